@@ -12,9 +12,9 @@
 namespace sluice::io {
 
 struct ErrorLocation {
-  std::string file;                    // path as the user gave it; may be empty
-  std::optional<uint64_t> frame;       // frame number in the file or sequence
-  std::optional<uint64_t> chunk;       // chunk number within the frame
+  std::string file{};                  // path as the user gave it; may be empty
+  std::optional<uint64_t> frame{};      // frame number in the file or sequence
+  std::optional<uint64_t> chunk{};      // chunk number within the frame
 };
 
 class Error : public std::runtime_error {

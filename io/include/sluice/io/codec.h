@@ -1,0 +1,80 @@
+// sluice/io/codec.h: encoding frames into container records and decoding
+// chunks out of them. Pure functions over caller-owned memory: the runtime
+// decodes straight into buffers it was handed (e.g. mapped staging memory).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <vector>
+
+#include "sluice/io/error.h"
+#include "sluice/io/format.h"
+
+namespace sluice::io {
+
+struct EncodeOptions {
+  uint32_t chunk_particles = 65536;  // upper bound per chunk; chunks follow octree cells
+  int zstd_level = 3;                // 1 (fast) .. 19 (small); decode speed barely changes
+};
+
+// One frame to encode. Spans are borrowed for the duration of the call.
+struct FrameInput {
+  std::span<const float> positions;                 // x,y,z interleaved; finite
+  std::span<const uint16_t> lod;                    // one per particle (see lod.h)
+  std::vector<std::span<const float>> attributes;   // one span per header attribute, finite
+  double time = 0.0;
+};
+
+// A complete frame record, ready to append to a container.
+struct EncodedFrame {
+  FrameHeader header;             // frame_number is patched by the writer
+  std::vector<std::byte> record;  // header, chunk table, payloads
+  uint64_t raw_bytes = 0;         // filtered size before zstd, for statistics
+};
+
+// Chunks, quantizes, filters and compresses one frame. Parallel over chunks
+// (TBB); thread-safe. Throws io::Error if the input is inconsistent.
+EncodedFrame encode_frame(const FrameInput& input, const FileHeader& header, const EncodeOptions& options);
+
+// Rewrites the frame number of an encoded record in place (and its checksum).
+void set_frame_number(EncodedFrame& frame, uint32_t frame_number, size_t attribute_count);
+
+// Per-thread reusable decode state (zstd context and a scratch buffer).
+// Not thread-safe: use one per thread.
+class DecodeScratch {
+ public:
+  DecodeScratch();
+  ~DecodeScratch();
+  DecodeScratch(const DecodeScratch&) = delete;
+  DecodeScratch& operator=(const DecodeScratch&) = delete;
+  struct State;
+  State& state() { return *state_; }
+
+ private:
+  std::unique_ptr<State> state_;
+};
+
+// Where decode_chunk writes one chunk.
+struct ChunkDestination {
+  // particle_count * decoded_particle_bytes(coding) bytes, see format.h.
+  std::span<std::byte> particles;
+  // One array of particle_count values per attribute, quantized against the
+  // chunk's attribute range; may be empty to skip attributes.
+  std::span<uint16_t* const> attributes;
+};
+
+// Checks the chunk's checksum, decompresses (never beyond the size its
+// particle count implies) and unfilters into `out`. `record` is the whole
+// frame record the chunk belongs to. Throws io::Error at `where` (with the
+// chunk number filled in by the caller) on any inconsistency.
+void decode_chunk(std::span<const std::byte> record, const ChunkDesc& chunk, const FileHeader& header,
+                  const ChunkDestination& out, DecodeScratch& scratch, const ErrorLocation& where);
+
+// World position of a quantized coordinate, exactly as the GPU computes it.
+inline float dequantize(uint16_t q, float lo, float hi) {
+  return lo + float(q) * ((hi - lo) * (1.0f / 65535.0f));
+}
+
+}  // namespace sluice::io

@@ -1,0 +1,129 @@
+// sluice/io/format.h: the `.sluice` container, version 1 (docs/format.md).
+//
+// These are the in-memory forms of the on-disk records. They are parsed from
+// and written to bytes explicitly (little-endian), never memcpy'd, so every
+// field read from a file is range-checked before it is used.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "sluice/io/types.h"
+
+namespace sluice::io {
+
+inline constexpr uint16_t kFormatMajor = 1;  // readers reject other majors
+inline constexpr uint16_t kFormatMinor = 0;  // readers accept any minor of their major
+
+// Hard limits. A header that claims more is rejected before any allocation.
+inline constexpr uint32_t kMaxHeaderBytes = 1u << 20;
+inline constexpr uint32_t kMaxAttributes = 32;
+inline constexpr uint32_t kMaxNameBytes = 255;
+inline constexpr uint32_t kMaxChunkParticles = 1u << 20;
+inline constexpr uint32_t kMaxChunksPerFrame = 1u << 22;
+inline constexpr uint64_t kMaxFrames = 1ull << 32;
+
+// How positions are stored in a chunk.
+enum class PositionCoding : uint8_t {
+  Quantized16 = 0,  // 16 bits per axis relative to the chunk AABB; Morton-delta filter
+  Float32 = 1,      // lossless float32; byte-shuffle filter
+};
+
+// Where the per-particle LOD value comes from.
+enum class LodSource : uint8_t {
+  IdHash = 0,         // hash of the source's particle id array: stable across frames
+  ParticleOrder = 1,  // hash of the particle's index in the source: stable only if the source keeps its order
+};
+
+// Which layer of the narrow band a chunk belongs to. v1 writers that do not
+// classify write everything as All; the narrow-band classifier fills the rest.
+enum class Layer : uint8_t {
+  All = 0,       // unclassified: every particle
+  Surface = 1,   // LNM layers L1+L2: particles near the surface
+  Interior = 2,  // the rest of the particles
+  Blobs = 3,     // voxel blobs (centroid + count) standing in for Interior
+};
+inline constexpr int kLayerCount = 4;
+
+// Chunk payload compression.
+enum class ChunkCodec : uint8_t { Zstd = 0, Stored = 1 };
+
+struct FileHeader {
+  uint16_t version_major = kFormatMajor;
+  uint16_t version_minor = kFormatMinor;
+  PositionCoding position_coding = PositionCoding::Quantized16;
+  LodSource lod_source = LodSource::IdHash;
+  float particle_spacing = 0.f;  // rest spacing in world units; 0 if unknown
+  float particle_radius = 0.f;   // render radius in world units; 0 if unknown
+  float frame_rate = 0.f;        // nominal frames per second of playback; 0 if unknown
+  std::vector<AttributeInfo> attributes;
+  std::string lod_id_array;      // the id array hashed for LOD values, if any
+  std::string source;            // free text: what the file was converted from
+};
+
+struct ChunkDesc {
+  uint64_t offset = 0;           // from the start of the frame record
+  uint32_t compressed_size = 0;  // bytes at offset
+  uint32_t particle_count = 0;
+  Layer layer = Layer::All;
+  ChunkCodec codec = ChunkCodec::Zstd;
+  Aabb bounds;                   // every particle of the chunk lies inside (inclusive)
+  uint64_t checksum = 0;         // XXH3-64 of the compressed bytes
+  // Per attribute: the range its 16-bit values are quantized against.
+  std::vector<std::array<float, 2>> attribute_ranges;
+};
+
+struct FrameHeader {
+  uint32_t frame_number = 0;     // position in the file, 0-based
+  uint64_t frame_bytes = 0;      // the whole record: header, chunk table, payloads
+  double time = 0.0;             // simulation time, seconds
+  uint64_t particle_count = 0;
+  Aabb bounds;
+  std::vector<ChunkDesc> chunks;
+};
+
+struct FrameIndexEntry {
+  uint64_t offset = 0;           // of the frame record, from the start of the file
+  uint64_t bytes = 0;
+  double time = 0.0;
+  uint64_t particle_count = 0;
+  uint32_t chunk_count = 0;
+  Aabb bounds;
+  std::array<uint64_t, kLayerCount> layer_particles{};  // by Layer
+};
+
+struct FrameIndex {
+  std::vector<FrameIndexEntry> frames;
+  Aabb bounds;                                        // of every frame
+  std::vector<std::array<float, 2>> attribute_ranges; // observed over every frame
+};
+
+// Sizes of the fixed parts of the records (see docs/format.md).
+inline constexpr size_t kFrameHeaderFixedBytes = 72;
+inline constexpr size_t kChunkDescFixedBytes = 52;
+inline constexpr size_t kIndexEntryBytes = 96;
+inline constexpr size_t kFooterBytes = 24;
+
+inline size_t chunk_desc_bytes(size_t attribute_count) {
+  return kChunkDescFixedBytes + 8 * attribute_count;
+}
+// Header, chunk table and the table checksum: where the first payload starts.
+inline uint64_t frame_table_bytes(uint64_t chunk_count, size_t attribute_count) {
+  return kFrameHeaderFixedBytes + chunk_count * chunk_desc_bytes(attribute_count) + 8;
+}
+
+// Bytes per decoded particle in the buffers decode_chunk fills.
+//  Quantized16: uint16 x, y, z, lod (x,y,z relative to the chunk AABB)
+//  Float32:     float x, y, z; uint32 lod
+inline size_t decoded_particle_bytes(PositionCoding coding) {
+  return coding == PositionCoding::Quantized16 ? 8 : 16;
+}
+// Bytes of the filtered (pre-zstd) payload of a chunk.
+inline uint64_t raw_chunk_bytes(PositionCoding coding, uint64_t particles, size_t attribute_count) {
+  const uint64_t per = (coding == PositionCoding::Quantized16 ? 8 : 14) + 2 * attribute_count;
+  return particles * per;
+}
+
+}  // namespace sluice::io

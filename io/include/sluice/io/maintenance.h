@@ -1,0 +1,45 @@
+// sluice/io/maintenance.h: checking a `.sluice` file and rebuilding one that
+// was cut short.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace sluice::io {
+
+// Called with (frames done, frames total) as work progresses.
+using ProgressFn = std::function<void(uint64_t, uint64_t)>;
+
+struct VerifyReport {
+  uint64_t frames = 0;
+  uint64_t chunks = 0;
+  uint64_t particles = 0;
+  uint64_t bytes = 0;
+  std::vector<std::string> problems;  // each names file, frame and chunk
+  bool ok() const { return problems.empty(); }
+};
+
+// Checks every checksum (header, index, frame tables, chunks) and decodes
+// every chunk. Does not stop at the first problem. Throws io::Error only when
+// the file cannot be opened at all (bad header, no index).
+VerifyReport verify_container(const std::filesystem::path& path, const ProgressFn& progress = {});
+
+struct RecoveryReport {
+  uint64_t frames = 0;        // frames kept
+  uint64_t bytes_kept = 0;    // header + kept frames
+  uint64_t bytes_dropped = 0; // of the input, after the last good frame (old index included)
+  std::string stopped_because;
+};
+
+// Scans the frame records that follow the header, keeps every complete frame
+// whose checksums hold, up to the first that does not, and writes them with a
+// new index to `output`. If `output` is `input`, the file is truncated after
+// the last good frame and the index appended in place. Throws io::Error if
+// the file header itself is unreadable (nothing can be recovered then).
+RecoveryReport recover_container(const std::filesystem::path& input, const std::filesystem::path& output,
+                                 const ProgressFn& progress = {});
+
+}  // namespace sluice::io

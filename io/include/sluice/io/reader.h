@@ -1,0 +1,74 @@
+// sluice/io/reader.h: random access to a `.sluice` file.
+//
+// Opening reads the header and the frame index (found through the footer), so
+// seeking to any frame costs one read. Every size in the file is checked
+// against the file's real size and the format's limits before it is used.
+//
+// Threads: after construction every const member may be called concurrently
+// (reads use pread on a shared descriptor).
+#pragma once
+
+#include <filesystem>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "sluice/io/codec.h"
+#include "sluice/io/format.h"
+
+namespace sluice::io {
+
+class ContainerReader {
+ public:
+  // Throws io::Error: not a .sluice file, unsupported version, corrupt
+  // header, or no valid index (the message then says to run `sluice recover`).
+  explicit ContainerReader(const std::filesystem::path& path);
+  ~ContainerReader();
+  ContainerReader(const ContainerReader&) = delete;
+  ContainerReader& operator=(const ContainerReader&) = delete;
+
+  const std::string& path() const { return path_; }
+  const FileHeader& header() const { return header_; }
+  const FrameIndex& index() const { return index_; }
+  uint64_t frame_count() const { return index_.frames.size(); }
+  uint64_t file_size() const { return file_size_; }
+  int descriptor() const { return fd_; }  // for callers that manage their own reads
+
+  // Reads frame `frame`'s record into `out`, which must hold exactly
+  // index().frames[frame].bytes bytes.
+  void read_record(uint64_t frame, std::span<std::byte> out) const;
+  std::vector<std::byte> read_record(uint64_t frame) const;
+
+  // Validates a record's header and chunk table (checksum, sizes) and that it
+  // matches the index entry of `frame`.
+  FrameHeader parse_record(uint64_t frame, std::span<const std::byte> record) const;
+
+  ErrorLocation location(uint64_t frame) const { return {path_, frame, {}}; }
+  ErrorLocation location(uint64_t frame, uint64_t chunk) const { return {path_, frame, chunk}; }
+
+ private:
+  std::string path_;
+  int fd_ = -1;
+  uint64_t file_size_ = 0;
+  FileHeader header_;
+  FrameIndex index_;
+};
+
+// A frame decoded into host memory: convenient for tools and tests; the
+// runtime decodes chunk by chunk into its own buffers instead.
+struct DecodedFrame {
+  FrameHeader header;
+  std::vector<std::byte> particles;                // decoded_particle_bytes(coding) per particle
+  std::vector<std::vector<uint16_t>> attributes;   // per attribute, per particle (chunk ranges apply)
+  std::vector<uint64_t> chunk_first;               // first particle of each chunk
+};
+
+// Reads and decodes frame `frame`, chunks in parallel (TBB).
+DecodedFrame decode_frame(const ContainerReader& reader, uint64_t frame);
+
+// World-space x,y,z of every particle of a decoded frame.
+std::vector<float> world_positions(const DecodedFrame& frame, PositionCoding coding);
+// LOD value of every particle of a decoded frame.
+std::vector<uint16_t> lod_values_of(const DecodedFrame& frame, PositionCoding coding);
+
+}  // namespace sluice::io

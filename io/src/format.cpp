@@ -1,0 +1,320 @@
+#include <cmath>
+#include <cstring>
+
+#include "bytes.h"
+#include "records.h"
+
+namespace sluice::io {
+namespace {
+
+void write_aabb(ByteWriter& w, const Aabb& b) {
+  for (float v : b.min) w.f32(v);
+  for (float v : b.max) w.f32(v);
+}
+
+Aabb read_aabb(ByteReader& r) {
+  Aabb b;
+  for (float& v : b.min) v = r.f32();
+  for (float& v : b.max) v = r.f32();
+  return b;
+}
+
+// A stored box must be finite and ordered, or the canonical empty box.
+void check_aabb(const ByteReader& r, const Aabb& b, bool allow_empty, const char* what) {
+  if (allow_empty && Aabb{}.min == b.min && Aabb{}.max == b.max) return;
+  for (int a = 0; a < 3; ++a) {
+    if (!std::isfinite(b.min[a]) || !std::isfinite(b.max[a])) r.fail(std::string(what) + " bounds are not finite");
+    if (b.min[a] > b.max[a]) r.fail(std::string(what) + " bounds have min > max");
+  }
+}
+
+void check_range(const ByteReader& r, const std::array<float, 2>& range) {
+  if (!std::isfinite(range[0]) || !std::isfinite(range[1]) || range[0] > range[1]) {
+    r.fail("attribute range is not finite and ordered");
+  }
+}
+
+}  // namespace
+
+std::vector<std::byte> serialize_file_header(const FileHeader& h) {
+  std::vector<std::byte> out;
+  ByteWriter w(out);
+  w.bytes(kFileMagic.data(), kFileMagic.size());
+  w.u16(h.version_major);
+  w.u16(h.version_minor);
+  w.u32(0);  // header_bytes, patched below
+  w.u8(static_cast<uint8_t>(h.position_coding));
+  w.u8(static_cast<uint8_t>(h.lod_source));
+  w.u16(static_cast<uint16_t>(h.attributes.size()));
+  w.f32(h.particle_spacing);
+  w.f32(h.particle_radius);
+  w.f32(h.frame_rate);
+  w.u32(0);  // flags
+  for (const AttributeInfo& a : h.attributes) {
+    w.name(a.name);
+    w.f32(a.declared_min);
+    w.f32(a.declared_max);
+  }
+  w.text(h.lod_id_array);
+  w.text(h.source);
+  const auto total = static_cast<uint32_t>(out.size() + 8);
+  std::memcpy(out.data() + 12, &total, 4);
+  w.u64(checksum(out));
+  return out;
+}
+
+uint32_t peek_file_header_bytes(std::span<const std::byte> fixed, const ErrorLocation& where) {
+  ByteReader r(fixed, where, "file header");
+  std::array<uint8_t, 8> magic{};
+  for (auto& m : magic) m = r.u8();
+  if (magic != kFileMagic) r.fail("not a .sluice file (bad magic)");
+  const uint16_t major = r.u16();
+  const uint16_t minor = r.u16();
+  if (major != kFormatMajor) {
+    r.fail("format version " + std::to_string(major) + "." + std::to_string(minor) +
+           " is not supported by this build (reads " + std::to_string(kFormatMajor) + ".x)");
+  }
+  const uint32_t bytes = r.u32();
+  if (bytes < kFileHeaderFixedBytes + 12 || bytes > kMaxHeaderBytes) {
+    r.fail("header size " + std::to_string(bytes) + " is out of range");
+  }
+  return bytes;
+}
+
+FileHeader parse_file_header(std::span<const std::byte> bytes, const ErrorLocation& where) {
+  const uint32_t total = peek_file_header_bytes(bytes, where);
+  ByteReader r(bytes.first(std::min<size_t>(bytes.size(), total)), where, "file header");
+  if (bytes.size() < total) r.fail("file is shorter than its header");
+  uint64_t stored = 0;
+  std::memcpy(&stored, bytes.data() + total - 8, 8);
+  if (stored != checksum(bytes.first(total - 8))) r.fail("header checksum mismatch (the header is corrupt)");
+
+  FileHeader h;
+  r.skip(8);
+  h.version_major = r.u16();
+  h.version_minor = r.u16();
+  r.u32();
+  const uint8_t coding = r.u8();
+  if (coding > 1) r.fail("unknown position coding " + std::to_string(coding));
+  h.position_coding = static_cast<PositionCoding>(coding);
+  const uint8_t lod = r.u8();
+  if (lod > 1) r.fail("unknown LOD source " + std::to_string(lod));
+  h.lod_source = static_cast<LodSource>(lod);
+  const uint16_t attributes = r.u16();
+  if (attributes > kMaxAttributes) r.fail("claims " + std::to_string(attributes) + " attributes (limit 32)");
+  h.particle_spacing = r.f32();
+  h.particle_radius = r.f32();
+  h.frame_rate = r.f32();
+  r.u32();
+  h.attributes.resize(attributes);
+  for (AttributeInfo& a : h.attributes) {
+    a.name = r.name();
+    a.declared_min = r.f32();
+    a.declared_max = r.f32();
+  }
+  h.lod_id_array = r.text();
+  h.source = r.text();
+  if (r.position() != total - 8) r.fail("header size does not match its contents");
+  return h;
+}
+
+std::vector<std::byte> serialize_frame_table(const FrameHeader& f, size_t attribute_count) {
+  std::vector<std::byte> out;
+  out.reserve(frame_table_bytes(f.chunks.size(), attribute_count));
+  ByteWriter w(out);
+  w.u32(kFrameMagic);
+  w.u32(f.frame_number);
+  w.u64(f.frame_bytes);
+  w.f64(f.time);
+  w.u64(f.particle_count);
+  w.u32(static_cast<uint32_t>(f.chunks.size()));
+  w.u32(0);  // flags
+  write_aabb(w, f.bounds);
+  w.u32(static_cast<uint32_t>(attribute_count));
+  w.u32(0);  // reserved
+  for (const ChunkDesc& c : f.chunks) {
+    w.u64(c.offset);
+    w.u32(c.compressed_size);
+    w.u32(c.particle_count);
+    w.u8(static_cast<uint8_t>(c.layer));
+    w.u8(static_cast<uint8_t>(c.codec));
+    w.u16(0);
+    write_aabb(w, c.bounds);
+    w.u64(c.checksum);
+    for (const auto& range : c.attribute_ranges) {
+      w.f32(range[0]);
+      w.f32(range[1]);
+    }
+  }
+  w.u64(checksum(out));
+  return out;
+}
+
+FramePrefix parse_frame_prefix(std::span<const std::byte> fixed, const ErrorLocation& where) {
+  ByteReader r(fixed, where, "frame header");
+  if (r.u32() != kFrameMagic) r.fail("bad frame magic (not at a frame boundary, or corrupt)");
+  FramePrefix p{};
+  p.frame_number = r.u32();
+  p.frame_bytes = r.u64();
+  r.f64();
+  r.u64();
+  p.chunk_count = r.u32();
+  if (p.chunk_count > kMaxChunksPerFrame) r.fail("claims " + std::to_string(p.chunk_count) + " chunks");
+  if (p.frame_bytes < frame_table_bytes(p.chunk_count, 0)) r.fail("frame size is smaller than its chunk table");
+  return p;
+}
+
+FrameHeader parse_frame_table(std::span<const std::byte> record, size_t attribute_count,
+                              const ErrorLocation& where) {
+  const FramePrefix prefix = parse_frame_prefix(record, where);
+  const uint64_t table = frame_table_bytes(prefix.chunk_count, attribute_count);
+  ByteReader r(record, where, "frame header");
+  if (table > record.size() || prefix.frame_bytes > record.size()) r.fail("frame record is truncated");
+  uint64_t stored = 0;
+  std::memcpy(&stored, record.data() + table - 8, 8);
+  if (stored != checksum(record.first(table - 8))) r.fail("frame header checksum mismatch (corrupt header)");
+
+  FrameHeader f;
+  r.u32();
+  f.frame_number = r.u32();
+  f.frame_bytes = r.u64();
+  f.time = r.f64();
+  f.particle_count = r.u64();
+  r.u32();
+  r.u32();
+  f.bounds = read_aabb(r);
+  check_aabb(r, f.bounds, true, "frame");
+  if (r.u32() != attribute_count) r.fail("attribute count differs from the file header");
+  r.u32();
+  f.chunks.resize(prefix.chunk_count);
+  uint64_t particles = 0;
+  for (ChunkDesc& c : f.chunks) {
+    c.offset = r.u64();
+    c.compressed_size = r.u32();
+    c.particle_count = r.u32();
+    const uint8_t layer = r.u8();
+    const uint8_t codec = r.u8();
+    r.u16();
+    c.bounds = read_aabb(r);
+    c.checksum = r.u64();
+    c.attribute_ranges.resize(attribute_count);
+    for (auto& range : c.attribute_ranges) {
+      range[0] = r.f32();
+      range[1] = r.f32();
+      check_range(r, range);
+    }
+    if (layer >= kLayerCount) r.fail("unknown layer " + std::to_string(layer));
+    if (codec > 1) r.fail("unknown chunk codec " + std::to_string(codec));
+    c.layer = static_cast<Layer>(layer);
+    c.codec = static_cast<ChunkCodec>(codec);
+    if (c.particle_count == 0 || c.particle_count > kMaxChunkParticles) {
+      r.fail("chunk particle count " + std::to_string(c.particle_count) + " is out of range");
+    }
+    check_aabb(r, c.bounds, false, "chunk");
+    if (c.offset < table || c.offset > f.frame_bytes || c.compressed_size > f.frame_bytes - c.offset) {
+      r.fail("chunk payload lies outside the frame record");
+    }
+    particles += c.particle_count;
+  }
+  if (particles != f.particle_count) r.fail("chunk particle counts do not add up to the frame's");
+  return f;
+}
+
+std::vector<std::byte> serialize_index(const FrameIndex& index, size_t attribute_count) {
+  std::vector<std::byte> out;
+  ByteWriter w(out);
+  w.u32(kIndexMagic);
+  w.u32(static_cast<uint32_t>(attribute_count));
+  w.u64(index.frames.size());
+  write_aabb(w, index.bounds);
+  for (size_t a = 0; a < attribute_count; ++a) {
+    const auto range = a < index.attribute_ranges.size() ? index.attribute_ranges[a] : std::array<float, 2>{0, 0};
+    w.f32(range[0]);
+    w.f32(range[1]);
+  }
+  for (const FrameIndexEntry& e : index.frames) {
+    w.u64(e.offset);
+    w.u64(e.bytes);
+    w.f64(e.time);
+    w.u64(e.particle_count);
+    w.u32(e.chunk_count);
+    w.u32(0);
+    write_aabb(w, e.bounds);
+    for (uint64_t n : e.layer_particles) w.u64(n);
+  }
+  w.u64(checksum(out));
+  return out;
+}
+
+FrameIndex parse_index(std::span<const std::byte> bytes, size_t attribute_count, uint64_t file_size,
+                       const ErrorLocation& where) {
+  ByteReader r(bytes, where, "frame index");
+  if (bytes.size() < 8) r.fail("too small");
+  uint64_t stored = 0;
+  std::memcpy(&stored, bytes.data() + bytes.size() - 8, 8);
+  if (stored != checksum(bytes.first(bytes.size() - 8))) r.fail("checksum mismatch (run `sluice recover`)");
+  if (r.u32() != kIndexMagic) r.fail("bad magic");
+  if (r.u32() != attribute_count) r.fail("attribute count differs from the file header");
+  const uint64_t frames = r.u64();
+  const uint64_t fixed = 8 + 8 + 24 + 8 * attribute_count + 8;
+  if (frames > kMaxFrames || frames * kIndexEntryBytes + fixed != bytes.size()) {
+    r.fail("claims " + std::to_string(frames) + " frames, which does not match its size");
+  }
+  FrameIndex index;
+  index.bounds = read_aabb(r);
+  check_aabb(r, index.bounds, true, "global");
+  index.attribute_ranges.resize(attribute_count);
+  for (auto& range : index.attribute_ranges) {
+    range[0] = r.f32();
+    range[1] = r.f32();
+  }
+  index.frames.resize(frames);
+  uint64_t previous_end = 0;
+  for (FrameIndexEntry& e : index.frames) {
+    e.offset = r.u64();
+    e.bytes = r.u64();
+    e.time = r.f64();
+    e.particle_count = r.u64();
+    e.chunk_count = r.u32();
+    r.u32();
+    e.bounds = read_aabb(r);
+    check_aabb(r, e.bounds, true, "frame");
+    for (uint64_t& n : e.layer_particles) n = r.u64();
+    if (e.offset < previous_end || e.bytes > file_size || e.offset > file_size - e.bytes) {
+      r.fail("frame " + std::to_string(&e - index.frames.data()) + " lies outside the file or overlaps");
+    }
+    previous_end = e.offset + e.bytes;
+  }
+  return index;
+}
+
+std::vector<std::byte> serialize_footer(const Footer& footer) {
+  std::vector<std::byte> out;
+  ByteWriter w(out);
+  w.u64(footer.index_offset);
+  w.u64(footer.index_bytes);
+  w.bytes(kFooterMagic.data(), kFooterMagic.size());
+  return out;
+}
+
+bool parse_footer(std::span<const std::byte> bytes, Footer& out) {
+  if (bytes.size() != kFooterBytes) return false;
+  if (std::memcmp(bytes.data() + 16, kFooterMagic.data(), 8) != 0) return false;
+  std::memcpy(&out.index_offset, bytes.data(), 8);
+  std::memcpy(&out.index_bytes, bytes.data() + 8, 8);
+  return true;
+}
+
+FrameIndexEntry index_entry_for(const FrameHeader& frame, uint64_t offset) {
+  FrameIndexEntry e;
+  e.offset = offset;
+  e.bytes = frame.frame_bytes;
+  e.time = frame.time;
+  e.particle_count = frame.particle_count;
+  e.chunk_count = static_cast<uint32_t>(frame.chunks.size());
+  e.bounds = frame.bounds;
+  for (const ChunkDesc& c : frame.chunks) e.layer_particles[static_cast<size_t>(c.layer)] += c.particle_count;
+  return e;
+}
+
+}  // namespace sluice::io

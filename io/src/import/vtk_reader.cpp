@@ -1,0 +1,435 @@
+// One VTK file into a ParticleFrame, through VTK's own readers.
+#include "import/vtk_reader.h"
+
+#include <vtkCellType.h>
+#include <vtkCellTypes.h>
+#include <vtkDataArray.h>
+#include <vtkDataArraySelection.h>
+#include <vtkDataSet.h>
+#include <vtkDataSetReader.h>
+#include <vtkFieldData.h>
+#include <vtkNew.h>
+#include <vtkObjectFactory.h>
+#include <vtkOutputWindow.h>
+#include <vtkPointData.h>
+#include <vtkPointSet.h>
+#include <vtkPoints.h>
+#include <vtkSmartPointer.h>
+#include <vtkXMLPPolyDataReader.h>
+#include <vtkXMLPUnstructuredGridReader.h>
+#include <vtkXMLPolyDataReader.h>
+#include <vtkXMLUnstructuredGridReader.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdio>
+#include <mutex>
+#include <type_traits>
+
+#include "sluice/io/error.h"
+
+namespace sluice::io::detail {
+namespace {
+
+// ------------------------------------------------ VTK's messages, per thread
+
+// VTK reports errors through a process-wide output window instead of
+// throwing. Our window appends them to the capture buffer of the calling
+// thread, so concurrent reads each see only their own errors.
+thread_local std::vector<std::string>* t_capture = nullptr;
+
+// "ERROR: In /src/vtkXMLReader.cxx, line 42\nvtkXMLUnstructuredGridReader
+// (0x55d1): Error opening file\n\n" -> "vtkXMLUnstructuredGridReader: Error
+// opening file".
+std::string clean_message(const char* text) {
+  std::string s = text ? text : "";
+  if (s.rfind("ERROR: In ", 0) == 0 || s.rfind("Warning: In ", 0) == 0) {
+    const size_t nl = s.find('\n');
+    s = nl == std::string::npos ? std::string() : s.substr(nl + 1);
+  }
+  if (const size_t open = s.find(" (0x"); open != std::string::npos) {
+    const size_t close = s.find("):", open);
+    if (close != std::string::npos) s.erase(open, close + 1 - open);
+  }
+  std::replace(s.begin(), s.end(), '\n', ' ');
+  while (!s.empty() && (s.back() == ' ' || s.back() == '\r')) s.pop_back();
+  return s;
+}
+
+class CaptureWindow : public vtkOutputWindow {
+ public:
+  static CaptureWindow* New();
+  vtkTypeMacro(CaptureWindow, vtkOutputWindow);
+
+  void DisplayErrorText(const char* text) override {
+    if (t_capture) {
+      t_capture->push_back(clean_message(text));
+    } else {
+      std::fprintf(stderr, "VTK: %s\n", clean_message(text).c_str());  // VTK used outside a read
+    }
+  }
+  // Warnings and chatter would interleave with sluice's own output; a read
+  // either succeeds or its errors are thrown.
+  void DisplayText(const char*) override {}
+  void DisplayWarningText(const char*) override {}
+  void DisplayGenericWarningText(const char*) override {}
+  void DisplayDebugText(const char*) override {}
+};
+vtkStandardNewMacro(CaptureWindow);
+
+// Collects VTK errors raised on this thread while it lives.
+class ErrorCapture {
+ public:
+  ErrorCapture() : previous_(t_capture) {
+    static std::once_flag installed;
+    std::call_once(installed, [] {
+      vtkNew<CaptureWindow> window;
+      vtkOutputWindow::SetInstance(window);
+    });
+    t_capture = &errors_;
+  }
+  ~ErrorCapture() { t_capture = previous_; }
+  ErrorCapture(const ErrorCapture&) = delete;
+  ErrorCapture& operator=(const ErrorCapture&) = delete;
+
+  void throw_if_any(const std::string& path) const {
+    if (errors_.empty()) return;
+    std::string msg = "VTK could not read the file: " + errors_.front();
+    for (size_t k = 1; k < errors_.size() && k < 3; ++k) msg += "; " + errors_[k];
+    throw Error({path}, msg);
+  }
+
+ private:
+  std::vector<std::string> errors_;
+  std::vector<std::string>* previous_;
+};
+
+// ----------------------------------------------------------- opening files
+
+enum class Kind { kLegacy, kVtu, kVtp, kPvtu, kPvtp };
+
+Kind kind_of(const std::string& path) {
+  const size_t dot = path.rfind('.');
+  std::string ext = dot == std::string::npos ? "" : path.substr(dot + 1);
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  if (ext == "vtu") return Kind::kVtu;
+  if (ext == "vtp") return Kind::kVtp;
+  if (ext == "pvtu") return Kind::kPvtu;
+  if (ext == "pvtp") return Kind::kPvtp;
+  return Kind::kLegacy;
+}
+
+vtkSmartPointer<vtkXMLReader> make_xml_reader(Kind kind) {
+  switch (kind) {
+    case Kind::kVtu: return vtkSmartPointer<vtkXMLUnstructuredGridReader>::New();
+    case Kind::kVtp: return vtkSmartPointer<vtkXMLPolyDataReader>::New();
+    case Kind::kPvtu: return vtkSmartPointer<vtkXMLPUnstructuredGridReader>::New();
+    case Kind::kPvtp: return vtkSmartPointer<vtkXMLPPolyDataReader>::New();
+    case Kind::kLegacy: break;
+  }
+  return nullptr;
+}
+
+// A dataset and what keeps it alive.
+struct Loaded {
+  vtkSmartPointer<vtkAlgorithm> reader;
+  vtkDataSet* data = nullptr;
+  std::vector<std::string> arrays;  // point-data arrays in the file
+};
+
+std::vector<std::string> selection_names(vtkDataArraySelection* sel) {
+  std::vector<std::string> names;
+  for (int k = 0; k < sel->GetNumberOfArrays(); ++k) names.emplace_back(sel->GetArrayName(k));
+  return names;
+}
+
+std::vector<std::string> point_array_names(vtkDataSet* ds) {
+  std::vector<std::string> names;
+  vtkPointData* pd = ds->GetPointData();
+  for (int k = 0; k < pd->GetNumberOfArrays(); ++k) {
+    const char* name = pd->GetArrayName(k);
+    if (name) names.emplace_back(name);
+  }
+  return names;
+}
+
+// Reads the XML header only; `wanted` == nullptr stops there. Otherwise
+// only the wanted point arrays are decoded: PySPH files carry arrays we
+// would decompress for nothing.
+Loaded load_xml(const std::string& path, Kind kind, const std::vector<std::string>* wanted) {
+  ErrorCapture capture;
+  Loaded out;
+  vtkSmartPointer<vtkXMLReader> reader = make_xml_reader(kind);
+  out.reader = reader;
+  reader->SetFileName(path.c_str());
+  reader->UpdateInformation();
+  capture.throw_if_any(path);
+  out.arrays = selection_names(reader->GetPointDataArraySelection());
+  if (!wanted) return out;
+  reader->GetPointDataArraySelection()->DisableAllArrays();
+  for (const auto& name : *wanted) reader->GetPointDataArraySelection()->EnableArray(name.c_str());
+  reader->GetCellDataArraySelection()->DisableAllArrays();
+  reader->Update();
+  capture.throw_if_any(path);
+  out.data = reader->GetOutputAsDataSet();
+  if (!out.data) throw Error({path}, "VTK could not read the file (no dataset)");
+  return out;
+}
+
+// Legacy files have no cheap header: always read whole, every array.
+Loaded load_legacy(const std::string& path) {
+  ErrorCapture capture;
+  Loaded out;
+  vtkNew<vtkDataSetReader> reader;
+  out.reader = reader.Get();
+  reader->SetFileName(path.c_str());
+  reader->ReadAllScalarsOn();
+  reader->ReadAllVectorsOn();
+  reader->ReadAllNormalsOn();
+  reader->ReadAllTensorsOn();
+  reader->ReadAllColorScalarsOn();
+  reader->ReadAllTCoordsOn();
+  reader->ReadAllFieldsOn();
+  reader->Update();
+  capture.throw_if_any(path);
+  out.data = reader->GetOutput();
+  if (!out.data) throw Error({path}, "VTK could not read the file (not a legacy VTK dataset)");
+  out.arrays = point_array_names(out.data);
+  return out;
+}
+
+Loaded load(const std::string& path, const std::vector<std::string>* wanted) {
+  const Kind kind = kind_of(path);
+  if (kind == Kind::kLegacy) return load_legacy(path);
+  return load_xml(path, kind, wanted);
+}
+
+// ------------------------------------------------------- array conversion
+
+std::string join(const std::vector<std::string>& names) {
+  if (names.empty()) return "(none)";
+  std::string out;
+  for (const auto& n : names) out += (out.empty() ? "" : ", ") + n;
+  return out;
+}
+
+template <class T>
+void convert_values(const T* in, size_t count, float* out) {
+  for (size_t k = 0; k < count; ++k) out[k] = static_cast<float>(in[k]);
+}
+
+template <class T>
+void magnitudes(const T* in, size_t tuples, size_t comps, float* out) {
+  for (size_t t = 0; t < tuples; ++t) {
+    double sum = 0.0;
+    for (size_t c = 0; c < comps; ++c) {
+      const auto v = static_cast<double>(in[t * comps + c]);
+      sum += v * v;
+    }
+    out[t] = static_cast<float>(std::sqrt(sum));
+  }
+}
+
+// All values of `a` as float, tuple-major. Typed access on contiguous
+// arrays (every array a reader makes); GetComponent only as a fallback.
+void copy_as_float(vtkDataArray* a, float* out) {
+  const size_t count = static_cast<size_t>(a->GetNumberOfTuples()) * a->GetNumberOfComponents();
+  if (count == 0) return;
+  if (a->HasStandardMemoryLayout()) {
+    void* raw = a->GetVoidPointer(0);
+    switch (a->GetDataType()) {
+      vtkTemplateMacro(convert_values(static_cast<const VTK_TT*>(raw), count, out); return);
+      default: break;
+    }
+  }
+  const int comps = a->GetNumberOfComponents();
+  for (size_t k = 0; k < count; ++k) {
+    out[k] = static_cast<float>(a->GetComponent(static_cast<vtkIdType>(k / comps), static_cast<int>(k % comps)));
+  }
+}
+
+// One float per tuple: the value itself, or the magnitude of a vector.
+void copy_scalar(vtkDataArray* a, float* out) {
+  const size_t comps = static_cast<size_t>(a->GetNumberOfComponents());
+  if (comps == 1) return copy_as_float(a, out);
+  const size_t tuples = static_cast<size_t>(a->GetNumberOfTuples());
+  if (a->HasStandardMemoryLayout()) {
+    void* raw = a->GetVoidPointer(0);
+    switch (a->GetDataType()) {
+      vtkTemplateMacro(magnitudes(static_cast<const VTK_TT*>(raw), tuples, comps, out); return);
+      default: break;
+    }
+  }
+  std::vector<double> tuple(comps);
+  for (size_t t = 0; t < tuples; ++t) {
+    a->GetTuple(static_cast<vtkIdType>(t), tuple.data());
+    double sum = 0.0;
+    for (double v : tuple) sum += v * v;
+    out[t] = static_cast<float>(std::sqrt(sum));
+  }
+}
+
+// Converts ids; returns the index of the first id that is negative,
+// fractional or out of range, or `count` when all are valid.
+template <class T>
+size_t convert_ids(const T* in, size_t count, uint64_t* out) {
+  for (size_t k = 0; k < count; ++k) {
+    const T v = in[k];
+    if constexpr (std::is_floating_point_v<T>) {
+      if (!(v >= 0) || std::floor(v) != v || static_cast<double>(v) >= 18446744073709551616.0) return k;
+    } else if constexpr (std::is_signed_v<T>) {
+      if (v < 0) return k;
+    }
+    out[k] = static_cast<uint64_t>(v);
+  }
+  return count;
+}
+
+size_t copy_ids(vtkDataArray* a, uint64_t* out) {
+  const size_t count = static_cast<size_t>(a->GetNumberOfTuples());
+  if (count == 0) return 0;
+  if (a->HasStandardMemoryLayout()) {
+    void* raw = a->GetVoidPointer(0);
+    switch (a->GetDataType()) {
+      vtkTemplateMacro(return convert_ids(static_cast<const VTK_TT*>(raw), count, out));
+      default: break;
+    }
+  }
+  for (size_t k = 0; k < count; ++k) {
+    const double v = a->GetComponent(static_cast<vtkIdType>(k), 0);
+    if (!(v >= 0) || std::floor(v) != v || v >= 18446744073709551616.0) return k;
+    out[k] = static_cast<uint64_t>(v);
+  }
+  return count;
+}
+
+// ------------------------------------------------------- dataset -> frame
+
+void copy_positions(const std::string& path, vtkDataSet* ds, std::vector<float>& out) {
+  const vtkIdType n = ds->GetNumberOfPoints();
+  out.resize(static_cast<size_t>(n) * 3);
+  auto* ps = vtkPointSet::SafeDownCast(ds);
+  if (ps && ps->GetPoints()) {
+    vtkDataArray* a = ps->GetPoints()->GetData();
+    if (a->GetNumberOfComponents() != 3) throw Error({path}, "points do not have 3 components");
+    copy_as_float(a, out.data());
+    return;
+  }
+  // Image and rectilinear data: points are implicit, generate them.
+  double p[3];
+  for (vtkIdType i = 0; i < n; ++i) {
+    ds->GetPoint(i, p);
+    for (int c = 0; c < 3; ++c) out[static_cast<size_t>(i) * 3 + c] = static_cast<float>(p[c]);
+  }
+}
+
+// The point array `name`, checked to be numeric and of the right length.
+vtkDataArray* point_array(const std::string& path, vtkDataSet* ds, const std::string& name,
+                          const std::vector<std::string>& existing, const char* what) {
+  vtkPointData* pd = ds->GetPointData();
+  vtkDataArray* a = pd->GetArray(name.c_str());
+  if (!a) {
+    if (pd->GetAbstractArray(name.c_str())) throw Error({path}, std::string(what) + " '" + name + "' is not numeric");
+    throw Error({path}, "no point array '" + name + "' (" + what + "); arrays in the file: " + join(existing));
+  }
+  const vtkIdType n = ds->GetNumberOfPoints();
+  if (a->GetNumberOfTuples() != n) {
+    throw Error({path}, "array '" + name + "' has " + std::to_string(a->GetNumberOfTuples()) +
+                            " values but the file has " + std::to_string(n) + " points");
+  }
+  return a;
+}
+
+void copy_id_array(const std::string& path, vtkDataArray* a, const std::string& name, std::vector<uint64_t>& out) {
+  if (a->GetNumberOfComponents() != 1) {
+    throw Error({path}, "id array '" + name + "' has " + std::to_string(a->GetNumberOfComponents()) +
+                            " components; ids need 1");
+  }
+  out.resize(static_cast<size_t>(a->GetNumberOfTuples()));
+  const size_t bad = copy_ids(a, out.data());
+  if (bad < out.size()) {
+    char value[64];
+    std::snprintf(value, sizeof value, "%.17g", a->GetComponent(static_cast<vtkIdType>(bad), 0));
+    throw Error({path}, "id array '" + name + "' holds " + value + " at index " + std::to_string(bad) +
+                            ": ids must be non-negative integers");
+  }
+}
+
+// "vtkQuadraticTetra" -> "QUADRATIC_TETRA", as VTK's enum spells it.
+std::string cell_type_name(int type) {
+  std::string cls = vtkCellTypes::GetClassNameFromTypeId(type);
+  if (cls.rfind("vtk", 0) != 0) return "type " + std::to_string(type);
+  std::string out;
+  for (size_t k = 3; k < cls.size(); ++k) {
+    const char c = cls[k];
+    if (std::isupper(static_cast<unsigned char>(c)) && k > 3) out += '_';
+    out += static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  }
+  return out;
+}
+
+// A note when the file has cells other than vertices (a mesh): its points
+// still become particles.
+std::optional<std::string> ignored_cells_note(vtkDataSet* ds) {
+  if (ds->GetNumberOfCells() == 0) return std::nullopt;
+  vtkNew<vtkCellTypes> types;
+  ds->GetCellTypes(types);
+  std::vector<std::string> names;
+  for (vtkIdType k = 0; k < types->GetNumberOfTypes(); ++k) {
+    const int t = types->GetCellType(k);
+    if (t != VTK_VERTEX && t != VTK_POLY_VERTEX && t != VTK_EMPTY_CELL) names.push_back(cell_type_name(t));
+  }
+  if (names.empty()) return std::nullopt;
+  return "cells of type " + join(names) + " ignored: using the " + std::to_string(ds->GetNumberOfPoints()) +
+         " points as particles";
+}
+
+// Simulation time, when a writer stored it (VTK's TimeValue convention, or TIME).
+std::optional<double> field_time(vtkDataSet* ds) {
+  vtkFieldData* fd = ds->GetFieldData();
+  if (!fd) return std::nullopt;
+  for (int k = 0; k < fd->GetNumberOfArrays(); ++k) {
+    vtkDataArray* a = fd->GetArray(k);
+    if (!a || !a->GetName() || a->GetNumberOfTuples() < 1) continue;
+    std::string name = a->GetName();
+    std::transform(name.begin(), name.end(), name.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    if (name != "timevalue" && name != "time") continue;
+    const double t = a->GetComponent(0, 0);
+    if (std::isfinite(t)) return t;
+  }
+  return std::nullopt;
+}
+
+}  // namespace
+
+std::vector<std::string> vtk_arrays(const std::string& path) { return load(path, nullptr).arrays; }
+
+VtkRead read_vtk(const std::string& path, const std::vector<std::string>& attributes, const std::string& id_array) {
+  std::vector<std::string> wanted = attributes;
+  if (!id_array.empty()) wanted.push_back(id_array);
+  const Loaded loaded = load(path, &wanted);
+  vtkDataSet* ds = loaded.data;
+
+  VtkRead out;
+  out.time = field_time(ds);
+  ParticleFrame& f = out.frame;
+  f.attributes.resize(attributes.size());
+  // An empty file often declares no arrays at all: nothing to look up.
+  if (ds->GetNumberOfPoints() == 0) return out;
+
+  copy_positions(path, ds, f.positions);
+  const size_t n = f.count();
+  if (!id_array.empty()) {
+    copy_id_array(path, point_array(path, ds, id_array, loaded.arrays, "id array"), id_array, f.ids);
+  }
+  for (size_t k = 0; k < attributes.size(); ++k) {
+    vtkDataArray* a = point_array(path, ds, attributes[k], loaded.arrays, "attribute");
+    f.attributes[k].resize(n);
+    copy_scalar(a, f.attributes[k].data());
+  }
+  if (auto note = ignored_cells_note(ds)) f.repairs.push_back(std::move(*note));
+  return out;
+}
+
+}  // namespace sluice::io::detail

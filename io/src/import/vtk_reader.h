@@ -1,0 +1,33 @@
+// Private: reading one VTK file with VTK's own readers (compiled only when
+// sluice is built with VTK).
+//
+// Handles legacy .vtk (any dataset type; points of structured data are
+// generated), XML .vtu/.vtp, and the multi-piece .pvtu/.pvtp (all pieces
+// concatenated). Errors that VTK reports through its output window are
+// captured per thread and thrown as io::Error carrying VTK's message.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "sluice/io/types.h"
+
+namespace sluice::io::detail {
+
+// The point-data arrays a file offers. Cheap for XML files (only the header
+// is parsed); a legacy file is read whole.
+std::vector<std::string> vtk_arrays(const std::string& path);
+
+struct VtkRead {
+  ParticleFrame frame;               // raw values: non-finite numbers are kept for the caller
+  std::optional<double> time;        // from a TimeValue/TIME field-data array, if any
+};
+
+// Reads positions (as float), ids from `id_array` (if not empty) and the
+// `attributes` (vectors as magnitudes). Cells other than vertices are
+// ignored with a note in frame.repairs. Throws io::Error naming the file.
+VtkRead read_vtk(const std::string& path, const std::vector<std::string>& attributes,
+                 const std::string& id_array);
+
+}  // namespace sluice::io::detail
