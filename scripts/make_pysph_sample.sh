@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Generate real SPH sample data with PySPH (Debian package python3-pysph):
-# the 3D dam break example (dam_break_3d), exported to VTK (.vtu) with
-# PySPH's own `dump_vtk`. Only the fluid files (*_fluid_*.vtu) are kept.
+# the 3D dam break example (pysph.examples.dam_break_3d), exported to VTK
+# (.vtu) with PySPH's own `dump_vtk`. Only the fluid files (*_fluid_*.vtu)
+# are kept.
 #
 # Defaults reproduce the bundled sample in data/dam_break_3d:
 #   scripts/make_pysph_sample.sh
@@ -12,18 +13,29 @@
 # Options:
 #   --dx DX          particle spacing in m          (default 0.04)
 #   --tf TF          final simulated time in s      (default 0.25)
-#   --pfreq N        write an output every N steps  (default 25)
+#   --pfreq N        write an output every N steps  (default 50; the final
+#                    time is always written as well)
 #   --every K        keep only every K-th written frame (default 1 = all)
 #   --out DIR        destination of the fluid .vtu files
 #                    (default <repo>/data/dam_break_3d)
 #   --work DIR       scratch folder for the HDF5 and VTK output
 #                    (default: a fresh temporary folder, removed afterwards)
 #   --keep-work      do not remove the scratch folder
+#   --no-gid         run the stock example through `pysph.tools.cli run`
+#                    and export only rho,p (see "Particle ids" below)
+#
+# Particle ids: serial PySPH never assigns `gid` (every particle keeps
+# 4294967295, i.e. (uint32)-1). By default this script therefore runs the
+# stock example class DamBreak3D through a 10-line driver that only sets
+# gid = 0..n-1 on each particle array after creation; PySPH then carries gid
+# with the particles, and dump_vtk exports it (`-s rho,p,gid`). The physics,
+# parameters and output are otherwise identical to
+#   python3 -m pysph.tools.cli run dam_break_3d --no-openmp --dx .. --tf .. --pfreq ..
 #
 # Runs on one core (--no-openmp, OMP_NUM_THREADS=1). Needs Debian 12 with
 # python3-pysph, python3-h5py and mayavi2 (for dump_vtk's TVTK writer);
 # these are installed with apt-get when missing (needs root or sudo).
-# This script does not install anything else and does not call sluice.
+# This script installs nothing else and does not call sluice.
 set -euo pipefail
 
 PY=/usr/bin/python3
@@ -32,14 +44,14 @@ REPO_ROOT=$(cd "$SCRIPT_DIR/.." && pwd)
 
 DX=0.04
 TF=0.25
-PFREQ=25
+PFREQ=50
 EVERY=1
 OUT="$REPO_ROOT/data/dam_break_3d"
 WORK=""
 KEEP_WORK=0
-SCALARS="rho,p,gid"
+WITH_GID=1
 
-usage() { sed -n '2,26p' "$0" | sed 's/^# \{0,1\}//'; }
+usage() { sed -n '2,/^set -euo/p' "$0" | grep '^#' | sed 's/^# \{0,1\}//'; }
 
 while [[ $# -gt 0 ]]; do
     case "$1" in
@@ -50,6 +62,7 @@ while [[ $# -gt 0 ]]; do
         --out) OUT="$2"; shift 2 ;;
         --work) WORK="$2"; shift 2 ;;
         --keep-work) KEEP_WORK=1; shift ;;
+        --no-gid) WITH_GID=0; shift ;;
         -h|--help) usage; exit 0 ;;
         *) echo "make_pysph_sample: unknown argument: $1" >&2; usage >&2; exit 2 ;;
     esac
@@ -97,8 +110,33 @@ export OMP_NUM_THREADS=1
 export ETS_TOOLKIT=null
 
 # --- 3. simulate ------------------------------------------------------------
-RUN_CMD=("$PY" -m pysph.tools.cli run dam_break_3d --no-openmp
-         --dx "$DX" --tf "$TF" --pfreq "$PFREQ" -d "$SIM_DIR")
+SIM_OPTS=(--no-openmp --dx "$DX" --tf "$TF" --pfreq "$PFREQ" -d "$SIM_DIR")
+if [[ $WITH_GID -eq 1 ]]; then
+    SCALARS="rho,p,gid"
+    DRIVER="$WORK/dam_break_3d_gid.py"
+    cat > "$DRIVER" <<'PYEOF'
+# PySPH's stock dam_break_3d example; the only change: gid = 0..n-1.
+import numpy as np
+from pysph.examples.dam_break_3d import DamBreak3D
+
+
+class DamBreak3DWithGid(DamBreak3D):
+    def create_particles(self):
+        arrays = super().create_particles()
+        for pa in arrays:
+            n = pa.get_number_of_particles()
+            pa.gid[:] = np.arange(n, dtype=np.uint32)
+        return arrays
+
+
+if __name__ == '__main__':
+    DamBreak3DWithGid(fname='dam_break_3d').run()
+PYEOF
+    RUN_CMD=("$PY" "$DRIVER" "${SIM_OPTS[@]}")
+else
+    SCALARS="rho,p"
+    RUN_CMD=("$PY" -m pysph.tools.cli run dam_break_3d "${SIM_OPTS[@]}")
+fi
 log "running: ${RUN_CMD[*]}"
 t0=$(date +%s)
 "${RUN_CMD[@]}"

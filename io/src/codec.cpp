@@ -14,6 +14,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#if defined(__x86_64__)
+#include <immintrin.h>
+#endif
 #include <limits>
 
 #include "bytes.h"
@@ -26,6 +29,8 @@ namespace sluice::io {
 struct DecodeScratch::State {
   ZSTD_DCtx* zstd = ZSTD_createDCtx();
   std::vector<std::byte> raw;
+  std::vector<const uint8_t*> planes;
+  std::vector<uint64_t> codes;
   ~State() { ZSTD_freeDCtx(zstd); }
 };
 
@@ -61,6 +66,112 @@ ZSTD_CCtx* thread_compressor() {
   };
   thread_local Holder holder;
   return holder.ctx;
+}
+
+// Chunk payload (codec Zstd): a table of one u32 per plane, then the planes.
+// A plane whose table entry is n is stored as is (read in place, no copy);
+// any other entry is the size of the zstd frame holding the plane. Planes
+// that zstd cannot shrink by kMinPlaneGain are stored: decoding them costs
+// nothing, and they are typically noise (LOD values, low bytes).
+constexpr double kMinPlaneGain = 0.05;
+
+void compress_planes(std::vector<std::byte>& raw, size_t n, int level, std::vector<std::byte>& payload,
+                     ChunkCodec& codec) {
+  const size_t planes = raw.size() / n;
+  ZSTD_CCtx* cctx = thread_compressor();
+  std::vector<std::byte> frame(ZSTD_compressBound(n));
+  payload.assign(4 * planes, std::byte{0});
+  for (size_t p = 0; p < planes; ++p) {
+    const std::byte* plane = raw.data() + p * n;
+    size_t size = ZSTD_compressCCtx(cctx, frame.data(), frame.size(), plane, n, level);
+    if (ZSTD_isError(size)) throw Error({}, std::string("zstd: ") + ZSTD_getErrorName(size));
+    const bool stored = double(size) > double(n) * (1.0 - kMinPlaneGain);
+    const std::byte* bytes = stored ? plane : frame.data();
+    if (stored) size = n;
+    const auto size32 = static_cast<uint32_t>(size);
+    std::memcpy(payload.data() + 4 * p, &size32, 4);
+    payload.insert(payload.end(), bytes, bytes + size);
+  }
+  codec = ChunkCodec::Zstd;
+  if (payload.size() >= raw.size()) {  // nothing shrank: store the planes, no table
+    payload = std::move(raw);
+    codec = ChunkCodec::Stored;
+  }
+}
+
+// Morton deltas from their 6 byte planes; a loop the compiler vectorizes.
+void gather_deltas(const uint8_t* const* b, size_t n, uint64_t* deltas) {
+  const uint8_t *b0 = b[0], *b1 = b[1], *b2 = b[2], *b3 = b[3], *b4 = b[4], *b5 = b[5];
+  for (size_t i = 0; i < n; ++i) {
+    deltas[i] = uint64_t(b0[i]) | uint64_t(b1[i]) << 8 | uint64_t(b2[i]) << 16 | uint64_t(b3[i]) << 24 |
+                uint64_t(b4[i]) << 32 | uint64_t(b5[i]) << 40;
+  }
+}
+
+// Codes + LOD bytes -> packed (x, y, z, lod) uint16 quadruples, written with
+// unaligned-safe stores (the destination may be mapped staging memory).
+template <class Decode>
+inline void unpack_with(Decode decode, const uint64_t* codes, const uint8_t* lod_lo, const uint8_t* lod_hi, size_t n,
+                        uint64_t* dst) {
+  for (size_t i = 0; i < n; ++i) {
+    const uint64_t packed = decode(codes[i]) | (uint64_t(lod_lo[i]) | uint64_t(lod_hi[i]) << 8) << 48;
+    std::memcpy(dst + i, &packed, 8);
+  }
+}
+
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+__attribute__((target("bmi2"))) void unpack_codes_bmi2(const uint64_t* codes, const uint8_t* lod_lo,
+                                                       const uint8_t* lod_hi, size_t n, uint64_t* dst) {
+  for (size_t i = 0; i < n; ++i) {
+    const uint64_t c = codes[i];
+    const uint64_t packed = _pext_u64(c, 0x249249249249ull) | _pext_u64(c, 0x492492492492ull) << 16 |
+                            _pext_u64(c, 0x924924924924ull) << 32 |
+                            (uint64_t(lod_lo[i]) | uint64_t(lod_hi[i]) << 8) << 48;
+    std::memcpy(dst + i, &packed, 8);
+  }
+}
+const bool kHaveBmi2 = __builtin_cpu_supports("bmi2");
+#endif
+
+void unpack_codes(const uint64_t* codes, const uint8_t* lod_lo, const uint8_t* lod_hi, size_t n, uint64_t* dst) {
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+  if (kHaveBmi2) return unpack_codes_bmi2(codes, lod_lo, lod_hi, n, dst);
+#endif
+  unpack_with(morton_to_packed16, codes, lod_lo, lod_hi, n, dst);
+}
+
+// Finds (and decompresses where needed) every plane of a chunk payload.
+void locate_planes(std::span<const std::byte> payload, ChunkCodec codec, size_t n, size_t planes,
+                   DecodeScratch::State& s, std::vector<const uint8_t*>& out, const ErrorLocation& where) {
+  out.resize(planes);
+  if (codec == ChunkCodec::Stored) {
+    if (payload.size() != n * planes) throw Error(where, "stored chunk has the wrong size");
+    for (size_t p = 0; p < planes; ++p) out[p] = reinterpret_cast<const uint8_t*>(payload.data()) + p * n;
+    return;
+  }
+  if (payload.size() < 4 * planes) throw Error(where, "chunk payload is smaller than its plane table");
+  if (s.raw.size() < n * planes) s.raw.resize(n * planes);
+  size_t at = 4 * planes;
+  for (size_t p = 0; p < planes; ++p) {
+    uint32_t size;
+    std::memcpy(&size, payload.data() + 4 * p, 4);
+    if (size > payload.size() - at) throw Error(where, "plane " + std::to_string(p) + " runs past the chunk payload");
+    const std::byte* src = payload.data() + at;
+    if (size == n) {
+      out[p] = reinterpret_cast<const uint8_t*>(src);
+    } else {
+      std::byte* dst = s.raw.data() + p * n;
+      const size_t got = ZSTD_decompressDCtx(s.zstd, dst, n, src, size);
+      if (ZSTD_isError(got)) throw Error(where, "plane " + std::to_string(p) + ": zstd: " + ZSTD_getErrorName(got));
+      if (got != n) {
+        throw Error(where, "plane " + std::to_string(p) + " decompressed to " + std::to_string(got) + " bytes, expected " +
+                               std::to_string(n));
+      }
+      out[p] = reinterpret_cast<const uint8_t*>(dst);
+    }
+    at += size;
+  }
+  if (at != payload.size()) throw Error(where, "chunk payload has trailing bytes");
 }
 
 EncodedChunk encode_chunk(const FrameInput& in, std::span<const uint32_t> members, PositionCoding coding,
@@ -136,16 +247,7 @@ EncodedChunk encode_chunk(const FrameInput& in, std::span<const uint32_t> member
   }
 
   out.raw_bytes = raw_size;
-  out.payload.resize(ZSTD_compressBound(raw_size));
-  const size_t written = ZSTD_compressCCtx(thread_compressor(), out.payload.data(), out.payload.size(), raw.data(),
-                                           raw.size(), options.zstd_level);
-  if (ZSTD_isError(written) || written >= raw_size) {
-    out.payload = std::move(raw);  // incompressible: store as is
-    desc.codec = ChunkCodec::Stored;
-  } else {
-    out.payload.resize(written);
-    desc.codec = ChunkCodec::Zstd;
-  }
+  compress_planes(raw, n, options.zstd_level, out.payload, desc.codec);
   desc.compressed_size = static_cast<uint32_t>(out.payload.size());
   desc.checksum = checksum(out.payload);
   return out;
@@ -227,54 +329,38 @@ void decode_chunk(std::span<const std::byte> record, const ChunkDesc& chunk, con
   const uint64_t stored = checksum(payload);
   if (stored != chunk.checksum) throw Error(where, "chunk checksum mismatch (the chunk's bytes are corrupt)");
 
-  const uint64_t raw_size = raw_chunk_bytes(coding, n, attributes);
-  const std::byte* raw = nullptr;
-  if (chunk.codec == ChunkCodec::Stored) {
-    if (payload.size() != raw_size) throw Error(where, "stored chunk has the wrong size");
-    raw = payload.data();
-  } else {
-    DecodeScratch::State& s = scratch.state();
-    if (s.raw.size() < raw_size) s.raw.resize(raw_size);
-    const size_t got = ZSTD_decompressDCtx(s.zstd, s.raw.data(), raw_size, payload.data(), payload.size());
-    if (ZSTD_isError(got)) throw Error(where, std::string("zstd: ") + ZSTD_getErrorName(got));
-    if (got != raw_size) throw Error(where, "chunk decompressed to " + std::to_string(got) + " bytes, expected " +
-                                                std::to_string(raw_size));
-    raw = s.raw.data();
-  }
-
-  const auto* planes = reinterpret_cast<const uint8_t*>(raw);
-  const uint8_t* lod_lo = planes + (coding == PositionCoding::Quantized16 ? 6 : 12) * n;
-  const uint8_t* lod_hi = lod_lo + n;
+  const size_t plane_count = raw_chunk_bytes(coding, 1, attributes);
+  DecodeScratch::State& state = scratch.state();
+  std::vector<const uint8_t*>& planes = state.planes;
+  locate_planes(payload, chunk.codec, n, plane_count, state, planes, where);
+  const size_t first_lod = coding == PositionCoding::Quantized16 ? 6 : 12;
+  const uint8_t* lod_lo = planes[first_lod];
+  const uint8_t* lod_hi = planes[first_lod + 1];
   if (coding == PositionCoding::Quantized16) {
-    const uint8_t *b0 = planes, *b1 = b0 + n, *b2 = b1 + n, *b3 = b2 + n, *b4 = b3 + n, *b5 = b4 + n;
-    auto* dst = reinterpret_cast<uint64_t*>(out.particles.data());
+    state.codes.resize(n);
+    uint64_t* codes = state.codes.data();
+    gather_deltas(planes.data(), n, codes);
     uint64_t code = 0;
-    for (size_t i = 0; i < n; ++i) {
-      code += uint64_t(b0[i]) | uint64_t(b1[i]) << 8 | uint64_t(b2[i]) << 16 | uint64_t(b3[i]) << 24 |
-              uint64_t(b4[i]) << 32 | uint64_t(b5[i]) << 40;
-      const uint64_t x = compact_bits_by_3(code), y = compact_bits_by_3(code >> 1), z = compact_bits_by_3(code >> 2);
-      const uint64_t lod = uint64_t(lod_lo[i]) | uint64_t(lod_hi[i]) << 8;
-      const uint64_t packed = (x & 0xffff) | (y & 0xffff) << 16 | (z & 0xffff) << 32 | lod << 48;
-      std::memcpy(dst + i, &packed, 8);
-    }
+    for (size_t i = 0; i < n; ++i) codes[i] = code += codes[i];
+    unpack_codes(codes, lod_lo, lod_hi, n, reinterpret_cast<uint64_t*>(out.particles.data()));
   } else {
     auto* dst = reinterpret_cast<uint32_t*>(out.particles.data());
     for (size_t i = 0; i < n; ++i) {
       for (size_t a = 0; a < 3; ++a) {
-        const uint8_t* p = planes + 4 * a * n;
-        dst[4 * i + a] = uint32_t(p[i]) | uint32_t(p[n + i]) << 8 | uint32_t(p[2 * n + i]) << 16 |
-                         uint32_t(p[3 * n + i]) << 24;
+        const uint8_t* const* p = &planes[4 * a];
+        dst[4 * i + a] = uint32_t(p[0][i]) | uint32_t(p[1][i]) << 8 | uint32_t(p[2][i]) << 16 | uint32_t(p[3][i]) << 24;
       }
       dst[4 * i + 3] = uint32_t(lod_lo[i]) | uint32_t(lod_hi[i]) << 8;
     }
   }
-  const uint8_t* attr = lod_hi + n;
-  for (size_t a = 0; a < attributes && a < out.attributes.size(); ++a, attr += 2 * n) {
+  for (size_t a = 0; a < attributes && a < out.attributes.size(); ++a) {
     uint16_t* dst = out.attributes[a];
     if (dst == nullptr) continue;
+    const uint8_t* lo = planes[first_lod + 2 + 2 * a];
+    const uint8_t* hi = planes[first_lod + 3 + 2 * a];
     uint16_t q = 0;
     for (size_t i = 0; i < n; ++i) {
-      q = uint16_t(q + (attr[i] | attr[n + i] << 8));
+      q = uint16_t(q + (lo[i] | hi[i] << 8));
       dst[i] = q;
     }
   }

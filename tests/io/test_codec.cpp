@@ -84,3 +84,24 @@ TEST(Dequantize, EndpointsAreExact) {
   EXPECT_EQ(dequantize(0, -2.5f, 7.f), -2.5f);
   EXPECT_NEAR(dequantize(65535, -2.5f, 7.f), 7.f, 1e-6f);
 }
+
+#include "sluice/io/spacing.h"
+
+TEST(Spacing, LatticeSpacingIsFound) {
+  std::vector<float> xyz;
+  for (int i = 0; i < 20; ++i)
+    for (int j = 0; j < 20; ++j)
+      for (int k = 0; k < 20; ++k) xyz.insert(xyz.end(), {i * 0.04f, j * 0.04f + 1.f, k * 0.04f});
+  EXPECT_NEAR(estimate_spacing(xyz), 0.04f, 1e-5f);
+  EXPECT_EQ(estimate_spacing(std::vector<float>{1, 2, 3}), 0.f);
+}
+
+TEST(Morton, TableDecodeMatchesBitDecode) {
+  std::mt19937_64 rng(5);
+  for (int i = 0; i < 100000; ++i) {
+    const uint64_t code = rng();
+    uint32_t x, y, z;
+    morton_decode(code & ((uint64_t{1} << 48) - 1), x, y, z);
+    ASSERT_EQ(morton_to_packed16(code), uint64_t(x) | uint64_t(y) << 16 | uint64_t(z) << 32);
+  }
+}

@@ -2,6 +2,7 @@
 // std::from_chars: millions of rows take well under a second per million.
 #include "import/text_reader.h"
 
+#include <algorithm>
 #include <cerrno>
 #include <charconv>
 #include <cmath>
@@ -114,11 +115,13 @@ std::string join(const std::vector<std::string>& names) {
 
 // ----------------------------------------------------------- column roles
 
-// What a column feeds. Attributes may span several columns (vector
-// components), whose squares are summed and rooted.
+// What a column feeds (the id column may also be a requested attribute).
+// Attributes may span several columns (vector components), whose squares
+// are summed and rooted.
 struct ColumnRole {
-  enum Kind { kSkip, kPosition, kId, kAttribute } kind = kSkip;
-  int slot = 0;  // axis for positions, attribute index for attributes
+  int axis = -1;       // 0..2 for x, y, z
+  int attribute = -1;  // index among the requested attributes
+  bool id = false;
 };
 
 struct ArrayColumns {
@@ -137,7 +140,7 @@ Layout make_layout(const std::string& path, size_t ncols, const size_t pos_cols[
                    const std::string& id_array) {
   Layout layout;
   layout.roles.resize(ncols);
-  for (int axis = 0; axis < 3; ++axis) layout.roles[pos_cols[axis]] = {ColumnRole::kPosition, axis};
+  for (int axis = 0; axis < 3; ++axis) layout.roles[pos_cols[axis]].axis = axis;
   const auto find = [&](const std::string& name) -> const ArrayColumns* {
     for (const auto& a : arrays) {
       if (a.name == name) return &a;
@@ -153,12 +156,12 @@ Layout make_layout(const std::string& path, size_t ncols, const size_t pos_cols[
     const ArrayColumns* a = find(id_array);
     if (!a) throw Error({path}, "no id column '" + id_array + "'; columns: " + join(names()));
     if (a->columns.size() != 1) throw Error({path}, "id array '" + id_array + "' has several components");
-    layout.roles[a->columns[0]] = {ColumnRole::kId, 0};
+    layout.roles[a->columns[0]].id = true;
   }
   for (size_t k = 0; k < attributes.size(); ++k) {
     const ArrayColumns* a = find(attributes[k]);
     if (!a) throw Error({path}, "no array '" + attributes[k] + "'; arrays: " + join(names()));
-    for (size_t c : a->columns) layout.roles[c] = {ColumnRole::kAttribute, static_cast<int>(k)};
+    for (size_t c : a->columns) layout.roles[c].attribute = static_cast<int>(k);
     layout.components.push_back(static_cast<int>(a->columns.size()));
   }
   return layout;
@@ -173,17 +176,17 @@ class RowSink {
   }
   // Feeds field `col` of the current row; returns false if it is not a number.
   bool field(size_t col, std::string_view text) {
-    const ColumnRole role = layout_.roles[col];
-    if (role.kind == ColumnRole::kSkip) return true;
-    if (role.kind == ColumnRole::kId) return parse_id(text, id_);
+    const ColumnRole& role = layout_.roles[col];
+    if (role.id && !parse_id(text, id_)) return false;
+    if (role.axis < 0 && role.attribute < 0) return true;
     double v = 0;
     if (!parse_double(text, v)) return false;
-    if (role.kind == ColumnRole::kPosition) {
-      xyz_[role.slot] = v;
-    } else if (layout_.components[role.slot] == 1) {
-      acc_[role.slot] = v;
+    if (role.axis >= 0) {
+      xyz_[role.axis] = v;
+    } else if (layout_.components[role.attribute] == 1) {
+      acc_[role.attribute] = v;
     } else {
-      acc_[role.slot] += v * v;
+      acc_[role.attribute] += v * v;
     }
     return true;
   }
@@ -195,6 +198,11 @@ class RowSink {
       frame_.attributes[k].push_back(static_cast<float>(v));
       acc_[k] = 0.0;
     }
+  }
+  void reserve(size_t rows) {
+    frame_.positions.reserve(rows * 3);
+    if (with_ids_) frame_.ids.reserve(rows);
+    for (auto& a : frame_.attributes) a.reserve(rows);
   }
   ParticleFrame take() { return std::move(frame_); }
 
@@ -209,7 +217,7 @@ class RowSink {
 
 std::string describe_bad_field(const Layout& layout, const std::vector<std::string>& column_names, size_t col,
                                std::string_view text) {
-  const bool is_id = layout.roles[col].kind == ColumnRole::kId;
+  const bool is_id = layout.roles[col].id;
   return "'" + std::string(trim(text)) + "' in column '" + column_names[col] + "' is not " +
          (is_id ? "a non-negative integer id" : "a number");
 }
@@ -382,6 +390,7 @@ ParticleFrame read_csv(const std::string& path, const std::vector<std::string>& 
   const size_t ncols = header.columns.size();
   const Layout layout = make_layout(path, ncols, header.pos_cols, header.arrays, attributes, id_array);
   RowSink sink(layout, !id_array.empty(), attributes.size());
+  sink.reserve(static_cast<size_t>(std::count(text.begin(), text.end(), '\n')));
   while (lines.next(line)) {
     if (is_blank(line)) continue;
     size_t pos = 0;
@@ -432,6 +441,7 @@ ParticleFrame read_xyz(const std::string& path, const std::vector<std::string>& 
       const size_t pos_cols[3] = {0, 1, 2};
       layout = make_layout(path, ncols, pos_cols, xyz_columns(ncols), attributes, id_array);
       sink.emplace(*layout, !id_array.empty(), attributes.size());
+      sink->reserve(static_cast<size_t>(std::count(text.begin(), text.end(), '\n')));
     }
     size_t pos = 0;
     size_t col = 0;

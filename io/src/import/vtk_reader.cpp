@@ -8,6 +8,7 @@
 #include <vtkDataSet.h>
 #include <vtkDataSetReader.h>
 #include <vtkFieldData.h>
+#include <vtkLogger.h>
 #include <vtkNew.h>
 #include <vtkObjectFactory.h>
 #include <vtkOutputWindow.h>
@@ -52,15 +53,28 @@ std::string clean_message(const char* text) {
     const size_t close = s.find("):", open);
     if (close != std::string::npos) s.erase(open, close + 1 - open);
   }
-  std::replace(s.begin(), s.end(), '\n', ' ');
-  while (!s.empty() && (s.back() == ' ' || s.back() == '\r')) s.pop_back();
-  return s;
+  // One line, single spaces.
+  std::string out;
+  for (char c : s) {
+    const bool space = c == ' ' || c == '\n' || c == '\r' || c == '\t';
+    if (space && (out.empty() || out.back() == ' ')) continue;
+    out += space ? ' ' : c;
+  }
+  while (!out.empty() && out.back() == ' ') out.pop_back();
+  return out;
+}
+
+// The pipeline's own "algorithm returned failure" follows the reader's
+// real message and only adds noise (a dump of the request).
+bool is_pipeline_echo(const std::string& m) {
+  return m.rfind("vtkCompositeDataPipeline:", 0) == 0 || m.rfind("vtkStreamingDemandDrivenPipeline:", 0) == 0 ||
+         m.rfind("vtkDemandDrivenPipeline:", 0) == 0 || m.rfind("vtkExecutive:", 0) == 0;
 }
 
 class CaptureWindow : public vtkOutputWindow {
  public:
   static CaptureWindow* New();
-  vtkTypeMacro(CaptureWindow, vtkOutputWindow);
+  vtkTypeMacro(CaptureWindow, vtkOutputWindow)
 
   void DisplayErrorText(const char* text) override {
     if (t_capture) {
@@ -86,6 +100,8 @@ class ErrorCapture {
     std::call_once(installed, [] {
       vtkNew<CaptureWindow> window;
       vtkOutputWindow::SetInstance(window);
+      // VTK 9 also logs every error to stderr itself; the window has it.
+      vtkLogger::SetStderrVerbosity(vtkLogger::VERBOSITY_OFF);
     });
     t_capture = &errors_;
   }
@@ -93,10 +109,24 @@ class ErrorCapture {
   ErrorCapture(const ErrorCapture&) = delete;
   ErrorCapture& operator=(const ErrorCapture&) = delete;
 
+  // Removes the messages containing `text`; true if there were any.
+  bool take(const char* text) {
+    const auto has = [&](const std::string& m) { return m.find(text) != std::string::npos; };
+    const auto it = std::remove_if(errors_.begin(), errors_.end(), has);
+    const bool found = it != errors_.end();
+    errors_.erase(it, errors_.end());
+    return found;
+  }
+
   void throw_if_any(const std::string& path) const {
     if (errors_.empty()) return;
-    std::string msg = "VTK could not read the file: " + errors_.front();
-    for (size_t k = 1; k < errors_.size() && k < 3; ++k) msg += "; " + errors_[k];
+    std::vector<std::string> shown;
+    for (const auto& m : errors_) {
+      if (!is_pipeline_echo(m) && shown.size() < 3) shown.push_back(m);
+    }
+    if (shown.empty()) shown.push_back(errors_.front());
+    std::string msg = "VTK could not read the file: " + shown.front();
+    for (size_t k = 1; k < shown.size(); ++k) msg += "; " + shown[k];
     throw Error({path}, msg);
   }
 
@@ -154,6 +184,8 @@ std::vector<std::string> point_array_names(vtkDataSet* ds) {
   return names;
 }
 
+constexpr const char* kNoPointsElement = "No Points element available in first piece";
+
 // Reads the XML header only; `wanted` == nullptr stops there. Otherwise
 // only the wanted point arrays are decoded: PySPH files carry arrays we
 // would decompress for nothing.
@@ -164,6 +196,9 @@ Loaded load_xml(const std::string& path, Kind kind, const std::vector<std::strin
   out.reader = reader;
   reader->SetFileName(path.c_str());
   reader->UpdateInformation();
+  // VTK's writers store an empty dataset with an empty <Points/>, which its
+  // reader then reports as an error although it reads the file fine.
+  bool no_points_element = capture.take(kNoPointsElement);
   capture.throw_if_any(path);
   out.arrays = selection_names(reader->GetPointDataArraySelection());
   if (!wanted) return out;
@@ -171,9 +206,13 @@ Loaded load_xml(const std::string& path, Kind kind, const std::vector<std::strin
   for (const auto& name : *wanted) reader->GetPointDataArraySelection()->EnableArray(name.c_str());
   reader->GetCellDataArraySelection()->DisableAllArrays();
   reader->Update();
+  no_points_element = capture.take(kNoPointsElement) || no_points_element;
   capture.throw_if_any(path);
   out.data = reader->GetOutputAsDataSet();
   if (!out.data) throw Error({path}, "VTK could not read the file (no dataset)");
+  if (no_points_element && out.data->GetNumberOfPoints() != 0) {
+    throw Error({path}, std::string("VTK could not read the file: ") + kNoPointsElement);
+  }
   return out;
 }
 
@@ -252,7 +291,10 @@ void copy_as_float(vtkDataArray* a, float* out) {
 // One float per tuple: the value itself, or the magnitude of a vector.
 void copy_scalar(vtkDataArray* a, float* out) {
   const size_t comps = static_cast<size_t>(a->GetNumberOfComponents());
-  if (comps == 1) return copy_as_float(a, out);
+  if (comps == 1) {
+    copy_as_float(a, out);
+    return;
+  }
   const size_t tuples = static_cast<size_t>(a->GetNumberOfTuples());
   if (a->HasStandardMemoryLayout()) {
     void* raw = a->GetVoidPointer(0);

@@ -64,3 +64,16 @@ std::vector<std::string> expand_glob_natural(const std::string& pattern);
 bool natural_less(const std::string& a, const std::string& b);
 
 }  // namespace sluice::io
+
+namespace sluice::io {
+
+// True when this build reads (and writes) VTK files.
+bool has_vtk_support();
+
+// Writes `frame` as a VTK XML unstructured grid: float32 points, one
+// VTK_VERTEX cell per particle (as solvers write particle files), appended
+// binary data, zlib-compressed when `compress`. For comparisons and tests.
+// Throws io::Error when built without VTK.
+void write_vtu(const std::string& path, const ParticleFrame& frame, bool compress);
+
+}  // namespace sluice::io

@@ -1,0 +1,156 @@
+// `sluice info`: what a .sluice file holds, for people or (--json) scripts.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include "commands.h"
+#include "human.h"
+#include "sluice/io/reader.h"
+
+namespace sluice::app {
+namespace {
+
+struct InfoOptions {
+  std::string file;
+  bool json = false;
+  bool all_frames = false;
+};
+
+const char* coding_name(io::PositionCoding c) {
+  return c == io::PositionCoding::Quantized16 ? "quantized16" : "float32";
+}
+
+std::string json_string(const std::string& s) {
+  std::string out = "\"";
+  for (char c : s) {
+    if (c == '"' || c == '\\') out += '\\', out += c;
+    else if (static_cast<unsigned char>(c) < 0x20) {
+      char buf[8];
+      std::snprintf(buf, sizeof buf, "\\u%04x", c);
+      out += buf;
+    } else out += c;
+  }
+  return out + "\"";
+}
+
+std::string json_number(double v) {
+  if (!std::isfinite(v)) return "null";
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.9g", v);
+  return buf;
+}
+
+std::string json_box(const io::Aabb& b) {
+  if (b.empty()) return "null";
+  return "{\"min\": [" + json_number(b.min[0]) + ", " + json_number(b.min[1]) + ", " + json_number(b.min[2]) +
+         "], \"max\": [" + json_number(b.max[0]) + ", " + json_number(b.max[1]) + ", " + json_number(b.max[2]) + "]}";
+}
+
+std::string text_box(const io::Aabb& b) {
+  if (b.empty()) return "(empty)";
+  char buf[160];
+  std::snprintf(buf, sizeof buf, "[%.4g, %.4g, %.4g] .. [%.4g, %.4g, %.4g]", b.min[0], b.min[1], b.min[2], b.max[0],
+                b.max[1], b.max[2]);
+  return buf;
+}
+
+void print_json(const io::ContainerReader& r) {
+  const io::FileHeader& h = r.header();
+  const auto& frames = r.index().frames;
+  uint64_t particles = 0;
+  for (const auto& f : frames) particles += f.particle_count;
+  std::printf("{\n  \"file\": %s,\n  \"format_version\": \"%u.%u\",\n  \"file_bytes\": %llu,\n", json_string(r.path()).c_str(),
+              h.version_major, h.version_minor, (unsigned long long)r.file_size());
+  std::printf("  \"position_coding\": \"%s\",\n  \"lod_source\": \"%s\",\n  \"lod_id_array\": %s,\n", coding_name(h.position_coding),
+              h.lod_source == io::LodSource::IdHash ? "id_hash" : "particle_order", json_string(h.lod_id_array).c_str());
+  std::printf("  \"particle_spacing\": %s,\n  \"particle_radius\": %s,\n  \"frame_rate\": %s,\n  \"source\": %s,\n",
+              json_number(h.particle_spacing).c_str(), json_number(h.particle_radius).c_str(),
+              json_number(h.frame_rate).c_str(), json_string(h.source).c_str());
+  std::printf("  \"bounds\": %s,\n  \"attributes\": [", json_box(r.index().bounds).c_str());
+  for (size_t a = 0; a < h.attributes.size(); ++a) {
+    std::printf("%s{\"name\": %s, \"min\": %s, \"max\": %s}", a ? ", " : "", json_string(h.attributes[a].name).c_str(),
+                json_number(r.index().attribute_ranges[a][0]).c_str(), json_number(r.index().attribute_ranges[a][1]).c_str());
+  }
+  std::printf("],\n  \"frame_count\": %zu,\n  \"particles_total\": %llu,\n  \"frames\": [\n", frames.size(),
+              (unsigned long long)particles);
+  for (size_t i = 0; i < frames.size(); ++i) {
+    const auto& f = frames[i];
+    std::printf("    {\"frame\": %zu, \"time\": %s, \"particles\": %llu, \"chunks\": %u, \"offset\": %llu, \"bytes\": %llu, "
+                "\"bounds\": %s, \"layers\": {\"all\": %llu, \"surface\": %llu, \"interior\": %llu, \"blobs\": %llu}}%s\n",
+                i, json_number(f.time).c_str(), (unsigned long long)f.particle_count, f.chunk_count,
+                (unsigned long long)f.offset, (unsigned long long)f.bytes, json_box(f.bounds).c_str(),
+                (unsigned long long)f.layer_particles[0], (unsigned long long)f.layer_particles[1],
+                (unsigned long long)f.layer_particles[2], (unsigned long long)f.layer_particles[3],
+                i + 1 < frames.size() ? "," : "");
+  }
+  std::printf("  ]\n}\n");
+}
+
+void print_text(const io::ContainerReader& r, bool all_frames) {
+  const io::FileHeader& h = r.header();
+  const auto& frames = r.index().frames;
+  uint64_t particles = 0, frame_bytes = 0, chunks = 0, lo = UINT64_MAX, hi = 0;
+  for (const auto& f : frames) {
+    particles += f.particle_count;
+    frame_bytes += f.bytes;
+    chunks += f.chunk_count;
+    lo = std::min(lo, f.particle_count);
+    hi = std::max(hi, f.particle_count);
+  }
+  const double per = particles ? double(frame_bytes) / double(particles) : 0;
+  const size_t decoded = io::decoded_particle_bytes(h.position_coding) + 2 * h.attributes.size();
+  std::printf("%s\n", r.path().c_str());
+  std::printf("  format        %u.%u, %s positions, %s\n", h.version_major, h.version_minor,
+              h.position_coding == io::PositionCoding::Quantized16 ? "16-bit quantized" : "float32 (lossless)",
+              human_bytes(double(r.file_size())).c_str());
+  std::printf("  source        %s\n", h.source.c_str());
+  std::printf("  LOD values    %s\n", h.lod_source == io::LodSource::IdHash
+                                         ? ("hash of id array '" + h.lod_id_array + "' (stable across frames)").c_str()
+                                         : "hash of particle order (stable only if the source keeps its order)");
+  std::printf("  spacing       %g (radius %g), %g frames/s\n", h.particle_spacing, h.particle_radius, h.frame_rate);
+  std::printf("  bounds        %s\n", text_box(r.index().bounds).c_str());
+  for (size_t a = 0; a < h.attributes.size(); ++a) {
+    std::printf("  attribute     %s  [%g, %g]\n", h.attributes[a].name.c_str(), r.index().attribute_ranges[a][0],
+                r.index().attribute_ranges[a][1]);
+  }
+  if (frames.empty()) {
+    std::printf("  frames        0\n");
+    return;
+  }
+  std::printf("  frames        %zu, time %g .. %g s\n", frames.size(), frames.front().time, frames.back().time);
+  std::printf("  particles     %s per frame (min %s, max %s), %s in all\n",
+              human_count(double(particles) / double(frames.size())).c_str(), human_count(double(lo)).c_str(),
+              human_count(double(hi)).c_str(), human_count(double(particles)).c_str());
+  std::printf("  chunks        %s per frame on average\n", fixed(double(chunks) / double(frames.size()), 1).c_str());
+  std::printf("  compression   %s bytes/particle on disk; %sx smaller than raw float32 xyz, %sx smaller than decoded (%zu B)\n",
+              fixed(per, 2).c_str(), fixed(per > 0 ? 12.0 / per : 0, 2).c_str(),
+              fixed(per > 0 ? double(decoded) / per : 0, 2).c_str(), decoded);
+  std::printf("\n  %6s %10s %12s %7s %10s  %s\n", "frame", "time", "particles", "chunks", "bytes", "bounds");
+  const size_t n = frames.size();
+  for (size_t i = 0; i < n; ++i) {
+    if (!all_frames && n > 12 && i == 5) {
+      std::printf("  %6s  ... %zu more (--all-frames lists every frame)\n", "", n - 10);
+      i = n - 5;
+    }
+    const auto& f = frames[i];
+    std::printf("  %6zu %10.4g %12s %7u %10s  %s\n", i, f.time, human_count(double(f.particle_count)).c_str(),
+                f.chunk_count, human_bytes(double(f.bytes)).c_str(), text_box(f.bounds).c_str());
+  }
+}
+
+}  // namespace
+
+void add_info(CLI::App& app) {
+  auto o = std::make_shared<InfoOptions>();
+  CLI::App* cmd = app.add_subcommand("info", "Show what a .sluice file holds: header, frames, compression");
+  cmd->add_option("file", o->file, ".sluice file")->required();
+  cmd->add_flag("--json", o->json, "Print JSON for scripts (every frame)");
+  cmd->add_flag("--all-frames", o->all_frames, "List every frame, not the first and last five");
+  cmd->callback([o] {
+    const io::ContainerReader reader(o->file);
+    if (o->json) print_json(reader);
+    else print_text(reader, o->all_frames);
+  });
+}
+
+}  // namespace sluice::app

@@ -1,0 +1,20 @@
+// Each subcommand registers its options on the CLI and runs when chosen.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+namespace sluice::app {
+
+void add_convert(CLI::App& app);
+void add_info(CLI::App& app);
+void add_verify(CLI::App& app);
+void add_recover(CLI::App& app);
+void add_bench(CLI::App& app);
+
+// Thrown by a subcommand that has already printed what went wrong, to set the
+// process exit code without another message.
+struct ExitCode {
+  int code;
+};
+
+}  // namespace sluice::app

@@ -1,0 +1,42 @@
+#include "human.h"
+
+#include <cmath>
+#include <cstdio>
+
+namespace sluice::app {
+
+std::string fixed(double v, int decimals) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
+  return buf;
+}
+
+std::string human_bytes(double bytes) {
+  const char* units[] = {"B", "kB", "MB", "GB", "TB"};
+  int u = 0;
+  while (std::fabs(bytes) >= 1000 && u < 4) bytes /= 1000, ++u;
+  return fixed(bytes, u == 0 ? 0 : (bytes < 10 ? 2 : 1)) + " " + units[u];
+}
+
+std::string human_count(double n) {
+  if (n >= 1e9) return fixed(n / 1e9, 2) + " G";
+  if (n >= 1e6) return fixed(n / 1e6, 2) + " M";
+  std::string digits = fixed(n, 0), out;
+  for (size_t i = 0; i < digits.size(); ++i) {
+    if (i > 0 && (digits.size() - i) % 3 == 0) out += ',';
+    out += digits[i];
+  }
+  return out;
+}
+
+std::string human_duration(double s) {
+  if (!std::isfinite(s)) return "?";
+  if (s < 60) return fixed(s, s < 10 ? 2 : 1) + " s";
+  const auto t = static_cast<long>(std::lround(s));
+  char buf[32];
+  if (t < 3600) std::snprintf(buf, sizeof buf, "%ld:%02ld", t / 60, t % 60);
+  else std::snprintf(buf, sizeof buf, "%ld:%02ld:%02ld", t / 3600, (t / 60) % 60, t % 60);
+  return buf;
+}
+
+}  // namespace sluice::app

@@ -1,0 +1,14 @@
+// Numbers for people: sizes, counts, rates and durations.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+namespace sluice::app {
+
+std::string human_bytes(double bytes);      // "12.3 MB" (decimal units, as drives and networks count)
+std::string human_count(double n);          // "9,360" below a million, else "1.09 M"
+std::string human_duration(double seconds); // "0.84 s", "3:05", "1:02:09"
+std::string fixed(double v, int decimals);
+
+}  // namespace sluice::app

@@ -1,0 +1,41 @@
+// sluice: stream huge particle-fluid simulations to the GPU and look at them
+// as liquid. This file wires the subcommands together and turns errors into
+// messages and exit codes.
+#include <cstdio>
+#include <exception>
+
+#include "commands.h"
+#include "sluice/io/error.h"
+
+int main(int argc, char** argv) {
+  CLI::App app{
+      "sluice: stream huge particle-fluid simulation sequences (SPH, MPM, FLIP) from disk and look at them.\n\n"
+      "Typical use:\n"
+      "  sluice convert 'out/fluid_*.vtu' -o run.sluice --attribute rho   # VTK/CSV -> .sluice\n"
+      "  sluice info run.sluice                                         # what is inside\n"
+      "  sluice verify run.sluice                                       # check every checksum, decode all\n"
+      "  sluice bench io 'out/fluid_*.vtu'                              # sluice against VTK's reader\n",
+      "sluice"};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", "sluice 0.1.0 (container format 1.0)");
+  app.footer("Run `sluice COMMAND --help` for the options of a command.");
+  sluice::app::add_convert(app);
+  sluice::app::add_info(app);
+  sluice::app::add_verify(app);
+  sluice::app::add_recover(app);
+  sluice::app::add_bench(app);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  } catch (const sluice::app::ExitCode& e) {
+    return e.code;
+  } catch (const sluice::io::Error& e) {
+    std::fprintf(stderr, "sluice: error: %s\n", e.what());
+    return 1;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "sluice: error: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}

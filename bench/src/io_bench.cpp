@@ -1,0 +1,206 @@
+// `sluice bench io`: the same frames read by VTK's XML reader and by sluice,
+// sizes on disk, and decode scaling over threads.
+#include "sluice/bench/io_bench.h"
+
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <random>
+
+#include "machine.h"
+#include "sluice/io/convert.h"
+#include "sluice/io/lod.h"
+#include "sluice/io/reader.h"
+#include "sluice/io/spacing.h"
+#include "table.h"
+
+namespace sluice::bench {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+// Runs `pass` until `min_seconds` have gone by; returns seconds per pass.
+template <class F>
+double time_passes(double min_seconds, F&& pass) {
+  const auto start = Clock::now();
+  int passes = 0;
+  do {
+    pass();
+    ++passes;
+  } while (seconds_since(start) < min_seconds);
+  return seconds_since(start) / passes;
+}
+
+struct Dataset {
+  std::vector<io::ParticleFrame> frames;
+  uint64_t particles = 0;
+  uint64_t input_bytes = 0;
+};
+
+std::string write_container(const std::string& path, const io::FrameSource& source, io::PositionCoding coding) {
+  io::FileHeader header;
+  header.position_coding = coding;
+  header.lod_id_array = source.info().id_array;
+  header.lod_source = header.lod_id_array.empty() ? io::LodSource::ParticleOrder : io::LodSource::IdHash;
+  header.source = source.info().description;
+  io::ContainerWriter writer(path, header);
+  io::convert_frames(source, std::nullopt, writer, {}, size_t(core_count()) + 1);
+  writer.finish();
+  return path;
+}
+
+// Every chunk of every frame of a container, records held in memory.
+struct LoadedContainer {
+  std::vector<std::vector<std::byte>> records;
+  std::vector<io::FrameHeader> frames;
+  std::vector<std::pair<size_t, size_t>> chunks;  // (frame, chunk)
+  uint64_t particles = 0;
+};
+
+LoadedContainer load(const io::ContainerReader& reader) {
+  LoadedContainer c;
+  for (uint64_t f = 0; f < reader.frame_count(); ++f) {
+    c.records.push_back(reader.read_record(f));
+    c.frames.push_back(reader.parse_record(f, c.records.back()));
+    for (size_t k = 0; k < c.frames.back().chunks.size(); ++k) c.chunks.emplace_back(f, k);
+    c.particles += c.frames.back().particle_count;
+  }
+  return c;
+}
+
+// Decodes every chunk into per-thread output buffers (as the runtime decodes
+// into staging memory), with `threads` workers.
+void decode_all(const io::ContainerReader& reader, const LoadedContainer& c, int threads) {
+  tbb::task_arena arena(threads);
+  arena.execute([&] {
+    tbb::parallel_for(size_t(0), c.chunks.size(), [&](size_t i) {
+      thread_local io::DecodeScratch scratch;
+      thread_local std::vector<std::byte> out;
+      thread_local std::vector<uint16_t> attribute;
+      const auto [f, k] = c.chunks[i];
+      const io::ChunkDesc& chunk = c.frames[f].chunks[k];
+      out.resize(chunk.particle_count * io::decoded_particle_bytes(reader.header().position_coding));
+      io::decode_chunk(c.records[f], chunk, reader.header(), {out, {}}, scratch, reader.location(f, k));
+    });
+  });
+}
+
+// Reads each frame from the file (page cache) and decodes it: the whole path.
+void read_and_decode_all(const io::ContainerReader& reader, int threads) {
+  tbb::task_arena arena(threads);
+  arena.execute([&] {
+    tbb::parallel_for(uint64_t(0), reader.frame_count(), [&](uint64_t f) {
+      thread_local io::DecodeScratch scratch;
+      thread_local std::vector<std::byte> record, out;
+      record.resize(reader.index().frames[f].bytes);
+      reader.read_record(f, record);
+      const io::FrameHeader h = reader.parse_record(f, record);
+      for (size_t k = 0; k < h.chunks.size(); ++k) {
+        out.resize(h.chunks[k].particle_count * io::decoded_particle_bytes(reader.header().position_coding));
+        io::decode_chunk(record, h.chunks[k], reader.header(), {out, {}}, scratch, reader.location(f, k));
+      }
+    });
+  });
+}
+
+}  // namespace
+
+void run_io_bench(const IoBenchOptions& o) {
+  const int cores = o.max_threads > 0 ? o.max_threads : core_count();
+  const auto source = io::open_source(o.input, {});
+  const uint64_t frame_count = source->frame_count();
+  std::printf("sluice bench io: %s\n", source->info().description.c_str());
+  std::printf("machine: %s, %d threads; each timing repeats for at least %.1f s\n", cpu_model().c_str(), cores,
+              o.min_seconds);
+
+  // 1. VTK's reader, one thread per file as convert uses it, and one thread.
+  Dataset data;
+  data.frames.resize(frame_count);
+  for (uint64_t f = 0; f < frame_count; ++f) {
+    std::error_code ec;
+    data.input_bytes += std::filesystem::file_size(source->frame_name(f), ec);
+  }
+  const double vtk_1 = time_passes(o.min_seconds, [&] {
+    for (uint64_t f = 0; f < frame_count; ++f) data.frames[f] = source->read(f);
+  });
+  for (const auto& f : data.frames) data.particles += f.count();
+  const double vtk_n = time_passes(o.min_seconds, [&] {
+    tbb::task_arena arena(cores);
+    arena.execute([&] { tbb::parallel_for(uint64_t(0), frame_count, [&](uint64_t f) { (void)source->read(f); }); });
+  });
+
+  // 2. Files of the same frames.
+  namespace fs = std::filesystem;
+  const bool temp = o.work_dir.empty();
+  const fs::path dir = temp ? fs::temp_directory_path() / ("sluice-bench-" + std::to_string(std::random_device{}()))
+                            : fs::path(o.work_dir);
+  fs::create_directories(dir);
+  const std::string quantized = write_container((dir / "q.sluice").string(), *source, io::PositionCoding::Quantized16);
+  const std::string lossless = write_container((dir / "f.sluice").string(), *source, io::PositionCoding::Float32);
+  uint64_t vtu_zlib = 0, vtu_raw = 0;
+  if (io::has_vtk_support()) {
+    for (uint64_t f = 0; f < frame_count; ++f) {
+      io::write_vtu((dir / "z.vtu").string(), data.frames[f], true);
+      vtu_zlib += fs::file_size(dir / "z.vtu");
+      io::write_vtu((dir / "r.vtu").string(), data.frames[f], false);
+      vtu_raw += fs::file_size(dir / "r.vtu");
+    }
+  }
+  const double n = double(data.particles);
+  const io::ContainerReader q(quantized), l(lossless);
+  const double q_bytes = double(fs::file_size(quantized)), l_bytes = double(fs::file_size(lossless));
+  Table sizes({"format", "bytes", "bytes/particle", "vs raw float32 xyz"});
+  auto size_row = [&](const std::string& name, double bytes) {
+    sizes.row({name, num(bytes, 0), num(bytes / n, 2), num(12.0 * n / bytes, 2) + "x smaller"});
+  };
+  size_row("raw float32 xyz (no LOD value)", 12.0 * n);
+  size_row("input files (as given)", double(data.input_bytes));
+  if (vtu_raw) size_row("VTK .vtu float32, appended raw", double(vtu_raw));
+  if (vtu_zlib) size_row("VTK .vtu float32, zlib", double(vtu_zlib));
+  size_row(".sluice lossless float32 + LOD", l_bytes);
+  size_row(".sluice quantized 16-bit + LOD", q_bytes);
+  std::printf("\n%llu frames, %llu particles in all (%.0f per frame), spacing %.4g\n", (unsigned long long)frame_count,
+              (unsigned long long)data.particles, n / double(frame_count),
+              io::estimate_spacing(data.frames[0].positions));
+  sizes.print("Size on disk (LOD value included in .sluice; VTK files carry no LOD value)");
+
+  // 3. Read + decode against VTK's reader, page cache.
+  const double out_bytes = n * 8;
+  const double rd_1 = time_passes(o.min_seconds, [&] { read_and_decode_all(q, 1); });
+  const double rd_n = time_passes(o.min_seconds, [&] { read_and_decode_all(q, cores); });
+  const double rdl_n = time_passes(o.min_seconds, [&] { read_and_decode_all(l, cores); });
+  Table read({"reader", "threads", "M particles/s", "input MB/s", "output GB/s", "vs VTK (same threads)"});
+  read.row({"VTK XML reader (via sluice import)", "1", num(n / vtk_1 / 1e6, 2), num(double(data.input_bytes) / vtk_1 / 1e6, 1),
+            num(n * 12 / vtk_1 / 1e9, 3), "1.0x"});
+  read.row({"VTK XML reader (via sluice import)", std::to_string(cores), num(n / vtk_n / 1e6, 2),
+            num(double(data.input_bytes) / vtk_n / 1e6, 1), num(n * 12 / vtk_n / 1e9, 3), "1.0x"});
+  read.row({".sluice quantized read+decode", "1", num(n / rd_1 / 1e6, 1), num(q_bytes / rd_1 / 1e6, 1),
+            num(out_bytes / rd_1 / 1e9, 2), num(vtk_1 / rd_1, 0) + "x"});
+  read.row({".sluice quantized read+decode", std::to_string(cores), num(n / rd_n / 1e6, 1), num(q_bytes / rd_n / 1e6, 1),
+            num(out_bytes / rd_n / 1e9, 2), num(vtk_n / rd_n, 0) + "x"});
+  read.row({".sluice lossless read+decode", std::to_string(cores), num(n / rdl_n / 1e6, 1), num(l_bytes / rdl_n / 1e6, 1),
+            num(n * 16 / rdl_n / 1e9, 2), num(vtk_n / rdl_n, 0) + "x"});
+  read.print("Read + decode from the page cache (output: 8 B/particle quantized, 16 B lossless; VTK: float32 xyz)");
+
+  // 4. Decode scaling, records in memory.
+  const LoadedContainer loaded = load(q);
+  Table scaling({"threads", "M particles/s", "output GB/s", "GB/s per thread", "speed-up"});
+  double base = 0;
+  for (int t = 1; t <= cores; t = (t == cores ? cores + 1 : std::min(cores, t * 2))) {
+    const double s = time_passes(o.min_seconds, [&] { decode_all(q, loaded, t); });
+    const double gbps = double(loaded.particles) * 8 / s / 1e9;
+    if (t == 1) base = gbps;
+    scaling.row({std::to_string(t), num(double(loaded.particles) / s / 1e6, 1), num(gbps, 2), num(gbps / t, 2),
+                 num(gbps / base, 2) + "x"});
+  }
+  scaling.print("Decode scaling, quantized chunks in memory (" + std::to_string(loaded.chunks.size()) + " chunks)");
+  std::printf("\nmemcpy bound, one thread: %.1f GB/s\n", memcpy_gbps(o.min_seconds));
+  if (temp) fs::remove_all(dir);
+}
+
+}  // namespace sluice::bench

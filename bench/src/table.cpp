@@ -1,0 +1,36 @@
+#include "table.h"
+
+#include <algorithm>
+#include <cstdio>
+
+namespace sluice::bench {
+
+std::string num(double v, int decimals) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
+  return buf;
+}
+
+void Table::print(const std::string& title) const {
+  std::vector<size_t> width(header_.size());
+  for (size_t c = 0; c < header_.size(); ++c) width[c] = header_[c].size();
+  for (const auto& r : rows_)
+    for (size_t c = 0; c < r.size() && c < width.size(); ++c) width[c] = std::max(width[c], r[c].size());
+  std::printf("\n%s\n", title.c_str());
+  auto line = [&](const std::vector<std::string>& cells) {
+    std::string out = " ";
+    for (size_t c = 0; c < width.size(); ++c) {
+      const std::string cell = c < cells.size() ? cells[c] : "";
+      const std::string pad(width[c] - cell.size(), ' ');
+      out += " " + (c == 0 ? cell + pad : pad + cell) + " ";
+    }
+    std::printf("%s\n", out.c_str());
+  };
+  line(header_);
+  std::string rule;
+  for (size_t c = 0; c < width.size(); ++c) rule += " " + std::string(width[c] + 1, '-');
+  std::printf(" %s\n", rule.c_str());
+  for (const auto& r : rows_) line(r);
+}
+
+}  // namespace sluice::bench

@@ -1,0 +1,22 @@
+// A plain text table: columns sized to their contents, numbers right-aligned.
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace sluice::bench {
+
+class Table {
+ public:
+  explicit Table(std::vector<std::string> header) : header_(std::move(header)) {}
+  void row(std::vector<std::string> cells) { rows_.push_back(std::move(cells)); }
+  void print(const std::string& title) const;
+
+ private:
+  std::vector<std::string> header_;
+  std::vector<std::vector<std::string>> rows_;
+};
+
+std::string num(double v, int decimals);
+
+}  // namespace sluice::bench
