@@ -6,3 +6,8 @@ if(SLUICE_SANITIZE)
     add_compile_options(-fno-sanitize-recover=undefined)
   endif()
 endif()
+
+# Coverage instrumentation for the libFuzzer targets (clang only).
+if(SLUICE_FUZZ)
+  add_compile_options(-fsanitize=fuzzer-no-link)
+endif()

@@ -167,6 +167,28 @@ for i in "${!fluid[@]}"; do
     fi
 done
 log "copied $kept of ${#fluid[@]} fluid frames to $OUT"
+
+# --- 6. a .pvd series with the simulation times --------------------------------
+# dump_vtk writes no time into the .vtu files; the HDF5 output has it
+# (solver_data/t). The .pvd lets `sluice convert` carry real times.
+PVD="$OUT/dam_break_3d.pvd"
+"$PY" - "$SIM_DIR" "$OUT" "$PVD" <<'PYEOF'
+import glob, os, re, sys
+import h5py
+sim, out, pvd = sys.argv[1:4]
+times = {}
+for h5 in glob.glob(os.path.join(sim, '*.hdf5')):
+    with h5py.File(h5, 'r') as f:
+        times[int(re.search(r'_(\d+)\.hdf5$', h5).group(1))] = float(f['solver_data'].attrs['t'])
+rows = []
+for vtu in sorted(glob.glob(os.path.join(out, '*_fluid_*.vtu'))):
+    it = int(re.search(r'_(\d+)\.vtu$', vtu).group(1))
+    rows.append('    <DataSet timestep="%.9g" part="0" file="%s"/>' % (times[it], os.path.basename(vtu)))
+with open(pvd, 'w') as f:
+    f.write('<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n  <Collection>\n')
+    f.write('\n'.join(rows) + '\n  </Collection>\n</VTKFile>\n')
+print('wrote %s (%d frames)' % (pvd, len(rows)))
+PYEOF
 # Print the run's info file (solver parameters, times) for the record.
 info=$(find "$SIM_DIR" -maxdepth 1 -name '*.info' | head -n 1)
 [[ -n "$info" ]] && log "run info: $(cat "$info")"

@@ -2,6 +2,9 @@
 #pragma once
 
 #include <cstdint>
+#include <unistd.h>
+
+#include <cmath>
 #include <filesystem>
 #include <random>
 #include <string>

@@ -1,0 +1,49 @@
+#!/usr/bin/env bash
+# Installs what is missing, builds, and passes every test:
+#   1. Release build, whole suite (CTest)
+#   2. ASan + UBSan build, whole suite
+#   3. TSan build, the pipeline tests (CTest label "pipeline")
+#   4. libFuzzer targets (clang, ASan + UBSan), a short run of each
+# Set QUICK=1 to run step 1 only.
+set -euo pipefail
+root=$(cd "$(dirname "$0")/.." && pwd)
+jobs=${JOBS:-$(nproc)}
+export CCACHE_DIR=${CCACHE_DIR:-$root/.cache/ccache}
+"$root/scripts/deps.sh"
+
+step() { printf '\n=== %s ===\n' "$*"; }
+
+step "Release build and tests"
+BUILD_DIR="$root/build" "$root/scripts/build.sh"
+ctest --test-dir "$root/build" --output-on-failure -j "$jobs"
+[[ "${QUICK:-0}" == 1 ]] && exit 0
+
+step "ASan + UBSan build and tests"
+BUILD_DIR="$root/build-asan" "$root/scripts/build.sh" -DSLUICE_SANITIZE=address,undefined -DCMAKE_BUILD_TYPE=RelWithDebInfo
+ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
+  ctest --test-dir "$root/build-asan" --output-on-failure -j "$jobs"
+
+if [[ -d "$root/runtime" ]]; then
+  step "TSan build and pipeline tests"
+  cmake -S "$root" -B "$root/build-tsan" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSLUICE_SANITIZE=thread >/dev/null
+  cmake --build "$root/build-tsan" -j "$jobs" --target sluice_runtime_tests
+  supp="$root/tests/runtime/tsan.supp"
+  TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1${supp:+ suppressions=$supp}" \
+    ctest --test-dir "$root/build-tsan" -L pipeline --output-on-failure -j "$jobs"
+fi
+
+step "libFuzzer targets"
+CC=clang CXX=clang++ cmake -S "$root" -B "$root/build-fuzz" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSLUICE_FUZZ=ON \
+  -DSLUICE_SANITIZE=address,undefined -DSLUICE_TESTS=ON >/dev/null
+cmake --build "$root/build-fuzz" -j "$jobs" --target fuzz_container fuzz_text_import
+corpus="$root/build-fuzz/corpus"
+rm -rf "$corpus" && mkdir -p "$corpus/container" "$corpus/text"
+# Seeds: real containers (small chunks so there are several) and text files.
+"$root/build/apps/sluice/sluice" convert "$root/data/dam_break_3d/dam_break_3d_fluid_00000.vtu" \
+  -o "$corpus/container/q.sluice" --chunk 300 -a rho -q -f
+"$root/build/apps/sluice/sluice" convert "$root/tests/data/import/ug_ascii.vtu" -o "$corpus/container/f.sluice" --lossless -q -f
+cp "$root"/tests/data/fuzz/text/* "$corpus/text/" 2>/dev/null || true
+secs=${FUZZ_SECONDS:-60}
+"$root/build-fuzz/tests/fuzz/fuzz_container" -max_total_time="$secs" -rss_limit_mb=2048 -timeout=10 "$corpus/container"
+"$root/build-fuzz/tests/fuzz/fuzz_text_import" -max_total_time="$secs" -rss_limit_mb=2048 -timeout=10 "$corpus/text"
+step "all tests passed"
