@@ -8,6 +8,7 @@
 #include <fstream>
 #include <functional>
 #include <map>
+#include <set>
 #include <optional>
 #include <sstream>
 #include <string_view>
@@ -312,6 +313,23 @@ Plan plan_directory(const std::string& dir) {
   }
   if (ec) throw Error({dir}, "cannot list the directory: " + ec.message());
   if (groups.empty()) throw Error({dir}, std::string("no particle files in this directory; supported: ") + kSupported);
+  // A directory with one .pvd collection that references every other
+  // particle file there is that collection (it also carries the times).
+  std::vector<std::string> collections, others;
+  for (const auto& [key, files] : groups) {
+    for (const std::string& f : files) (format_of(f) == Format::kPvd ? collections : others).push_back(f);
+  }
+  if (collections.size() == 1) {
+    Plan plan = plan_pvd(collections[0]);
+    std::set<std::string> referenced;
+    for (const FrameFiles& frame : plan.frames) {
+      for (const std::string& f : frame.files) referenced.insert(fs::weakly_canonical(f).string());
+    }
+    const bool covers_all = std::all_of(others.begin(), others.end(), [&](const std::string& f) {
+      return referenced.count(fs::weakly_canonical(f).string()) > 0;
+    });
+    if (covers_all) return plan;
+  }
   if (groups.size() > 1) {
     // Several particle sets (PySPH writes fluid and boundary side by side):
     // mixing them into one fluid is never what the user wants.

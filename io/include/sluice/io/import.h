@@ -76,4 +76,9 @@ bool has_vtk_support();
 // Throws io::Error when built without VTK.
 void write_vtu(const std::string& path, const ParticleFrame& frame, bool compress);
 
+// Reads a VTK file with VTK's own reader, every array, as ParaView does, and
+// returns its point count: the peer in `sluice bench io`. Throws io::Error
+// when built without VTK.
+uint64_t read_with_vtk(const std::string& path);
+
 }  // namespace sluice::io
