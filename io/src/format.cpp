@@ -1,3 +1,4 @@
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 
@@ -315,6 +316,19 @@ FrameIndexEntry index_entry_for(const FrameHeader& frame, uint64_t offset) {
   e.bounds = frame.bounds;
   for (const ChunkDesc& c : frame.chunks) e.layer_particles[static_cast<size_t>(c.layer)] += c.particle_count;
   return e;
+}
+
+void IndexBuilder::add(const FrameHeader& frame, uint64_t offset) {
+  for (const ChunkDesc& c : frame.chunks) {
+    for (size_t a = 0; a < c.attribute_ranges.size() && a < index_.attribute_ranges.size(); ++a) {
+      auto& range = index_.attribute_ranges[a];
+      range[0] = have_ranges_ ? std::min(range[0], c.attribute_ranges[a][0]) : c.attribute_ranges[a][0];
+      range[1] = have_ranges_ ? std::max(range[1], c.attribute_ranges[a][1]) : c.attribute_ranges[a][1];
+    }
+    have_ranges_ = true;
+  }
+  index_.bounds.extend(frame.bounds);
+  index_.frames.push_back(index_entry_for(frame, offset));
 }
 
 }  // namespace sluice::io

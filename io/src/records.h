@@ -46,4 +46,5 @@ bool parse_footer(std::span<const std::byte> bytes, Footer& out);
 
 FrameIndexEntry index_entry_for(const FrameHeader& frame, uint64_t offset);
 
+
 }  // namespace sluice::io

@@ -2,6 +2,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <optional>
 
 #include "file.h"
 #include "records.h"
@@ -14,7 +15,7 @@ namespace {
 struct Scan {
   uint32_t header_bytes = 0;
   FileHeader header;
-  FrameIndex index;
+  std::optional<IndexBuilder> index;  // set once the header says how many attributes
   uint64_t end = 0;  // just past the last good frame
   std::string stopped_because;
 };
@@ -33,14 +34,13 @@ Scan scan_frames(int fd, uint64_t size, const std::string& path, const ProgressF
   pread_all_or_throw(fd, head, 0, where);
   scan.header = parse_file_header(head, where);
   const size_t attributes = scan.header.attributes.size();
-  scan.index.attribute_ranges.assign(attributes, {0.f, 0.f});
+  scan.index.emplace(attributes);
 
   DecodeScratch scratch;
   std::vector<std::byte> record;
   uint64_t pos = scan.header_bytes;
-  bool have_ranges = false;
   for (;;) {
-    const auto number = static_cast<uint32_t>(scan.index.frames.size());
+    const auto number = static_cast<uint32_t>(scan.index->index().frames.size());
     const ErrorLocation at{path, number, {}};
     if (size - pos < kFrameHeaderFixedBytes) {
       scan.stopped_because = size == pos ? "end of file" : "frame " + std::to_string(number) + " is cut short";
@@ -58,16 +58,7 @@ Scan scan_frames(int fd, uint64_t size, const std::string& path, const ProgressF
         std::vector<std::byte> particles(h.chunks[c].particle_count * decoded_particle_bytes(scan.header.position_coding));
         decode_chunk(record, h.chunks[c], scan.header, {particles, {}}, scratch, {path, number, c});
       }
-      scan.index.frames.push_back(index_entry_for(h, pos));
-      scan.index.bounds.extend(h.bounds);
-      for (const ChunkDesc& c : h.chunks) {
-        for (size_t a = 0; a < attributes; ++a) {
-          auto& r = scan.index.attribute_ranges[a];
-          r[0] = have_ranges ? std::min(r[0], c.attribute_ranges[a][0]) : c.attribute_ranges[a][0];
-          r[1] = have_ranges ? std::max(r[1], c.attribute_ranges[a][1]) : c.attribute_ranges[a][1];
-        }
-        have_ranges = true;
-      }
+      scan.index->add(h, pos);
       pos += prefix.frame_bytes;
       if (progress) progress(pos, size);
     } catch (const Error& e) {
@@ -100,7 +91,7 @@ RecoveryReport recover_container(const std::filesystem::path& input, const std::
   try {
     const uint64_t size = file_size_or_throw(fd, in);
     const Scan scan = scan_frames(fd, size, in, progress);
-    const std::vector<std::byte> index = serialize_index(scan.index, scan.header.attributes.size());
+    const std::vector<std::byte> index = serialize_index(scan.index->index(), scan.header.attributes.size());
     const std::vector<std::byte> footer = serialize_footer({scan.end, index.size()});
     if (in_place) {
       if (::ftruncate(fd, static_cast<off_t>(scan.end)) != 0) throw Error({in}, "cannot truncate for recovery");
@@ -121,7 +112,7 @@ RecoveryReport recover_container(const std::filesystem::path& input, const std::
       }
       ::close(o);
     }
-    report.frames = scan.index.frames.size();
+    report.frames = scan.index->index().frames.size();
     report.bytes_kept = scan.end;
     report.bytes_dropped = size - scan.end;
     report.stopped_because = scan.stopped_because;

@@ -11,13 +11,12 @@
 namespace sluice::io {
 
 ContainerWriter::ContainerWriter(const std::filesystem::path& path, FileHeader header)
-    : path_(path.string()), header_(std::move(header)) {
+    : path_(path.string()), header_(std::move(header)), index_(header_.attributes.size()) {
   if (header_.attributes.size() > kMaxAttributes) throw Error({path_}, "too many attributes (limit 32)");
   for (const AttributeInfo& a : header_.attributes) {
     if (a.name.empty() || a.name.size() > kMaxNameBytes) throw Error({path_}, "attribute name is empty or too long");
   }
   fd_ = open_or_throw(path_, O_WRONLY | O_CREAT | O_TRUNC);
-  index_.attribute_ranges.assign(header_.attributes.size(), {0.f, 0.f});
   write_all(serialize_file_header(header_));
 }
 
@@ -32,24 +31,15 @@ void ContainerWriter::write_all(std::span<const std::byte> bytes) {
 
 void ContainerWriter::append(EncodedFrame frame) {
   if (fd_ < 0) throw Error({path_}, "append after finish");
-  const auto number = static_cast<uint32_t>(index_.frames.size());
+  const auto number = static_cast<uint32_t>(frames_written());
   if (frame.header.frame_number != number) set_frame_number(frame, number, header_.attributes.size());
-  for (const ChunkDesc& c : frame.header.chunks) {
-    for (size_t a = 0; a < c.attribute_ranges.size(); ++a) {
-      auto& range = index_.attribute_ranges[a];
-      range[0] = have_ranges_ ? std::min(range[0], c.attribute_ranges[a][0]) : c.attribute_ranges[a][0];
-      range[1] = have_ranges_ ? std::max(range[1], c.attribute_ranges[a][1]) : c.attribute_ranges[a][1];
-    }
-    have_ranges_ = true;
-  }
-  index_.bounds.extend(frame.header.bounds);
-  index_.frames.push_back(index_entry_for(frame.header, offset_));
+  index_.add(frame.header, offset_);
   write_all(frame.record);
 }
 
 void ContainerWriter::finish() {
   if (fd_ < 0) return;
-  const std::vector<std::byte> index = serialize_index(index_, header_.attributes.size());
+  const std::vector<std::byte> index = serialize_index(index_.index(), header_.attributes.size());
   const uint64_t index_offset = offset_;
   write_all(index);
   write_all(serialize_footer({index_offset, index.size()}));

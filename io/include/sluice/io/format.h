@@ -100,6 +100,19 @@ struct FrameIndex {
   std::vector<std::array<float, 2>> attribute_ranges; // observed over every frame
 };
 
+// Accumulates the frame index as frames are written or recovered: entries,
+// global bounds and the observed range of each attribute.
+class IndexBuilder {
+ public:
+  explicit IndexBuilder(size_t attribute_count) { index_.attribute_ranges.assign(attribute_count, {0.f, 0.f}); }
+  void add(const FrameHeader& frame, uint64_t offset);
+  const FrameIndex& index() const { return index_; }
+
+ private:
+  FrameIndex index_;
+  bool have_ranges_ = false;  // an attribute range has been seen
+};
+
 // Sizes of the fixed parts of the records (see docs/format.md).
 inline constexpr size_t kFrameHeaderFixedBytes = 72;
 inline constexpr size_t kChunkDescFixedBytes = 52;

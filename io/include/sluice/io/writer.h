@@ -30,7 +30,7 @@ class ContainerWriter {
   void finish();
 
   const FileHeader& header() const { return header_; }
-  uint64_t frames_written() const { return index_.frames.size(); }
+  uint64_t frames_written() const { return index_.index().frames.size(); }
   uint64_t bytes_written() const { return offset_; }
 
  private:
@@ -38,10 +38,9 @@ class ContainerWriter {
 
   std::string path_;
   FileHeader header_;
-  FrameIndex index_;
+  IndexBuilder index_;
   int fd_ = -1;
   uint64_t offset_ = 0;
-  bool have_ranges_ = false;  // attribute ranges seen in a chunk yet
 };
 
 }  // namespace sluice::io
