@@ -99,17 +99,31 @@ void compress_planes(std::vector<std::byte>& raw, size_t n, int level, std::vect
   }
 }
 
-// Morton deltas from their 6 byte planes; a loop the compiler vectorizes
-// (with AVX2 where the CPU has it).
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
-__attribute__((target_clones("avx2", "default")))
-#endif
-void gather_deltas(const uint8_t* const* b, size_t n, uint64_t* deltas) {
+// Morton deltas from their 6 byte planes; a loop the compiler vectorizes.
+// An AVX2 copy is picked at run time by a plain flag rather than an ifunc
+// (target_clones): ifunc resolvers run before TSan initialises and crash it.
+// Inlined into the AVX2 copy below too, where it is vectorized for AVX2.
+__attribute__((always_inline)) inline void gather_deltas_portable(const uint8_t* const* b, size_t n,
+                                                                  uint64_t* deltas) {
   const uint8_t *b0 = b[0], *b1 = b[1], *b2 = b[2], *b3 = b[3], *b4 = b[4], *b5 = b[5];
   for (size_t i = 0; i < n; ++i) {
     deltas[i] = uint64_t(b0[i]) | uint64_t(b1[i]) << 8 | uint64_t(b2[i]) << 16 | uint64_t(b3[i]) << 24 |
                 uint64_t(b4[i]) << 32 | uint64_t(b5[i]) << 40;
   }
+}
+
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+__attribute__((target("avx2"))) void gather_deltas_avx2(const uint8_t* const* b, size_t n, uint64_t* deltas) {
+  gather_deltas_portable(b, n, deltas);
+}
+const bool kHaveAvx2 = __builtin_cpu_supports("avx2");
+#endif
+
+void gather_deltas(const uint8_t* const* b, size_t n, uint64_t* deltas) {
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+  if (kHaveAvx2) return gather_deltas_avx2(b, n, deltas);
+#endif
+  gather_deltas_portable(b, n, deltas);
 }
 
 // Codes + LOD bytes -> packed (x, y, z, lod) uint16 quadruples, written with
