@@ -1,6 +1,8 @@
 // `sluice bench`: measurements that print tables (never pass/fail).
 #include "commands.h"
 #include "sluice/bench/io_bench.h"
+#include "sluice/bench/stream_bench.h"
+#include "sluice/runtime/budget.h"
 
 namespace sluice::app {
 
@@ -15,6 +17,26 @@ void add_bench(CLI::App& app) {
   cmd->add_option("--min-time", io->min_seconds, "Seconds each timing repeats for")->capture_default_str();
   cmd->add_option("--work-dir", io->work_dir, "Keep the converted files here (default: a temp dir)");
   cmd->callback([io] { bench::run_io_bench(*io); });
+
+  auto stream = std::make_shared<bench::StreamBenchOptions>();
+  auto stream_memory = std::make_shared<std::string>();
+  CLI::App* st = bench->add_subcommand("stream", "The streaming pipeline from storage and the page cache, against the machine's bounds");
+  st->footer("Example: sluice synth -n 10M --frames 200 -o synth.sluice && sluice bench stream synth.sluice");
+  st->add_option("file", stream->file, ".sluice file to stream")->required()->check(CLI::ExistingFile);
+  st->add_option("-t,--threads", stream->max_threads, "Most decode workers (default: all cores)");
+  st->add_option("-r,--read-threads", stream->read_threads, "Threads reading a record (default: a quarter of the workers, 1 to 4)");
+  st->add_option("--min-time", stream->min_seconds, "Seconds each page-cache timing runs for")->capture_default_str();
+  st->add_option("--memory", *stream_memory, "Memory cap of the pipeline, e.g. 4G (default: 2G)");
+  st->add_option("--frames", stream->frames, "Stream the first N frames (default: as many as fit in the page cache)");
+  st->add_flag("!--no-storage", stream->storage, "Skip the storage passes (they drop the file from the page cache)");
+  st->callback([stream, stream_memory] {
+    if (!stream_memory->empty()) {
+      const auto bytes = runtime::parse_byte_size(*stream_memory);
+      if (!bytes) throw std::runtime_error("--memory: cannot read '" + *stream_memory + "' as a size (try 4G or 512M)");
+      stream->memory = *bytes;
+    }
+    bench::run_stream_bench(*stream);
+  });
 }
 
 }  // namespace sluice::app

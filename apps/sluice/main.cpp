@@ -24,6 +24,15 @@ int main(int argc, char** argv) {
   sluice::app::add_verify(app);
   sluice::app::add_recover(app);
   sluice::app::add_bench(app);
+  sluice::app::add_play(app);
+  sluice::app::add_synth(app);
+#if SLUICE_WITH_RENDER
+  sluice::app::add_render(app);
+  sluice::app::add_bench_render(*app.get_subcommand("bench"));
+#endif
+#if SLUICE_WITH_WINDOW
+  sluice::app::add_play_window(app);
+#endif
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -1,0 +1,299 @@
+// `sluice render`: frames of a .sluice file to PNG images or an MP4, headless
+// (offscreen Vulkan; lavapipe works without a GPU or a display). Also the
+// options the player shares (add_view_options).
+#include <cstdio>
+#include <filesystem>
+#include <sstream>
+
+#include "commands.h"
+#include "human.h"
+#include "view_options.h"
+#include "progress.h"
+#include "sluice/bench/render_bench.h"
+#include "sluice/io/reader.h"
+#include "sluice/render/image_io.h"
+#include "sluice/render/renderer.h"
+
+namespace sluice::app {
+namespace {
+
+struct RenderCommand {
+  std::string input;
+  std::string frames;  // "A:B" inclusive, "A", "A:", ":B"; empty: all
+  std::string out = "frames";
+  std::string size = "1280x720";
+  double fps = 0;
+  bool quiet = false, stats = false;
+};
+
+std::pair<uint32_t, uint32_t> parse_size(const std::string& s) {
+  unsigned w = 0, h = 0;
+  char x = 0;
+  std::istringstream in(s);
+  if (!(in >> w >> x >> h) || (x != 'x' && x != 'X') || w == 0 || h == 0 || w > 16384 || h > 16384 || !in.eof()) {
+    throw std::runtime_error("--size: expected WIDTHxHEIGHT (e.g. 1920x1080), got '" + s + "'");
+  }
+  return {w, h};
+}
+
+std::pair<uint64_t, uint64_t> parse_frames(const std::string& s, uint64_t count) {
+  if (count == 0) throw std::runtime_error("the file has no frames");
+  if (s.empty()) return {0, count - 1};
+  const auto number = [&](const std::string& t, uint64_t fallback) -> uint64_t {
+    if (t.empty()) return fallback;
+    size_t used = 0;
+    const unsigned long long v = std::stoull(t, &used);
+    if (used != t.size()) throw std::invalid_argument(t);
+    return v;
+  };
+  uint64_t a = 0, b = 0;
+  try {
+    const size_t colon = s.find(':');
+    if (colon == std::string::npos) {
+      a = b = number(s, 0);
+    } else {
+      a = number(s.substr(0, colon), 0);
+      b = number(s.substr(colon + 1), count - 1);
+    }
+  } catch (const std::exception&) {
+    throw std::runtime_error("--frames: expected A:B (inclusive), A, A: or :B, got '" + s + "'");
+  }
+  if (a > b || b >= count) {
+    throw std::runtime_error("--frames " + s + ": the file has frames 0.." + std::to_string(count - 1));
+  }
+  return {a, b};
+}
+
+std::string frame_path(const std::string& out, uint64_t frame, bool single) {
+  namespace fs = std::filesystem;
+  char name[64];
+  if (out.find('%') != std::string::npos) {
+    char buf[4096];
+    std::snprintf(buf, sizeof buf, out.c_str(), (unsigned long long)frame);
+    return buf;
+  }
+  const fs::path p(out);
+  if (p.extension() == ".png") {
+    if (single) return out;
+    std::snprintf(name, sizeof name, "_%05llu.png", (unsigned long long)frame);
+    return (p.parent_path() / p.stem()).string() + name;
+  }
+  std::snprintf(name, sizeof name, "frame_%05llu.png", (unsigned long long)frame);
+  return (p / name).string();
+}
+
+void run_render(const RenderCommand& o, const ViewSettings& v) {
+  namespace fs = std::filesystem;
+  const io::ContainerReader reader(o.input);
+  const auto [first, last] = parse_frames(o.frames, reader.frame_count());
+  const auto [width, height] = parse_size(o.size);
+  const bool video = fs::path(o.out).extension() == ".mp4";
+  const bool single = first == last;
+  if (!video && fs::path(o.out).extension() != ".png" && o.out.find('%') == std::string::npos) {
+    fs::create_directories(o.out);
+  }
+
+  render::Context context(v.context_options());
+  render::SceneInfo scene = render::scene_info(reader);
+  render::Renderer renderer(context, scene, width, height);
+  const render::FluidOptions fluid = v.fluid_options(scene);
+  const render::LodOptions lod = v.lod_options();
+  const render::Camera camera = v.camera(scene, float(width) / float(height));
+  if (!o.quiet) {
+    std::fprintf(stderr, "rendering %s frames %llu..%llu at %ux%u on %s (%s)\n  camera \"%s\"\n", o.input.c_str(),
+                 (unsigned long long)first, (unsigned long long)last, width, height, context.device().name.c_str(),
+                 context.device().type.c_str(), camera.to_string().c_str());
+  }
+
+  std::unique_ptr<render::VideoWriter> writer;
+  if (video) {
+    const double fps = o.fps > 0 ? o.fps : (reader.header().frame_rate > 0 ? reader.header().frame_rate : 30.0);
+    writer = std::make_unique<render::VideoWriter>(o.out, width, height, fps);
+  }
+  ProgressBar bar("frames", last - first + 1, o.quiet);
+  render::Image image{width, height, {}};
+  for (uint64_t f = first; f <= last; ++f) {
+    renderer.load_frame(reader, f, fluid.scalar_visibility ? fluid.color_attribute : -1);
+    const render::FrameStats stats = renderer.render(camera, fluid, lod);
+    image.rgba = renderer.read_rgba8();
+    if (writer) writer->add(image);
+    else render::write_png(frame_path(o.out, f, single), image);
+    if (o.stats) {
+      std::string passes;
+      for (const render::PassTime& p : stats.passes) passes += " " + p.name + " " + fixed(p.ms, 2);
+      bar.warn("frame " + std::to_string(f) + ": " + std::to_string(stats.drawn) + "/" + std::to_string(stats.particles) +
+               " particles drawn; GPU ms:" + passes + "; total " + fixed(stats.gpu_ms, 2));
+    }
+    bar.update(f - first + 1);
+  }
+  if (writer) writer->finish();
+  bar.finish();
+  if (context.validation_active() && context.validation_errors() > 0) {
+    std::fprintf(stderr, "sluice: %llu Vulkan validation errors\n", (unsigned long long)context.validation_errors());
+    throw ExitCode{2};
+  }
+  if (!o.quiet) {
+    const std::string where = video ? o.out : single ? frame_path(o.out, first, true) : o.out;
+    std::printf("wrote %s (%llu frame%s, %s)\n", where.c_str(), (unsigned long long)(last - first + 1),
+                single ? "" : "s", human_duration(bar.elapsed()).c_str());
+  }
+}
+
+}  // namespace
+
+render::ContextOptions ViewSettings::context_options() const {
+  render::ContextOptions c;
+  c.validation = validation;
+  c.device = device;
+  return c;
+}
+
+render::FluidOptions ViewSettings::fluid_options(const render::SceneInfo& scene) const {
+  render::FluidOptions f = fluid;
+  f.display_mode = render::parse_display_mode(display);
+  f.surface_filter_method = render::parse_filter_method(filter);
+  f.colormap = render::parse_colormap(colormap);
+  f.splatting = render::parse_splatting(splat);
+  f.up_axis = render::parse_axis(up);
+  f.ground = !no_ground;
+  f.half_resolution_thickness = !full_res_thickness;
+  f.scalar_visibility = !color_by.empty();
+  if (!color_by.empty()) {
+    f.color_attribute = -1;
+    for (size_t a = 0; a < scene.attribute_names.size(); ++a) {
+      if (scene.attribute_names[a] == color_by) f.color_attribute = int(a);
+    }
+    if (f.color_attribute < 0) {
+      std::string names;
+      for (const std::string& n : scene.attribute_names) names += (names.empty() ? "" : ", ") + n;
+      throw std::runtime_error("--color-by " + color_by + ": the file has no such attribute (it has: " +
+                               (names.empty() ? "none" : names) + ")");
+    }
+  }
+  if (color_range.size() == 2) {
+    f.color_min = color_range[0];
+    f.color_max = color_range[1];
+  }
+  if (attenuation_color.size() == 3) f.attenuation_color = {attenuation_color[0], attenuation_color[1], attenuation_color[2]};
+  return f;
+}
+
+render::LodOptions ViewSettings::lod_options() const {
+  render::LodOptions l = lod;
+  l.mode = render::parse_lod_mode(lod_mode);
+  return l;
+}
+
+render::Camera ViewSettings::camera(const render::SceneInfo& scene, float aspect) const {
+  render::Camera c = render::Camera::framing(scene.bounds, render::parse_axis(up), aspect, fov);
+  if (!camera_text.empty()) {
+    try {
+      c.apply(camera_text);
+    } catch (const std::invalid_argument& e) {
+      throw std::runtime_error(std::string("--camera: ") + e.what());
+    }
+  }
+  return c;
+}
+
+void add_view_options(CLI::App& cmd, ViewSettings& v) {
+  cmd.add_option("--camera", v.camera_text,
+                 "View as \"eye=x,y,z;target=x,y,z;up=x,y,z;fov=deg\" (any subset; default: framing the data)");
+  cmd.add_option("--fov", v.fov, "Vertical field of view in degrees for the default view")->capture_default_str();
+  cmd.add_option("--up", v.up, "World axis that points up: x, y or z")->capture_default_str();
+  cmd.add_option("--device", v.device, "Vulkan device: index or part of its name (default: first discrete GPU)");
+  cmd.add_flag("--validation", v.validation, "Enable the Vulkan validation layer; errors make the command fail");
+  auto& f = v.fluid;
+  const std::string look = "Look (vtkOpenGLFluidMapper names)";
+  cmd.add_option("--display", v.display,
+                 "transparent, opaque, normals, depth, thickness (and *-unfiltered), or a VTK DisplayMode name")
+      ->capture_default_str()->group(look);
+  cmd.add_option("--radius", f.particle_radius, "ParticleRadius in world units (default: the file's spacing)")->group(look);
+  cmd.add_option("--filter", v.filter, "SurfaceFilterMethod: narrow-range or bilateral")->capture_default_str()->group(look);
+  cmd.add_option("--filter-radius", f.surface_filter_radius, "SurfaceFilterRadius: largest depth-filter kernel radius, px")
+      ->capture_default_str()->group(look);
+  cmd.add_option("--filter-iterations", f.surface_filter_iterations, "SurfaceFilterIterations (0 = unfiltered)")
+      ->capture_default_str()->check(CLI::Range(0, 8))->group(look);
+  cmd.add_option("--thickness-radius", f.thickness_and_volume_color_filter_radius,
+                 "ThicknessAndVolumeColorFilterRadius, px of the thickness buffer")->capture_default_str()->group(look);
+  cmd.add_option("--thickness-iterations", f.thickness_and_volume_color_filter_iterations,
+                 "ThicknessAndVolumeColorFilterIterations")->capture_default_str()->group(look);
+  cmd.add_option("--splat", v.splat, "Sphere splatting: compute (atomics), raster (point sprites) or auto (raster on CPU devices)")
+      ->capture_default_str()->group(look);
+  cmd.add_flag("--full-res-thickness", v.full_res_thickness, "Thickness buffer at full resolution (default: half)")->group(look);
+  cmd.add_option("--ior", f.refractive_index, "RefractiveIndex")->capture_default_str()->group(look);
+  cmd.add_option("--refraction-scale", f.refraction_scale, "RefractionScale")->capture_default_str()->group(look);
+  cmd.add_option("--additional-reflection", f.additional_reflection, "AdditionalReflection, 0..1")
+      ->capture_default_str()->group(look);
+  cmd.add_option("--attenuation-color", v.attenuation_color, "AttenuationColor r,g,b (absorbed per unit thickness)")
+      ->delimiter(',')->expected(3)->group(look);
+  cmd.add_option("--attenuation-scale", f.attenuation_scale, "AttenuationScale per world unit (default: 6 / data diagonal)")->group(look);
+  cmd.add_option("--color-by", v.color_by, "Colour by this attribute (ScalarVisibility on)")->group(look);
+  cmd.add_option("--colormap", v.colormap, "viridis, coolwarm, turbo or blues")->capture_default_str()->group(look);
+  cmd.add_option("--color-range", v.color_range, "Colour range min,max (default: the file's)")
+      ->delimiter(',')->expected(2)->group(look);
+  cmd.add_flag("--no-ground", v.no_ground, "No ground plane under the data")->group(look);
+  const std::string lod = "Level of detail";
+  cmd.add_option("--lod", v.lod_mode, "off, clod (thesis formula 3.1) or density (cLOD, kept splats grow)")
+      ->capture_default_str()->group(lod);
+  cmd.add_option("--lod-level", v.lod.level, "cLOD threshold 0..1 (1 keeps everything)")
+      ->capture_default_str()->check(CLI::Range(0.0, 1.0))->group(lod);
+  cmd.add_option("--near-cull", v.lod.near_cull_distance, "Drop particles nearer the eye than this (world units)")->group(lod);
+  cmd.add_option("--max-splat", v.lod.max_splat_pixels, "Drop particles covering more pixels across than this")->group(lod);
+}
+
+void add_render(CLI::App& app) {
+  auto o = std::make_shared<RenderCommand>();
+  auto v = std::make_shared<ViewSettings>();
+  CLI::App* cmd = app.add_subcommand("render", "Render frames to PNG images or an MP4, headless (no display needed)");
+  cmd->footer(
+      "OUT is a directory (frame_00000.png ...), a .png file (one frame; name_00000.png ... for several),\n"
+      "a printf pattern (shot_%04d.png) or a .mp4 file (needs ffmpeg on PATH).\n\n"
+      "Examples:\n"
+      "  sluice render dam.sluice --frames 12 --out dam.png --size 1920x1080\n"
+      "  sluice render dam.sluice --out dam.mp4 --color-by rho --colormap coolwarm\n"
+      "  sluice render big.sluice --lod density --lod-level 0.3 --camera \"eye=4,-3,2;target=1,0,0.3\"\n");
+  cmd->add_option("input", o->input, ".sluice file")->required()->check(CLI::ExistingFile);
+  cmd->add_option("--frames", o->frames, "Frames A:B (inclusive), A, A: or :B (default: all)");
+  cmd->add_option("-o,--out", o->out, "Output directory, .png, pattern or .mp4")->capture_default_str();
+  cmd->add_option("--size", o->size, "Image size WIDTHxHEIGHT")->capture_default_str();
+  cmd->add_option("--fps", o->fps, "MP4 frame rate (default: the file's)");
+  cmd->add_flag("--stats", o->stats, "Print particles drawn and GPU ms per pass for every frame");
+  cmd->add_flag("-q,--quiet", o->quiet, "No progress bar or notes");
+  add_view_options(*cmd, *v);
+  cmd->callback([o, v] { run_render(*o, *v); });
+}
+
+void add_bench_render(CLI::App& bench) {
+  auto o = std::make_shared<bench::RenderBenchOptions>();
+  auto sizes = std::make_shared<std::string>("1M,10M,50M,100M");
+  auto size = std::make_shared<std::string>("1920x1080");
+  CLI::App* cmd = bench.add_subcommand("render", "GPU ms per renderer pass for 1M..100M particles, cLOD off/on, vs VTK");
+  cmd->footer(
+      "Synthetic frames are generated in memory (a pool with waves and a collapsing column on a jittered\n"
+      "grid, 32^3-particle chunks). --real adds the last frame of a .sluice file; --vtk runs VTK 9's\n"
+      "vtkOpenGLFluidMapper on the same frames (python3-vtk9 and xvfb-run; slow on llvmpipe).\n\n"
+      "Examples:\n"
+      "  sluice bench render\n"
+      "  sluice bench render --sizes 100k,1M --real dam.sluice --vtk --images bench_images\n");
+  cmd->add_option("--sizes", *sizes, "Synthetic particle counts (k, M suffixes; empty for none)")->capture_default_str();
+  cmd->add_option("--size", *size, "Image size WIDTHxHEIGHT")->capture_default_str();
+  cmd->add_option("--repeats", o->repeats, "Renders per case (median)")->capture_default_str();
+  cmd->add_option("--lod-level", o->lod_level, "cLOD level of the 'LOD on' rows")->capture_default_str();
+  cmd->add_option("--real", o->real, "A .sluice file whose last frame is measured too")->check(CLI::ExistingFile);
+  cmd->add_flag("--vtk", o->vtk, "Also time VTK's vtkOpenGLFluidMapper on the same frames");
+  cmd->add_option("--vtk-max", o->vtk_max, "Largest frame handed to VTK")->capture_default_str();
+  cmd->add_option("--device", o->device, "Vulkan device: index or part of its name");
+  cmd->add_option("--images", o->images, "Save every case's image (and VTK's) in this directory");
+  cmd->add_option("--splat", o->splat, "Sphere splatting: auto, compute or raster")->capture_default_str();
+  cmd->add_option("--csv", o->csv, "Also write the per-pass table as CSV (for plots of ms against particles)");
+  cmd->callback([o, sizes, size] {
+    o->sizes = sizes->empty() ? std::vector<uint64_t>{} : bench::parse_counts(*sizes);
+    const auto [w, h] = parse_size(*size);
+    o->width = w;
+    o->height = h;
+    bench::run_render_bench(*o);
+  });
+}
+
+}  // namespace sluice::app

@@ -1,0 +1,38 @@
+// Options shared by `sluice render` and `sluice play`: camera, device, look
+// (vtkOpenGLFluidMapper names) and level of detail, as the command line
+// gives them, and their conversion into the renderer's types.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+#include <string>
+#include <vector>
+
+#include "sluice/render/camera.h"
+#include "sluice/render/context.h"
+#include "sluice/render/frame.h"
+#include "sluice/render/options.h"
+
+namespace sluice::app {
+
+struct ViewSettings {
+  std::string camera_text, up = "z", device;
+  float fov = 40.0f;
+  bool validation = false;
+  render::FluidOptions fluid;
+  std::string display = "transparent", filter = "narrow-range", colormap = "viridis", color_by, splat = "auto";
+  std::vector<float> color_range, attenuation_color;
+  bool no_ground = false, full_res_thickness = false;
+  std::string lod_mode = "off";
+  render::LodOptions lod;
+
+  render::ContextOptions context_options() const;
+  // Throws std::runtime_error on a bad name (display, filter, attribute, ...).
+  render::FluidOptions fluid_options(const render::SceneInfo& scene) const;
+  render::LodOptions lod_options() const;
+  render::Camera camera(const render::SceneInfo& scene, float aspect) const;
+};
+
+void add_view_options(CLI::App& cmd, ViewSettings& v);
+
+}  // namespace sluice::app

@@ -1,0 +1,28 @@
+#!/usr/bin/env bash
+# Packs what the GPU machine needs (it starts bare, with another OS): the
+# sluice binary, every shared library it links that is not glibc, a few
+# frames of the larger PySPH run, and the Vulkan loader packages.
+# Output: .gpu/ (ignored by git), carried by the device tool.
+#   bash bench/device/pack.sh [BIG_VTU_DIR]
+set -euo pipefail
+root=$(cd "$(dirname "$0")/../.." && pwd)
+big=${1:-/work/bigdata/dam_break_3d_dx002}
+stage=$(mktemp -d)
+mkdir -p "$stage/lib" "$stage/big" "$root/.gpu"
+ldd "$root/build/apps/sluice/sluice" | awk '{print $3}' | grep '^/' |
+  grep -v -E '/(libc|libm|libpthread|libdl|libgcc_s|libstdc\+\+)\.so|ld-linux' | xargs -I{} cp -L {} "$stage/lib/"
+if [[ -d "$big" ]]; then
+  ls "$big"/*.vtu | sort -V | awk 'NR % 4 == 0' | head -6 | xargs -I{} cp {} "$stage/big/"
+fi
+tar -C "$stage" -cf - lib big | xz -6 -T2 > "$root/.gpu/pack.tar.xz"
+cp "$root/build/apps/sluice/sluice" "$root/.gpu/sluice"
+rm -rf "$stage"
+# Vulkan loader (the driver is the machine's own).
+mkdir -p "$root/.gl" /tmp/amd64/partial
+o=(-oAPT::Architecture=amd64 -oAPT::Architectures=amd64 -oDir::State::Lists=/tmp/amd64)
+if ! ls "$root"/.gl/libvulkan1_*.deb >/dev/null 2>&1; then
+  apt-get "${o[@]}" update -qq
+  (cd "$root/.gl" && apt-get "${o[@]}" download libvulkan1 libwayland-client0 libx11-6 libxcb1 libxau6 libxdmcp6 \
+    libbsd0 libmd0 libffi8 vulkan-tools)
+fi
+du -sh "$root/.gpu" "$root/.gl"

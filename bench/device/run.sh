@@ -1,0 +1,34 @@
+#!/usr/bin/env bash
+# Runs on the GPU machine (see bench/device/README.md): every benchmark the
+# issues ask GPU-machine figures for, in one call. Results go to $OUT.
+#   bash bench/device/run.sh [quick]
+set -uo pipefail
+OUT=${OUT:-/tmp/out}
+mkdir -p "$OUT" /tmp/s
+tar -C /tmp/s -xJf .gpu/pack.tar.xz
+export LD_LIBRARY_PATH=/tmp/s/lib
+for f in .gl/*.deb; do dpkg -x "$f" /; done
+ldconfig
+[[ -f /usr/share/vulkan/icd.d/nvidia_icd.json ]] || export VK_DRIVER_FILES=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
+S=./.gpu/sluice
+log() { printf '\n##### %s\n' "$*" | tee -a "$OUT/summary.txt"; }
+run() { log "$*"; "$@" 2>&1 | tee -a "$OUT/summary.txt"; }
+
+log "machine"
+{ nproc; grep -m1 "model name" /proc/cpuinfo; nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv,noheader; free -g | head -2; df -h /tmp | tail -1; } 2>&1 | tee -a "$OUT/summary.txt"
+
+run $S bench io data/dam_break_3d/dam_break_3d.pvd --min-time 1
+[[ -d /tmp/s/big ]] && run $S bench io '/tmp/s/big/*.vtu' --min-time 1
+
+if $S synth --help >/dev/null 2>&1; then
+  run $S synth -n 10M --frames ${SYNTH_FRAMES:-120} -o /tmp/synth10m.sluice --force
+  run $S bench stream /tmp/synth10m.sluice
+  run $S play --headless --stats --seconds 10 --loop /tmp/synth10m.sluice
+fi
+if $S bench render --help >/dev/null 2>&1; then
+  run $S bench render
+fi
+if $S render --help >/dev/null 2>&1; then
+  $S convert data/dam_break_3d/dam_break_3d.pvd -o /tmp/dam.sluice -a rho -q -f
+  run $S render /tmp/dam.sluice --frames 12:12 --out "$OUT/dam_gpu.png" --size 1920x1080
+fi

@@ -1,0 +1,33 @@
+// sluice/bench/render_bench.h: `sluice bench render`, GPU time per pass of
+// the renderer at a given resolution for synthetic frames of 1M..100M
+// particles (and a real file), with cLOD off and on; optionally side by side
+// with VTK 9's vtkOpenGLFluidMapper on the same frame, camera and size.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace sluice::bench {
+
+struct RenderBenchOptions {
+  std::vector<uint64_t> sizes{1'000'000, 10'000'000, 50'000'000, 100'000'000};  // synthetic particle counts
+  uint32_t width = 1920, height = 1080;
+  int repeats = 3;              // renders per case; the median is reported
+  float lod_level = 0.3f;       // the "LOD on" rows (density-preserving cLOD)
+  std::string real;             // a .sluice file: its last frame gets rows too
+  bool vtk = false;             // run the VTK peer (python3-vtk9 under xvfb-run)
+  uint64_t vtk_max = 1'000'000; // largest frame given to the peer (it takes ~30 s per frame per 1M on llvmpipe)
+  std::string device;           // Vulkan device choice, as --device
+  std::string images;           // directory to save each case's image (and the peer's)
+  std::string splat = "auto";   // sphere splatting: auto, compute or raster
+  std::string csv;              // also write every case (per-pass ms) here, for plots of ms against particles
+};
+
+// Runs the benchmark and prints its tables to stdout.
+void run_render_bench(const RenderBenchOptions& options);
+
+// Parses "1M,10M,2.5k,1000" into counts. Throws std::invalid_argument.
+std::vector<uint64_t> parse_counts(const std::string& text);
+
+}  // namespace sluice::bench

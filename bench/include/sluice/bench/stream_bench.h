@@ -1,0 +1,29 @@
+// sluice/bench/stream_bench.h: `sluice bench stream`, the streaming pipeline
+// against the machine's own bounds, measured in the same run.
+//
+// Prints: the bounds (memcpy on one and on all threads; sequential pread of
+// the file from storage with the page cache bypassed, and from the page
+// cache), the pipeline's sustained frames/s and GB/s from storage and from
+// the page cache with each figure as a ratio of the slower bound, and a
+// decode scaling table for 1..N workers. Tables only: nothing passes or fails.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+namespace sluice::bench {
+
+struct StreamBenchOptions {
+  std::string file;
+  int max_threads = 0;       // decode workers at most; 0: all cores
+  int read_threads = 0;      // the pipeline's read threads (and the read bounds'); 0: its default
+  double min_seconds = 3.0;  // each page-cache timing runs at least this long
+  uint64_t memory = 0;       // the pipeline's memory cap; 0: 2 GiB
+  uint64_t frames = 0;       // frames to stream (from frame 0); 0: as many as fit in the page cache
+  bool storage = true;       // also measure from storage (drops the file from the page cache)
+};
+
+// Throws io::Error on a bad file.
+void run_stream_bench(const StreamBenchOptions& options);
+
+}  // namespace sluice::bench

@@ -1,0 +1,31 @@
+// The machine's own bounds for streaming a file: memory copy on several
+// threads, sequential reads from storage (page cache bypassed) and from the
+// page cache, and control over what of a file the page cache holds.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+
+namespace sluice::bench {
+
+// memcpy of 64 MiB per thread on `threads` threads at once, GB/s in all.
+double parallel_memcpy_gbps(int threads, double min_seconds);
+
+// Writes back and drops bytes [offset, offset + bytes) of `path` from the page
+// cache (posix_fadvise DONTNEED). Pages other processes map stay.
+void drop_from_page_cache(const std::string& path, uint64_t offset, uint64_t bytes);
+// Share of those bytes the page cache holds now, 0..1 (mincore).
+double page_cache_share(const std::string& path, uint64_t offset, uint64_t bytes);
+
+enum class ReadMode { PageCache, BufferedCold, Direct };
+
+// pread of the range in 8 MiB pieces, in order, on `threads` threads taking
+// the next piece in turn (as the pipeline's read threads do), GB/s.
+// PageCache repeats until min_seconds; BufferedCold drops the range first and
+// reads it once (kernel readahead on); Direct reads it once with O_DIRECT.
+// nullopt: the mode is not available here (O_DIRECT refused).
+std::optional<double> sequential_read_gbps(const std::string& path, uint64_t offset, uint64_t bytes, ReadMode mode,
+                                           double min_seconds, int threads = 1);
+
+}  // namespace sluice::bench

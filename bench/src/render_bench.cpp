@@ -1,0 +1,306 @@
+// `sluice bench render`: per-pass GPU time (timestamps) of the renderer on
+// synthetic and real frames, cLOD off and on, and the VTK fluid mapper on
+// the same frame as the peer.
+#include "sluice/bench/render_bench.h"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <stdexcept>
+
+#include "machine.h"
+#include "sluice/io/reader.h"
+#include "sluice/render/image_io.h"
+#include "sluice/render/renderer.h"
+#include "sluice/render/synthetic.h"
+#include "table.h"
+
+namespace sluice::bench {
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+// The VTK peer: reads float32 xyz, renders with vtkOpenGLFluidMapper (narrow
+// range filter, transparent fluid volume) and prints seconds per Render().
+// The two settings without which VTK 9.1 silently draws nothing under Xvfb
+// are set (no multisampling, the renderer's last culler removed).
+constexpr const char* kVtkPeer = R"PY(
+import sys, time
+import numpy as np
+import vtk
+from vtk.util import numpy_support as ns
+path, w, h, radius, reps, out = sys.argv[1], int(sys.argv[2]), int(sys.argv[3]), float(sys.argv[4]), int(sys.argv[5]), sys.argv[6]
+cam = [float(v) for v in sys.argv[7].split(',')]
+xyz = np.fromfile(path, dtype=np.float32).reshape(-1, 3)
+points = vtk.vtkPoints()
+points.SetData(ns.numpy_to_vtk(xyz, deep=1))
+poly = vtk.vtkPolyData()
+poly.SetPoints(points)
+mapper = vtk.vtkOpenGLFluidMapper()
+mapper.SetInputData(poly)
+mapper.SetParticleRadius(radius)
+mapper.SetSurfaceFilterMethod(vtk.vtkOpenGLFluidMapper.NarrowRange)
+mapper.SetDisplayMode(vtk.vtkOpenGLFluidMapper.TransparentFluidVolume)
+mapper.SetAttenuationColor(0.6, 0.15, 0.06)
+volume = vtk.vtkVolume()
+volume.SetMapper(mapper)
+renderer = vtk.vtkRenderer()
+renderer.SetBackground(0.78, 0.85, 0.92)
+renderer.AddVolume(volume)
+cullers = renderer.GetCullers()
+cullers.RemoveItem(cullers.GetLastItem())
+window = vtk.vtkRenderWindow()
+window.SetMultiSamples(0)
+window.SetSize(w, h)
+window.AddRenderer(renderer)
+camera = renderer.GetActiveCamera()
+camera.SetPosition(cam[0:3])
+camera.SetFocalPoint(cam[3:6])
+camera.SetViewUp(cam[6:9])
+camera.SetViewAngle(cam[9])
+renderer.ResetCameraClippingRange()
+window.Render()
+times = []
+for i in range(reps):
+    t = time.perf_counter()
+    window.Render()
+    times.append(time.perf_counter() - t)
+times.sort()
+print("VTKPEER %.6f %s" % (times[len(times) // 2], vtk.vtkVersion.GetVTKVersion()))
+if out:
+    grab = vtk.vtkWindowToImageFilter()
+    grab.SetInput(window)
+    grab.Update()
+    writer = vtk.vtkPNGWriter()
+    writer.SetFileName(out)
+    writer.SetInputConnection(grab.GetOutputPort())
+    writer.Write()
+)PY";
+
+struct Case {
+  std::string name;
+  uint64_t particles = 0;
+  std::string lod;
+  render::FrameStats stats;  // median over repeats, per pass
+  double wall_ms = 0;        // render() call: submit to fence, median
+  double vtk_ms = -1;        // peer, when run
+};
+
+std::string count_name(uint64_t n) {
+  if (n >= 1'000'000 && n % 100'000 == 0) return num(double(n) / 1e6, n % 1'000'000 ? 1 : 0) + "M";
+  if (n >= 1'000) return num(double(n) / 1e3, n % 1000 ? 1 : 0) + "k";
+  return std::to_string(n);
+}
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v.empty() ? 0 : v[v.size() / 2];
+}
+
+// Renders `repeats` times after one warm-up; per-pass medians.
+Case measure(render::Renderer& r, const render::Camera& cam, const render::FluidOptions& fluid,
+             const render::LodOptions& lod, int repeats) {
+  Case c;
+  r.render(cam, fluid, lod);  // warm-up: first-use costs (shader JIT on lavapipe)
+  std::map<std::string, std::vector<double>> passes;
+  std::vector<double> total, wall;
+  render::FrameStats last;
+  for (int i = 0; i < std::max(repeats, 1); ++i) {
+    const auto t0 = Clock::now();
+    last = r.render(cam, fluid, lod);
+    wall.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
+    for (const render::PassTime& p : last.passes) passes[p.name].push_back(p.ms);
+    total.push_back(last.gpu_ms);
+  }
+  c.stats = last;
+  for (render::PassTime& p : c.stats.passes) p.ms = median(passes[p.name]);
+  c.stats.gpu_ms = median(total);
+  c.wall_ms = median(wall);
+  return c;
+}
+
+// Runs the VTK peer on the positions; seconds per frame, or -1 with a note.
+double run_vtk_peer(const std::vector<float>& xyz, const RenderBenchOptions& o, float radius, const render::Camera& cam,
+                    const std::string& image) {
+  const fs::path dir = fs::temp_directory_path() / ("sluice_vtk_peer_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const fs::path script = dir / "peer.py", data = dir / "xyz.f32", log = dir / "out.txt";
+  std::ofstream(script) << kVtkPeer;
+  {
+    std::ofstream f(data, std::ios::binary);
+    f.write(reinterpret_cast<const char*>(xyz.data()), std::streamsize(xyz.size() * sizeof(float)));
+  }
+  char camera[512];
+  std::snprintf(camera, sizeof camera, "%g,%g,%g,%g,%g,%g,%g,%g,%g,%g", double(cam.eye.x), double(cam.eye.y),
+                double(cam.eye.z), double(cam.target.x), double(cam.target.y), double(cam.target.z), double(cam.up.x),
+                double(cam.up.y), double(cam.up.z), double(cam.fov_deg));
+  const std::string cmd = "xvfb-run -a -s '-screen 0 " + std::to_string(o.width + 64) + "x" + std::to_string(o.height + 64) +
+                          "x24' /usr/bin/python3 " + script.string() + " " + data.string() + " " + std::to_string(o.width) +
+                          " " + std::to_string(o.height) + " " + std::to_string(radius) + " " +
+                          std::to_string(std::max(1, std::min(o.repeats, 3))) + " '" + image + "' " + camera + " > " +
+                          log.string() + " 2>&1";
+  const int rc = std::system(cmd.c_str());
+  double seconds = -1;
+  std::ifstream in(log);
+  std::string word;
+  while (in >> word) {
+    if (word == "VTKPEER" && (in >> seconds)) break;
+  }
+  if (rc != 0 || seconds < 0) {
+    std::fprintf(stderr, "note: the VTK peer failed (needs python3-vtk9, xvfb-run); its output is in %s\n", log.c_str());
+    return -1;
+  }
+  fs::remove_all(dir);
+  return seconds;
+}
+
+}  // namespace
+
+std::vector<uint64_t> parse_counts(const std::string& text) {
+  std::vector<uint64_t> out;
+  size_t pos = 0;
+  while (pos <= text.size()) {
+    const size_t comma = std::min(text.find(',', pos), text.size());
+    const std::string item = text.substr(pos, comma - pos);
+    pos = comma + 1;
+    if (item.empty()) continue;
+    size_t used = 0;
+    double v = 0;
+    try {
+      v = std::stod(item, &used);
+    } catch (const std::exception&) {
+      throw std::invalid_argument("bad particle count '" + item + "'");
+    }
+    const std::string suffix = item.substr(used);
+    if (suffix == "k" || suffix == "K") v *= 1e3;
+    else if (suffix == "M" || suffix == "m") v *= 1e6;
+    else if (suffix == "G" || suffix == "g") v *= 1e9;
+    else if (!suffix.empty()) throw std::invalid_argument("bad particle count '" + item + "' (use k, M or G)");
+    if (!(v >= 1)) throw std::invalid_argument("bad particle count '" + item + "'");
+    out.push_back(uint64_t(std::llround(v)));
+  }
+  return out;
+}
+
+void run_render_bench(const RenderBenchOptions& o) {
+  render::ContextOptions co;
+  co.device = o.device;
+  render::Context context(co);
+  const render::DeviceInfo& dev = context.device();
+  std::printf("sluice bench render: %ux%u, median of %d renders after a warm-up\n", o.width, o.height, o.repeats);
+  std::printf("device: %s (%s, %s)%s\n", dev.name.c_str(), dev.type.c_str(), dev.driver.c_str(),
+              dev.type == "cpu" ? "  -- a CPU implementation: these are CPU milliseconds, not GPU ones" : "");
+  std::printf("host: %s, %d cores; splatting %s\n", cpu_model().c_str(), core_count(), o.splat.c_str());
+  if (!o.images.empty()) fs::create_directories(o.images);
+
+  render::FluidOptions fluid;  // transparent fluid, narrow-range filter, defaults
+  fluid.splatting = render::parse_splatting(o.splat);
+  std::vector<Case> cases;
+  const auto run_frame = [&](const std::string& name, render::Renderer& r, const render::SceneInfo& scene,
+                             const std::vector<float>* xyz) {
+    render::Camera cam = render::Camera::framing(scene.bounds, 2, float(o.width) / float(o.height));
+    for (bool lod_on : {false, true}) {
+      render::LodOptions lod;
+      if (lod_on) {
+        lod.mode = render::LodMode::DensityPreserving;
+        lod.level = o.lod_level;
+      }
+      Case c = measure(r, cam, fluid, lod, o.repeats);
+      c.name = name;
+      c.particles = c.stats.particles;
+      c.lod = lod_on ? "density " + num(o.lod_level, 2) : "off";
+      if (!o.images.empty()) {
+        render::write_png((fs::path(o.images) / (name + (lod_on ? "_lod" : "") + ".png")).string(),
+                          {o.width, o.height, r.read_rgba8()});
+      }
+      if (!lod_on && o.vtk && xyz && c.particles <= o.vtk_max) {
+        std::fprintf(stderr, "running the VTK peer on %s (%s particles)...\n", name.c_str(), count_name(c.particles).c_str());
+        const std::string image = o.images.empty() ? "" : (fs::path(o.images) / (name + "_vtk.png")).string();
+        const double s = run_vtk_peer(*xyz, o, render::effective_radius(fluid, scene), cam, image);
+        if (s > 0) c.vtk_ms = s * 1e3;
+      }
+      std::fprintf(stderr, "  %s, LOD %s: %.1f ms GPU\n", name.c_str(), c.lod.c_str(), c.stats.gpu_ms);
+      cases.push_back(c);
+    }
+  };
+
+  if (!o.real.empty()) {
+    const io::ContainerReader reader(o.real);
+    const render::SceneInfo scene = render::scene_info(reader);
+    render::Renderer r(context, scene, o.width, o.height);
+    const uint64_t frame = reader.frame_count() - 1;
+    r.load_frame(reader, frame, -1);
+    std::vector<float> xyz;
+    if (o.vtk) xyz = io::world_positions(io::decode_frame(reader, frame), reader.header().position_coding);
+    run_frame("real " + fs::path(o.real).stem().string(), r, scene, &xyz);
+  }
+  for (uint64_t n : o.sizes) {
+    std::fprintf(stderr, "generating %s synthetic particles...\n", count_name(n).c_str());
+    const render::SyntheticFluid f = render::synthetic_fluid(n);
+    render::Renderer r(context, f.scene, o.width, o.height);
+    render::upload_synthetic(r, f);
+    std::vector<float> xyz;
+    if (o.vtk && f.particles <= o.vtk_max) xyz = render::synthetic_points(f);
+    run_frame("synthetic " + count_name(n), r, f.scene, &xyz);
+  }
+
+  // Per-pass table.
+  std::vector<std::string> header{"frame", "particles", "LOD", "drawn"};
+  if (!cases.empty()) {
+    for (const render::PassTime& p : cases[0].stats.passes) header.push_back(p.name);
+  }
+  header.insert(header.end(), {"GPU ms", "wall ms", "cull Mp/ms", "upload ms"});
+  Table passes(header);
+  for (const Case& c : cases) {
+    std::vector<std::string> row{c.name, count_name(c.particles), c.lod, count_name(c.stats.drawn)};
+    double cull = 0;
+    for (const render::PassTime& p : c.stats.passes) {
+      row.push_back(num(p.ms, 2));
+      if (p.name == "cull") cull = p.ms;
+    }
+    row.push_back(num(c.stats.gpu_ms, 2));
+    row.push_back(num(c.wall_ms, 1));
+    row.push_back(cull > 0 ? num(double(c.particles) / 1e6 / cull, 2) : "-");
+    row.push_back(num(c.stats.upload_ms, 2));
+    passes.row(row);
+  }
+  passes.print("Per-pass time (ms, from timestamps; 'wall' is the render() call, submit to fence)");
+  if (!o.csv.empty()) {
+    std::ofstream csv(o.csv);
+    csv << "frame,particles,lod,drawn";
+    if (!cases.empty()) {
+      for (const render::PassTime& p : cases[0].stats.passes) csv << "," << p.name << "_ms";
+    }
+    csv << ",gpu_ms,wall_ms,vtk_ms,device\n";
+    for (const Case& c : cases) {
+      csv << '"' << c.name << "\"," << c.particles << ",\"" << c.lod << "\"," << c.stats.drawn;
+      for (const render::PassTime& p : c.stats.passes) csv << "," << p.ms;
+      csv << "," << c.stats.gpu_ms << "," << c.wall_ms << "," << (c.vtk_ms < 0 ? std::string() : std::to_string(c.vtk_ms))
+          << ",\"" << dev.name << "\"\n";
+    }
+    if (!csv) throw std::runtime_error(o.csv + ": cannot write");
+    std::printf("\nwrote %s\n", o.csv.c_str());
+  }
+
+  bool any_vtk = false;
+  Table peer({"frame", "particles", "sluice GPU ms", "sluice wall ms", "VTK ms", "VTK / sluice (wall)"});
+  for (const Case& c : cases) {
+    if (c.vtk_ms < 0) continue;
+    any_vtk = true;
+    peer.row({c.name, count_name(c.particles), num(c.stats.gpu_ms, 1), num(c.wall_ms, 1), num(c.vtk_ms, 0),
+              num(c.vtk_ms / c.wall_ms, 1) + "x"});
+  }
+  if (any_vtk) {
+    peer.print("Against VTK 9 vtkOpenGLFluidMapper (same frame, camera, radius and size; NarrowRange, "
+               "TransparentFluidVolume; VTK time is a Render() call)");
+  }
+}
+
+}  // namespace sluice::bench

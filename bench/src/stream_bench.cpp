@@ -1,0 +1,261 @@
+// `sluice bench stream`: the pipeline (reader thread, decode workers, a null
+// consumer taking frames as fast as it can) against the machine's bounds,
+// measured in the same run, from storage and from the page cache.
+#include "sluice/bench/stream_bench.h"
+
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <limits>
+
+#include "bounds.h"
+#include "machine.h"
+#include "sluice/io/codec.h"
+#include "sluice/io/reader.h"
+#include "sluice/runtime/pipeline.h"
+#include "table.h"
+
+namespace sluice::bench {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+using runtime::EndMode;
+using runtime::PipelineStats;
+
+double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+// The frames a run streams: a prefix of the file.
+struct Slice {
+  uint64_t frames = 0;
+  uint64_t offset = 0, bytes = 0;  // their records in the file
+  uint64_t particles = 0;          // in all of them
+  uint64_t decoded = 0;            // decoded bytes of all of them
+  double in_per_frame() const { return double(bytes) / double(frames); }
+  double out_per_frame() const { return double(decoded) / double(frames); }
+};
+
+Slice slice_of(const io::ContainerReader& reader, uint64_t wanted, uint64_t page_cache_room) {
+  const auto& index = reader.index().frames;
+  const uint64_t per_particle =
+      io::decoded_particle_bytes(reader.header().position_coding) + 2 * reader.header().attributes.size();
+  Slice s;
+  s.offset = index.empty() ? 0 : index.front().offset;
+  for (const io::FrameIndexEntry& e : index) {
+    if (wanted ? s.frames == wanted : (s.frames > 0 && s.bytes + e.bytes > page_cache_room)) break;
+    ++s.frames;
+    s.bytes += e.bytes;
+    s.particles += e.particle_count;
+    s.decoded += e.particle_count * per_particle;
+  }
+  return s;
+}
+
+struct Pass {
+  double seconds = 0;
+  uint64_t frames = 0;
+  runtime::PipelineRates rates;
+  std::string window;  // in use / planned
+  std::string io_mode;
+};
+
+struct PassSetup {
+  int decode_threads = 1;
+  int read_threads = 1;
+  uint64_t memory = 0;
+};
+
+// Streams the slice through a pipeline into a null consumer. Looping passes
+// run for `min_seconds` after one window of warm-up; others run once.
+Pass stream(const io::ContainerReader& reader, const Slice& slice, const PassSetup& setup, bool direct, bool loop,
+            double min_seconds) {
+  runtime::HostFrameAllocator allocator;
+  runtime::PipelineOptions o;
+  o.decode_threads = setup.decode_threads;
+  o.read_threads = setup.read_threads;
+  o.direct_io = direct;
+  o.budget.memory_cap = setup.memory;
+  runtime::Pipeline pipeline(reader, allocator, o);
+  // frame_count = the slice: a loop goes round the prefix only.
+  pipeline.restart({slice.frames, 0, 1, 1, loop ? EndMode::Loop : EndMode::Stop});
+  auto consume = [&](uint64_t most, double seconds) {
+    const auto start = Clock::now();
+    uint64_t n = 0;
+    for (; n < most && (seconds <= 0 || seconds_since(start) < seconds); ++n) {
+      if (pipeline.wait_next().end) break;
+      const runtime::FrameHandle h = pipeline.take();
+      if (h.failed()) throw io::Error(h.error()->where, h.error()->message);
+    }
+    return n;
+  };
+  if (loop) consume(pipeline.window(), 0);
+  const PipelineStats before = pipeline.stats();
+  const auto start = Clock::now();
+  Pass p;
+  p.frames = consume(loop ? std::numeric_limits<uint64_t>::max() : slice.frames, loop ? min_seconds : 0);
+  p.seconds = seconds_since(start);
+  const PipelineStats after = pipeline.stats();
+  p.rates = runtime::rates_between(before, after);
+  p.window = std::to_string(after.active_frames) + "/" + std::to_string(after.window_frames);
+  p.io_mode = after.io_mode;
+  return p;
+}
+
+// Decode alone, records already in memory, into full-frame buffers: what the
+// workers could do if reading cost nothing.
+double decode_only_fps(const io::ContainerReader& reader, const Slice& slice, int threads, double min_seconds) {
+  const uint64_t frames = std::min<uint64_t>(slice.frames, 8);
+  std::vector<std::vector<std::byte>> records;
+  std::vector<io::FrameHeader> headers;
+  std::vector<std::vector<std::byte>> outputs;
+  std::vector<std::pair<uint64_t, size_t>> chunks;  // (frame, chunk)
+  std::vector<std::vector<uint64_t>> first;
+  const size_t stride = io::decoded_particle_bytes(reader.header().position_coding);
+  for (uint64_t f = 0; f < frames; ++f) {
+    records.push_back(reader.read_record(f));
+    headers.push_back(reader.parse_record(f, records.back()));
+    outputs.emplace_back(headers.back().particle_count * stride);
+    first.emplace_back();
+    uint64_t at = 0;
+    for (size_t c = 0; c < headers.back().chunks.size(); ++c) {
+      chunks.emplace_back(f, c);
+      first.back().push_back(at);
+      at += headers.back().chunks[c].particle_count;
+    }
+  }
+  tbb::task_arena arena(threads);
+  const auto start = Clock::now();
+  uint64_t passes = 0;
+  do {
+    arena.execute([&] {
+      tbb::parallel_for(size_t(0), chunks.size(), [&](size_t i) {
+        thread_local io::DecodeScratch scratch;
+        const auto [f, c] = chunks[i];
+        const io::ChunkDesc& chunk = headers[f].chunks[c];
+        const std::span<std::byte> out = std::span(outputs[f]).subspan(first[f][c] * stride, chunk.particle_count * stride);
+        io::decode_chunk(records[f], chunk, reader.header(), {out, {}}, scratch, reader.location(f, c));
+      });
+    });
+    ++passes;
+  } while (seconds_since(start) < min_seconds);
+  return double(frames * passes) / seconds_since(start);
+}
+
+std::string gbps(double bytes_per_second) { return num(bytes_per_second / 1e9, 2); }
+std::string percent(double share) { return num(100 * share, 0) + "%"; }
+std::string threads_text(int n) { return std::to_string(n) + (n == 1 ? " thread" : " threads"); }
+
+}  // namespace
+
+void run_stream_bench(const StreamBenchOptions& o) {
+  const io::ContainerReader reader(o.file);
+  if (reader.frame_count() == 0) throw io::Error({o.file}, "has no frames to stream");
+  const int cores = o.max_threads > 0 ? o.max_threads : core_count();
+  PassSetup setup;
+  setup.decode_threads = cores;
+  setup.read_threads = o.read_threads > 0 ? o.read_threads : std::clamp(cores / 4, 1, 4);  // the pipeline's default
+  setup.memory = o.memory ? o.memory : uint64_t(2) << 30;
+  const int readers = setup.read_threads;
+  const runtime::HostMemory host = runtime::read_host_memory();
+  const Slice slice = slice_of(reader, o.frames, static_cast<uint64_t>(0.4 * double(host.available())));
+  const double in = slice.in_per_frame(), out = slice.out_per_frame();
+
+  std::printf("sluice bench stream: %s\n", o.file.c_str());
+  std::printf("  %llu of %llu frames (%s GB on disk), %.2f M particles/frame, %.1f MB/frame on disk, %.1f MB/frame decoded\n",
+              (unsigned long long)slice.frames, (unsigned long long)reader.frame_count(), num(double(slice.bytes) / 1e9, 2).c_str(),
+              double(slice.particles) / double(slice.frames) / 1e6, in / 1e6, out / 1e6);
+  std::printf("machine: %s; pipeline: %d decode workers, %s reading, memory cap %s GB; timings of at least %.1f s\n",
+              cpu_model().c_str(), cores, threads_text(readers).c_str(), num(double(setup.memory) / (1 << 30), 1).c_str(),
+              o.min_seconds);
+  if (!o.frames && slice.frames < reader.frame_count()) {
+    std::printf("  (only the frames that fit in 40%% of available memory, so the page-cache figures are from the cache)\n");
+  }
+
+  // 1. Bounds, read the way the pipeline reads (8 MiB pieces, its read threads).
+  Table bounds({"bound", "GB/s", "frames/s of this file", "what"});
+  const double copy_1 = memcpy_gbps(std::min(1.0, o.min_seconds)) * 1e9;
+  const double copy_n = parallel_memcpy_gbps(cores, std::min(1.0, o.min_seconds)) * 1e9;
+  bounds.row({"memcpy, 1 thread", gbps(copy_1), num(copy_1 / out, 1), "decoded bytes"});
+  bounds.row({"memcpy, " + threads_text(cores), gbps(copy_n), num(copy_n / out, 1), "decoded bytes"});
+  double storage = 0, cold_share = 1;
+  std::optional<double> direct;
+  if (o.storage) {
+    const double cold = *sequential_read_gbps(o.file, slice.offset, slice.bytes, ReadMode::BufferedCold, 0, readers) * 1e9;
+    drop_from_page_cache(o.file, slice.offset, slice.bytes);
+    cold_share = page_cache_share(o.file, slice.offset, slice.bytes);
+    direct = sequential_read_gbps(o.file, slice.offset, slice.bytes, ReadMode::Direct, 0, readers);
+    if (direct) *direct *= 1e9;
+    storage = std::max(cold, direct.value_or(0));
+    bounds.row({"pread, storage, cache dropped, " + threads_text(readers), gbps(cold), num(cold / in, 1),
+                "file bytes, kernel readahead"});
+    if (direct) bounds.row({"pread, storage, O_DIRECT, " + threads_text(readers), gbps(*direct), num(*direct / in, 1), "file bytes"});
+    else bounds.row({"pread, storage, O_DIRECT", "-", "-", "refused by the filesystem"});
+  }
+  (void)sequential_read_gbps(o.file, slice.offset, slice.bytes, ReadMode::PageCache, 0, readers);  // bring it in
+  const double warm_share = page_cache_share(o.file, slice.offset, slice.bytes);
+  const double cached_1 = *sequential_read_gbps(o.file, slice.offset, slice.bytes, ReadMode::PageCache, o.min_seconds, 1) * 1e9;
+  bounds.row({"pread, page cache, 1 thread", gbps(cached_1), num(cached_1 / in, 1), "file bytes"});
+  double cached = cached_1;
+  if (readers > 1) {
+    cached = *sequential_read_gbps(o.file, slice.offset, slice.bytes, ReadMode::PageCache, o.min_seconds, readers) * 1e9;
+    bounds.row({"pread, page cache, " + threads_text(readers), gbps(cached), num(cached / in, 1), "file bytes"});
+  }
+  const double decode_fps = decode_only_fps(reader, slice, cores, o.min_seconds);
+  bounds.row({"decode only, " + std::to_string(cores) + " workers, records in memory", gbps(decode_fps * out),
+              num(decode_fps, 1), "decoded bytes (the work itself, not a bound)"});
+  bounds.print("Machine bounds, measured now");
+  if (o.storage) std::printf("  page cache held %s of the frames after dropping them\n", percent(cold_share).c_str());
+  std::printf("  page cache held %s of the frames for the page-cache passes\n", percent(warm_share).c_str());
+
+  // 2. The pipeline, from storage and from the page cache.
+  Table passes({"source", "frames/s", "M particles/s", "read GB/s", "decoded GB/s", "window", "bound frames/s",
+                "vs bound", "limited by", "vs decode alone", "read path"});
+  auto pass_row = [&](const std::string& name, const Pass& p, double read_bound, const std::string& read_name) {
+    const double fps = double(p.frames) / p.seconds;
+    const double read_fps = read_bound / in, copy_fps = copy_n / out;
+    const bool read_slower = read_fps < copy_fps;
+    passes.row({name, num(fps, 1), num(fps * double(slice.particles) / double(slice.frames) / 1e6, 1),
+                num(p.rates.read_mbps / 1e3, 2), num(p.rates.decode_mbps / 1e3, 2), p.window,
+                num(std::min(read_fps, copy_fps), 1), percent(fps / std::min(read_fps, copy_fps)),
+                read_slower ? read_name : "memcpy, " + threads_text(cores), percent(fps / decode_fps), p.io_mode});
+  };
+  if (o.storage) {
+    // The storage bound is the faster of the two ways of reading it.
+    const std::string storage_name = "storage read";
+    if (direct) {
+      drop_from_page_cache(o.file, slice.offset, slice.bytes);
+      pass_row("storage, O_DIRECT", stream(reader, slice, setup, true, false, 0), storage, storage_name);
+    }
+    drop_from_page_cache(o.file, slice.offset, slice.bytes);
+    pass_row("storage, cache dropped", stream(reader, slice, setup, false, false, 0), storage, storage_name);
+    (void)sequential_read_gbps(o.file, slice.offset, slice.bytes, ReadMode::PageCache, 0, readers);  // back into the cache
+  }
+  pass_row("page cache", stream(reader, slice, setup, false, true, o.min_seconds), cached,
+           "pread, page cache, " + threads_text(readers));
+  passes.print("Pipeline: reader thread (" + threads_text(readers) + " reading) + " + std::to_string(cores) +
+               " decode workers -> null consumer (bound: the slower of reading the file and memcpy)");
+
+  // 3. Decode scaling through the pipeline.
+  Table scaling({"workers", "frames/s", "decoded GB/s", "GB/s per busy worker", "workers busy", "speed-up"});
+  double base = 0;
+  for (int t = 1; t <= cores; t = (t == cores ? cores + 1 : std::min(cores, t * 2))) {
+    PassSetup scaled = setup;
+    scaled.decode_threads = t;
+    const Pass p = stream(reader, slice, scaled, false, true, std::max(1.0, o.min_seconds / 2));
+    const double fps = double(p.frames) / p.seconds;
+    if (t == 1) base = fps;
+    double per_worker = 0, busy = 0;  // averages over the workers that decoded
+    const auto active = double(std::max<size_t>(1, p.rates.worker_decode_mbps.size()));
+    for (size_t w = 0; w < p.rates.worker_decode_mbps.size(); ++w) {
+      per_worker += p.rates.worker_decode_mbps[w] / active;
+      busy += p.rates.worker_busy[w] / active;
+    }
+    scaling.row({std::to_string(t), num(fps, 1), num(p.rates.decode_mbps / 1e3, 2), num(per_worker / 1e3, 2),
+                 percent(busy), num(fps / base, 2) + "x"});
+  }
+  scaling.print("Decode scaling through the pipeline, page cache (" + threads_text(readers) + " reading)");
+}
+
+}  // namespace sluice::bench

@@ -1,0 +1,56 @@
+// sluice/render/camera.h: a perspective camera with the interactions a
+// viewer needs (orbit, pan, zoom, fit to bounds) and a text form to save and
+// restore views: "eye=x,y,z;target=x,y,z;up=x,y,z;fov=deg[;near=n]".
+//
+// Units: world units for positions and distances, degrees for fov_deg.
+// Plain value type; not thread-safe to mutate from several threads.
+#pragma once
+
+#include <string>
+
+#include "sluice/render/math.h"
+
+namespace sluice::render {
+
+struct Bounds {
+  Vec3 min, max;
+  Vec3 center() const { return (min + max) * 0.5f; }
+  float diagonal() const { return length(max - min); }
+};
+
+class Camera {
+ public:
+  Vec3 eye{0, -3, 1};
+  Vec3 target{0, 0, 0};
+  Vec3 up{0, 0, 1};
+  float fov_deg = 40.0f;  // vertical field of view
+  float near = 0.0f;      // near plane distance; 0: automatic (distance to target / 1000)
+
+  // Rotates the eye about the target: yaw about `up`, pitch about the
+  // camera's right axis (radians). Pitch stops short of the poles.
+  void orbit(float yaw, float pitch);
+  // Moves eye and target together by fractions of the view height at the
+  // target's distance (dx right, dy up).
+  void pan(float dx, float dy);
+  // Moves the eye toward the target by factor (< 1 closer, > 1 farther).
+  void zoom(float factor);
+  // Keeps the viewing direction, moves the target to the box's centre and the
+  // eye back until the box's bounding sphere fits the narrower fov.
+  void fit(const Bounds& box, float aspect);
+  // A default three-quarter view of `box` looking along -up·0.35 + side,
+  // then fit(). `up_axis` is 0 (x), 1 (y) or 2 (z).
+  static Camera framing(const Bounds& box, int up_axis, float aspect, float fov_deg = 40.0f);
+
+  float near_plane() const;
+  Vec3 forward() const { return normalize(target - eye); }
+  Mat4 view() const { return look_at(eye, target, up); }
+  Mat4 projection(float aspect) const;
+
+  // "eye=..;target=..;up=..;fov=.." with 9 significant digits.
+  std::string to_string() const;
+  // Parses the form above; keys may come in any order and be omitted (they
+  // keep this camera's values). Throws std::invalid_argument naming the bad key.
+  void apply(const std::string& text);
+};
+
+}  // namespace sluice::render

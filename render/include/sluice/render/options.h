@@ -1,0 +1,143 @@
+// sluice/render/options.h: everything that changes how a frame looks or how
+// much of it is drawn. Plain values, cheap to copy; change them between frames
+// freely (nothing is rebuilt except where noted).
+//
+// Names follow vtkOpenGLFluidMapper's where they mean the same thing (table
+// 2.1 of the Tsinghua thesis, ../shared/papers/003_*), in snake_case:
+// ParticleRadius -> particle_radius, DisplayMode -> display_mode, ...
+// Units: world units for lengths, pixels where the name says so.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "sluice/render/math.h"
+
+namespace sluice::render {
+
+// vtkOpenGLFluidMapper::FluidDisplayMode, plus nothing else.
+enum class DisplayMode : uint32_t {
+  UnfilteredOpaqueSurface = 0,
+  FilteredOpaqueSurface = 1,
+  UnfilteredSurfaceNormal = 2,
+  FilteredSurfaceNormal = 3,
+  UnfilteredDepth = 4,
+  FilteredDepth = 5,
+  ThicknessBuffer = 6,
+  FilteredThickness = 7,
+  TransparentFluidVolume = 8,
+};
+
+// vtkOpenGLFluidMapper::FluidSurfaceFilterMethod.
+enum class SurfaceFilterMethod : uint32_t {
+  BilateralGaussian = 0,
+  NarrowRange = 1,  // Truong & Yuksel 2018, with bias correction and dynamic range
+};
+
+// How sphere impostors reach the depth and thickness buffers. Both give the
+// exact ray-sphere depth per pixel.
+enum class Splatting : uint32_t {
+  Compute = 0,  // compute shader with atomics: fast where raster units are few (H100: 10x), order-independent
+  Raster = 1,   // point sprites through the graphics pipeline: faster on CPU implementations (lavapipe: 4x)
+  Auto = 2,     // Raster on CPU devices, Compute on GPUs
+};
+
+enum class Colormap : uint32_t { Viridis = 0, Coolwarm = 1, Turbo = 2, Blues = 3 };
+
+struct FluidOptions {
+  // Radius of the rendered spheres; 0 takes the file's particle spacing (twice
+  // the stored radius: spheres that overlap give a continuous surface).
+  float particle_radius = 0.0f;
+  DisplayMode display_mode = DisplayMode::TransparentFluidVolume;
+  float refractive_index = 1.33f;
+  // How far (in units of the fluid's thickness) refracted rays are bent.
+  float refraction_scale = 1.0f;
+  // Extra reflection of the environment on top of Fresnel, 0..1.
+  float additional_reflection = 0.0f;
+  // Colour the fluid by the attribute chosen below (vertex colours in VTK).
+  bool scalar_visibility = false;
+  // Colour absorbed exponentially with thickness (Beer-Lambert), and its scale
+  // per world unit of thickness. 0: automatic, 6 / (diagonal of the data's
+  // bounds), so a liquid looks like water whatever the units.
+  Vec3 attenuation_color{0.6f, 0.15f, 0.06f};
+  float attenuation_scale = 0.0f;
+  // Surface colour of the opaque display modes.
+  Vec3 opaque_color{0.0f, 0.4f, 0.8f};
+
+  SurfaceFilterMethod surface_filter_method = SurfaceFilterMethod::NarrowRange;
+  // Largest depth-filter kernel radius in pixels. The radius actually used at
+  // a pixel comes from the particle radius, its depth and the fov (Truong &
+  // Yuksel's sigma_i = H*sigma / (2 z tan(fov/2)), kernel = 3 sigma_i).
+  int surface_filter_radius = 20;
+  int surface_filter_iterations = 2;  // 1..3 for the narrow-range filter
+  // Gaussian over the thickness and colour buffers, pixels of that buffer.
+  int thickness_and_volume_color_filter_radius = 8;
+  int thickness_and_volume_color_filter_iterations = 1;
+  // Thickness (and colour) buffer at half the resolution in each axis.
+  bool half_resolution_thickness = true;
+  Splatting splatting = Splatting::Auto;
+
+  // Colouring by attribute (when scalar_visibility).
+  int color_attribute = 0;                // index into the file's attributes
+  std::optional<float> color_min, color_max;  // default: the file's observed range
+  Colormap colormap = Colormap::Viridis;
+
+  // Scene around the fluid.
+  int up_axis = 2;                  // 0 x, 1 y, 2 z: which world axis points up
+  bool ground = true;               // a checkered plane under the fluid's bounds
+  Vec3 light_direction{0.4f, -0.3f, 1.0f};  // towards the sun; given with z up, turned to up_axis
+};
+
+enum class LodMode : uint32_t {
+  Off = 0,              // draw everything inside the frustum
+  Clod = 1,             // thesis formula 3.1: drop particles at random, keep splat size
+  DensityPreserving = 2,  // as Clod, and kept splats grow by (1/p)^(1/3) so the surface has no holes
+};
+
+enum class LodRandom : uint32_t {
+  Stable = 0,        // the container's per-particle value (no flicker during playback)
+  PositionHash = 1,  // thesis formula 3.2 on the world position (flickers when particles move)
+};
+
+// Continuous LOD, culling and the limits that protect the screen-space filter.
+struct LodOptions {
+  LodMode mode = LodMode::Off;
+  // The user's threshold, 0..1: 1 keeps every particle inside the frustum,
+  // lower keeps fewer (about `level` of them where a particle's importance is 1).
+  float level = 1.0f;
+  // Distance at which the importance of a particle at the screen centre is 1
+  // (the thesis's CLOD constant, as a length). 0: the diagonal of the data's
+  // bounds, so the default view keeps about `level` of the particles.
+  float reference_distance = 0.0f;
+  LodRandom random = LodRandom::Stable;
+  // Near-camera culling (thesis 3.4): particles closer than this to the eye
+  // are dropped. 0: only those crossing the near plane.
+  float near_cull_distance = 0.0f;
+  // Particles whose sphere would cover more than this many pixels across are
+  // dropped too (thesis 3.4: they only spoil the filter). 0: the device's
+  // largest point size.
+  float max_splat_pixels = 0.0f;
+  // Largest growth factor of a kept splat in DensityPreserving mode.
+  float max_splat_scale = 4.0f;
+};
+
+// Names used on the command line and in camera/option strings.
+const char* to_string(DisplayMode m);
+const char* to_string(SurfaceFilterMethod m);
+const char* to_string(LodMode m);
+const char* to_string(Colormap m);
+const char* to_string(Splatting m);
+Splatting parse_splatting(const std::string& s);  // "auto" | "compute" | "raster"
+// Accepts the VTK name ("TransparentFluidVolume") or the short one
+// ("transparent", "opaque", "normals", "depth", "thickness", ...).
+// Throws std::invalid_argument listing the choices.
+DisplayMode parse_display_mode(const std::string& s);
+SurfaceFilterMethod parse_filter_method(const std::string& s);  // "narrow-range" | "bilateral"
+LodMode parse_lod_mode(const std::string& s);                   // "off" | "clod" | "density"
+Colormap parse_colormap(const std::string& s);
+std::vector<std::string> display_mode_names();  // short names, in enum order
+int parse_axis(const std::string& s);  // "x" | "y" | "z" -> 0..2
+
+}  // namespace sluice::render

@@ -1,0 +1,81 @@
+// sluice/render/window.h: a desktop window (GLFW) with a Vulkan swapchain
+// that shows a Renderer's image with a Dear ImGui HUD drawn on top. Built
+// only where GLFW and Dear ImGui are found (SLUICE_WITH_WINDOW).
+//
+// Usage: window_instance_extensions() -> Context(with them, presentation)
+// -> Window -> per frame: poll_events(), Renderer::render(), new_ui_frame(),
+// ImGui:: calls, present().
+// Threads: everything on the thread that created the window (GLFW's rule).
+// Ownership: the Window borrows the Context, which must outlive it.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "sluice/render/context.h"
+#include "sluice/render/renderer.h"
+
+struct GLFWwindow;
+
+namespace sluice::render {
+
+struct WindowOptions {
+  uint32_t width = 1280, height = 720;  // initial size in screen coordinates
+  std::string title = "sluice";
+  bool vsync = true;  // FIFO presentation; off: MAILBOX/IMMEDIATE where offered
+};
+
+// Initializes GLFW (once per process) and returns the instance extensions
+// Vulkan needs for its windows. Throws std::runtime_error when there is no
+// display (no X server / Wayland compositor) or GLFW lacks Vulkan.
+std::vector<std::string> window_instance_extensions();
+
+// Processes pending window events (input callbacks run inside).
+void poll_window_events();
+
+// GLFW input callbacks of the application; Dear ImGui's run first and call these.
+struct WindowCallbacks {
+  void (*key)(GLFWwindow*, int key, int scancode, int action, int mods) = nullptr;
+  void (*mouse_button)(GLFWwindow*, int button, int action, int mods) = nullptr;
+  void (*cursor)(GLFWwindow*, double x, double y) = nullptr;
+  void (*scroll)(GLFWwindow*, double dx, double dy) = nullptr;
+  void* user = nullptr;  // glfwGetWindowUserPointer
+};
+
+class Window {
+ public:
+  // The context must have been created with window_instance_extensions() and
+  // presentation = true. Also sets up Dear ImGui (context, GLFW and Vulkan
+  // backends), which chains to the input callbacks given here.
+  Window(Context& context, const WindowOptions& options, const WindowCallbacks& callbacks = {});
+  ~Window();
+  Window(const Window&) = delete;
+  Window& operator=(const Window&) = delete;
+
+  GLFWwindow* glfw() const;
+  bool should_close() const;
+  void request_close();
+  // Framebuffer size in pixels (0 x 0 while minimized).
+  uint32_t width() const;
+  uint32_t height() const;
+
+  // Starts a Dear ImGui frame: build the HUD with ImGui:: calls, then present().
+  void new_ui_frame();
+  // Shows the renderer's last image (scaled if the sizes differ) with the UI
+  // on top (when `ui`; else the UI frame is discarded) and presents it.
+  // Returns false when the frame was dropped because the swapchain had to be
+  // rebuilt (resize): resize the renderer to width() x height() and go on.
+  // `capture` keeps a copy of what was presented for read_presented().
+  bool present(Renderer& renderer, bool ui, bool capture = false);
+  // The last captured presented image: width*height RGBA8, top row first.
+  std::vector<uint8_t> read_presented();
+
+  struct Impl;
+
+ private:
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace sluice::render

@@ -1,0 +1,146 @@
+// Shared by every sluice shader: the per-frame uniforms (mirrored by
+// struct Globals in src/gpu_types.h; keep the two in step), the buffer layouts
+// reached through buffer device addresses, and the push constants.
+#extension GL_EXT_buffer_reference : require
+#extension GL_EXT_buffer_reference_uvec2 : require
+
+layout(set = 0, binding = 0, std140) uniform Globals {
+  mat4 view;            // world -> eye
+  mat4 inv_view;        // eye -> world
+  vec4 planes[5];       // world frustum planes (left, right, bottom, top, near): inside when dot(n, x) + w >= 0
+  vec4 eye;             // world eye position; w: near plane distance
+  vec4 viewport;        // output width, height, 1/width, 1/height
+  vec4 thick_viewport;  // the thickness buffer's width, height, 1/width, 1/height
+  vec4 proj;            // P00 (f / aspect), P11 (f), tan(fov/2), ndc->pixel scale unused
+  vec4 radius;          // sphere radius, largest point size (px), largest splat (px), near-cull distance
+  vec4 lod;             // level, threshold -ln(level), 1 / reference distance, largest splat scale
+  uvec4 modes;          // lod mode, lod random, position coding, has colour attribute
+  vec4 color;           // colour range min, 1 / (max - min), scalar visibility, colormap
+  vec4 filter_params;   // sigma (world), largest kernel radius (px), delta (world), mu (world)
+  uvec4 filter_modes;   // method, iterations, thickness radius (px), thickness iterations
+  vec4 shade;           // refractive index, refraction scale, additional reflection, attenuation scale
+  vec4 attenuation;     // rgb absorption colour
+  vec4 opaque_color;    // rgb
+  uvec4 display;        // display mode, ground on, write aux, depth filtered
+  vec4 up;              // world up axis; w: ground height along it
+  vec4 light;           // world direction towards the sun
+  vec4 scene;           // scene centre xyz; w: scene extent (diagonal)
+  vec4 splat;           // thickness fixed-point scale (units per world unit), its inverse, largest small-splat area (px)
+} g;
+
+struct Chunk {
+  vec3 lo;
+  uint first;
+  vec3 hi;
+  uint count;
+  vec2 attr_range;
+  uvec2 pad;
+};
+
+layout(buffer_reference, std430, buffer_reference_align = 8) readonly buffer Particles8 { uvec2 v[]; };
+layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer Particles16 { uvec4 v[]; };
+layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer Chunks { Chunk c[]; };
+layout(buffer_reference, std430, buffer_reference_align = 4) readonly buffer Attributes { uint v[]; };
+layout(buffer_reference, std430, buffer_reference_align = 8) buffer Blocks { uvec2 b[]; };
+// The draw list: one uvec2 per kept particle, x = its 256-particle block
+// in Blocks, y = index in the block (8 bits) | splat growth (12-bit unorm
+// over 1..largest scale) << 8 | colour attribute (12-bit unorm) << 20.
+// 8 bytes: the cull writes half of what world positions would take.
+layout(buffer_reference, std430, buffer_reference_align = 8) buffer Draws { uvec2 d[]; };
+
+// Counters and indirect arguments, reset before every cull.
+layout(buffer_reference, std430, buffer_reference_align = 16) buffer Args {
+  uint vertex_count;    // VkDrawIndirectCommand
+  uint instance_count;
+  uint first_vertex;
+  uint first_instance;
+  uint groups_x;        // VkDispatchIndirectCommand for the particle pass
+  uint groups_y;
+  uint groups_z;
+  uint block_count;     // visible 256-particle blocks
+  uint visible_chunks;
+  uint splat_x;         // VkDispatchIndirectCommand for the small-splat pass
+  uint splat_y;
+  uint splat_z;
+  uint big_count;       // splats too large for one thread
+  uint big_x;           // VkDispatchIndirectCommand for the large-splat pass
+  uint big_y;
+  uint big_z;
+};
+layout(buffer_reference, std430, buffer_reference_align = 4) buffer Items { uint i[]; };
+
+layout(push_constant) uniform Push {
+  uvec2 particles;
+  uvec2 chunks;
+  uvec2 attributes;
+  uvec2 blocks;
+  uvec2 draws;
+  uvec2 args;
+  uvec2 big;    // Items: draw-list indices of the large splats
+  uint chunk_count;
+  uint param0;  // per pass: filter direction, thickness pass flag, ...
+  uint param1;
+  uint param2;
+} pc;
+
+const uint kBlock = 256;  // particles per cull workgroup
+
+// World position and stable LOD value of particle `index` of chunk `c`.
+void decode_particle(Chunk c, uint index, out vec3 pos, out uint lod_value) {
+  if (g.modes.z == 0u) {
+    uvec2 raw = Particles8(pc.particles).v[index];
+    uvec3 q = uvec3(raw.x & 0xffffu, raw.x >> 16, raw.y & 0xffffu);
+    pos = c.lo + vec3(q) * ((c.hi - c.lo) * (1.0 / 65535.0));
+    lod_value = raw.y >> 16;
+  } else {
+    uvec4 raw = Particles16(pc.particles).v[index];
+    pos = uintBitsToFloat(raw.xyz);
+    lod_value = raw.w & 0xffffu;
+  }
+}
+
+struct DrawItem {
+  vec3 pos;      // world
+  float radius;  // world, grown in density-preserving LOD
+  float attr;    // colour attribute, 0..1
+};
+
+DrawItem load_item(uint item) {
+  uvec2 d = Draws(pc.draws).d[item];
+  uvec2 block = Blocks(pc.blocks).b[d.x];
+  Chunk c = Chunks(pc.chunks).c[block.x];
+  DrawItem it;
+  uint lod_value;
+  decode_particle(c, c.first + (block.y & 0x7fffffffu) + (d.y & 0xffu), it.pos, lod_value);
+  float growth = float((d.y >> 8) & 0xfffu) * (1.0 / 4095.0);
+  it.radius = g.radius.x * (1.0 + growth * (g.lod.w - 1.0));
+  it.attr = float(d.y >> 20) * (1.0 / 4095.0);
+  return it;
+}
+
+// Extent of tan(angle) covered by a circle of radius r at (u, d) (d > 0 in
+// front of the eye): tan(phi -/+ alpha), from the two tangent lines.
+vec2 tangent_range(float u, float d, float r) {
+  float t = sqrt(max(u * u + d * d - r * r, 0.0));
+  float lo_den = d * t + u * r;
+  float hi_den = d * t - u * r;
+  float lo = lo_den > 0.0 ? (u * t - r * d) / lo_den : -1e6;
+  float hi = hi_den > 0.0 ? (u * t + r * d) / hi_den : 1e6;
+  return vec2(lo, hi);
+}
+
+// The exact screen-space bounding box (pixels of a viewport `vp`) of the
+// perspective projection of a sphere at eye-space c with radius r.
+void sphere_bounds(vec3 c, float r, vec4 vp, out vec2 lo, out vec2 hi) {
+  float d = -c.z;
+  vec2 tx = tangent_range(c.x, d, r) * g.proj.x;    // ndc x range
+  vec2 ty = tangent_range(c.y, d, r) * -g.proj.y;   // ndc y (flipped: image rows go down)
+  lo = (vec2(tx.x, min(ty.x, ty.y)) * 0.5 + 0.5) * vp.xy;
+  hi = (vec2(tx.y, max(ty.x, ty.y)) * 0.5 + 0.5) * vp.xy;
+}
+
+// Eye-space ray direction through a pixel (not normalized; z = -1).
+vec3 eye_ray(vec2 pixel, vec4 vp) {
+  vec2 ndc = pixel * vp.zw * 2.0 - 1.0;
+  return vec3(ndc.x / g.proj.x, -ndc.y / g.proj.y, -1.0);
+}

@@ -1,0 +1,109 @@
+#version 460
+// Normals from the (filtered) depth, then shading: Fresnel reflection of the
+// environment, refraction of the background, Beer-Lambert absorption over the
+// thickness, specular; or the debug views of vtkOpenGLFluidMapper's display
+// modes. Writes the RGBA8 output (sRGB-encoded) and, for tests, eye normals
+// and depth.
+#include "common.glsl"
+#include "images.glsl"
+#include "scene.glsl"
+#include "colormap.glsl"
+
+layout(local_size_x = 8, local_size_y = 8) in;
+
+uint depth_source() { return g.display.w != 0u ? 1u : 0u; }
+
+vec3 eye_point(ivec2 p, float z) { return eye_ray(vec2(p) + 0.5, g.viewport) * z; }
+
+// Of the two one-sided differences, the one with the smaller depth step (or
+// the only one with fluid): no smearing across silhouettes.
+vec3 one_sided(ivec2 p, ivec2 axis, vec3 centre, float zc) {
+  float za = load_depth(depth_source(), p + axis);
+  float zb = load_depth(depth_source(), p - axis);
+  bool a_ok = za > 0.0, b_ok = zb > 0.0;
+  if (a_ok && (!b_ok || abs(za - zc) <= abs(zc - zb))) return eye_point(p + axis, za) - centre;
+  if (b_ok) return centre - eye_point(p - axis, zb);
+  return vec3(0.0);
+}
+
+vec3 surface_normal(ivec2 p, float z, vec3 pe) {
+  vec3 dx = one_sided(p, ivec2(1, 0), pe, z);
+  vec3 dy = one_sided(p, ivec2(0, 1), pe, z);
+  vec3 n = cross(dy, dx);  // image rows go down: this faces the camera
+  if (dot(n, n) < 1e-30) return vec3(0.0, 0.0, 1.0);
+  n = normalize(n);
+  return dot(n, pe) > 0.0 ? -n : n;
+}
+
+vec3 to_srgb(vec3 c) {
+  c = max(c, 0.0);
+  c = c / (1.0 + 0.12 * c);  // gentle shoulder for the sun glint
+  return pow(clamp(c, 0.0, 1.0), vec3(1.0 / 2.2));
+}
+
+void main() {
+  ivec2 p = ivec2(gl_GlobalInvocationID.xy);
+  if (any(greaterThanEqual(p, ivec2(g.viewport.xy)))) return;
+  vec3 de = eye_ray(vec2(p) + 0.5, g.viewport);
+  vec3 dir = normalize(mat3(g.inv_view) * de);
+  vec3 eye = g.eye.xyz;
+  uint mode = g.display.x;
+
+  float z = load_depth(depth_source(), p);
+  float dist = z * length(de);
+  float tg = ground_hit(eye, dir);
+  bool fluid = z > 0.0 && (tg < 0.0 || dist < tg);
+  vec3 color;
+  vec3 n = vec3(0.0);
+  if (!fluid) {
+    color = mode >= 2u && mode <= 7u ? vec3(0.0) : environment(eye, dir);
+  } else {
+    vec3 pe = de * z;
+    n = surface_normal(p, z, pe);
+    vec2 uv = (vec2(p) + 0.5) * g.viewport.zw;
+    vec2 th = g.filter_modes.w != 0u ? texture(thick_a_tex, uv).xy : texture(thick_raw_tex, uv).xy;
+    float thickness = th.x;
+    float attr = th.x > 0.0 ? th.y / th.x : 0.0;
+    vec3 nw = normalize(mat3(g.inv_view) * n);
+    vec3 pw = eye + dir * dist;
+    vec3 l = normalize(g.light.xyz);
+    float ior = g.shade.x;
+    float f0 = (ior - 1.0) / (ior + 1.0);
+    f0 *= f0;
+    float cos_v = clamp(dot(nw, -dir), 0.0, 1.0);
+    float fresnel = f0 + (1.0 - f0) * pow(1.0 - cos_v, 5.0);
+    vec3 refl_dir = reflect(dir, nw);
+    vec3 reflection = environment(pw + nw * g.radius.x * 0.01, refl_dir);
+    float spec = pow(max(dot(nw, normalize(l - dir)), 0.0), 300.0) * 3.0 + pow(max(dot(nw, normalize(l - dir)), 0.0), 40.0) * 0.15;
+    bool scalar = g.color.z != 0.0;
+    vec3 tint = scalar ? colormap(attr, uint(g.color.w)) : vec3(1.0);
+
+    if (mode == 2u || mode == 3u) {
+      color = n * 0.5 + 0.5;
+    } else if (mode == 4u || mode == 5u) {
+      float centre = length(g.scene.xyz - eye);
+      float v = clamp((z - (centre - 0.5 * g.scene.w)) / max(g.scene.w, 1e-6), 0.0, 1.0);
+      color = vec3(1.0 - v);
+    } else if (mode == 6u || mode == 7u) {
+      color = vec3(1.0 - exp(-thickness / max(8.0 * g.radius.x, 1e-9)));
+    } else if (mode == 8u) {
+      vec3 refr = refract(dir, nw, 1.0 / ior);
+      if (dot(refr, refr) < 1e-6) refr = refl_dir;
+      vec3 bent = normalize(dir + (refr - dir) * g.shade.y);
+      vec3 background = environment(pw, bent);
+      vec3 absorb = (scalar ? (1.0 - tint) + 0.05 : g.attenuation.rgb) * g.shade.w;
+      vec3 transmit = exp(-absorb * thickness);
+      // A little in-scattering so deep liquid is not black.
+      vec3 scatter = (1.0 - transmit) * (scalar ? tint : vec3(0.05, 0.22, 0.3)) * 0.25 * sky(g.up.xyz);
+      color = (1.0 - fresnel) * (background * transmit + scatter) + (fresnel + g.shade.z) * reflection +
+              spec * vec3(1.0, 0.95, 0.85);
+    } else {
+      vec3 base = scalar ? tint : g.opaque_color.rgb;
+      vec3 diffuse = base * (0.3 + 0.7 * max(dot(nw, l), 0.0));
+      color = mix(diffuse, reflection, clamp(fresnel + g.shade.z, 0.0, 1.0)) + spec * vec3(1.0, 0.95, 0.85);
+    }
+  }
+  bool raw_view = mode >= 2u && mode <= 7u;
+  imageStore(out_color, p, vec4(raw_view ? clamp(color, 0.0, 1.0) : to_srgb(color), 1.0));
+  if (g.display.z != 0u) imageStore(out_aux, p, vec4(n, fluid ? z : 0.0));
+}

@@ -1,0 +1,53 @@
+#version 460
+// Chunk frustum test: one thread per chunk. A visible chunk appends its
+// 256-particle blocks to the block list that the particle pass walks, so
+// culled chunks cost nothing further.
+#include "common.glsl"
+
+layout(local_size_x = 64) in;
+
+// Largest distance any particle's sphere reaches beyond its centre.
+float reach() {
+  float r = g.radius.x;
+  return g.modes.x == 2u ? r * g.lod.w : r;
+}
+
+bool aabb_visible(vec3 lo, vec3 hi, float r) {
+  for (int i = 0; i < 5; ++i) {
+    vec4 p = g.planes[i];
+    // The box corner farthest along the plane normal.
+    vec3 c = vec3(p.x >= 0.0 ? hi.x : lo.x, p.y >= 0.0 ? hi.y : lo.y, p.z >= 0.0 ? hi.z : lo.z);
+    if (dot(p.xyz, c) + p.w < -r) return false;
+  }
+  return true;
+}
+
+// True when no particle of the chunk can fail the per-particle frustum,
+// near-plane or splat-size tests: the particle pass then skips them.
+bool aabb_inside(vec3 lo, vec3 hi, float r) {
+  for (int i = 0; i < 5; ++i) {
+    vec4 p = g.planes[i];
+    vec3 c = vec3(p.x >= 0.0 ? lo.x : hi.x, p.y >= 0.0 ? lo.y : hi.y, p.z >= 0.0 ? lo.z : hi.z);
+    if (dot(p.xyz, c) + p.w < r) return false;
+  }
+  // Nearest depth along the view axis of any point of the box.
+  vec3 row = vec3(g.view[0][2], g.view[1][2], g.view[2][2]);
+  vec3 centre = 0.5 * (lo + hi), half_size = 0.5 * (hi - lo);
+  float nearest = -(dot(row, centre) + g.view[3][2] + dot(abs(row), half_size));
+  if (nearest - r < max(g.eye.w, g.radius.w)) return false;
+  return r * g.proj.y * g.viewport.y <= g.radius.z * (nearest - r);
+}
+
+void main() {
+  uint i = gl_GlobalInvocationID.y * (gl_NumWorkGroups.x * 64u) + gl_GlobalInvocationID.x;
+  if (i >= pc.chunk_count) return;
+  Chunk c = Chunks(pc.chunks).c[i];
+  if (c.count == 0u || !aabb_visible(c.lo, c.hi, reach())) return;
+  Args args = Args(pc.args);
+  atomicAdd(args.visible_chunks, 1u);
+  uint blocks = (c.count + kBlock - 1u) / kBlock;
+  uint base = atomicAdd(args.block_count, blocks);
+  uint inside = aabb_inside(c.lo, c.hi, reach()) ? 0x80000000u : 0u;
+  Blocks list = Blocks(pc.blocks);
+  for (uint b = 0u; b < blocks; ++b) list.b[base + b] = uvec2(i, (b * kBlock) | inside);
+}

@@ -1,0 +1,81 @@
+#version 460
+// Per particle: dequantize, frustum and near-camera culling (thesis 3.4),
+// continuous LOD (thesis 3.1, see include/sluice/render/lod.h), and
+// compaction of the survivors into the draw list and the indirect draw.
+#include "common.glsl"
+
+layout(local_size_x = 256) in;
+
+shared uint s_count;
+shared uint s_base;
+
+// Thesis formula 3.2.
+float position_hash(vec3 p) {
+  return fract(sin(dot(p, vec3(12.9898, 78.233, 54.143))) * 437586.5453);
+}
+
+void main() {
+  Args args = Args(pc.args);
+  uint block_index = gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x;
+  if (block_index >= args.block_count) return;  // whole workgroup: uniform
+  if (gl_LocalInvocationIndex == 0u) s_count = 0u;
+  barrier();
+
+  uvec2 block = Blocks(pc.blocks).b[block_index];
+  bool inside = (block.y & 0x80000000u) != 0u;  // the chunk pass proved the tests below pass
+  Chunk c = Chunks(pc.chunks).c[block.x];
+  uint local = (block.y & 0x7fffffffu) + gl_LocalInvocationIndex;
+  bool keep = local < c.count;
+  uint index = c.first + min(local, c.count - 1u);
+
+  vec3 pos;
+  uint lod_value;
+  decode_particle(c, index, pos, lod_value);
+
+  vec3 e = (g.view * vec4(pos, 1.0)).xyz;
+  float dist = -e.z;   // along the view axis
+  float r = g.radius.x;
+  float scale = 1.0;
+
+  if (g.modes.x != 0u && keep) {
+    // Importance w (formula 3.1 with CLOD = 1000 / d_ref) and random term.
+    vec2 ndc = vec2(g.proj.x * e.x, -g.proj.y * e.y) / max(dist, 1e-20);
+    float centre = max(1.0 - 0.7 * min(length(ndc) * 0.70710678, 1.0), 0.3);
+    float w = centre / (max(length(e), 1e-20) * g.lod.z);
+    float u = g.modes.y == 0u ? (float(lod_value) + 0.5) * (1.0 / 65536.0) : position_hash(pos);
+    float lod = w * -log(1.0 - u);
+    keep = lod >= g.lod.y;
+    if (g.modes.x == 2u) {
+      // Density preserving: grow by (1/p)^(1/3), p = level^(1/w).
+      scale = min(exp(g.lod.y / (3.0 * w)), g.lod.w);
+      r *= scale;
+    }
+  }
+  if (keep && !inside) {
+    for (int i = 0; i < 5; ++i) {
+      if (dot(g.planes[i].xyz, pos) + g.planes[i].w < -r) keep = false;
+    }
+    // Near-camera culling: too close, or a splat too large for the filter.
+    if (dist - r < max(g.eye.w, g.radius.w)) keep = false;
+    if (2.0 * r * g.proj.y * g.viewport.y * 0.5 > g.radius.z * max(dist - r, 1e-20)) keep = false;
+  }
+
+  float t = 0.0;
+  if (keep && g.modes.w != 0u) {
+    uint word = Attributes(pc.attributes).v[index >> 1];
+    float q = float((index & 1u) == 0u ? (word & 0xffffu) : (word >> 16));
+    float value = c.attr_range.x + q * ((c.attr_range.y - c.attr_range.x) * (1.0 / 65535.0));
+    t = clamp((value - g.color.x) * g.color.y, 0.0, 1.0);
+  }
+
+  uint slot = 0u;
+  if (keep) slot = atomicAdd(s_count, 1u);
+  barrier();
+  if (gl_LocalInvocationIndex == 0u) s_base = s_count == 0u ? 0u : atomicAdd(args.vertex_count, s_count);
+  barrier();
+  if (keep) {
+    uint growth = g.lod.w > 1.0 ? uint((scale - 1.0) / (g.lod.w - 1.0) * 4095.0 + 0.5) : 0u;
+    uint packed = gl_LocalInvocationIndex | (min(growth, 4095u) << 8) | (uint(t * 4095.0 + 0.5) << 20);
+    Draws(pc.draws).d[s_base + slot] = uvec2(block_index, packed);
+  }
+}

@@ -1,0 +1,40 @@
+#version 460
+// One point sprite per kept particle, placed and sized to cover the sphere's
+// exact perspective projection (tangent planes per axis), clamped to the
+// viewport so the point's centre is always inside the clip volume (points
+// whose centre is outside may be discarded whole). The fragment shaders
+// intersect the pixel's ray with the sphere, so the sprite only has to cover.
+#include "common.glsl"
+
+layout(location = 0) flat out vec3 v_center;  // eye space
+layout(location = 1) flat out float v_radius;
+layout(location = 2) flat out float v_attr;
+
+void hide() {
+  gl_Position = vec4(4.0, 4.0, 0.5, 1.0);
+  gl_PointSize = 1.0;
+}
+
+void main() {
+  DrawItem item = load_item(uint(gl_VertexIndex));
+  float r = item.radius;
+  vec3 c = (g.view * vec4(item.pos, 1.0)).xyz;
+  float d = -c.z;
+  v_center = c;
+  v_radius = r;
+  v_attr = item.attr;
+  if (d - r <= g.eye.w) { hide(); return; }
+
+  vec4 vp = pc.param0 == 1u ? g.thick_viewport : g.viewport;
+  vec2 lo, hi;
+  sphere_bounds(c, r, vp, lo, hi);
+  lo = clamp(lo, vec2(0.0), vp.xy);
+  hi = clamp(hi, vec2(0.0), vp.xy);
+  if (any(lessThanEqual(hi, lo))) { hide(); return; }
+  vec2 centre = (lo + hi) * 0.5;
+  vec2 size = hi - lo;
+  gl_PointSize = min(max(size.x, size.y) + 2.0, g.radius.y);
+  // Depth of the sphere's nearest point: every fragment is at or behind it
+  // (reversed z: depth_less in the fragment shader).
+  gl_Position = vec4(centre * vp.zw * 2.0 - 1.0, g.eye.w / (d - r), 1.0);
+}

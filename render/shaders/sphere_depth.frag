@@ -1,0 +1,24 @@
+#version 460
+// Exact sphere depth per pixel: ray-sphere intersection in eye space. Writes
+// the hardware depth (reversed z) and the linear depth used by the filters.
+#include "common.glsl"
+
+layout(location = 0) flat in vec3 v_center;
+layout(location = 1) flat in float v_radius;
+layout(location = 2) flat in float v_attr;
+layout(location = 0) out float o_depth;  // distance along the view axis
+layout(depth_less) out float gl_FragDepth;
+
+void main() {
+  vec3 dir = eye_ray(gl_FragCoord.xy, g.viewport);
+  float inv_len = inversesqrt(dot(dir, dir));
+  vec3 n = dir * inv_len;
+  // Closest approach first: stable when the sphere is tiny and far away.
+  float tc = dot(n, v_center);
+  vec3 perp = v_center - tc * n;
+  float h2 = v_radius * v_radius - dot(perp, perp);
+  if (h2 < 0.0) discard;
+  float z = (tc - sqrt(h2)) * inv_len;  // dir.z = -1: distance along the ray * |n.z|
+  o_depth = z;
+  gl_FragDepth = g.eye.w / z;
+}

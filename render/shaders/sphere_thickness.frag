@@ -1,0 +1,19 @@
+#version 460
+// Additive thickness: the chord of the pixel's ray through the sphere, and
+// the chord weighted by the colour attribute (for volume colour).
+#include "common.glsl"
+
+layout(location = 0) flat in vec3 v_center;
+layout(location = 1) flat in float v_radius;
+layout(location = 2) flat in float v_attr;
+layout(location = 0) out vec2 o_thickness;
+
+void main() {
+  vec3 n = normalize(eye_ray(gl_FragCoord.xy, g.thick_viewport));
+  float tc = dot(n, v_center);
+  vec3 perp = v_center - tc * n;
+  float h2 = v_radius * v_radius - dot(perp, perp);
+  if (h2 < 0.0) discard;
+  float chord = 2.0 * sqrt(h2);
+  o_thickness = vec2(chord, chord * v_attr);
+}

@@ -1,0 +1,105 @@
+#version 460
+// Sphere impostors without the rasterizer: every kept particle's pixels get
+// the exact ray-sphere depth (atomicMin on the float's bits) and the chord
+// through it (fixed-point atomicAdd, with the colour attribute weighted in)
+// at the thickness buffer's resolution. pc.param0 = 0: one thread per draw
+// item; items covering more than g.splat.z pixels are listed for param0 = 1:
+// one workgroup per listed item. GPUs with few raster units (H100) run this
+// far faster than point sprites, and integer atomics make the sums
+// independent of order (deterministic images).
+#include "common.glsl"
+#include "images.glsl"
+
+layout(local_size_x = 64) in;
+
+struct Sphere {
+  vec3 c;   // eye space
+  float r;
+  float attr;
+};
+
+Sphere load(uint item) {
+  DrawItem it = load_item(item);
+  Sphere s;
+  s.c = (g.view * vec4(it.pos, 1.0)).xyz;
+  s.r = it.radius;
+  s.attr = it.attr;
+  return s;
+}
+
+// Pixels [lo, hi) whose centres can fall inside the sphere's projection.
+void pixel_box(Sphere s, vec4 vp, out ivec2 lo, out ivec2 hi) {
+  vec2 a, b;
+  sphere_bounds(s.c, s.r, vp, a, b);
+  lo = clamp(ivec2(floor(a)), ivec2(0), ivec2(vp.xy));
+  hi = clamp(ivec2(ceil(b)), ivec2(0), ivec2(vp.xy));
+}
+
+// h^2 of the pixel's ray against the sphere (< 0: miss) and the hit depth.
+float ray_sphere(Sphere s, ivec2 p, vec4 vp, out float z) {
+  vec3 dir = eye_ray(vec2(p) + 0.5, vp);
+  float inv_len = inversesqrt(dot(dir, dir));
+  vec3 n = dir * inv_len;
+  float tc = dot(n, s.c);
+  vec3 perp = s.c - tc * n;
+  float h2 = s.r * s.r - dot(perp, perp);
+  z = (tc - sqrt(max(h2, 0.0))) * inv_len;
+  return h2;
+}
+
+void depth_pixel(Sphere s, ivec2 p) {
+  float z;
+  if (ray_sphere(s, p, g.viewport, z) < 0.0) return;
+  uint bits = floatBitsToUint(z);
+  if (imageLoad(depth_u, p).x > bits) imageAtomicMin(depth_u, p, bits);
+}
+
+void thickness_pixel(Sphere s, ivec2 p, bool attr) {
+  float z;
+  float h2 = ray_sphere(s, p, g.thick_viewport, z);
+  if (h2 < 0.0) return;
+  float chord = 2.0 * sqrt(h2) * g.splat.x;
+  uint t = uint(chord + 0.5);
+  if (t == 0u) return;
+  imageAtomicAdd(thick_u, p, t);
+  if (attr) imageAtomicAdd(thick_attr_u, p, uint(chord * s.attr + 0.5));
+}
+
+void main() {
+  bool attr = g.modes.w != 0u;
+  if (pc.param0 == 0u) {
+    uint item = (gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x) * 64u + gl_LocalInvocationIndex;
+    Args args = Args(pc.args);
+    if (item >= args.vertex_count) return;
+    Sphere s = load(item);
+    ivec2 lo, hi, tlo, thi;
+    pixel_box(s, g.viewport, lo, hi);
+    pixel_box(s, g.thick_viewport, tlo, thi);
+    ivec2 size = max(hi - lo, ivec2(0));
+    if (float(size.x) * float(size.y) > g.splat.z) {
+      Items(pc.big).i[atomicAdd(args.big_count, 1u)] = item;
+      return;
+    }
+    for (int y = lo.y; y < hi.y; ++y)
+      for (int x = lo.x; x < hi.x; ++x) depth_pixel(s, ivec2(x, y));
+    for (int y = tlo.y; y < thi.y; ++y)
+      for (int x = tlo.x; x < thi.x; ++x) thickness_pixel(s, ivec2(x, y), attr);
+  } else {
+    uint index = gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x;
+    if (index >= Args(pc.args).big_count) return;
+    Sphere s = load(Items(pc.big).i[index]);
+    ivec2 lo, hi, tlo, thi;
+    pixel_box(s, g.viewport, lo, hi);
+    pixel_box(s, g.thick_viewport, tlo, thi);
+    ivec2 size = max(hi - lo, ivec2(0));
+    uint area = uint(size.x) * uint(size.y);
+    for (uint i = gl_LocalInvocationIndex; i < area; i += 64u) {
+      depth_pixel(s, lo + ivec2(int(i % uint(size.x)), int(i / uint(size.x))));
+    }
+    ivec2 tsize = max(thi - tlo, ivec2(0));
+    uint tarea = uint(tsize.x) * uint(tsize.y);
+    for (uint i = gl_LocalInvocationIndex; i < tarea; i += 64u) {
+      thickness_pixel(s, tlo + ivec2(int(i % uint(tsize.x)), int(i / uint(tsize.x))), attr);
+    }
+  }
+}

@@ -1,0 +1,164 @@
+// Camera interactions and its text form (see camera.h).
+#include "sluice/render/camera.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+#include <stdexcept>
+#include <vector>
+
+namespace sluice::render {
+namespace {
+
+constexpr float kPi = 3.14159265358979f;
+
+// Rotates v about the unit axis k by angle a (Rodrigues).
+Vec3 rotate(Vec3 v, Vec3 k, float a) {
+  const float c = std::cos(a), s = std::sin(a);
+  return v * c + cross(k, v) * s + k * (dot(k, v) * (1 - c));
+}
+
+Vec3 parse_vec3(const std::string& key, const std::string& value) {
+  Vec3 v;
+  std::vector<float> parts;
+  std::stringstream ss(value);
+  std::string item;
+  while (std::getline(ss, item, ',')) {
+    try {
+      size_t used = 0;
+      parts.push_back(std::stof(item, &used));
+      if (used != item.size()) throw std::invalid_argument(item);
+    } catch (const std::exception&) {
+      throw std::invalid_argument("camera: '" + key + "' needs three numbers x,y,z, got '" + value + "'");
+    }
+  }
+  if (parts.size() != 3) throw std::invalid_argument("camera: '" + key + "' needs three numbers x,y,z, got '" + value + "'");
+  return {parts[0], parts[1], parts[2]};
+}
+
+float parse_float(const std::string& key, const std::string& value) {
+  try {
+    size_t used = 0;
+    const float f = std::stof(value, &used);
+    if (used == value.size()) return f;
+  } catch (const std::exception&) {
+  }
+  throw std::invalid_argument("camera: '" + key + "' needs a number, got '" + value + "'");
+}
+
+std::string fmt(Vec3 v) {
+  char buf[96];
+  std::snprintf(buf, sizeof buf, "%.9g,%.9g,%.9g", double(v.x), double(v.y), double(v.z));
+  return buf;
+}
+
+}  // namespace
+
+void Camera::orbit(float yaw, float pitch) {
+  const Vec3 k = normalize(up);
+  Vec3 offset = eye - target;
+  offset = rotate(offset, k, yaw);
+  // Keep at least ~1 degree from the poles so `up` stays usable.
+  const float dist = length(offset);
+  if (dist <= 0) return;
+  const float elevation = std::asin(std::clamp(dot(offset, k) / dist, -1.0f, 1.0f));
+  const float limit = kPi / 2 - 0.02f;
+  const float next = std::clamp(elevation + pitch, -limit, limit);
+  const Vec3 right = normalize(cross(offset, k));
+  if (dot(right, right) > 0) offset = rotate(offset, right, next - elevation);
+  eye = target + offset;
+}
+
+void Camera::pan(float dx, float dy) {
+  const float dist = length(target - eye);
+  const float h = 2 * dist * std::tan(fov_deg * kPi / 360.0f);
+  const Vec3 f = forward();
+  const Vec3 right = normalize(cross(f, up));
+  const Vec3 u = cross(right, f);
+  const Vec3 move = right * (dx * h) + u * (dy * h);
+  eye = eye + move;
+  target = target + move;
+}
+
+void Camera::zoom(float factor) {
+  if (factor <= 0) return;
+  eye = target + (eye - target) * factor;
+}
+
+void Camera::fit(const Bounds& box, float aspect) {
+  const float radius = std::max(box.diagonal() * 0.5f, 1e-6f);
+  const float half_v = fov_deg * kPi / 360.0f;
+  const float half_h = std::atan(std::tan(half_v) * aspect);
+  const float half = std::min(half_v, half_h);
+  const float dist = radius / std::sin(half);
+  Vec3 dir = forward();
+  if (dot(dir, dir) == 0) dir = {0, 1, 0};
+  target = box.center();
+  eye = target - dir * dist;
+}
+
+Camera Camera::framing(const Bounds& box, int up_axis, float aspect, float fov_deg) {
+  Camera c;
+  c.fov_deg = fov_deg;
+  Vec3 up{};
+  up[std::clamp(up_axis, 0, 2)] = 1;
+  c.up = up;
+  // From the front-left, a little above: the view a ParaView user starts with.
+  const int a = (std::clamp(up_axis, 0, 2) + 1) % 3, b = (std::clamp(up_axis, 0, 2) + 2) % 3;
+  Vec3 dir{};
+  dir[a] = 0.55f;
+  dir[b] = 0.8f;
+  dir = normalize(dir - up * 0.45f);
+  c.target = box.center();
+  c.eye = c.target - dir;
+  c.fit(box, aspect);
+  // The bounding sphere is loose for flat data: come in a little.
+  c.zoom(0.8f);
+  return c;
+}
+
+float Camera::near_plane() const {
+  if (near > 0) return near;
+  return std::max(length(target - eye) * 1e-3f, 1e-6f);
+}
+
+Mat4 Camera::projection(float aspect) const {
+  return perspective_reverse_z(fov_deg * kPi / 180.0f, aspect, near_plane());
+}
+
+std::string Camera::to_string() const {
+  char fov[32];
+  std::snprintf(fov, sizeof fov, "%.9g", double(fov_deg));
+  std::string s = "eye=" + fmt(eye) + ";target=" + fmt(target) + ";up=" + fmt(up) + ";fov=" + fov;
+  if (near > 0) {
+    char n[32];
+    std::snprintf(n, sizeof n, "%.9g", double(near));
+    s += ";near=" + std::string(n);
+  }
+  return s;
+}
+
+void Camera::apply(const std::string& text) {
+  Camera next = *this;
+  std::stringstream ss(text);
+  std::string item;
+  while (std::getline(ss, item, ';')) {
+    if (item.empty()) continue;
+    const size_t eq = item.find('=');
+    if (eq == std::string::npos) throw std::invalid_argument("camera: expected key=value, got '" + item + "'");
+    const std::string key = item.substr(0, eq), value = item.substr(eq + 1);
+    if (key == "eye") next.eye = parse_vec3(key, value);
+    else if (key == "target") next.target = parse_vec3(key, value);
+    else if (key == "up") next.up = parse_vec3(key, value);
+    else if (key == "fov") next.fov_deg = parse_float(key, value);
+    else if (key == "near") next.near = parse_float(key, value);
+    else throw std::invalid_argument("camera: unknown key '" + key + "' (eye, target, up, fov, near)");
+  }
+  if (!(next.fov_deg > 0 && next.fov_deg < 179)) throw std::invalid_argument("camera: fov must be in (0, 179) degrees");
+  if (length(next.eye - next.target) <= 0) throw std::invalid_argument("camera: eye and target coincide");
+  if (length(next.up) <= 0) throw std::invalid_argument("camera: up is zero");
+  *this = next;
+}
+
+}  // namespace sluice::render

@@ -1,0 +1,379 @@
+// Vulkan instance, device selection and queues; buffer and image helpers.
+#include <algorithm>
+#include <cctype>
+#include <cstdio>
+#include <cstring>
+#include <stdexcept>
+
+#include "vk_common.h"
+
+namespace sluice::render {
+namespace {
+
+constexpr const char* kValidationLayer = "VK_LAYER_KHRONOS_validation";
+
+std::string lower(std::string s) {
+  for (char& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
+
+const char* type_name(vk::PhysicalDeviceType t) {
+  switch (t) {
+    case vk::PhysicalDeviceType::eDiscreteGpu: return "discrete";
+    case vk::PhysicalDeviceType::eIntegratedGpu: return "integrated";
+    case vk::PhysicalDeviceType::eVirtualGpu: return "virtual";
+    case vk::PhysicalDeviceType::eCpu: return "cpu";
+    default: return "other";
+  }
+}
+
+int type_rank(vk::PhysicalDeviceType t) {
+  switch (t) {
+    case vk::PhysicalDeviceType::eDiscreteGpu: return 0;
+    case vk::PhysicalDeviceType::eIntegratedGpu: return 1;
+    case vk::PhysicalDeviceType::eVirtualGpu: return 2;
+    case vk::PhysicalDeviceType::eCpu: return 3;
+    default: return 4;
+  }
+}
+
+bool has_extension(const std::vector<vk::ExtensionProperties>& list, const char* name) {
+  return std::any_of(list.begin(), list.end(), [&](const vk::ExtensionProperties& e) {
+    return std::strcmp(e.extensionName.data(), name) == 0;
+  });
+}
+
+// What the renderer needs from a device; empty string when it has it all.
+std::string missing_features(const vk::raii::PhysicalDevice& pd, bool presentation) {
+  const auto props = pd.getProperties();
+  if (props.apiVersion < VK_API_VERSION_1_3) return "Vulkan " + format_api_version(props.apiVersion) + " < 1.3";
+  const auto chain = pd.getFeatures2<vk::PhysicalDeviceFeatures2, vk::PhysicalDeviceVulkan12Features,
+                                     vk::PhysicalDeviceVulkan13Features>();
+  const auto& f = chain.get<vk::PhysicalDeviceFeatures2>().features;
+  const auto& f12 = chain.get<vk::PhysicalDeviceVulkan12Features>();
+  const auto& f13 = chain.get<vk::PhysicalDeviceVulkan13Features>();
+  if (!f.largePoints) return "no largePoints";
+  if (!f12.bufferDeviceAddress) return "no bufferDeviceAddress";
+  if (!f12.timelineSemaphore) return "no timelineSemaphore";
+  if (!f13.synchronization2) return "no synchronization2";
+  if (!f13.dynamicRendering) return "no dynamicRendering";
+  if (!f13.maintenance4) return "no maintenance4";
+  if (!props.limits.timestampComputeAndGraphics) return "no timestamps on graphics/compute queues";
+  if (presentation && !has_extension(pd.enumerateDeviceExtensionProperties(), VK_KHR_SWAPCHAIN_EXTENSION_NAME)) {
+    return "no VK_KHR_swapchain";
+  }
+  bool graphics = false;
+  for (const auto& q : pd.getQueueFamilyProperties()) {
+    if ((q.queueFlags & vk::QueueFlagBits::eGraphics) && (q.queueFlags & vk::QueueFlagBits::eCompute)) graphics = true;
+  }
+  if (!graphics) return "no graphics+compute queue";
+  return {};
+}
+
+DeviceInfo describe(const vk::raii::PhysicalDevice& pd, uint32_t index, bool presentation) {
+  DeviceInfo d;
+  const auto chain = pd.getProperties2<vk::PhysicalDeviceProperties2, vk::PhysicalDeviceDriverProperties>();
+  const auto& p = chain.get<vk::PhysicalDeviceProperties2>().properties;
+  const auto& drv = chain.get<vk::PhysicalDeviceDriverProperties>();
+  d.index = index;
+  d.name = p.deviceName.data();
+  d.type = type_name(p.deviceType);
+  d.driver = std::string(drv.driverName.data()) + " " + drv.driverInfo.data();
+  d.api_version = p.apiVersion;
+  const auto mem = pd.getMemoryProperties();
+  for (uint32_t h = 0; h < mem.memoryHeapCount; ++h) {
+    if (mem.memoryHeaps[h].flags & vk::MemoryHeapFlagBits::eDeviceLocal) d.device_local_bytes += mem.memoryHeaps[h].size;
+  }
+  d.why_not = missing_features(pd, presentation);
+  d.usable = d.why_not.empty();
+  return d;
+}
+
+VKAPI_ATTR VkBool32 VKAPI_CALL debug_callback(VkDebugUtilsMessageSeverityFlagBitsEXT severity,
+                                              VkDebugUtilsMessageTypeFlagsEXT /*types*/,
+                                              const VkDebugUtilsMessengerCallbackDataEXT* data, void* user) {
+  auto* impl = static_cast<Context::Impl*>(user);
+  const bool error = severity & VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT;
+  (error ? impl->errors : impl->warnings).fetch_add(1, std::memory_order_relaxed);
+  const std::string text = std::string(error ? "validation error: " : "validation warning: ") +
+                           (data && data->pMessage ? data->pMessage : "");
+  {
+    std::lock_guard lock(impl->messages_mutex);
+    if (impl->messages.size() < 32) impl->messages.push_back(text);
+  }
+  if (!impl->options.quiet_validation) std::fprintf(stderr, "sluice: %s\n", text.c_str());
+  return VK_FALSE;
+}
+
+vk::raii::Instance make_instance(const vk::raii::Context& context, const ContextOptions& o, bool validation,
+                                 bool debug_utils, bool portability) {
+  vk::ApplicationInfo app(o.application_name.c_str(), 1, "sluice", 1, VK_API_VERSION_1_3);
+  std::vector<const char*> layers;
+  if (validation) layers.push_back(kValidationLayer);
+  std::vector<const char*> extensions;
+  for (const std::string& e : o.instance_extensions) extensions.push_back(e.c_str());
+  if (debug_utils) extensions.push_back(VK_EXT_DEBUG_UTILS_EXTENSION_NAME);
+  if (portability) extensions.push_back(VK_KHR_PORTABILITY_ENUMERATION_EXTENSION_NAME);
+  vk::InstanceCreateInfo info({}, &app, layers, extensions);
+  if (portability) info.flags |= vk::InstanceCreateFlagBits::eEnumeratePortabilityKHR;
+  return vk::raii::Instance(context, info);
+}
+
+}  // namespace
+
+std::string format_api_version(uint32_t v) {
+  return std::to_string(VK_API_VERSION_MAJOR(v)) + "." + std::to_string(VK_API_VERSION_MINOR(v)) + "." +
+         std::to_string(VK_API_VERSION_PATCH(v));
+}
+
+std::vector<DeviceInfo> Context::list_devices() {
+  vk::raii::Context context;
+  const bool portability = has_extension(context.enumerateInstanceExtensionProperties(),
+                                         VK_KHR_PORTABILITY_ENUMERATION_EXTENSION_NAME);
+  vk::raii::Instance instance = make_instance(context, {}, false, false, portability);
+  std::vector<DeviceInfo> out;
+  uint32_t i = 0;
+  for (const auto& pd : vk::raii::PhysicalDevices(instance)) out.push_back(describe(pd, i++, false));
+  return out;
+}
+
+Context::Context(const ContextOptions& options) : impl_(std::make_unique<Impl>()) {
+  Impl& c = *impl_;
+  c.options = options;
+  if (c.context.enumerateInstanceVersion() < VK_API_VERSION_1_3) {
+    throw std::runtime_error("the Vulkan loader is older than 1.3 (" +
+                             format_api_version(c.context.enumerateInstanceVersion()) + ")");
+  }
+  const auto instance_extensions = c.context.enumerateInstanceExtensionProperties();
+  bool layer_present = false;
+  for (const auto& l : c.context.enumerateInstanceLayerProperties()) {
+    if (std::strcmp(l.layerName.data(), kValidationLayer) == 0) layer_present = true;
+  }
+  const bool debug_utils = has_extension(instance_extensions, VK_EXT_DEBUG_UTILS_EXTENSION_NAME);
+  c.validation = options.validation && layer_present && debug_utils;
+  if (options.validation && !c.validation && !options.quiet_validation) {
+    std::fprintf(stderr, "sluice: warning: %s is not installed; running without validation\n", kValidationLayer);
+  }
+  const bool portability = has_extension(instance_extensions, VK_KHR_PORTABILITY_ENUMERATION_EXTENSION_NAME);
+  c.instance = make_instance(c.context, options, c.validation, c.validation, portability);
+  if (c.validation) {
+    using S = vk::DebugUtilsMessageSeverityFlagBitsEXT;
+    using T = vk::DebugUtilsMessageTypeFlagBitsEXT;
+    vk::DebugUtilsMessengerCreateInfoEXT info({}, S::eWarning | S::eError,
+                                              T::eGeneral | T::eValidation | T::ePerformance, &debug_callback, &c);
+    c.messenger = vk::raii::DebugUtilsMessengerEXT(c.instance, info);
+  }
+
+  // Device choice: explicit index or name, else the best-ranked usable one.
+  vk::raii::PhysicalDevices devices(c.instance);
+  std::vector<DeviceInfo> infos;
+  for (uint32_t i = 0; i < devices.size(); ++i) infos.push_back(describe(devices[i], i, options.presentation));
+  if (infos.empty()) throw std::runtime_error("no Vulkan device found (is mesa-vulkan-drivers or a GPU driver installed?)");
+  int chosen = -1;
+  const std::string& want = options.device;
+  if (!want.empty()) {
+    const bool numeric = std::all_of(want.begin(), want.end(), [](char ch) { return std::isdigit(static_cast<unsigned char>(ch)); });
+    for (const DeviceInfo& d : infos) {
+      if (numeric ? d.index == uint32_t(std::stoul(want)) : lower(d.name).find(lower(want)) != std::string::npos) {
+        chosen = int(d.index);
+        break;
+      }
+    }
+    if (chosen < 0) {
+      std::string list;
+      for (const DeviceInfo& d : infos) list += "\n  " + std::to_string(d.index) + ": " + d.name;
+      throw std::runtime_error("no Vulkan device matches '" + want + "'; devices:" + list);
+    }
+    if (!infos[size_t(chosen)].usable) {
+      throw std::runtime_error("device " + infos[size_t(chosen)].name + " cannot run sluice: " + infos[size_t(chosen)].why_not);
+    }
+  } else {
+    for (const DeviceInfo& d : infos) {
+      if (!d.usable) continue;
+      if (chosen < 0 || type_rank(devices[d.index].getProperties().deviceType) <
+                            type_rank(devices[size_t(chosen)].getProperties().deviceType)) {
+        chosen = int(d.index);
+      }
+    }
+    if (chosen < 0) {
+      std::string list;
+      for (const DeviceInfo& d : infos) list += "\n  " + d.name + ": " + d.why_not;
+      throw std::runtime_error("no Vulkan device can run sluice:" + list);
+    }
+  }
+  c.physical = std::move(devices[size_t(chosen)]);
+  c.info = infos[size_t(chosen)];
+  c.properties = c.physical.getProperties();
+  c.memory = c.physical.getMemoryProperties();
+
+  // Queues: one graphics+compute family; a transfer-only family if there is one.
+  const auto families = c.physical.getQueueFamilyProperties();
+  std::optional<uint32_t> graphics, transfer;
+  for (uint32_t i = 0; i < families.size(); ++i) {
+    const auto f = families[i].queueFlags;
+    if (!graphics && (f & vk::QueueFlagBits::eGraphics) && (f & vk::QueueFlagBits::eCompute)) graphics = i;
+    if (!transfer && (f & vk::QueueFlagBits::eTransfer) && !(f & vk::QueueFlagBits::eGraphics) &&
+        !(f & vk::QueueFlagBits::eCompute) && families[i].timestampValidBits > 0) {
+      transfer = i;
+    }
+  }
+  c.graphics_family = *graphics;
+  c.transfer_family = transfer.value_or(*graphics);
+  const float priority = 1.0f;
+  std::vector<vk::DeviceQueueCreateInfo> queues{vk::DeviceQueueCreateInfo({}, c.graphics_family, 1, &priority)};
+  if (c.transfer_family != c.graphics_family) queues.emplace_back(vk::DeviceQueueCreateInfo({}, c.transfer_family, 1, &priority));
+
+  const auto device_extensions = c.physical.enumerateDeviceExtensionProperties();
+  std::vector<const char*> extensions;
+  if (options.presentation) extensions.push_back(VK_KHR_SWAPCHAIN_EXTENSION_NAME);
+  c.memory_budget = has_extension(device_extensions, VK_EXT_MEMORY_BUDGET_EXTENSION_NAME);
+  if (c.memory_budget) extensions.push_back(VK_EXT_MEMORY_BUDGET_EXTENSION_NAME);
+
+  vk::StructureChain<vk::DeviceCreateInfo, vk::PhysicalDeviceFeatures2, vk::PhysicalDeviceVulkan12Features,
+                     vk::PhysicalDeviceVulkan13Features>
+      chain;
+  chain.get<vk::DeviceCreateInfo>().setQueueCreateInfos(queues).setPEnabledExtensionNames(extensions);
+  auto& f = chain.get<vk::PhysicalDeviceFeatures2>().features;
+  f.largePoints = VK_TRUE;
+  auto& f12 = chain.get<vk::PhysicalDeviceVulkan12Features>();
+  f12.bufferDeviceAddress = VK_TRUE;
+  f12.timelineSemaphore = VK_TRUE;
+  f12.hostQueryReset = VK_TRUE;
+  auto& f13 = chain.get<vk::PhysicalDeviceVulkan13Features>();
+  f13.synchronization2 = VK_TRUE;
+  f13.dynamicRendering = VK_TRUE;
+  f13.maintenance4 = VK_TRUE;  // required by 1.3; SPIR-V 1.6 uses LocalSizeId
+  c.device = vk::raii::Device(c.physical, chain.get<vk::DeviceCreateInfo>());
+  c.graphics_queue = vk::raii::Queue(c.device, c.graphics_family, 0);
+  c.transfer_queue = vk::raii::Queue(c.device, c.transfer_family, 0);
+}
+
+Context::~Context() {
+  if (impl_ && *impl_->device) impl_->device.waitIdle();
+}
+
+const DeviceInfo& Context::device() const { return impl_->info; }
+bool Context::has_transfer_queue() const { return impl_->transfer_family != impl_->graphics_family; }
+bool Context::validation_active() const { return impl_->validation; }
+uint64_t Context::validation_errors() const { return impl_->errors.load(); }
+uint64_t Context::validation_warnings() const { return impl_->warnings.load(); }
+std::vector<std::string> Context::validation_messages() const {
+  std::lock_guard lock(impl_->messages_mutex);
+  return impl_->messages;
+}
+
+uint64_t Context::device_budget_bytes() const {
+  const Impl& c = *impl_;
+  uint64_t total = 0;
+  if (c.memory_budget) {
+    const auto chain = c.physical.getMemoryProperties2<vk::PhysicalDeviceMemoryProperties2,
+                                                       vk::PhysicalDeviceMemoryBudgetPropertiesEXT>();
+    const auto& props = chain.get<vk::PhysicalDeviceMemoryProperties2>().memoryProperties;
+    const auto& budget = chain.get<vk::PhysicalDeviceMemoryBudgetPropertiesEXT>();
+    for (uint32_t h = 0; h < props.memoryHeapCount; ++h) {
+      if (!(props.memoryHeaps[h].flags & vk::MemoryHeapFlagBits::eDeviceLocal)) continue;
+      total += budget.heapBudget[h] > budget.heapUsage[h] ? budget.heapBudget[h] - budget.heapUsage[h] : 0;
+    }
+    return total;
+  }
+  return c.info.device_local_bytes;
+}
+
+uint32_t Context::Impl::memory_type(uint32_t type_bits, vk::MemoryPropertyFlags wanted) const {
+  for (uint32_t i = 0; i < memory.memoryTypeCount; ++i) {
+    if ((type_bits & (1u << i)) && (memory.memoryTypes[i].propertyFlags & wanted) == wanted) return i;
+  }
+  throw std::runtime_error("no Vulkan memory type with the wanted properties");
+}
+
+void Context::Impl::run_once(const std::function<void(vk::CommandBuffer)>& record) const {
+  vk::raii::CommandPool pool(device, vk::CommandPoolCreateInfo(vk::CommandPoolCreateFlagBits::eTransient, graphics_family));
+  vk::raii::CommandBuffers cmds(device, vk::CommandBufferAllocateInfo(*pool, vk::CommandBufferLevel::ePrimary, 1));
+  vk::CommandBuffer cmd = *cmds[0];
+  cmd.begin(vk::CommandBufferBeginInfo(vk::CommandBufferUsageFlagBits::eOneTimeSubmit));
+  record(cmd);
+  cmd.end();
+  vk::raii::Fence fence(device, vk::FenceCreateInfo());
+  vk::CommandBufferSubmitInfo cb(cmd);
+  graphics_queue.submit2(vk::SubmitInfo2({}, {}, cb), *fence);
+  while (device.waitForFences(*fence, VK_TRUE, UINT64_MAX) == vk::Result::eTimeout) {
+  }
+}
+
+Buffer create_buffer(const Context::Impl& ctx, vk::DeviceSize size, vk::BufferUsageFlags usage, MemoryKind kind) {
+  Buffer b;
+  b.size = size;
+  const bool address = bool(usage & vk::BufferUsageFlagBits::eShaderDeviceAddress);
+  vk::BufferCreateInfo info({}, std::max<vk::DeviceSize>(size, 16), usage, vk::SharingMode::eExclusive);
+  // Buffers the transfer queue writes are shared with the graphics queue
+  // rather than handed over with ownership transfers.
+  const std::array<uint32_t, 2> families{ctx.graphics_family, ctx.transfer_family};
+  if (ctx.graphics_family != ctx.transfer_family) {
+    info.setSharingMode(vk::SharingMode::eConcurrent).setQueueFamilyIndices(families);
+  }
+  b.buffer = vk::raii::Buffer(ctx.device, info);
+  const vk::MemoryRequirements req = b.buffer.getMemoryRequirements();
+  vk::MemoryPropertyFlags props;
+  switch (kind) {
+    case MemoryKind::DeviceLocal: props = vk::MemoryPropertyFlagBits::eDeviceLocal; break;
+    case MemoryKind::Upload: props = vk::MemoryPropertyFlagBits::eHostVisible | vk::MemoryPropertyFlagBits::eHostCoherent; break;
+    case MemoryKind::Readback:
+      props = vk::MemoryPropertyFlagBits::eHostVisible | vk::MemoryPropertyFlagBits::eHostCoherent;
+      break;
+  }
+  uint32_t type = 0;
+  if (kind == MemoryKind::Readback) {
+    // Prefer cached memory for reads; fall back to any host-visible type.
+    try {
+      type = ctx.memory_type(req.memoryTypeBits, props | vk::MemoryPropertyFlagBits::eHostCached);
+    } catch (const std::runtime_error&) {
+      type = ctx.memory_type(req.memoryTypeBits, props);
+    }
+  } else {
+    type = ctx.memory_type(req.memoryTypeBits, props);
+  }
+  vk::MemoryAllocateFlagsInfo flags(address ? vk::MemoryAllocateFlagBits::eDeviceAddress : vk::MemoryAllocateFlags{});
+  vk::MemoryAllocateInfo alloc(req.size, type);
+  alloc.pNext = &flags;
+  b.memory = vk::raii::DeviceMemory(ctx.device, alloc);
+  b.buffer.bindMemory(*b.memory, 0);
+  if (kind != MemoryKind::DeviceLocal) b.mapped = b.memory.mapMemory(0, VK_WHOLE_SIZE);
+  if (address) b.address = ctx.device.getBufferAddress(vk::BufferDeviceAddressInfo(*b.buffer));
+  return b;
+}
+
+Texture create_texture(const Context::Impl& ctx, vk::Extent2D extent, vk::Format format, vk::ImageUsageFlags usage,
+                       uint32_t layers) {
+  Texture t;
+  t.format = format;
+  t.extent = extent;
+  t.layers = layers;
+  const bool depth = format == vk::Format::eD32Sfloat;
+  t.aspect = depth ? vk::ImageAspectFlagBits::eDepth : vk::ImageAspectFlagBits::eColor;
+  vk::ImageCreateInfo info({}, vk::ImageType::e2D, format, vk::Extent3D(extent, 1), 1, layers, vk::SampleCountFlagBits::e1,
+                           vk::ImageTiling::eOptimal, usage, vk::SharingMode::eExclusive, {}, vk::ImageLayout::eUndefined);
+  t.image = vk::raii::Image(ctx.device, info);
+  const vk::MemoryRequirements req = t.image.getMemoryRequirements();
+  t.memory = vk::raii::DeviceMemory(
+      ctx.device, vk::MemoryAllocateInfo(req.size, ctx.memory_type(req.memoryTypeBits, vk::MemoryPropertyFlagBits::eDeviceLocal)));
+  t.image.bindMemory(*t.memory, 0);
+  t.view = vk::raii::ImageView(
+      ctx.device, vk::ImageViewCreateInfo({}, *t.image, layers > 1 ? vk::ImageViewType::e2DArray : vk::ImageViewType::e2D,
+                                          format, {}, vk::ImageSubresourceRange(t.aspect, 0, 1, 0, layers)));
+  return t;
+}
+
+vk::ImageMemoryBarrier2 image_barrier(const Texture& t, vk::ImageLayout from, vk::ImageLayout to,
+                                      vk::PipelineStageFlags2 src_stage, vk::AccessFlags2 src_access,
+                                      vk::PipelineStageFlags2 dst_stage, vk::AccessFlags2 dst_access) {
+  return vk::ImageMemoryBarrier2(src_stage, src_access, dst_stage, dst_access, from, to, VK_QUEUE_FAMILY_IGNORED,
+                                 VK_QUEUE_FAMILY_IGNORED, *t.image, vk::ImageSubresourceRange(t.aspect, 0, 1, 0, t.layers));
+}
+
+void memory_barrier(vk::CommandBuffer cmd, vk::PipelineStageFlags2 src_stage, vk::AccessFlags2 src_access,
+                    vk::PipelineStageFlags2 dst_stage, vk::AccessFlags2 dst_access) {
+  vk::MemoryBarrier2 b(src_stage, src_access, dst_stage, dst_access);
+  cmd.pipelineBarrier2(vk::DependencyInfo({}, b));
+}
+
+}  // namespace sluice::render

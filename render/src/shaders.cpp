@@ -1,0 +1,59 @@
+// The embedded SPIR-V (see shaders.h). The .inc files are glslc -mfmt=c
+// output generated into the build tree.
+#include "shaders.h"
+
+namespace sluice::render {
+namespace {
+const uint32_t kCullChunks[] =
+#include "cull_chunks.comp.inc"
+    ;
+const uint32_t kCullArgs[] =
+#include "cull_args.comp.inc"
+    ;
+const uint32_t kCullParticles[] =
+#include "cull_particles.comp.inc"
+    ;
+const uint32_t kSplat[] =
+#include "splat.comp.inc"
+    ;
+const uint32_t kResolve[] =
+#include "resolve.comp.inc"
+    ;
+const uint32_t kSphereVert[] =
+#include "sphere.vert.inc"
+    ;
+const uint32_t kSphereDepthFrag[] =
+#include "sphere_depth.frag.inc"
+    ;
+const uint32_t kSphereThicknessFrag[] =
+#include "sphere_thickness.frag.inc"
+    ;
+const uint32_t kFilterDepth[] =
+#include "filter_depth.comp.inc"
+    ;
+const uint32_t kFilterThickness[] =
+#include "filter_thickness.comp.inc"
+    ;
+const uint32_t kComposite[] =
+#include "composite.comp.inc"
+    ;
+}  // namespace
+
+std::span<const uint32_t> spirv(Shader s) {
+  switch (s) {
+    case Shader::CullChunks: return kCullChunks;
+    case Shader::CullArgs: return kCullArgs;
+    case Shader::CullParticles: return kCullParticles;
+    case Shader::Splat: return kSplat;
+    case Shader::Resolve: return kResolve;
+    case Shader::SphereVert: return kSphereVert;
+    case Shader::SphereDepthFrag: return kSphereDepthFrag;
+    case Shader::SphereThicknessFrag: return kSphereThicknessFrag;
+    case Shader::FilterDepth: return kFilterDepth;
+    case Shader::FilterThickness: return kFilterThickness;
+    case Shader::Composite: return kComposite;
+  }
+  return {};
+}
+
+}  // namespace sluice::render

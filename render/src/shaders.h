@@ -1,0 +1,26 @@
+// Internal: the SPIR-V of every shader, compiled by glslc at build time and
+// embedded in the library (no files to find at run time).
+#pragma once
+
+#include <cstdint>
+#include <span>
+
+namespace sluice::render {
+
+enum class Shader {
+  CullChunks,
+  CullArgs,
+  CullParticles,
+  Splat,
+  Resolve,
+  SphereVert,
+  SphereDepthFrag,
+  SphereThicknessFrag,
+  FilterDepth,
+  FilterThickness,
+  Composite,
+};
+
+std::span<const uint32_t> spirv(Shader s);
+
+}  // namespace sluice::render

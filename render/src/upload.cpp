@@ -1,0 +1,175 @@
+// Frames to the GPU: persistently mapped staging that decoders write into,
+// then one copy per buffer on the transfer queue (where there is one),
+// signalling a timeline semaphore that the next render waits on.
+#include <tbb/parallel_for.h>
+
+#include <cstring>
+#include <stdexcept>
+
+#include "renderer_impl.h"
+#include "sluice/io/codec.h"
+#include "sluice/io/reader.h"
+
+namespace sluice::render {
+namespace {
+
+constexpr auto kDeviceUsage = vk::BufferUsageFlagBits::eStorageBuffer | vk::BufferUsageFlagBits::eShaderDeviceAddress |
+                              vk::BufferUsageFlagBits::eTransferDst;
+
+// Staging layout: particles | chunk table | colour attribute, each 16-aligned.
+struct StagingLayout {
+  vk::DeviceSize particles = 0, chunks = 0, attribute = 0, total = 0;
+};
+StagingLayout staging_layout(uint64_t particles, uint32_t chunks, size_t stride, bool attribute) {
+  const auto align = [](vk::DeviceSize v) { return (v + 15) & ~vk::DeviceSize(15); };
+  StagingLayout l;
+  l.particles = 0;
+  l.chunks = align(particles * stride);
+  l.attribute = align(l.chunks + vk::DeviceSize(chunks) * sizeof(GpuChunk));
+  l.total = align(l.attribute + (attribute ? particles * 2 : 0));
+  return l;
+}
+
+}  // namespace
+
+SceneInfo scene_info(const io::ContainerReader& reader) {
+  SceneInfo s;
+  const io::FileHeader& h = reader.header();
+  const io::FrameIndex& index = reader.index();
+  s.bounds = {{index.bounds.min[0], index.bounds.min[1], index.bounds.min[2]},
+              {index.bounds.max[0], index.bounds.max[1], index.bounds.max[2]}};
+  if (index.bounds.empty()) s.bounds = {{0, 0, 0}, {1, 1, 1}};
+  s.particle_spacing = h.particle_spacing;
+  s.particle_radius = h.particle_radius;
+  s.coding = h.position_coding;
+  for (size_t a = 0; a < h.attributes.size(); ++a) {
+    s.attribute_names.push_back(h.attributes[a].name);
+    s.attribute_ranges.push_back(a < index.attribute_ranges.size() ? index.attribute_ranges[a] : std::array<float, 2>{0, 1});
+  }
+  for (const io::FrameIndexEntry& f : index.frames) {
+    s.max_particles = std::max(s.max_particles, f.particle_count);
+    s.max_chunks = std::max<uint64_t>(s.max_chunks, f.chunk_count);
+  }
+  return s;
+}
+
+void Renderer::Impl::wait_uploads() {
+  if (upload_value == 0) return;
+  const vk::Semaphore sem = *upload_done;
+  const vk::SemaphoreWaitInfo info({}, sem, upload_value);
+  while (ctx.device.waitSemaphores(info, UINT64_MAX) == vk::Result::eTimeout) {
+  }
+}
+
+FrameStaging Renderer::stage_frame(uint64_t particles, uint32_t chunks) {
+  Impl& r = *impl_;
+  // The previous copy must be done reading staging before it is rewritten.
+  r.wait_uploads();
+  r.stride = io::decoded_particle_bytes(r.scene.coding);
+  const bool attribute = !r.scene.attribute_names.empty();
+  const StagingLayout l = staging_layout(particles, chunks, r.stride, attribute);
+  r.ensure(r.staging, l.total, vk::BufferUsageFlagBits::eTransferSrc, MemoryKind::Upload);
+  r.staged_particles = particles;
+  r.staged_chunks = chunks;
+  r.staged_attribute = attribute;
+  auto* base = static_cast<std::byte*>(r.staging.mapped);
+  FrameStaging s;
+  s.stride = r.stride;
+  s.particles = {base + l.particles, size_t(particles * r.stride)};
+  s.chunks = {reinterpret_cast<GpuChunk*>(base + l.chunks), chunks};
+  if (attribute) s.color_attribute = {reinterpret_cast<uint16_t*>(base + l.attribute), size_t(particles)};
+  return s;
+}
+
+void Renderer::commit_frame() {
+  Impl& r = *impl_;
+  const uint64_t n = r.staged_particles;
+  const uint32_t chunks = r.staged_chunks;
+  const StagingLayout l = staging_layout(n, chunks, r.stride, r.staged_attribute);
+  // Device buffers sized for this frame; the work lists for its worst case.
+  uint64_t blocks = 0;
+  const auto* table = reinterpret_cast<const GpuChunk*>(static_cast<const std::byte*>(r.staging.mapped) + l.chunks);
+  for (uint32_t c = 0; c < chunks; ++c) {
+    if (uint64_t(table[c].first) + table[c].count > n) {
+      throw std::runtime_error("staged chunk " + std::to_string(c) + " reaches past the frame's particles");
+    }
+    blocks += (table[c].count + 255) / 256;
+  }
+  r.ensure(r.particles, std::max<uint64_t>(n * r.stride, 16), kDeviceUsage, MemoryKind::DeviceLocal);
+  r.ensure(r.chunks, std::max<uint64_t>(chunks * sizeof(GpuChunk), 16), kDeviceUsage, MemoryKind::DeviceLocal);
+  r.ensure(r.attributes, std::max<uint64_t>(n * 2 + 4, 16), kDeviceUsage, MemoryKind::DeviceLocal);
+  r.ensure(r.blocks, std::max<uint64_t>(blocks * 8, 16), kDeviceUsage, MemoryKind::DeviceLocal);
+  r.ensure(r.draws, std::max<uint64_t>(n * 8, 16), kDeviceUsage, MemoryKind::DeviceLocal);
+  r.ensure(r.big, std::max<uint64_t>(n * 4, 16), kDeviceUsage, MemoryKind::DeviceLocal);
+
+  (*r.ctx.device).resetQueryPool(*r.upload_timestamps, 0, 2);
+  vk::CommandBuffer cmd = *r.transfer_cmd;
+  cmd.reset();
+  cmd.begin(vk::CommandBufferBeginInfo(vk::CommandBufferUsageFlagBits::eOneTimeSubmit));
+  cmd.writeTimestamp2(vk::PipelineStageFlagBits2::eAllCommands, *r.upload_timestamps, 0);
+  if (n > 0) cmd.copyBuffer(*r.staging.buffer, *r.particles.buffer, vk::BufferCopy(l.particles, 0, n * r.stride));
+  if (chunks > 0) cmd.copyBuffer(*r.staging.buffer, *r.chunks.buffer, vk::BufferCopy(l.chunks, 0, chunks * sizeof(GpuChunk)));
+  if (r.staged_attribute && n > 0) {
+    cmd.copyBuffer(*r.staging.buffer, *r.attributes.buffer, vk::BufferCopy(l.attribute, 0, (n * 2 + 3) & ~uint64_t(3)));
+  }
+  cmd.writeTimestamp2(vk::PipelineStageFlagBits2::eAllCommands, *r.upload_timestamps, 1);
+  cmd.end();
+  ++r.upload_value;
+  const vk::CommandBufferSubmitInfo cb(cmd);
+  const vk::SemaphoreSubmitInfo signal(*r.upload_done, r.upload_value, vk::PipelineStageFlagBits2::eAllCommands);
+  r.ctx.transfer_queue.submit2(vk::SubmitInfo2({}, {}, cb, signal));
+  r.particle_count = n;
+  r.chunk_count = chunks;
+  r.has_attribute = r.staged_attribute;
+
+  // The copy's GPU time, for the stats (waits: uploads are not overlapped yet).
+  r.wait_uploads();
+  std::array<uint64_t, 2> stamps{};
+  if ((*r.ctx.device).getQueryPoolResults(*r.upload_timestamps, 0, 2, sizeof stamps, stamps.data(), sizeof(uint64_t),
+                                          vk::QueryResultFlagBits::e64) == vk::Result::eSuccess) {
+    r.upload_ms = double(stamps[1] - stamps[0]) * r.ctx.properties.limits.timestampPeriod * 1e-6;
+  }
+}
+
+void Renderer::load_frame(const io::ContainerReader& reader, uint64_t frame, int color_attribute) {
+  const std::vector<std::byte> record = reader.read_record(frame);
+  const io::FrameHeader header = reader.parse_record(frame, record);
+  const io::FileHeader& fh = reader.header();
+  if (fh.position_coding != impl_->scene.coding) throw std::runtime_error("frame coding differs from the scene's");
+  const uint32_t chunks = uint32_t(header.chunks.size());
+  FrameStaging s = stage_frame(header.particle_count, chunks);
+  const bool attr = color_attribute >= 0 && size_t(color_attribute) < fh.attributes.size() && !s.color_attribute.empty();
+  uint64_t first = 0;
+  for (uint32_t c = 0; c < chunks; ++c) {
+    const io::ChunkDesc& d = header.chunks[c];
+    GpuChunk& g = s.chunks[c];
+    g = GpuChunk{};
+    for (int a = 0; a < 3; ++a) {
+      g.lo[a] = d.bounds.min[size_t(a)];
+      g.hi[a] = d.bounds.max[size_t(a)];
+    }
+    g.first = uint32_t(first);
+    g.count = d.particle_count;
+    if (attr) {
+      g.attr_lo = d.attribute_ranges[size_t(color_attribute)][0];
+      g.attr_hi = d.attribute_ranges[size_t(color_attribute)][1];
+    }
+    first += d.particle_count;
+  }
+  if (first != header.particle_count || first > UINT32_MAX) {
+    throw io::Error(reader.location(frame), "chunk particle counts do not add up to the frame's (or exceed 2^32)");
+  }
+  // Decode every chunk straight into the mapped staging memory.
+  tbb::parallel_for(uint32_t(0), chunks, [&](uint32_t c) {
+    thread_local io::DecodeScratch scratch;
+    const io::ChunkDesc& d = header.chunks[c];
+    const uint64_t begin = s.chunks[c].first;
+    std::vector<uint16_t*> attributes(fh.attributes.size(), nullptr);
+    if (attr) attributes[size_t(color_attribute)] = s.color_attribute.data() + begin;
+    const io::ChunkDestination dest{s.particles.subspan(begin * s.stride, size_t(d.particle_count) * s.stride), attributes};
+    io::decode_chunk(record, d, fh, dest, scratch, reader.location(frame, c));
+  });
+  commit_frame();
+}
+
+}  // namespace sluice::render

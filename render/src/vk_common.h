@@ -1,0 +1,83 @@
+// Internal to sluice_render: the Vulkan-Hpp RAII objects behind the public
+// pimpls, and small helpers for buffers and images.
+//
+// This is the only header that includes vulkan_raii.hpp (a large header);
+// only the four .cpp files that talk to Vulkan include it (context.cpp,
+// renderer.cpp, upload.cpp, window.cpp), to keep the build fast.
+#pragma once
+
+#include <vulkan/vulkan_raii.hpp>
+
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "sluice/render/context.h"
+
+namespace sluice::render {
+
+struct Context::Impl {
+  ContextOptions options;
+  vk::raii::Context context;
+  vk::raii::Instance instance{nullptr};
+  vk::raii::DebugUtilsMessengerEXT messenger{nullptr};
+  vk::raii::PhysicalDevice physical{nullptr};
+  vk::raii::Device device{nullptr};
+  uint32_t graphics_family = 0;  // graphics + compute (+ present when asked)
+  uint32_t transfer_family = 0;  // == graphics_family when there is no separate one
+  vk::raii::Queue graphics_queue{nullptr};
+  vk::raii::Queue transfer_queue{nullptr};  // the graphics queue when there is no separate one
+  vk::PhysicalDeviceProperties properties;
+  vk::PhysicalDeviceMemoryProperties memory;
+  bool memory_budget = false;  // VK_EXT_memory_budget enabled
+  DeviceInfo info;
+  bool validation = false;
+
+  // Debug messenger state (written from the driver's threads).
+  std::atomic<uint64_t> errors{0}, warnings{0};
+  mutable std::mutex messages_mutex;
+  std::vector<std::string> messages;
+
+  uint32_t memory_type(uint32_t type_bits, vk::MemoryPropertyFlags wanted) const;
+  // Records `record` into a fresh command buffer on the graphics queue, submits
+  // it and waits. For setup work only.
+  void run_once(const std::function<void(vk::CommandBuffer)>& record) const;
+};
+
+// A buffer with its own memory. Host-visible buffers are persistently mapped.
+struct Buffer {
+  vk::raii::Buffer buffer{nullptr};
+  vk::raii::DeviceMemory memory{nullptr};
+  vk::DeviceSize size = 0;
+  void* mapped = nullptr;
+  vk::DeviceAddress address = 0;  // when created with eShaderDeviceAddress
+};
+
+enum class MemoryKind { DeviceLocal, Upload, Readback };
+Buffer create_buffer(const Context::Impl& ctx, vk::DeviceSize size, vk::BufferUsageFlags usage, MemoryKind kind);
+
+// A 2D image (array of `layers`, 1 today; 2 for multiview stereo) with a view.
+struct Texture {
+  vk::raii::Image image{nullptr};
+  vk::raii::DeviceMemory memory{nullptr};
+  vk::raii::ImageView view{nullptr};
+  vk::Format format = vk::Format::eUndefined;
+  vk::Extent2D extent;
+  uint32_t layers = 1;
+  vk::ImageAspectFlags aspect = vk::ImageAspectFlagBits::eColor;
+};
+Texture create_texture(const Context::Impl& ctx, vk::Extent2D extent, vk::Format format, vk::ImageUsageFlags usage,
+                       uint32_t layers = 1);
+
+// An image layout transition with synchronization2 scopes.
+vk::ImageMemoryBarrier2 image_barrier(const Texture& t, vk::ImageLayout from, vk::ImageLayout to,
+                                      vk::PipelineStageFlags2 src_stage, vk::AccessFlags2 src_access,
+                                      vk::PipelineStageFlags2 dst_stage, vk::AccessFlags2 dst_access);
+void memory_barrier(vk::CommandBuffer cmd, vk::PipelineStageFlags2 src_stage, vk::AccessFlags2 src_access,
+                    vk::PipelineStageFlags2 dst_stage, vk::AccessFlags2 dst_access);
+
+}  // namespace sluice::render

@@ -1,0 +1,87 @@
+// sluice/runtime/frame_allocator.h: where decoded frames live.
+//
+// The pipeline asks a FrameAllocator for the destination buffers of each
+// frame before decoding it, and decode workers write straight into them: the
+// renderer hands out persistently mapped staging memory, so a decoded chunk is
+// written once, where the upload reads it. Buffers go back to the allocator
+// when the pipeline no longer needs the frame (after the consumer released it
+// and it has fallen out of the window).
+#pragma once
+
+#include <atomic>
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <vector>
+
+namespace sluice::runtime {
+
+// What one frame needs. Sizes come from the frame index.
+struct FrameLayout {
+  uint64_t frame = 0;              // frame number in the file (for the allocator's logs)
+  uint64_t particles = 0;
+  uint32_t particle_stride = 8;    // decoded bytes per particle (io::decoded_particle_bytes)
+  uint32_t attribute_streams = 0;  // uint16 streams of `particles` values each
+
+  uint64_t particle_bytes() const { return particles * particle_stride; }
+  uint64_t attribute_bytes() const { return particles * 2; }  // per stream
+  uint64_t total_bytes() const { return particle_bytes() + attribute_streams * attribute_bytes(); }
+};
+
+// The buffers of one frame. Memory is owned by the allocator.
+struct FrameBuffers {
+  std::span<std::byte> particles;               // >= layout.particle_bytes(), 16-byte aligned
+  std::vector<std::span<uint16_t>> attributes;  // layout.attribute_streams spans of >= particles values
+  uint64_t tag = 0;                             // the allocator's own (a staging offset, an index, ...)
+};
+
+// Threads: the pipeline calls allocate() and release() from one thread at a
+// time (its reader thread, and the thread destroying it once the reader has
+// stopped), so an implementation needs no lock of its own. Decode workers
+// write into the buffers between the two calls; nothing else touches them.
+class FrameAllocator {
+ public:
+  virtual ~FrameAllocator() = default;
+  // Returns buffers of at least the layout's sizes. May throw (std::bad_alloc
+  // or io::Error): the pipeline reports it as an error of that frame.
+  virtual FrameBuffers allocate(const FrameLayout& layout) = 0;
+  // Takes back buffers allocate() returned.
+  virtual void release(FrameBuffers& buffers) = 0;
+  // Bytes an allocation of `layout` really takes (alignment, padding): the
+  // window is sized with it. Any thread.
+  virtual uint64_t bytes_for(const FrameLayout& layout) const { return layout.total_bytes(); }
+};
+
+// Host memory with byte accounting, for headless playback, benchmarks and
+// the memory tests. Released buffers are kept for reuse (a fresh allocation
+// of a big frame costs a page fault per 4 KiB); the number of buffers alive,
+// in use or kept, never exceeds the most that were in use at once, so
+// held_bytes() is what the window really costs.
+class HostFrameAllocator final : public FrameAllocator {
+ public:
+  HostFrameAllocator();
+  ~HostFrameAllocator() override;
+  HostFrameAllocator(const HostFrameAllocator&) = delete;
+  HostFrameAllocator& operator=(const HostFrameAllocator&) = delete;
+
+  FrameBuffers allocate(const FrameLayout& layout) override;
+  void release(FrameBuffers& buffers) override;
+  uint64_t bytes_for(const FrameLayout& layout) const override;
+
+  // Readable from any thread.
+  uint64_t held_bytes() const { return held_.load(std::memory_order_relaxed); }       // in use + kept
+  uint64_t peak_held_bytes() const { return peak_.load(std::memory_order_relaxed); }
+  uint64_t in_use_buffers() const { return in_use_.load(std::memory_order_relaxed); }
+  uint64_t allocations() const { return allocations_.load(std::memory_order_relaxed); }  // fresh, not reused
+
+ private:
+  struct Block;
+  void account(int64_t delta);
+
+  std::vector<std::unique_ptr<Block>> blocks_;  // every block, indexed by FrameBuffers::tag
+  std::vector<uint64_t> kept_;                  // tags of released blocks ready for reuse
+  std::atomic<uint64_t> held_{0}, peak_{0}, in_use_{0}, allocations_{0};
+};
+
+}  // namespace sluice::runtime

@@ -1,0 +1,179 @@
+// sluice/runtime/pipeline.h: frames from disk to a consumer, in order.
+//
+//   reader thread ──(pread, fadvise, O_DIRECT)──> record buffers
+//        │ parse the frame table, FrameAllocator::allocate
+//        v
+//   TBB decode workers: chunks of a frame in parallel, several frames at once,
+//        │ written straight into the allocator's buffers
+//        v
+//   delivery ring (SPSC, schedule order) ──> ONE consumer: peek / take / drop
+//        ^                                        │
+//        └──────────── return ring (SPSC) <───────┘ release
+//
+// The reader fetches the entries of a PlaybackSchedule in order, as far
+// ahead as the prefetch window allows (window.h); it blocks, never spins,
+// when the window is full. Frames the consumer released stay decoded behind
+// the playhead (a quarter of the window is kept for them) so reversing and
+// scrubbing back find them at once. restart() starts a new schedule under a
+// new generation number: queued and in-flight work of older generations is
+// dropped (decode skips the chunks it has not started), never delivered and
+// never waited for.
+//
+// Threads. One consumer thread calls everything marked "consumer". stats()
+// and window() may be called from any thread. No mutex is taken per frame:
+// slots move through an atomic state machine (slot.h) and the rings are
+// lock-free; restart() takes a mutex shared only with the reader thread's
+// pick-up of the new schedule (a rare control operation).
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <span>
+#include <vector>
+
+#include "sluice/io/reader.h"
+#include "sluice/runtime/budget.h"
+#include "sluice/runtime/frame_allocator.h"
+#include "sluice/runtime/frame_error.h"
+#include "sluice/runtime/record_source.h"
+#include "sluice/runtime/schedule.h"
+#include "sluice/runtime/stats.h"
+#include "sluice/runtime/window.h"
+
+namespace sluice::runtime {
+
+struct WindowChange {
+  uint32_t previous_frames = 0;  // 0 for the first plan
+  WindowPlan plan;
+};
+
+struct PipelineOptions {
+  int decode_threads = 0;   // TBB workers decoding chunks; 0: one per core
+  int read_threads = 0;     // threads reading a record's pieces at once; 0: decode_threads / 4, 1 to 4
+  bool direct_io = false;   // read with O_DIRECT where the filesystem allows it (else buffered, said in stats)
+  // Attribute streams to decode (indices into the file header's list); nullopt: all of them.
+  std::optional<std::vector<uint32_t>> attributes;
+  BudgetOptions budget;
+  const DeviceMemoryBudget* device_budget = nullptr;  // borrowed; null: no device limit
+  uint32_t reevaluate_every = 32;                     // frames started between budget re-readings
+  // Slow start: use a few slots first and grow toward the planned window only
+  // while decoding keeps ahead of the consumer, so fresh buffers (a page
+  // fault per 4 KiB on first use) are not paid for by every frame of a long
+  // window. Turn off when the allocator hands out memory already touched (a
+  // preallocated staging ring): the whole window is then used at once.
+  bool slow_start = true;
+  // Called when the window is planned (on the constructing thread) and when
+  // it changes (on the reader thread). For logging: must not call the pipeline.
+  std::function<void(const WindowChange&)> on_window_change;
+  // Where records come from; null: the file, through FileRecordSource.
+  std::shared_ptr<RecordSource> source;
+  uint64_t read_piece_bytes = 8 << 20;  // reads are split (a seek cancels a big read early; pieces go in parallel)
+};
+
+enum class EntryStatus : uint8_t {
+  None,     // not fetched yet (or the schedule has ended: see NextEntry::end)
+  Pending,  // being decoded
+  Ready,    // decoded: take() it
+  Failed,   // could not be read or decoded: take() it to get the error
+};
+
+struct NextEntry {
+  EntryStatus status = EntryStatus::None;
+  bool end = false;        // the schedule has no such entry: nothing more will come
+  uint64_t sequence = 0;   // index in the current schedule
+  uint64_t frame = 0;      // frame number in the file (valid unless `end`)
+};
+
+class Pipeline;
+namespace detail {
+class PipelineCore;  // runtime/src/pipeline_core.h
+}
+
+// A frame handed to the consumer. Move-only; destroying or reset()ing it
+// gives the frame back. Consumer thread only; must not outlive its Pipeline.
+// Buffers are read-only for the consumer and stay valid until the release.
+class FrameHandle {
+ public:
+  FrameHandle() = default;
+  FrameHandle(FrameHandle&& other) noexcept;
+  FrameHandle& operator=(FrameHandle&& other) noexcept;
+  ~FrameHandle() { reset(); }
+
+  bool empty() const { return owner_ == nullptr && !error_; }
+  bool failed() const { return error_ != nullptr; }
+  const FrameError* error() const { return error_.get(); }  // when failed()
+
+  uint64_t frame() const { return frame_; }
+  uint64_t generation() const { return generation_; }
+  uint64_t sequence() const { return sequence_; }
+
+  // Valid when !empty() && !failed():
+  const io::FrameHeader& header() const;           // chunk table: counts, AABBs (to dequantize), layers
+  std::span<const uint64_t> chunk_first() const;   // first particle of each chunk
+  const FrameLayout& layout() const;
+  const FrameBuffers& buffers() const;             // particles (io::decoded_particle_bytes each), attributes
+
+  void reset();
+
+ private:
+  friend class detail::PipelineCore;
+  detail::PipelineCore* owner_ = nullptr;
+  uint32_t slot_ = 0;
+  uint64_t frame_ = 0, generation_ = 0, sequence_ = 0;
+  std::unique_ptr<FrameError> error_;
+};
+
+class Pipeline {
+ public:
+  // Borrowed: `reader` and `allocator` must outlive the pipeline. Plans the
+  // window and starts the reader thread, idle until restart(). Throws
+  // io::Error if an attribute index is out of range.
+  Pipeline(const io::ContainerReader& reader, FrameAllocator& allocator, PipelineOptions options = {});
+  // Stops the reader, waits for decode tasks (they skip what is left) and
+  // gives every buffer back to the allocator. Handles must be gone by then.
+  ~Pipeline();
+  Pipeline(const Pipeline&) = delete;
+  Pipeline& operator=(const Pipeline&) = delete;
+
+  // Consumer: plays `schedule` from its entry 0 under a new generation;
+  // everything of older generations is dropped. Returns the generation.
+  // frame_count may be less than the file's (a loop over its first frames);
+  // throws std::invalid_argument if it is more, or stride is 0, or the
+  // direction is not +1 or -1.
+  uint64_t restart(const PlaybackSchedule& schedule);
+  const PlaybackSchedule& schedule() const;  // consumer
+  uint64_t generation() const;               // consumer
+
+  // Consumer: the i-th entry not yet taken, without waiting.
+  NextEntry peek(size_t i = 0);
+  // Consumer: blocks until the next entry is Ready or Failed, or returns
+  // with `end` set when the schedule has no next entry. Releasing frames is
+  // the consumer's job: holding a whole window of handles while waiting
+  // would wait forever.
+  NextEntry wait_next();
+  // Consumer: takes the next entry, which must be Ready or Failed (a failed
+  // handle carries the error; its frame is already given back). Throws
+  // std::logic_error otherwise.
+  FrameHandle take();
+  // Consumer: skips the next entry, whatever its state; work still pending
+  // for it is abandoned.
+  void drop();
+  // Consumer: entries decoded and waiting.
+  uint32_t ready_count();
+
+  // Any thread.
+  PipelineStats stats() const;
+  uint32_t window() const;
+  std::string io_mode() const;
+  const io::ContainerReader& reader() const;
+  // Set if the reader thread stopped on an error outside any frame (out of
+  // memory for its own bookkeeping). Consumer.
+  std::optional<FrameError> fatal_error() const;
+
+ private:
+  std::unique_ptr<detail::PipelineCore> core_;
+};
+
+}  // namespace sluice::runtime

@@ -1,0 +1,69 @@
+// sluice/runtime/record_source.h: where the reader thread gets its bytes.
+//
+// FileRecordSource reads the container with pread, gives the kernel
+// readahead hints (posix_fadvise), and can bypass the page cache with
+// O_DIRECT, falling back to buffered reads when the filesystem refuses it.
+// The interface exists so tests can wrap the real source and inject faults.
+#pragma once
+
+#include <atomic>
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <string>
+
+namespace sluice::runtime {
+
+enum class AccessPattern : uint8_t { Sequential, Random };
+
+// Threads: read_at() may be called from several of the pipeline's read
+// threads at once (different ranges); the hints from the reader thread only;
+// describe() from any thread.
+class RecordSource {
+ public:
+  virtual ~RecordSource() = default;
+  // Reads up to dst.size() bytes at `offset`; returns how many were read, 0
+  // at end of file. May return fewer than asked (the caller loops). Throws
+  // io::Error naming the file when the read fails.
+  virtual size_t read_at(std::span<std::byte> dst, uint64_t offset) = 0;
+  // Offsets, sizes and buffer addresses of reads must be multiples of this
+  // (O_DIRECT); 1 when there is no constraint. May change after a read (a
+  // refused O_DIRECT falls back to buffered reads).
+  virtual size_t alignment() const = 0;
+  // Hints; they may do nothing.
+  virtual void will_need(uint64_t /*offset*/, uint64_t /*bytes*/) {}
+  virtual void set_access(AccessPattern /*pattern*/) {}
+  // "pread", "pread, O_DIRECT", "pread (O_DIRECT refused: ...)".
+  virtual std::string describe() const = 0;
+};
+
+class FileRecordSource final : public RecordSource {
+ public:
+  // Reads `path` through `buffered_fd` (borrowed: the ContainerReader's
+  // descriptor) or, with `direct`, through its own O_DIRECT descriptor.
+  FileRecordSource(std::string path, int buffered_fd, bool direct);
+  ~FileRecordSource() override;
+  FileRecordSource(const FileRecordSource&) = delete;
+  FileRecordSource& operator=(const FileRecordSource&) = delete;
+
+  size_t read_at(std::span<std::byte> dst, uint64_t offset) override;
+  size_t alignment() const override;
+  void will_need(uint64_t offset, uint64_t bytes) override;
+  void set_access(AccessPattern pattern) override;
+  std::string describe() const override;
+  bool direct() const { return direct_fd_.load(std::memory_order_acquire) >= 0; }
+
+  static constexpr size_t kDirectAlignment = 4096;
+
+ private:
+  void fall_back(const std::string& why);
+
+  std::string path_;
+  int buffered_fd_;
+  std::atomic<int> direct_fd_{-1};
+  std::atomic<bool> falling_back_{false};  // the first thread to see a refusal records why
+  int owned_fd_ = -1;
+  std::string refused_;  // why O_DIRECT is not in use, once it was asked for
+};
+
+}  // namespace sluice::runtime

@@ -1,0 +1,100 @@
+// Decode workers: the chunks of one frame in parallel (several frames are in
+// flight at once, one TBB task each), written straight into the frame's
+// buffers. The worker that finishes the last chunk publishes the frame.
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <array>
+#include <chrono>
+
+#include "pipeline_core.h"
+#include "sluice/io/codec.h"
+#include "tsan_handoff.h"
+
+namespace sluice::runtime::detail {
+namespace {
+
+constexpr auto kRelaxed = std::memory_order_relaxed;
+
+}  // namespace
+
+bool PipelineCore::stale(const Slot& slot) const {
+  return stopping_.load(kRelaxed) || slot.abandoned.load(kRelaxed) || generation_.load(kRelaxed) != slot.generation;
+}
+
+void PipelineCore::decode_frame(Slot& slot, uint32_t s) {
+  handoff_acquire(&slot);  // from the reader thread, through TBB
+  const size_t chunks = slot.header.chunks.size();
+  handoff_release(&slot);  // what this thread read happens before the chunks' completion
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, chunks, 1), [&](const tbb::blocked_range<size_t>& range) {
+    for (size_t c = range.begin(); c != range.end(); ++c) {
+      decode_chunk(slot, c);
+      // The last chunk publishes the frame; nothing here touches the slot
+      // after that (every chunk is done, so the loop is over).
+      if (slot.chunks_left.fetch_sub(1, std::memory_order_acq_rel) == 1) finish_decode(s);
+    }
+    handoff_release(this);  // for the destructor, after it waited for the decode tasks
+  });
+}
+
+void PipelineCore::decode_chunk(Slot& slot, size_t c) {
+  handoff_acquire(&slot);  // from the reader thread, through TBB
+  if (stale(slot)) {  // a newer schedule, or the consumer dropped it: skip, do not wait
+    slot.skipped.store(true, kRelaxed);
+    return;
+  }
+  if (slot.error_claimed.load(kRelaxed)) return;  // the frame has failed already
+  const io::ChunkDesc& chunk = slot.header.chunks[c];
+  const uint64_t first = slot.chunk_first[c];
+  const size_t stride = slot.layout.particle_stride;
+  std::array<uint16_t*, io::kMaxAttributes> targets{};
+  for (size_t a = 0; a < slot.attribute_targets.size(); ++a) {
+    if (slot.attribute_targets[a]) targets[a] = slot.attribute_targets[a] + first;
+  }
+  const io::ChunkDestination destination{
+      slot.buffers.particles.subspan(first * stride, size_t(chunk.particle_count) * stride),
+      std::span<uint16_t* const>(targets.data(), slot.attribute_targets.size())};
+
+  const auto t0 = std::chrono::steady_clock::now();
+  try {
+    thread_local io::DecodeScratch scratch;
+    io::decode_chunk(slot.record_bytes, chunk, reader_.header(), destination, scratch, reader_.location(slot.frame, c));
+  } catch (const io::Error& e) {
+    if (!slot.error_claimed.exchange(true, std::memory_order_acq_rel)) slot.error = FrameError::from(e);
+    return;
+  } catch (const std::exception& e) {
+    if (!slot.error_claimed.exchange(true, std::memory_order_acq_rel)) slot.error = {reader_.location(slot.frame, c), e.what()};
+    return;
+  }
+  const auto ns = std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - t0).count();
+  const uint64_t bytes = uint64_t(chunk.particle_count) * (stride + 2 * uint64_t(attribute_streams_));
+  const int worker = tbb::this_task_arena::current_thread_index();
+  if (worker >= 0 && uint32_t(worker) < worker_slots()) {
+    WorkerCounters& w = workers_[uint32_t(worker)];
+    w.chunks.fetch_add(1, kRelaxed);
+    w.output_bytes.fetch_add(bytes, kRelaxed);
+    w.busy_ns.fetch_add(static_cast<uint64_t>(ns), kRelaxed);
+  }
+  counters_.decoded_bytes.fetch_add(bytes, kRelaxed);
+}
+
+void PipelineCore::finish_decode(uint32_t s) {
+  Slot& slot = slots_[s];
+  SlotState result = SlotState::Ready;
+  if (slot.error_claimed.load(std::memory_order_acquire)) result = SlotState::Failed;
+  else if (slot.skipped.load(kRelaxed)) result = SlotState::Cancelled;
+  switch (result) {
+    case SlotState::Ready: counters_.frames_decoded.fetch_add(1, kRelaxed); break;
+    case SlotState::Failed: counters_.frames_failed.fetch_add(1, kRelaxed); break;
+    default: counters_.frames_cancelled.fetch_add(1, kRelaxed); break;
+  }
+  // The record is no longer needed once every chunk is done with it.
+  if (!record_returns_.try_push(slot.record)) std::terminate();  // holds every record buffer
+  slot.record = kNoRecord;
+  frames_decoding_.fetch_sub(1, std::memory_order_release);
+  slot.state.store(result, std::memory_order_release);
+  slot.state.notify_all();  // a consumer may be waiting for this frame
+  wake_reader();            // the record buffer, or a drained slot, is free
+}
+
+}  // namespace sluice::runtime::detail

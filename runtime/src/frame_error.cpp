@@ -1,0 +1,7 @@
+#include "sluice/runtime/frame_error.h"
+
+namespace sluice::runtime {
+
+std::string FrameError::text() const { return io::format_location(where) + ": " + message; }
+
+}  // namespace sluice::runtime

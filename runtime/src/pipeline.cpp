@@ -1,0 +1,303 @@
+// Construction, the consumer's side of the pipeline, and stats.
+#include <tbb/info.h>
+
+#include <algorithm>
+#include <exception>
+#include <stdexcept>
+#include <utility>
+
+#include "pipeline_core.h"
+#include "tsan_handoff.h"
+
+namespace sluice::runtime {
+namespace detail {
+namespace {
+
+constexpr auto kRelaxed = std::memory_order_relaxed;
+
+std::vector<uint32_t> stream_map(const io::ContainerReader& reader, const std::optional<std::vector<uint32_t>>& wanted,
+                                 uint32_t& streams) {
+  const size_t count = reader.header().attributes.size();
+  std::vector<uint32_t> map(count, ~0u);
+  streams = 0;
+  if (!wanted) {
+    for (size_t a = 0; a < count; ++a) map[a] = streams++;
+    return map;
+  }
+  for (uint32_t a : *wanted) {
+    if (a >= count) {
+      throw io::Error({reader.path()}, "no attribute " + std::to_string(a) + " to decode (the file has " +
+                                           std::to_string(count) + ")");
+    }
+    if (map[a] != ~0u) throw io::Error({reader.path()}, "attribute " + std::to_string(a) + " asked for twice");
+    map[a] = streams++;
+  }
+  return map;
+}
+
+}  // namespace
+
+PipelineCore::PipelineCore(const io::ContainerReader& reader, FrameAllocator& allocator, PipelineOptions options)
+    : reader_(reader),
+      allocator_(allocator),
+      options_(std::move(options)),
+      decode_threads_(options_.decode_threads > 0 ? options_.decode_threads : tbb::info::default_concurrency()),
+      delivery_(std::max<uint32_t>(2, options_.budget.ring_capacity)),
+      returns_(std::max<uint32_t>(2, options_.budget.ring_capacity)),
+      record_returns_(size_t(decode_threads_) + 1),
+      records_(size_t(decode_threads_) + 1) {
+  stream_of_attribute_ = stream_map(reader_, options_.attributes, attribute_streams_);
+  footprint_ = largest_frame(reader_, attribute_streams_, &allocator_);
+  source_ = options_.source ? options_.source
+                            : std::make_shared<FileRecordSource>(reader_.path(), reader_.descriptor(), options_.direct_io);
+  slot_count_ = std::max<uint32_t>(2, options_.budget.ring_capacity);
+  slots_ = std::make_unique<Slot[]>(slot_count_);
+  workers_ = std::make_unique<WorkerCounters[]>(worker_slots());
+
+  read_threads_ = options_.read_threads > 0 ? options_.read_threads : std::clamp(decode_threads_ / 4, 1, 4);
+  // Workers wanted: every decode slot, and the read helpers (the reader
+  // thread itself takes the read arena's reserved slot).
+  const int workers = decode_threads_ + read_threads_ - 1;
+  if (workers + 1 > tbb::info::default_concurrency()) {
+    parallelism_.emplace(tbb::global_control::max_allowed_parallelism, size_t(workers) + 1);
+  }
+  arena_.initialize(decode_threads_, 0);       // no slot reserved: only workers decode
+  read_arena_.initialize(read_threads_, 1);   // the reader thread's own slot, and helpers
+
+  initial_plan_ = plan_now(0);
+  counters_.window_frames.store(initial_plan_.frames, kRelaxed);
+  counters_.active_frames.store(initial_active(initial_plan_), kRelaxed);
+  counters_.record_buffers.store(initial_plan_.record_buffers, kRelaxed);
+  if (options_.on_window_change) options_.on_window_change({0, initial_plan_});
+
+  reader_thread_ = std::thread([this] { reader_main(); });
+}
+
+PipelineCore::~PipelineCore() {
+  stopping_.store(true, std::memory_order_release);
+  wake_reader();
+  if (reader_thread_.joinable()) reader_thread_.join();
+  // Decode tasks still running see stopping_ and skip their remaining chunks.
+  // Waited for from outside the arena: the workers finish them.
+  decode_group_.wait();
+  handoff_acquire(this);
+  for (uint32_t s = 0; s < slot_count_; ++s) {
+    if (slots_[s].has_buffers) allocator_.release(slots_[s].buffers);
+  }
+}
+
+void PipelineCore::wake_reader() {
+  reader_wake_.fetch_add(1, std::memory_order_release);
+  reader_wake_.notify_one();
+}
+
+void PipelineCore::wake_consumer() {
+  consumer_wake_.fetch_add(1, std::memory_order_release);
+  consumer_wake_.notify_one();
+}
+
+uint64_t PipelineCore::restart(const PlaybackSchedule& schedule) {
+  if (schedule.frame_count > reader_.frame_count() || schedule.stride == 0 ||
+      (schedule.direction != 1 && schedule.direction != -1)) {
+    throw std::invalid_argument("Pipeline::restart(): the schedule needs frame_count <= the file's frames (" +
+                                std::to_string(reader_.frame_count()) + "), stride >= 1 and direction +1 or -1");
+  }
+  uint64_t g;
+  {
+    const std::lock_guard lock(control_mutex_);
+    requested_ = schedule;
+    g = generation_.load(kRelaxed) + 1;
+    generation_.store(g, std::memory_order_release);
+  }
+  schedule_ = schedule;
+  consumer_generation_ = g;
+  next_sequence_ = 0;
+  front();  // gives back what is queued of older generations
+  wake_reader();
+  return g;
+}
+
+void PipelineCore::give_back(uint32_t s) {
+  // The return ring holds every slot at once: a push cannot fail.
+  if (!returns_.try_push(s)) std::terminate();
+  wake_reader();
+}
+
+const Entry* PipelineCore::front() {
+  // Entries of older generations form a prefix of the ring: the reader may
+  // still push one it was working on when restart() came. Drop them here,
+  // checking the very entry returned, so a late arrival is never mistaken
+  // for the current generation's.
+  while (const Entry* e = delivery_.peek(0)) {
+    if (e->generation == consumer_generation_) return e;
+    Entry gone;
+    delivery_.try_pop(gone);
+    slots_[gone.slot].abandoned.store(true, std::memory_order_release);
+    give_back(gone.slot);
+  }
+  return nullptr;
+}
+
+NextEntry PipelineCore::describe(const Entry* e, size_t i) const {
+  NextEntry n;
+  n.sequence = next_sequence_ + i;
+  if (!e) {
+    const auto frame = schedule_.frame_at(n.sequence);
+    n.end = !frame || reader_failed_.load(std::memory_order_acquire);
+    n.frame = frame.value_or(0);
+    return n;
+  }
+  n.frame = e->frame;
+  switch (slots_[e->slot].state.load(std::memory_order_acquire)) {
+    case SlotState::Ready: n.status = EntryStatus::Ready; break;
+    case SlotState::Failed: n.status = EntryStatus::Failed; break;
+    default: n.status = EntryStatus::Pending; break;
+  }
+  return n;
+}
+
+NextEntry PipelineCore::peek(size_t i) {
+  // Behind a current head every entry is current.
+  return describe(front() ? delivery_.peek(i) : nullptr, i);
+}
+
+NextEntry PipelineCore::wait_next() {
+  while (true) {
+    const uint32_t seen = consumer_wake_.load(std::memory_order_acquire);
+    const Entry* e = front();
+    if (!e) {
+      const NextEntry n = describe(nullptr, 0);
+      if (n.end) return n;
+      consumer_wake_.wait(seen, std::memory_order_acquire);
+      continue;
+    }
+    const SlotState state = slots_[e->slot].state.load(std::memory_order_acquire);
+    if (state == SlotState::Ready || state == SlotState::Failed) return describe(e, 0);
+    slots_[e->slot].state.wait(state, std::memory_order_acquire);
+  }
+}
+
+FrameHandle PipelineCore::take() {
+  const Entry* e = front();
+  const SlotState state = e ? slots_[e->slot].state.load(std::memory_order_acquire) : SlotState::Free;
+  if (state != SlotState::Ready && state != SlotState::Failed) {
+    throw std::logic_error("Pipeline::take(): the next entry is not ready (check peek() or wait_next() first)");
+  }
+  Entry entry;
+  delivery_.try_pop(entry);
+  ++next_sequence_;
+  FrameHandle h;
+  h.frame_ = entry.frame;
+  h.generation_ = entry.generation;
+  h.sequence_ = entry.sequence;
+  if (state == SlotState::Failed) {
+    h.error_ = std::make_unique<FrameError>(slots_[entry.slot].error);
+    give_back(entry.slot);
+  } else {
+    slots_[entry.slot].state.store(SlotState::Shown, kRelaxed);
+    h.owner_ = this;
+    h.slot_ = entry.slot;
+    counters_.frames_delivered.fetch_add(1, kRelaxed);
+  }
+  return h;
+}
+
+void PipelineCore::drop() {
+  Entry entry;
+  if (!front() || !delivery_.try_pop(entry)) throw std::logic_error("Pipeline::drop(): no entry to drop");
+  ++next_sequence_;
+  slots_[entry.slot].abandoned.store(true, std::memory_order_release);
+  give_back(entry.slot);
+}
+
+uint32_t PipelineCore::ready_count() {
+  uint32_t ready = 0;
+  for (size_t i = 0; const Entry* e = front() ? delivery_.peek(i) : nullptr; ++i) {
+    if (slots_[e->slot].state.load(std::memory_order_acquire) == SlotState::Ready) ++ready;
+  }
+  counters_.frames_ready.store(ready, kRelaxed);
+  return ready;
+}
+
+PipelineStats PipelineCore::stats() const {
+  PipelineStats s;
+  s.elapsed_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started_).count();
+  s.io_mode = source_->describe() + (read_threads_ > 1 ? ", " + std::to_string(read_threads_) + " read threads" : "");
+  const Counters& c = counters_;
+  s.bytes_read = c.bytes_read.load(kRelaxed);
+  s.read_seconds = double(c.read_ns.load(kRelaxed)) * 1e-9;
+  s.frames_read = c.frames_read.load(kRelaxed);
+  s.cache_hits = c.cache_hits.load(kRelaxed);
+  s.frames_decoded = c.frames_decoded.load(kRelaxed);
+  s.decoded_bytes = c.decoded_bytes.load(kRelaxed);
+  s.frames_cancelled = c.frames_cancelled.load(kRelaxed);
+  s.frames_delivered = c.frames_delivered.load(kRelaxed);
+  s.frames_failed = c.frames_failed.load(kRelaxed);
+  s.generation = generation_.load(kRelaxed);
+  s.window_frames = c.window_frames.load(kRelaxed);
+  s.active_frames = c.active_frames.load(kRelaxed);
+  s.record_buffers = c.record_buffers.load(kRelaxed);
+  s.frames_ready = c.frames_ready.load(kRelaxed);
+  s.held_bytes = c.held_bytes.load(kRelaxed);
+  s.peak_record_bytes = c.peak_record_bytes.load(kRelaxed);
+  for (uint32_t w = 0; w < worker_slots(); ++w) {
+    const WorkerCounters& wc = workers_[w];
+    const uint64_t chunks = wc.chunks.load(kRelaxed);
+    if (chunks == 0) continue;
+    s.workers.push_back({w, chunks, wc.output_bytes.load(kRelaxed), double(wc.busy_ns.load(kRelaxed)) * 1e-9});
+  }
+  return s;
+}
+
+}  // namespace detail
+
+// --- FrameHandle ---
+
+FrameHandle::FrameHandle(FrameHandle&& other) noexcept { *this = std::move(other); }
+
+FrameHandle& FrameHandle::operator=(FrameHandle&& other) noexcept {
+  if (this == &other) return *this;
+  reset();
+  owner_ = std::exchange(other.owner_, nullptr);
+  slot_ = other.slot_;
+  frame_ = other.frame_;
+  generation_ = other.generation_;
+  sequence_ = other.sequence_;
+  error_ = std::move(other.error_);
+  return *this;
+}
+
+void FrameHandle::reset() {
+  if (owner_) std::exchange(owner_, nullptr)->give_back(slot_);
+  error_.reset();
+}
+
+const io::FrameHeader& FrameHandle::header() const { return owner_->slot(slot_).header; }
+std::span<const uint64_t> FrameHandle::chunk_first() const { return owner_->slot(slot_).chunk_first; }
+const FrameLayout& FrameHandle::layout() const { return owner_->slot(slot_).layout; }
+const FrameBuffers& FrameHandle::buffers() const { return owner_->slot(slot_).buffers; }
+
+// --- Pipeline ---
+
+Pipeline::Pipeline(const io::ContainerReader& reader, FrameAllocator& allocator, PipelineOptions options)
+    : core_(std::make_unique<detail::PipelineCore>(reader, allocator, std::move(options))) {}
+Pipeline::~Pipeline() = default;
+
+uint64_t Pipeline::restart(const PlaybackSchedule& schedule) { return core_->restart(schedule); }
+const PlaybackSchedule& Pipeline::schedule() const { return core_->schedule_; }
+uint64_t Pipeline::generation() const { return core_->consumer_generation_; }
+NextEntry Pipeline::peek(size_t i) { return core_->peek(i); }
+NextEntry Pipeline::wait_next() { return core_->wait_next(); }
+FrameHandle Pipeline::take() { return core_->take(); }
+void Pipeline::drop() { core_->drop(); }
+uint32_t Pipeline::ready_count() { return core_->ready_count(); }
+PipelineStats Pipeline::stats() const { return core_->stats(); }
+uint32_t Pipeline::window() const { return core_->counters_.window_frames.load(std::memory_order_relaxed); }
+std::string Pipeline::io_mode() const { return core_->stats().io_mode; }
+const io::ContainerReader& Pipeline::reader() const { return core_->reader_; }
+std::optional<FrameError> Pipeline::fatal_error() const {
+  if (!core_->reader_failed_.load(std::memory_order_acquire)) return std::nullopt;
+  return core_->fatal_;
+}
+
+}  // namespace sluice::runtime

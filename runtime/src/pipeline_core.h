@@ -1,0 +1,179 @@
+// The pipeline's internals, shared by its three parts:
+//   pipeline.cpp       construction, the consumer's side, stats
+//   reader_thread.cpp  the reader thread: schedule, window, reads, dispatch
+//   decode_task.cpp    TBB decode of a frame's chunks and its completion
+#pragma once
+
+#include <tbb/global_control.h>
+#include <tbb/task_arena.h>
+#include <tbb/task_group.h>
+
+#include <atomic>
+#include <chrono>
+#include <deque>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <thread>
+#include <vector>
+
+#include "aligned_buffer.h"
+#include "mpsc_ring.h"
+#include "slot.h"
+#include "spsc_ring.h"
+#include "sluice/runtime/pipeline.h"
+
+namespace sluice::runtime::detail {
+
+// Per decode worker, on its own cache line: workers never share a written line.
+struct alignas(64) WorkerCounters {
+  std::atomic<uint64_t> chunks{0};
+  std::atomic<uint64_t> output_bytes{0};
+  std::atomic<uint64_t> busy_ns{0};
+};
+
+struct Counters {
+  std::atomic<uint64_t> bytes_read{0}, read_ns{0}, frames_read{0}, cache_hits{0};
+  std::atomic<uint64_t> frames_decoded{0}, decoded_bytes{0}, frames_cancelled{0};
+  std::atomic<uint64_t> frames_delivered{0}, frames_failed{0};
+  std::atomic<uint64_t> held_bytes{0}, peak_record_bytes{0};
+  std::atomic<uint32_t> window_frames{0}, active_frames{0}, record_buffers{0}, frames_ready{0};
+};
+
+// What only the reader thread touches.
+struct ReaderState {
+  uint64_t generation = ~uint64_t(0);
+  PlaybackSchedule schedule;
+  uint64_t next_k = 0;                  // next entry of the schedule to fetch
+  uint32_t out = 0;                     // entries pushed and not yet returned
+  std::vector<uint32_t> free_slots;
+  std::deque<uint32_t> cached;          // decoded frames behind the playhead, oldest first
+  std::vector<uint32_t> draining;       // returned while still decoding
+  std::vector<uint32_t> free_records;   // record buffers not in use
+  WindowPlan plan;
+  uint32_t active = 2;                  // slots in use at most: grows to plan.frames (slow start)
+  uint64_t frames_started = 0;
+  uint64_t next_evaluation = 0;
+  uint64_t decoded_held = 0;            // bytes of allocator buffers held
+  uint64_t record_held = 0;             // bytes of record buffers held
+};
+
+class PipelineCore {
+ public:
+  PipelineCore(const io::ContainerReader& reader, FrameAllocator& allocator, PipelineOptions options);
+  ~PipelineCore();
+
+  // --- consumer side (pipeline.cpp) ---
+  uint64_t restart(const PlaybackSchedule& schedule);
+  NextEntry peek(size_t i);
+  NextEntry wait_next();
+  FrameHandle take();
+  void drop();
+  uint32_t ready_count();
+  void give_back(uint32_t slot);  // a handle's release
+  const Slot& slot(uint32_t s) const { return slots_[s]; }
+  PipelineStats stats() const;
+
+  const io::ContainerReader& reader_;
+  FrameAllocator& allocator_;
+  const PipelineOptions options_;
+
+ private:
+  friend class sluice::runtime::Pipeline;
+  enum class Start { Pushed, Cancelled, Blocked };
+
+  // consumer side
+  const Entry* front();  // the head entry of the current generation, stale ones dropped
+  NextEntry describe(const Entry* e, size_t i) const;
+
+  // reader thread (reader_thread.cpp)
+  void reader_main();
+  bool reader_iteration(ReaderState& rs);  // false: nothing to do until woken
+  void adopt_schedule(ReaderState& rs);
+  void collect_returns(ReaderState& rs);
+  void collect_records(ReaderState& rs);
+  void settle(ReaderState& rs, uint32_t s, SlotState state);
+  void reevaluate(ReaderState& rs);
+  WindowPlan plan_now(uint64_t held) const;
+  void shrink_to_window(ReaderState& rs);
+  bool evict_oldest(ReaderState& rs);
+  void free_slot(ReaderState& rs, uint32_t s);
+  Start start_entry(ReaderState& rs, uint64_t k, uint64_t frame);
+  bool read_record(ReaderState& rs, Slot& slot, uint32_t record);
+  // record_read.cpp: reads [0, need) of `dst` from `offset` in pieces, on
+  // read_threads_ threads; false if a newer generation (or stop) came first.
+  bool read_pieces(std::span<std::byte> dst, uint64_t offset, uint64_t need, uint64_t frame, uint64_t generation);
+  void read_piece(std::span<std::byte> piece, uint64_t offset, uint64_t required, uint64_t frame, uint64_t frame_end);
+  void prepare_decode(ReaderState& rs, Slot& slot);
+  void publish(ReaderState& rs, uint32_t s, uint64_t k);
+  void fail(ReaderState& rs, uint32_t s, uint64_t k, FrameError error);
+  uint32_t ahead_limit(const ReaderState& rs) const;
+  bool grow(ReaderState& rs);
+  uint32_t initial_active(const WindowPlan& plan) const;
+  uint32_t occupied(const ReaderState& rs) const;
+
+  // decode workers (decode_task.cpp)
+  void decode_frame(Slot& slot, uint32_t s);
+  void decode_chunk(Slot& slot, size_t c);
+  void finish_decode(uint32_t s);
+  bool stale(const Slot& slot) const;
+
+  void wake_reader();
+  void wake_consumer();
+  // TBB numbers an arena's slots 0..max_concurrency (slot 0 is for a thread
+  // joining from outside): one counter per slot.
+  uint32_t worker_slots() const { return static_cast<uint32_t>(decode_threads_) + 1; }
+
+  // Fixed at construction.
+  std::shared_ptr<RecordSource> source_;
+  std::vector<uint32_t> stream_of_attribute_;  // header attribute -> decoded stream, or ~0u
+  uint32_t attribute_streams_ = 0;
+  FrameFootprint footprint_;
+  WindowPlan initial_plan_;  // the reader starts from it
+  int decode_threads_ = 1;
+  int read_threads_ = 1;
+  std::chrono::steady_clock::time_point started_ = std::chrono::steady_clock::now();
+
+  // Slots, rings and record buffers (capacities fixed at construction).
+  std::unique_ptr<Slot[]> slots_;
+  uint32_t slot_count_ = 0;
+  SpscRing<Entry> delivery_;          // reader -> consumer
+  SpscRing<uint32_t> returns_;        // consumer -> reader
+  MpscRing<uint32_t> record_returns_; // decode workers -> reader
+  std::vector<AlignedBuffer> records_;
+
+  // Control: the schedule the consumer asked for, picked up by the reader.
+  std::mutex control_mutex_;
+  PlaybackSchedule requested_;             // guarded by control_mutex_
+  std::atomic<uint64_t> generation_{0};    // written under control_mutex_
+  std::atomic<bool> stopping_{false};
+  std::atomic<uint32_t> reader_wake_{0};   // bumped whenever the reader may have work
+  std::atomic<uint32_t> consumer_wake_{0}; // bumped whenever an entry is pushed
+  std::atomic<bool> reader_failed_{false};
+  std::atomic<uint32_t> frames_decoding_{0};  // frames handed to the workers and not finished
+  FrameError fatal_;                       // written before reader_failed_ is set
+
+  // Consumer-only.
+  PlaybackSchedule schedule_;
+  uint64_t consumer_generation_ = 0;
+  uint64_t next_sequence_ = 0;
+
+  // Stats.
+  Counters counters_;
+  std::unique_ptr<WorkerCounters[]> workers_;
+
+  // Decode: our own arena, sized to decode_threads_. The global_control lets
+  // TBB start that many workers even where it would otherwise keep one core
+  // for a master thread that never joins this arena.
+  std::optional<tbb::global_control> parallelism_;
+  tbb::task_arena arena_;
+  tbb::task_group decode_group_;
+  // Reads: the reader thread plus read_threads_ - 1 helpers copy the pieces
+  // of one record at once (page-cache copies and O_DIRECT requests both
+  // scale with it).
+  tbb::task_arena read_arena_;
+
+  std::thread reader_thread_;  // last: started once everything above exists
+};
+
+}  // namespace sluice::runtime::detail

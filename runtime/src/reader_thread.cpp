@@ -1,0 +1,349 @@
+// The reader thread: follows the schedule, keeps the window, reads records
+// and hands frames to the decode workers. It owns every slot that is not out
+// with the consumer or being decoded, so its bookkeeping (ReaderState) needs
+// no synchronisation; everything it learns from other threads arrives
+// through the return rings, slot states and the generation number.
+#include <algorithm>
+#include <exception>
+
+#include "pipeline_core.h"
+#include "tsan_handoff.h"
+
+namespace sluice::runtime::detail {
+namespace {
+
+constexpr auto kRelaxed = std::memory_order_relaxed;
+
+uint64_t round_up(uint64_t n, uint64_t to) { return (n + to - 1) / to * to; }
+
+// Small moves of the window are noise (MemAvailable wobbles); follow a
+// change only when it is worth an eighth of the window.
+bool worth_changing(uint32_t from, uint32_t to) {
+  const uint32_t margin = from / 8;
+  return to + margin < from || to > from + margin;
+}
+
+}  // namespace
+
+void PipelineCore::reader_main() {
+  ReaderState rs;
+  rs.plan = initial_plan_;
+  rs.active = initial_active(rs.plan);  // as the constructor reported it
+  rs.next_evaluation = options_.reevaluate_every;
+  for (uint32_t s = slot_count_; s-- > 0;) rs.free_slots.push_back(s);
+  for (auto r = static_cast<uint32_t>(records_.size()); r-- > 0;) rs.free_records.push_back(r);
+  try {
+    while (!stopping_.load(std::memory_order_acquire)) {
+      const uint32_t seen = reader_wake_.load(std::memory_order_acquire);
+      if (!reader_iteration(rs)) reader_wake_.wait(seen, std::memory_order_acquire);
+    }
+  } catch (const std::exception& e) {
+    // Only the thread's own bookkeeping gets here (frame errors become
+    // failed entries): tell the consumer nothing more will come.
+    fatal_ = {{reader_.path()}, std::string("the reader thread stopped: ") + e.what()};
+    reader_failed_.store(true, std::memory_order_release);
+    wake_consumer();
+  }
+}
+
+bool PipelineCore::reader_iteration(ReaderState& rs) {
+  collect_returns(rs);
+  collect_records(rs);
+  adopt_schedule(rs);
+  if (rs.frames_started >= rs.next_evaluation) reevaluate(rs);
+  shrink_to_window(rs);
+  const auto frame = rs.schedule.frame_at(rs.next_k);
+  if (!frame) return false;
+  if (rs.out >= ahead_limit(rs) && !grow(rs)) return false;
+  switch (start_entry(rs, rs.next_k, *frame)) {
+    case Start::Pushed: ++rs.next_k; return true;
+    case Start::Cancelled: return true;  // a newer schedule is waiting
+    case Start::Blocked: return false;
+  }
+  return false;
+}
+
+uint32_t PipelineCore::ahead_limit(const ReaderState& rs) const { return rs.active - rs.active / 4; }
+
+bool PipelineCore::grow(ReaderState& rs) {
+  // Slow start: a fresh frame buffer costs a page fault per 4 KiB on first
+  // use, and a window whose buffers are all fresh makes every frame pay it.
+  // So the window starts small (its buffers are soon reused) and grows only
+  // while the reader is ahead of the consumer and decoding is idle: when a
+  // deeper prefetch is both useful and free.
+  if (rs.active >= rs.plan.frames || frames_decoding_.load(std::memory_order_acquire) > 0) return false;
+  ++rs.active;
+  counters_.active_frames.store(rs.active, kRelaxed);
+  return true;
+}
+
+uint32_t PipelineCore::initial_active(const WindowPlan& plan) const {
+  if (!options_.slow_start) return plan.frames;
+  return std::min<uint32_t>(plan.frames, static_cast<uint32_t>(std::max(4, decode_threads_ + 2)));
+}
+
+uint32_t PipelineCore::occupied(const ReaderState& rs) const {
+  return rs.out + static_cast<uint32_t>(rs.cached.size() + rs.draining.size());
+}
+
+void PipelineCore::adopt_schedule(ReaderState& rs) {
+  if (generation_.load(std::memory_order_acquire) == rs.generation) return;
+  {
+    const std::lock_guard lock(control_mutex_);
+    rs.schedule = requested_;
+    rs.generation = generation_.load(kRelaxed);
+  }
+  rs.next_k = 0;
+  // Kernel readahead only helps going forward one frame at a time.
+  const bool sequential = rs.schedule.direction > 0 && rs.schedule.stride == 1;
+  source_->set_access(sequential ? AccessPattern::Sequential : AccessPattern::Random);
+}
+
+void PipelineCore::collect_returns(ReaderState& rs) {
+  uint32_t s;
+  while (returns_.try_pop(s)) {
+    --rs.out;
+    const SlotState state = slots_[s].state.load(std::memory_order_acquire);
+    if (state == SlotState::Decoding) rs.draining.push_back(s);
+    else settle(rs, s, state);
+  }
+  // Dropped work finishes quickly: its remaining chunks are skipped.
+  std::erase_if(rs.draining, [&](uint32_t d) {
+    const SlotState state = slots_[d].state.load(std::memory_order_acquire);
+    if (state == SlotState::Decoding) return false;
+    settle(rs, d, state);
+    return true;
+  });
+}
+
+void PipelineCore::settle(ReaderState& rs, uint32_t s, SlotState state) {
+  Slot& slot = slots_[s];
+  if ((state == SlotState::Ready || state == SlotState::Shown) && slot.has_buffers) {
+    slot.state.store(SlotState::Cached, kRelaxed);
+    rs.cached.push_back(s);
+  } else {
+    free_slot(rs, s);
+  }
+}
+
+void PipelineCore::free_slot(ReaderState& rs, uint32_t s) {
+  Slot& slot = slots_[s];
+  if (slot.has_buffers) {
+    rs.decoded_held -= allocator_.bytes_for(slot.layout);
+    allocator_.release(slot.buffers);
+    slot.has_buffers = false;
+    counters_.held_bytes.store(rs.decoded_held + rs.record_held, kRelaxed);
+  }
+  slot.state.store(SlotState::Free, kRelaxed);
+  rs.free_slots.push_back(s);
+}
+
+bool PipelineCore::evict_oldest(ReaderState& rs) {
+  if (rs.cached.empty()) return false;
+  const uint32_t s = rs.cached.front();
+  rs.cached.pop_front();
+  free_slot(rs, s);
+  return true;
+}
+
+void PipelineCore::shrink_to_window(ReaderState& rs) {
+  while (occupied(rs) > rs.active && evict_oldest(rs)) {
+  }
+}
+
+void PipelineCore::collect_records(ReaderState& rs) {
+  uint32_t r;
+  while (record_returns_.try_pop(r)) rs.free_records.push_back(r);
+  // Give memory back when the plan allows fewer record buffers than we hold.
+  auto allocated = std::count_if(records_.begin(), records_.end(), [](const AlignedBuffer& b) { return b.capacity() > 0; });
+  for (uint32_t f : rs.free_records) {
+    if (allocated <= rs.plan.record_buffers) break;
+    if (records_[f].capacity() == 0) continue;
+    rs.record_held -= records_[f].capacity();
+    records_[f].release();
+    --allocated;
+  }
+  counters_.held_bytes.store(rs.decoded_held + rs.record_held, kRelaxed);
+}
+
+WindowPlan PipelineCore::plan_now(uint64_t held) const {
+  BudgetReading reading;
+  reading.host = read_host_memory(options_.budget.host_paths);
+  reading.held_bytes = held;
+  if (options_.device_budget) reading.device_available = options_.device_budget->available_bytes();
+  WindowPlan plan = plan_window(footprint_, reading, options_.budget, decode_threads_);
+  // More slots than frames would hold copies of the same frames (a short
+  // loop); with one slot per frame a loop is read once and then served from
+  // memory.
+  const auto frames = static_cast<uint32_t>(std::min<uint64_t>(reader_.frame_count(), plan.frames));
+  if (frames < plan.frames) {
+    plan.frames = std::max<uint32_t>(2, frames);
+    plan.record_buffers = std::min(plan.record_buffers, plan.frames);
+    plan.limited_by = "frames in the file";
+  }
+  return plan;
+}
+
+void PipelineCore::reevaluate(ReaderState& rs) {
+  rs.next_evaluation = rs.frames_started + std::max<uint32_t>(1, options_.reevaluate_every);
+  const WindowPlan plan = plan_now(rs.decoded_held + rs.record_held);
+  if (!worth_changing(rs.plan.frames, plan.frames)) return;
+  const uint32_t previous = rs.plan.frames;
+  rs.plan = plan;
+  rs.active = options_.slow_start ? std::min(rs.active, plan.frames) : plan.frames;
+  counters_.active_frames.store(rs.active, kRelaxed);
+  counters_.window_frames.store(plan.frames, kRelaxed);
+  counters_.record_buffers.store(plan.record_buffers, kRelaxed);
+  if (options_.on_window_change) options_.on_window_change({previous, plan});
+}
+
+PipelineCore::Start PipelineCore::start_entry(ReaderState& rs, uint64_t k, uint64_t frame) {
+  // A decoded copy kept behind the playhead (the newest, if several).
+  const auto hit = std::find_if(rs.cached.rbegin(), rs.cached.rend(), [&](uint32_t s) { return slots_[s].frame == frame; });
+  if (hit != rs.cached.rend()) {
+    const uint32_t s = *hit;
+    rs.cached.erase(std::next(hit).base());
+    slots_[s].generation = rs.generation;
+    slots_[s].state.store(SlotState::Ready, std::memory_order_release);
+    counters_.cache_hits.fetch_add(1, kRelaxed);
+    publish(rs, s, k);
+    return Start::Pushed;
+  }
+
+  while (occupied(rs) >= rs.active && evict_oldest(rs)) {
+  }
+  if (occupied(rs) >= rs.active) return Start::Blocked;
+  const auto in_use = static_cast<uint32_t>(records_.size() - rs.free_records.size());
+  if (rs.free_records.empty() || in_use >= rs.plan.record_buffers) return Start::Blocked;
+
+  // Prefer a record buffer that already has memory.
+  auto pick = std::find_if(rs.free_records.begin(), rs.free_records.end(),
+                           [&](uint32_t r) { return records_[r].capacity() > 0; });
+  if (pick == rs.free_records.end()) pick = rs.free_records.begin();
+  const uint32_t record = *pick;
+  rs.free_records.erase(pick);
+  const uint32_t s = rs.free_slots.back();
+  rs.free_slots.pop_back();
+
+  Slot& slot = slots_[s];
+  slot.frame = frame;
+  slot.generation = rs.generation;
+  slot.record = record;
+  slot.abandoned.store(false, kRelaxed);
+  slot.skipped.store(false, kRelaxed);
+  slot.error_claimed.store(false, kRelaxed);
+  slot.state.store(SlotState::Reading, kRelaxed);
+  ++rs.frames_started;
+
+  // Ask the kernel for the next entry's bytes while this one is read.
+  if (const auto next = rs.schedule.frame_at(k + 1)) {
+    const io::FrameIndexEntry& e = reader_.index().frames[*next];
+    source_->will_need(e.offset, e.bytes);
+  }
+
+  try {
+    if (!read_record(rs, slot, record)) {
+      rs.free_records.push_back(record);
+      slot.record = kNoRecord;
+      slot.state.store(SlotState::Free, kRelaxed);
+      rs.free_slots.push_back(s);
+      return Start::Cancelled;
+    }
+    slot.header = reader_.parse_record(frame, slot.record_bytes);
+    prepare_decode(rs, slot);
+  } catch (const io::Error& e) {
+    FrameError error = FrameError::from(e);
+    if (!error.where.frame) error.where = reader_.location(frame);  // the source knows only the file
+    fail(rs, s, k, std::move(error));
+    return Start::Pushed;
+  } catch (const std::exception& e) {
+    fail(rs, s, k, {reader_.location(frame), e.what()});
+    return Start::Pushed;
+  }
+
+  const size_t chunks = slot.header.chunks.size();
+  if (chunks == 0) {  // an empty frame: nothing to decode
+    rs.free_records.push_back(record);
+    slot.record = kNoRecord;
+    counters_.frames_decoded.fetch_add(1, kRelaxed);
+    slot.state.store(SlotState::Ready, std::memory_order_release);
+    publish(rs, s, k);
+    return Start::Pushed;
+  }
+  slot.chunks_left.store(static_cast<uint32_t>(chunks), kRelaxed);
+  frames_decoding_.fetch_add(1, kRelaxed);
+  slot.state.store(SlotState::Decoding, std::memory_order_release);
+  publish(rs, s, k);
+  handoff_release(&slot);  // what the workers read was written above (TBB's enqueue is invisible to TSan)
+  arena_.enqueue(decode_group_.defer([this, &slot, s] { decode_frame(slot, s); }));
+  return Start::Pushed;
+}
+
+bool PipelineCore::read_record(ReaderState& rs, Slot& slot, uint32_t record) {
+  const io::FrameIndexEntry& e = reader_.index().frames[slot.frame];
+  const uint64_t align = std::max<size_t>(1, source_->alignment());
+  const uint64_t begin = e.offset / align * align;
+  const uint64_t need = e.offset + e.bytes - begin;  // bytes from `begin` the frame needs
+  const uint64_t span = round_up(need, align);
+  AlignedBuffer& buffer = records_[record];
+  const size_t before = buffer.capacity();
+  buffer.reserve(std::max<uint64_t>(footprint_.record_bytes, span));
+  if (buffer.capacity() != before) {
+    rs.record_held += buffer.capacity() - before;
+    counters_.held_bytes.store(rs.decoded_held + rs.record_held, kRelaxed);
+    if (rs.record_held > counters_.peak_record_bytes.load(kRelaxed)) counters_.peak_record_bytes.store(rs.record_held, kRelaxed);
+  }
+  const std::span<std::byte> dst = buffer.span().first(span);
+  if (!read_pieces(dst, begin, need, slot.frame, rs.generation)) return false;
+  slot.record_bytes = dst.subspan(e.offset - begin, e.bytes);
+  counters_.frames_read.fetch_add(1, kRelaxed);
+  return true;
+}
+
+void PipelineCore::prepare_decode(ReaderState& rs, Slot& slot) {
+  const io::FrameHeader& h = slot.header;
+  slot.chunk_first.resize(h.chunks.size());
+  uint64_t first = 0;  // parse_record checked that the counts add up to the index's
+  for (size_t c = 0; c < h.chunks.size(); ++c) {
+    slot.chunk_first[c] = first;
+    first += h.chunks[c].particle_count;
+  }
+  slot.layout.frame = slot.frame;
+  slot.layout.particles = h.particle_count;
+  slot.layout.particle_stride = static_cast<uint32_t>(io::decoded_particle_bytes(reader_.header().position_coding));
+  slot.layout.attribute_streams = attribute_streams_;
+  slot.buffers = allocator_.allocate(slot.layout);
+  slot.has_buffers = true;
+  rs.decoded_held += allocator_.bytes_for(slot.layout);
+  counters_.held_bytes.store(rs.decoded_held + rs.record_held, kRelaxed);
+
+  bool fits = slot.buffers.particles.size() >= slot.layout.particle_bytes() &&
+              slot.buffers.attributes.size() >= attribute_streams_;
+  for (uint32_t a = 0; fits && a < attribute_streams_; ++a) fits = slot.buffers.attributes[a].size() >= h.particle_count;
+  if (!fits) throw io::Error(reader_.location(slot.frame), "the frame allocator returned buffers smaller than the frame");
+  slot.attribute_targets.assign(stream_of_attribute_.size(), nullptr);
+  for (size_t a = 0; a < stream_of_attribute_.size(); ++a) {
+    if (stream_of_attribute_[a] != ~0u) slot.attribute_targets[a] = slot.buffers.attributes[stream_of_attribute_[a]].data();
+  }
+}
+
+void PipelineCore::fail(ReaderState& rs, uint32_t s, uint64_t k, FrameError error) {
+  Slot& slot = slots_[s];
+  slot.error = std::move(error);
+  if (slot.record != kNoRecord) {
+    rs.free_records.push_back(slot.record);
+    slot.record = kNoRecord;
+  }
+  counters_.frames_failed.fetch_add(1, kRelaxed);
+  slot.state.store(SlotState::Failed, std::memory_order_release);
+  publish(rs, s, k);
+}
+
+void PipelineCore::publish(ReaderState& rs, uint32_t s, uint64_t k) {
+  // The window never holds more entries than the ring: a push cannot fail.
+  if (!delivery_.try_push({s, rs.generation, k, slots_[s].frame})) std::terminate();
+  ++rs.out;
+  wake_consumer();
+}
+
+}  // namespace sluice::runtime::detail

@@ -1,0 +1,82 @@
+// Reading a frame record: in pieces (so a seek cancels a big read early),
+// several at once when read_threads > 1. One thread copying out of the page
+// cache tops out well below what the decode workers can take.
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <chrono>
+
+#include "pipeline_core.h"
+#include "tsan_handoff.h"
+
+namespace sluice::runtime::detail {
+namespace {
+
+constexpr auto kRelaxed = std::memory_order_relaxed;
+
+uint64_t round_up(uint64_t n, uint64_t to) { return (n + to - 1) / to * to; }
+
+}  // namespace
+
+void PipelineCore::read_piece(std::span<std::byte> piece, uint64_t offset, uint64_t required, uint64_t frame,
+                              uint64_t frame_end) {
+  uint64_t got = 0;
+  while (got < required) {  // the source may return less than asked: carry on from there
+    const size_t n = source_->read_at(piece.subspan(got), offset + got);
+    if (n == 0) {
+      throw io::Error(reader_.location(frame), "the file ends at byte " + std::to_string(offset + got) +
+                                                   " but the frame runs to byte " + std::to_string(frame_end) +
+                                                   " (short read: was the file cut while playing?)");
+    }
+    got += n;
+    counters_.bytes_read.fetch_add(n, kRelaxed);
+  }
+}
+
+bool PipelineCore::read_pieces(std::span<std::byte> dst, uint64_t offset, uint64_t need, uint64_t frame,
+                               uint64_t generation) {
+  const uint64_t align = std::max<size_t>(1, source_->alignment());
+  const uint64_t piece = round_up(std::max<uint64_t>(options_.read_piece_bytes, 1), align);
+  const uint64_t count = (dst.size() + piece - 1) / piece;
+  const uint64_t frame_end = offset + need;
+  auto stale = [&] { return stopping_.load(kRelaxed) || generation_.load(kRelaxed) != generation; };
+  // Piece p covers [p * piece, +piece) of dst; bytes past `need` are only
+  // alignment padding and may lie beyond the end of the file.
+  auto read_one = [&](uint64_t p) {
+    const uint64_t at = p * piece;
+    const uint64_t length = std::min(piece, dst.size() - at);
+    read_piece(dst.subspan(at, length), offset + at, std::min(length, need - at), frame, frame_end);
+  };
+
+  const auto t0 = std::chrono::steady_clock::now();
+  bool cancelled = false;
+  if (read_threads_ <= 1 || count == 1) {
+    for (uint64_t p = 0; p < count && !(cancelled = stale()); ++p) read_one(p);
+  } else {
+    std::atomic<bool> gave_up{false};
+    handoff_release(&read_arena_);  // helpers read what this thread set up (TBB is invisible to TSan)
+    read_arena_.execute([&] {
+      tbb::parallel_for(tbb::blocked_range<uint64_t>(0, count, 1), [&](const tbb::blocked_range<uint64_t>& r) {
+        handoff_acquire(&read_arena_);
+        for (uint64_t p = r.begin(); p != r.end(); ++p) {
+          if (gave_up.load(kRelaxed) || stale()) {
+            gave_up.store(true, kRelaxed);
+            break;
+          }
+          read_one(p);
+        }
+        handoff_release(&read_arena_);
+      });
+    });
+    handoff_acquire(&read_arena_);
+    cancelled = gave_up.load(kRelaxed);
+  }
+  counters_.read_ns.fetch_add(static_cast<uint64_t>(std::chrono::duration_cast<std::chrono::nanoseconds>(
+                                                        std::chrono::steady_clock::now() - t0)
+                                                        .count()),
+                              kRelaxed);
+  return !cancelled;
+}
+
+}  // namespace sluice::runtime::detail

@@ -1,0 +1,72 @@
+// One frame's place in the pipeline, and the state machine it moves through.
+//
+//   Free -> Reading -> Decoding -> Ready -> Shown -> (returned) -> Cached -> Free
+//                          |          \__________________________/   ^   |
+//                          +-> Failed / Cancelled ---(returned)-> Free   +-> Ready (a cache hit)
+//
+// Ownership follows the state, so each field has one writer at a time:
+//  - the reader thread owns Free, Reading and Cached slots and fills them;
+//  - decode workers own a Decoding slot's buffers; the worker that finishes
+//    the last chunk moves it to Ready, Failed or Cancelled (release store);
+//  - the consumer owns Ready and Shown slots it has taken, and gives every
+//    slot back through the return ring, after which the reader owns it again.
+// Slots are published by release stores of `state` or by the delivery ring,
+// and read after the matching acquire.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "sluice/io/format.h"
+#include "sluice/runtime/frame_allocator.h"
+#include "sluice/runtime/frame_error.h"
+
+namespace sluice::runtime {
+
+enum class SlotState : uint32_t {  // 32 bits: std::atomic::wait is a plain futex on it
+  Free,
+  Reading,
+  Decoding,
+  Ready,
+  Failed,     // read, header or chunk error: `error` says which
+  Cancelled,  // decode abandoned (stale generation, dropped, or shutting down)
+  Shown,      // taken by the consumer
+  Cached,     // decoded, returned, kept behind the playhead for reuse
+};
+
+inline constexpr uint32_t kNoRecord = ~0u;
+
+struct Slot {
+  std::atomic<SlotState> state{SlotState::Free};
+  std::atomic<uint32_t> chunks_left{0};
+  std::atomic<bool> abandoned{false};      // the consumer dropped it: skip chunks not started
+  std::atomic<bool> skipped{false};        // some chunk was not decoded
+  std::atomic<bool> error_claimed{false};  // a chunk has written `error`
+
+  // Written by the reader while it owns the slot.
+  uint64_t frame = 0;
+  uint64_t generation = 0;
+  io::FrameHeader header;
+  std::vector<uint64_t> chunk_first;             // first particle of each chunk
+  FrameLayout layout;
+  FrameBuffers buffers;
+  bool has_buffers = false;
+  std::vector<uint16_t*> attribute_targets;      // per header attribute; nullptr where not decoded
+  uint32_t record = kNoRecord;                   // record buffer in use while decoding
+  std::span<const std::byte> record_bytes;       // the frame record inside it
+
+  // Written by the reader (read errors) or the chunk that won error_claimed.
+  FrameError error;
+};
+
+// What the reader hands the consumer, in schedule order.
+struct Entry {
+  uint32_t slot = 0;
+  uint64_t generation = 0;
+  uint64_t sequence = 0;
+  uint64_t frame = 0;
+};
+
+}  // namespace sluice::runtime

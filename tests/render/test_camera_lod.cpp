@@ -1,0 +1,111 @@
+// Host-only checks: camera math and its text form, the cLOD rule.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "sluice/render/camera.h"
+#include "sluice/render/lod.h"
+#include "sluice/render/options.h"
+
+using namespace sluice::render;
+
+TEST(Camera, TextRoundTrip) {
+  Camera c;
+  c.eye = {1.25f, -3.5f, 2.0f};
+  c.target = {0.1f, 0.2f, 0.3f};
+  c.up = {0, 0, 1};
+  c.fov_deg = 35.5f;
+  Camera d;
+  d.apply(c.to_string());
+  EXPECT_EQ(d.to_string(), c.to_string());
+  EXPECT_FLOAT_EQ(d.eye.y, -3.5f);
+  EXPECT_FLOAT_EQ(d.fov_deg, 35.5f);
+}
+
+TEST(Camera, PartialAndBadStrings) {
+  Camera c;
+  c.apply("fov=60");
+  EXPECT_FLOAT_EQ(c.fov_deg, 60.0f);
+  EXPECT_THROW(c.apply("eye=1,2"), std::invalid_argument);
+  EXPECT_THROW(c.apply("zoom=3"), std::invalid_argument);
+  EXPECT_THROW(c.apply("fov=0"), std::invalid_argument);
+  EXPECT_FLOAT_EQ(c.fov_deg, 60.0f);  // failed applies change nothing
+}
+
+TEST(Camera, OrbitKeepsDistanceAndPan) {
+  Camera c;
+  c.eye = {0, -4, 0};
+  c.target = {0, 0, 0};
+  c.orbit(0.7f, 0.3f);
+  EXPECT_NEAR(length(c.eye - c.target), 4.0f, 1e-4f);
+  EXPECT_GT(c.eye.z, 0.0f);  // positive pitch goes up
+  c.orbit(0, 10.0f);         // clamped short of the pole
+  EXPECT_LT(dot(normalize(c.eye - c.target), c.up), 1.0f);
+  const Vec3 before = c.target;
+  c.pan(0.5f, 0);
+  EXPECT_GT(length(c.target - before), 0.1f);
+  c.zoom(0.5f);
+  EXPECT_NEAR(length(c.eye - c.target), 2.0f, 1e-3f);
+}
+
+TEST(Camera, FitContainsBounds) {
+  const Bounds box{{-1, -2, 0}, {3, 2, 1}};
+  Camera c = Camera::framing(box, 2, 16.0f / 9.0f);
+  c.fit(box, 16.0f / 9.0f);  // framing() then comes in a little; fit() alone must contain it
+  const Mat4 vp = c.projection(16.0f / 9.0f) * c.view();
+  for (int i = 0; i < 8; ++i) {
+    const Vec4 p = vp * Vec4{i & 1 ? box.max.x : box.min.x, i & 2 ? box.max.y : box.min.y, i & 4 ? box.max.z : box.min.z, 1};
+    EXPECT_GT(p.w, 0);
+    EXPECT_LE(std::fabs(p.x / p.w), 1.0f);
+    EXPECT_LE(std::fabs(p.y / p.w), 1.0f);
+  }
+}
+
+TEST(Math, ProjectionIsReversedInfinite) {
+  const Mat4 p = perspective_reverse_z(1.0f, 1.0f, 0.1f);
+  const Vec4 nearp = p * Vec4{0, 0, -0.1f, 1};
+  const Vec4 far = p * Vec4{0, 0, -1000.0f, 1};
+  EXPECT_NEAR(nearp.z / nearp.w, 1.0f, 1e-6f);
+  EXPECT_NEAR(far.z / far.w, 1e-4f, 1e-7f);
+  const Mat4 i = inverse(p) * p;
+  for (int r = 0; r < 4; ++r)
+    for (int c = 0; c < 4; ++c) EXPECT_NEAR(i.at(r, c), r == c ? 1.0f : 0.0f, 1e-5f);
+}
+
+TEST(Lod, KeepProbabilityMatchesRule) {
+  // level 1 keeps all; level 0 none; importance 1 keeps `level`.
+  EXPECT_EQ(lod_keep_probability(1.0f, 0.1f), 1.0f);
+  EXPECT_EQ(lod_keep_probability(0.0f, 5.0f), 0.0f);
+  EXPECT_NEAR(lod_keep_probability(0.3f, 1.0f), 0.3f, 1e-6f);
+  EXPECT_GT(lod_keep_probability(0.3f, 2.0f), 0.3f);
+  EXPECT_LT(lod_keep_probability(0.3f, 0.5f), 0.3f);
+  // The decision over uniform u reproduces the probability.
+  for (float w : {0.4f, 1.0f, 2.5f}) {
+    int kept = 0;
+    const int n = 65536;
+    for (int v = 0; v < n; ++v) kept += lod_keep(0.4f, w, lod_uniform(uint16_t(v)));
+    EXPECT_NEAR(double(kept) / n, lod_keep_probability(0.4f, w), 2e-4) << "w " << w;
+  }
+  for (int v = 0; v < 65536; v += 97) EXPECT_TRUE(lod_keep(1.0f, 0.01f, lod_uniform(uint16_t(v))));
+}
+
+TEST(Lod, ImportanceFollowsThesis) {
+  EXPECT_FLOAT_EQ(lod_importance(0, 2, 2), 1.0f);
+  EXPECT_FLOAT_EQ(lod_importance(1, 2, 2), 0.3f);       // clamped at the corner
+  EXPECT_FLOAT_EQ(lod_importance(0.5f, 2, 2), 0.65f);  // 1 - 0.7 * 0.5
+  EXPECT_FLOAT_EQ(lod_importance(0, 4, 2), 0.5f);       // twice as far
+  EXPECT_NEAR(lod_splat_scale(0.125f, 4), 2.0f, 1e-6f);
+  EXPECT_EQ(lod_splat_scale(1e-6f, 4), 4.0f);
+  const float h = lod_position_hash(0.1f, 0.2f, 0.3f);
+  EXPECT_GE(h, 0.0f);
+  EXPECT_LT(h, 1.0f);
+}
+
+TEST(Options, Names) {
+  EXPECT_EQ(parse_display_mode("TransparentFluidVolume"), DisplayMode::TransparentFluidVolume);
+  EXPECT_EQ(parse_display_mode("normals"), DisplayMode::FilteredSurfaceNormal);
+  for (const std::string& n : display_mode_names()) EXPECT_EQ(to_string(parse_display_mode(n)), n);
+  EXPECT_EQ(parse_filter_method("bilateral"), SurfaceFilterMethod::BilateralGaussian);
+  EXPECT_EQ(parse_lod_mode("density"), LodMode::DensityPreserving);
+  EXPECT_THROW(parse_display_mode("shiny"), std::invalid_argument);
+}

@@ -1,0 +1,250 @@
+// Faults mid-play: a read that fails, a file that ends early, short reads, a
+// corrupt chunk, no memory for a frame. Each gives an error naming the file
+// and frame (and chunk), and playback carries on or stops cleanly by policy.
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <new>
+
+#include "runtime_test_util.h"
+#include "sluice/runtime/player.h"
+
+using namespace sluice;
+using namespace sluice::runtime;
+
+namespace {
+
+constexpr uint64_t kBad = 12;  // the frame that goes wrong
+
+class FaultTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = new test::TempDir;
+    path_ = new std::filesystem::path(test::write_tiny_file(*dir_ / "tiny.sluice", spec_));
+  }
+  static void TearDownTestSuite() {
+    delete path_;
+    delete dir_;
+  }
+
+  static std::shared_ptr<RecordSource> faulty(const io::ContainerReader& reader, test::FaultySource::Fault fault) {
+    const io::FrameIndexEntry& e = reader.index().frames[kBad];
+    return std::make_shared<test::FaultySource>(
+        std::make_shared<FileRecordSource>(reader.path(), reader.descriptor(), false), reader.path(), fault, e.offset,
+        e.offset + e.bytes);
+  }
+
+  static PlayerOptions options(ErrorPolicy policy, std::shared_ptr<RecordSource> source = nullptr) {
+    PlayerOptions o;
+    o.on_error = policy;
+    o.pipeline.decode_threads = 2;
+    o.pipeline.budget.max_frames = 8;
+    o.pipeline.source = std::move(source);
+    return o;
+  }
+
+  // Plays until the player leaves Playing (or `ticks` refreshes); returns the frames shown.
+  static std::vector<uint64_t> play_through(Player& player, VirtualClock& clock, int ticks = 200) {
+    std::vector<uint64_t> shown;
+    auto record = [&](const Tick& t) {
+      if (!t.changed) return;
+      EXPECT_TRUE(test::holds_frame(*t.frame, t.frame->frame(), spec_));
+      shown.push_back(t.frame->frame());
+    };
+    player.wait_for_due();
+    record(player.update());
+    player.play();
+    for (int i = 0; i < ticks && player.state() == PlayerState::Playing; ++i) {
+      clock.advance(1 / 30.0);
+      player.wait_for_due();
+      record(player.update());
+    }
+    return shown;
+  }
+
+  static std::vector<uint64_t> all_but(uint64_t from, uint64_t to, std::vector<uint64_t> skipped) {
+    std::vector<uint64_t> out;
+    for (uint64_t f = from; f < to; ++f) {
+      if (std::find(skipped.begin(), skipped.end(), f) == skipped.end()) out.push_back(f);
+    }
+    return out;
+  }
+
+  static inline test::TinySpec spec_{30, 80, 24, true};
+  static inline test::TempDir* dir_ = nullptr;
+  static inline std::filesystem::path* path_ = nullptr;
+};
+
+}  // namespace
+
+TEST_F(FaultTest, ReadErrorMidPlayIsReportedAndSkipped) {
+  const io::ContainerReader reader(*path_);
+  HostFrameAllocator allocator;
+  VirtualClock clock;
+  Player player(reader, allocator, clock, options(ErrorPolicy::SkipFrame, faulty(reader, test::FaultySource::Fault::Fail)));
+  EXPECT_EQ(play_through(player, clock), all_but(0, 30, {kBad}));
+  EXPECT_EQ(player.state(), PlayerState::Ended);
+  const auto error = player.pop_error();
+  ASSERT_TRUE(error);
+  EXPECT_EQ(error->where.file, reader.path());
+  EXPECT_EQ(error->where.frame, kBad);
+  EXPECT_NE(error->message.find("Input/output error"), std::string::npos) << error->text();
+  EXPECT_NE(error->text().find("frame 12"), std::string::npos) << error->text();
+  EXPECT_FALSE(player.pop_error());
+  EXPECT_EQ(player.stats().errors, 1u);
+  EXPECT_EQ(player.stats().pipeline.frames_failed, 1u);
+}
+
+TEST_F(FaultTest, ReadErrorStopsPlaybackCleanlyUnderTheStopPolicy) {
+  const io::ContainerReader reader(*path_);
+  HostFrameAllocator allocator;
+  VirtualClock clock;
+  Player player(reader, allocator, clock, options(ErrorPolicy::Stop, faulty(reader, test::FaultySource::Fault::Fail)));
+  EXPECT_EQ(play_through(player, clock), all_but(0, kBad, {}));
+  EXPECT_EQ(player.state(), PlayerState::Stopped);
+  const auto error = player.pop_error();
+  ASSERT_TRUE(error);
+  EXPECT_EQ(error->where.frame, kBad);
+  for (int i = 0; i < 10; ++i) {  // stays stopped on the last good frame
+    clock.advance(1 / 30.0);
+    player.wait_for_due();
+    const Tick t = player.update();
+    EXPECT_FALSE(t.changed);
+    EXPECT_EQ(t.frame->frame(), kBad - 1);
+  }
+  // A seek past the bad frame resumes.
+  player.seek(kBad + 1);
+  player.play();
+  std::vector<uint64_t> shown;
+  for (int i = 0; i < 40 && player.state() == PlayerState::Playing; ++i) {
+    player.wait_for_due();
+    const Tick t = player.update();
+    if (t.changed) shown.push_back(t.frame->frame());
+    clock.advance(1 / 30.0);
+  }
+  EXPECT_EQ(shown, all_but(kBad + 1, 30, {}));
+}
+
+TEST_F(FaultTest, FileEndingMidPlayNamesEachMissingFrame) {
+  const io::ContainerReader reader(*path_);
+  HostFrameAllocator allocator;
+  VirtualClock clock;
+  Player player(reader, allocator, clock,
+                options(ErrorPolicy::SkipFrame, faulty(reader, test::FaultySource::Fault::EndEarly)));
+  EXPECT_EQ(play_through(player, clock), all_but(0, kBad, {}));
+  EXPECT_EQ(player.state(), PlayerState::Ended);
+  for (uint64_t f = kBad; f < 30; ++f) {
+    const auto error = player.pop_error();
+    ASSERT_TRUE(error) << "frame " << f;
+    EXPECT_EQ(error->where.frame, f);
+    EXPECT_NE(error->message.find("short read"), std::string::npos) << error->text();
+  }
+  EXPECT_FALSE(player.pop_error());
+}
+
+TEST_F(FaultTest, FaultsInParallelPiecesNameTheFrame) {
+  const io::ContainerReader reader(*path_);
+  for (const auto fault : {test::FaultySource::Fault::Fail, test::FaultySource::Fault::Dribble}) {
+    HostFrameAllocator allocator;
+    VirtualClock clock;
+    PlayerOptions o = options(ErrorPolicy::SkipFrame, faulty(reader, fault));
+    o.pipeline.read_threads = 3;
+    o.pipeline.read_piece_bytes = 300;
+    Player player(reader, allocator, clock, o);
+    const bool fails = fault == test::FaultySource::Fault::Fail;
+    EXPECT_EQ(play_through(player, clock), all_but(0, 30, fails ? std::vector<uint64_t>{kBad} : std::vector<uint64_t>{}));
+    const auto error = player.pop_error();
+    EXPECT_EQ(error.has_value(), fails);
+    if (error) {
+      EXPECT_EQ(error->where.frame, kBad);
+    }
+  }
+}
+
+TEST_F(FaultTest, ShortReadsAreNotErrors) {
+  const io::ContainerReader reader(*path_);
+  HostFrameAllocator allocator;
+  VirtualClock clock;
+  Player player(reader, allocator, clock,
+                options(ErrorPolicy::Stop, faulty(reader, test::FaultySource::Fault::Dribble)));
+  EXPECT_EQ(play_through(player, clock), all_but(0, 30, {}));
+  EXPECT_FALSE(player.pop_error());
+  EXPECT_EQ(player.state(), PlayerState::Ended);
+}
+
+TEST_F(FaultTest, CorruptChunkNamesFileFrameAndChunk) {
+  const io::ContainerReader clean(*path_);
+  const io::FrameHeader h = clean.parse_record(kBad, clean.read_record(kBad));
+  ASSERT_GE(h.chunks.size(), 3u);
+  std::vector<char> bytes;
+  {
+    std::ifstream in(*path_, std::ios::binary);
+    bytes.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  const uint64_t at = clean.index().frames[kBad].offset + h.chunks[1].offset + h.chunks[1].compressed_size / 2;
+  bytes[at] = char(bytes[at] ^ 0x21);
+  const auto bad = *dir_ / "corrupt.sluice";
+  std::ofstream(bad, std::ios::binary | std::ios::trunc).write(bytes.data(), std::streamsize(bytes.size()));
+
+  const io::ContainerReader reader(bad);
+  HostFrameAllocator allocator;
+  VirtualClock clock;
+  Player player(reader, allocator, clock, options(ErrorPolicy::SkipFrame));
+  EXPECT_EQ(play_through(player, clock), all_but(0, 30, {kBad}));
+  const auto error = player.pop_error();
+  ASSERT_TRUE(error);
+  EXPECT_EQ(error->where.file, bad.string());
+  EXPECT_EQ(error->where.frame, kBad);
+  EXPECT_EQ(error->where.chunk, 1u);
+  EXPECT_NE(error->message.find("checksum"), std::string::npos) << error->text();
+}
+
+TEST_F(FaultTest, PipelineHandsFailuresToTheConsumerInOrder) {
+  const io::ContainerReader reader(*path_);
+  HostFrameAllocator allocator;
+  PipelineOptions o;
+  o.decode_threads = 2;
+  o.source = faulty(reader, test::FaultySource::Fault::Fail);
+  Pipeline p(reader, allocator, o);
+  p.restart({reader.frame_count(), 0, 1, 1, EndMode::Stop});
+  for (uint64_t f = 0; f < reader.frame_count(); ++f) {
+    const NextEntry next = p.wait_next();
+    ASSERT_FALSE(next.end);
+    ASSERT_EQ(next.frame, f);
+    ASSERT_EQ(next.status, f == kBad ? EntryStatus::Failed : EntryStatus::Ready);
+    const FrameHandle h = p.take();
+    EXPECT_EQ(h.failed(), f == kBad);
+    if (h.failed()) EXPECT_EQ(h.error()->where.frame, kBad);
+    else EXPECT_TRUE(test::holds_frame(h, f, spec_));
+  }
+  EXPECT_TRUE(p.wait_next().end);
+}
+
+namespace {
+
+// The real host allocator, out of memory for one frame.
+class FailingAllocator final : public FrameAllocator {
+ public:
+  FrameBuffers allocate(const FrameLayout& layout) override {
+    if (layout.frame == kBad) throw std::bad_alloc();
+    return host_.allocate(layout);
+  }
+  void release(FrameBuffers& buffers) override { host_.release(buffers); }
+  uint64_t bytes_for(const FrameLayout& layout) const override { return host_.bytes_for(layout); }
+
+ private:
+  HostFrameAllocator host_;
+};
+
+}  // namespace
+
+TEST_F(FaultTest, NoMemoryForAFrameIsAnErrorOfThatFrame) {
+  const io::ContainerReader reader(*path_);
+  FailingAllocator allocator;
+  VirtualClock clock;
+  Player player(reader, allocator, clock, options(ErrorPolicy::SkipFrame));
+  EXPECT_EQ(play_through(player, clock), all_but(0, 30, {kBad}));
+  const auto error = player.pop_error();
+  ASSERT_TRUE(error);
+  EXPECT_EQ(error->where.frame, kBad);
+}

@@ -1,0 +1,315 @@
+// The pipeline on its own: order, completeness, restarts (no stale frame),
+// tiny budgets, peak memory, frames kept for reversal, direct I/O, window
+// re-evaluation. Frames identify themselves (runtime_test_util.h), so every
+// delivered buffer is checked against the frame it claims to be.
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <memory>
+#include <random>
+
+#include "runtime_test_util.h"
+#include "sluice/runtime/pipeline.h"
+
+using namespace sluice;
+using namespace sluice::runtime;
+
+namespace {
+
+class PipelineTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = new test::TempDir;
+    path_ = new std::filesystem::path(test::write_tiny_file(*dir_ / "tiny.sluice", spec_));
+  }
+  static void TearDownTestSuite() {
+    delete path_;
+    delete dir_;
+  }
+  static PipelineOptions options() {
+    PipelineOptions o;
+    o.decode_threads = 2;
+    o.budget.memory_cap = 64u << 20;
+    return o;
+  }
+  // Takes `count` entries (or until the schedule ends) checking each one.
+  static std::vector<uint64_t> take_all(Pipeline& p, uint64_t count) {
+    std::vector<uint64_t> frames;
+    for (uint64_t i = 0; i < count; ++i) {
+      const NextEntry next = p.wait_next();
+      if (next.end) break;
+      EXPECT_EQ(next.status, EntryStatus::Ready);
+      FrameHandle h = p.take();
+      EXPECT_TRUE(test::holds_frame(h, next.frame, spec_));
+      EXPECT_EQ(h.generation(), p.generation());
+      EXPECT_EQ(p.schedule().frame_at(h.sequence()), h.frame());
+      frames.push_back(h.frame());
+    }
+    return frames;
+  }
+
+  static inline test::TinySpec spec_{};
+  static inline test::TempDir* dir_ = nullptr;
+  static inline std::filesystem::path* path_ = nullptr;
+};
+
+std::vector<uint64_t> expected(const PlaybackSchedule& s, uint64_t count) {
+  std::vector<uint64_t> out;
+  for (uint64_t k = 0; k < count && s.frame_at(k); ++k) out.push_back(*s.frame_at(k));
+  return out;
+}
+
+}  // namespace
+
+TEST_F(PipelineTest, DeliversEveryFrameInOrderThenEnds) {
+  const io::ContainerReader reader(*path_);
+  HostFrameAllocator allocator;
+  Pipeline p(reader, allocator, options());
+  const PlaybackSchedule s{reader.frame_count(), 0, 1, 1, EndMode::Stop};
+  p.restart(s);
+  EXPECT_EQ(take_all(p, 1000), expected(s, 1000));
+  EXPECT_TRUE(p.wait_next().end);
+  const PipelineStats st = p.stats();
+  EXPECT_EQ(st.frames_delivered, reader.frame_count());
+  EXPECT_EQ(st.frames_failed, 0u);
+  EXPECT_GT(st.bytes_read, 0u);
+  uint64_t worker_bytes = 0;
+  for (const WorkerStats& w : st.workers) worker_bytes += w.output_bytes;
+  EXPECT_EQ(worker_bytes, st.decoded_bytes);
+}
+
+TEST_F(PipelineTest, FollowsReverseLoopBounceAndStride) {
+  const io::ContainerReader reader(*path_);
+  HostFrameAllocator allocator;
+  Pipeline p(reader, allocator, options());
+  const uint64_t n = reader.frame_count();
+  for (const PlaybackSchedule& s : {PlaybackSchedule{n, int64_t(n) - 1, -1, 1, EndMode::Stop},
+                                    PlaybackSchedule{n, 50, 1, 1, EndMode::Loop},
+                                    PlaybackSchedule{n, 3, -1, 1, EndMode::Bounce},
+                                    PlaybackSchedule{n, 10, 1, 7, EndMode::Bounce},
+                                    PlaybackSchedule{n, 60, -1, 3, EndMode::Loop}}) {
+    p.restart(s);
+    EXPECT_EQ(take_all(p, 150), expected(s, 150)) << end_mode_name(s.end) << " from " << s.start;
+  }
+}
+
+TEST_F(PipelineTest, NoStaleFrameAfterRestart) {
+  const io::ContainerReader reader(*path_);
+  HostFrameAllocator allocator;
+  PipelineOptions o = options();
+  o.budget.max_frames = 12;
+  Pipeline p(reader, allocator, o);
+  std::mt19937 rng(2024);
+  const uint64_t n = reader.frame_count();
+  std::vector<FrameHandle> held;  // frames the consumer keeps across restarts
+  for (int round = 0; round < 1500; ++round) {
+    const PlaybackSchedule s{n, int64_t(rng() % n), rng() % 2 ? 1 : -1, 1 + uint32_t(rng() % 3),
+                             static_cast<EndMode>(rng() % 3)};
+    const uint64_t g = p.restart(s);
+    const int takes = int(rng() % 4);  // often restart again before anything arrives
+    for (int t = 0; t < takes; ++t) {
+      const NextEntry next = p.wait_next();
+      if (next.end) break;
+      FrameHandle h = p.take();
+      ASSERT_EQ(h.generation(), g) << "a frame of an older schedule was delivered";
+      ASSERT_EQ(h.sequence(), uint64_t(t));
+      ASSERT_EQ(s.frame_at(h.sequence()), h.frame());
+      ASSERT_TRUE(test::holds_frame(h, h.frame(), spec_));
+      if (held.size() < 3 && rng() % 4 == 0) held.push_back(std::move(h));
+    }
+    if (!held.empty() && rng() % 3 == 0) held.erase(held.begin());
+  }
+  held.clear();
+  const PipelineStats st = p.stats();
+  EXPECT_EQ(st.frames_failed, 0u);
+  EXPECT_GT(st.generation, 1000u);
+}
+
+TEST_F(PipelineTest, TwoFrameBudgetStillPlays) {
+  const io::ContainerReader reader(*path_);
+  HostFrameAllocator allocator;
+  PipelineOptions o = options();
+  const FrameFootprint f = largest_frame(reader, 1, &allocator);
+  o.budget.memory_cap = 2 * f.decoded_bytes + f.record_bytes;
+  std::vector<WindowChange> changes;
+  o.on_window_change = [&](const WindowChange& c) { changes.push_back(c); };
+  Pipeline p(reader, allocator, o);
+  ASSERT_EQ(changes.size(), 1u);
+  EXPECT_EQ(changes[0].plan.frames, 2u);
+  EXPECT_EQ(changes[0].plan.record_buffers, 1u);
+  EXPECT_EQ(p.window(), 2u);
+  for (int dir : {1, -1}) {
+    const PlaybackSchedule s{reader.frame_count(), dir > 0 ? 0 : int64_t(reader.frame_count()) - 1, dir, 1, EndMode::Stop};
+    p.restart(s);
+    EXPECT_EQ(take_all(p, 1000), expected(s, 1000));
+  }
+  EXPECT_LE(allocator.peak_held_bytes() + p.stats().peak_record_bytes, o.budget.memory_cap);
+}
+
+TEST_F(PipelineTest, PeakMemoryStaysWithinTheBudget) {
+  const io::ContainerReader reader(*path_);
+  HostFrameAllocator allocator;
+  PipelineOptions o = options();
+  const FrameFootprint f = largest_frame(reader, 1, &allocator);
+  o.budget.memory_cap = 7 * f.decoded_bytes + 3 * f.record_bytes;
+  Pipeline p(reader, allocator, o);
+  EXPECT_EQ(p.window(), 7u);
+  std::mt19937 rng(99);
+  const uint64_t n = reader.frame_count();
+  for (int round = 0; round < 200; ++round) {
+    const PlaybackSchedule s{n, int64_t(rng() % n), rng() % 2 ? 1 : -1, 1, EndMode::Loop};
+    p.restart(s);
+    const auto got = take_all(p, rng() % 20);
+    ASSERT_EQ(got, expected(s, got.size()));
+    ASSERT_LE(allocator.held_bytes() + p.stats().peak_record_bytes, o.budget.memory_cap);
+  }
+  EXPECT_LE(allocator.peak_held_bytes() + p.stats().peak_record_bytes, o.budget.memory_cap)
+      << "decoded buffers peaked at " << allocator.peak_held_bytes() << ", records at " << p.stats().peak_record_bytes;
+  EXPECT_GT(allocator.peak_held_bytes(), 3 * f.decoded_bytes) << "the window was used, not just the minimum";
+}
+
+TEST_F(PipelineTest, FramesBehindThePlayheadServeAReversal) {
+  const io::ContainerReader reader(*path_);
+  HostFrameAllocator allocator;
+  PipelineOptions o = options();
+  o.budget.max_frames = 16;  // 4 kept behind
+  o.slow_start = false;      // the whole window at once (this consumer never lets decoding idle)
+  Pipeline p(reader, allocator, o);
+  const uint64_t n = reader.frame_count();
+  p.restart({n, 0, 1, 1, EndMode::Stop});
+  EXPECT_EQ(take_all(p, 20).back(), 19u);
+  const uint64_t before = p.stats().cache_hits;
+  const PlaybackSchedule back{n, 18, -1, 1, EndMode::Stop};
+  p.restart(back);
+  EXPECT_EQ(take_all(p, 6), expected(back, 6));
+  EXPECT_GE(p.stats().cache_hits - before, 3u) << "frames just shown should come from memory, not from disk";
+}
+
+TEST_F(PipelineTest, SlowStartUsesAFewSlotsFirst) {
+  const io::ContainerReader reader(*path_);
+  HostFrameAllocator allocator;
+  PipelineOptions o = options();
+  o.budget.max_frames = 16;
+  Pipeline slow(reader, allocator, o);
+  EXPECT_EQ(slow.stats().window_frames, 16u);
+  EXPECT_EQ(slow.stats().active_frames, 4u) << "two decode workers + 2";
+  o.slow_start = false;
+  Pipeline eager(reader, allocator, o);
+  EXPECT_EQ(eager.stats().active_frames, 16u);
+}
+
+TEST_F(PipelineTest, DecodesOnlyTheAttributesAskedFor) {
+  const io::ContainerReader reader(*path_);
+  HostFrameAllocator allocator;
+  PipelineOptions o = options();
+  o.attributes = std::vector<uint32_t>{};
+  Pipeline p(reader, allocator, o);
+  p.restart({reader.frame_count(), 5, 1, 1, EndMode::Stop});
+  ASSERT_EQ(p.wait_next().status, EntryStatus::Ready);
+  const FrameHandle h = p.take();
+  EXPECT_EQ(h.layout().attribute_streams, 0u);
+  EXPECT_TRUE(h.buffers().attributes.empty());
+  EXPECT_TRUE(test::holds_frame(h, 5, spec_));
+
+  o.attributes = std::vector<uint32_t>{1};
+  EXPECT_THROW(Pipeline(reader, allocator, o), io::Error);
+}
+
+TEST_F(PipelineTest, ReadsPiecesOfARecordInParallel) {
+  const io::ContainerReader reader(*path_);
+  HostFrameAllocator allocator;
+  PipelineOptions o = options();
+  o.read_threads = 3;
+  o.read_piece_bytes = 256;  // several pieces per (tiny) record
+  Pipeline p(reader, allocator, o);
+  EXPECT_NE(p.io_mode().find("3 read threads"), std::string::npos) << p.io_mode();
+  std::mt19937 rng(5);
+  for (int round = 0; round < 50; ++round) {
+    const PlaybackSchedule s{reader.frame_count(), int64_t(rng() % reader.frame_count()), rng() % 2 ? 1 : -1, 1,
+                             EndMode::Loop};
+    p.restart(s);
+    EXPECT_EQ(take_all(p, 40), expected(s, 40));
+  }
+}
+
+TEST_F(PipelineTest, DirectIoReadsTheSameFrames) {
+  const io::ContainerReader reader(*path_);
+  HostFrameAllocator allocator;
+  PipelineOptions o = options();
+  o.direct_io = true;
+  Pipeline p(reader, allocator, o);
+  const PlaybackSchedule s{reader.frame_count(), 0, 1, 1, EndMode::Stop};
+  p.restart(s);
+  EXPECT_EQ(take_all(p, 1000), expected(s, 1000));
+  const std::string mode = p.io_mode();
+  EXPECT_TRUE(mode == "pread, O_DIRECT" || mode.find("O_DIRECT refused") != std::string::npos) << mode;
+}
+
+TEST_F(PipelineTest, FallsBackWhenTheFilesystemRefusesDirectIo) {
+  // tmpfs refuses O_DIRECT at open; use it where there is one.
+  const std::filesystem::path shm = "/dev/shm";
+  std::error_code ec;
+  if (!std::filesystem::is_directory(shm, ec)) GTEST_SKIP() << "no /dev/shm";
+  const auto copy = shm / ("sluice-rt-" + std::to_string(::getpid()) + ".sluice");
+  std::filesystem::copy_file(*path_, copy, std::filesystem::copy_options::overwrite_existing, ec);
+  if (ec) GTEST_SKIP() << "cannot write /dev/shm: " << ec.message();
+  {
+    const io::ContainerReader reader(copy);
+    FileRecordSource probe(reader.path(), reader.descriptor(), true);
+    if (probe.direct()) {
+      std::filesystem::remove(copy);
+      GTEST_SKIP() << "/dev/shm accepts O_DIRECT here";
+    }
+    HostFrameAllocator allocator;
+    PipelineOptions o = options();
+    o.direct_io = true;
+    Pipeline p(reader, allocator, o);
+    const PlaybackSchedule s{reader.frame_count(), 0, 1, 1, EndMode::Stop};
+    p.restart(s);
+    EXPECT_EQ(take_all(p, 1000), expected(s, 1000));
+    EXPECT_NE(p.io_mode().find("O_DIRECT refused"), std::string::npos) << p.io_mode();
+  }
+  std::filesystem::remove(copy);
+}
+
+TEST_F(PipelineTest, WindowFollowsAvailableMemoryWhilePlaying) {
+  const io::ContainerReader reader(*path_);
+  HostFrameAllocator allocator;
+  test::TempDir fake;
+  PipelineOptions o = options();
+  o.budget.memory_cap = 0;
+  o.budget.max_frames = 0;
+  o.budget.ring_capacity = 64;
+  o.budget.host_paths = {(fake / "meminfo").string(), (fake / "none").string(), (fake / "none").string()};
+  o.reevaluate_every = 1;
+  const FrameFootprint f = largest_frame(reader, 1, &allocator);
+  const uint64_t plenty = 2 * (40 * f.decoded_bytes + 3 * f.record_bytes);  // host fraction 0.5 -> ~40 frames
+  test::write_text_file(fake / "meminfo", "MemAvailable: " + std::to_string(plenty / 1024) + " kB\n");
+  // The fake MemAvailable does not drop as the pipeline allocates, so the
+  // window may first grow a little; what matters is that it follows the drop.
+  std::atomic<uint32_t> smallest{~0u};
+  o.on_window_change = [&](const WindowChange& c) { smallest = std::min(smallest.load(), c.plan.frames); };
+  Pipeline p(reader, allocator, o);
+  const uint32_t first = p.window();
+  EXPECT_GE(first, 30u);
+  p.restart({reader.frame_count(), 0, 1, 1, EndMode::Loop});
+  take_all(p, 10);
+  test::write_text_file(fake / "meminfo", "MemAvailable: " + std::to_string(plenty / 1024 / 8) + " kB\n");
+  for (int i = 0; i < 5000 && smallest.load() >= first; ++i) take_all(p, 1);
+  EXPECT_LT(smallest.load(), first) << "the window did not follow available memory while playing";
+  EXPECT_LT(p.window(), first);
+  take_all(p, 100);  // and it still plays
+}
+
+TEST_F(PipelineTest, RejectsSchedulesOutsideTheFile) {
+  const io::ContainerReader reader(*path_);
+  HostFrameAllocator allocator;
+  Pipeline p(reader, allocator, options());
+  EXPECT_THROW(p.restart({reader.frame_count() + 1, 0, 1, 1, EndMode::Loop}), std::invalid_argument);
+  EXPECT_THROW(p.restart({reader.frame_count(), 0, 1, 0, EndMode::Loop}), std::invalid_argument);
+  EXPECT_THROW(p.restart({reader.frame_count(), 0, 2, 1, EndMode::Loop}), std::invalid_argument);
+  // A loop over the first frames only is fine.
+  const PlaybackSchedule prefix{5, 3, 1, 1, EndMode::Loop};
+  p.restart(prefix);
+  EXPECT_EQ(take_all(p, 7), (std::vector<uint64_t>{3, 4, 0, 1, 2, 3, 4}));
+}
