@@ -1,28 +1,19 @@
-// `sluice play --headless FILE`: plays through the streaming pipeline into a
-// null sink, in real time, and says how it went (stats as it plays with
-// --stats, a summary at the end). The window player comes with the renderer.
+// `sluice play FILE`: plays through the streaming pipeline, in a window
+// (cmd_play_window.cpp) or, with --headless, into a null sink in real time,
+// saying how it went (stats as it plays with --stats, a summary at the end).
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <thread>
 
 #include "commands.h"
+#include "play.h"
 #include "human.h"
 #include "sluice/io/reader.h"
 #include "sluice/runtime/player.h"
 
 namespace sluice::app {
 namespace {
-
-struct PlayOptions {
-  std::string file;
-  bool headless = false, stats = false, loop = false, bounce = false, reverse = false, direct = false, quiet = false;
-  double fps = 0, rate = 1, seconds = 0, display_hz = 0, stats_every = 1;
-  std::string memory, policy = "hold", on_error = "skip";
-  uint32_t window = 0;
-  int threads = 0, read_threads = 0;
-  uint64_t start = 0;
-};
 
 std::string rate_text(double bytes, double seconds) { return human_bytes(seconds > 0 ? bytes / seconds : 0) + "/s"; }
 
@@ -52,38 +43,17 @@ void print_stats_line(const runtime::PlaybackStats& now, const runtime::Playback
                100 * busy);
 }
 
-void run_play(const PlayOptions& o) {
-  if (!o.headless) {
-    throw std::runtime_error("this build has no window player yet: pass --headless to play into a null sink");
-  }
+void print_window_change(const runtime::WindowChange& c) {
+  std::fprintf(stderr, "window: %u frames%s (limited by %s; host budget %s, %u record buffers)%s\n", c.plan.frames,
+               c.previous_frames ? (" (was " + std::to_string(c.previous_frames) + ")").c_str() : "",
+               c.plan.limited_by.c_str(), human_bytes(double(c.plan.host_budget)).c_str(), c.plan.record_buffers,
+               c.plan.over_budget ? ": over budget, two frames do not fit" : "");
+}
+
+void run_play_headless(const PlayOptions& o) {
   const io::ContainerReader reader(o.file);
   if (reader.frame_count() == 0) throw std::runtime_error(o.file + ": no frames to play");
-
-  runtime::PlayerOptions po;
-  po.frame_rate = o.fps;
-  po.rate = o.reverse ? -std::abs(o.rate) : o.rate;
-  po.start_frame = o.start;
-  po.end = o.bounce ? runtime::EndMode::Bounce : o.loop ? runtime::EndMode::Loop : runtime::EndMode::Stop;
-  po.policy = o.policy == "skip" ? runtime::RealTimePolicy::SkipToNewest : runtime::RealTimePolicy::HoldLastFrame;
-  po.on_error = o.on_error == "stop" ? runtime::ErrorPolicy::Stop : runtime::ErrorPolicy::SkipFrame;
-  po.pipeline.decode_threads = o.threads;
-  po.pipeline.read_threads = o.read_threads;
-  po.pipeline.direct_io = o.direct;
-  po.pipeline.budget.max_frames = o.window;
-  if (!o.memory.empty()) {
-    const auto bytes = runtime::parse_byte_size(o.memory);
-    if (!bytes) throw std::runtime_error("--memory: cannot read '" + o.memory + "' as a size (try 8G or 512M)");
-    po.pipeline.budget.memory_cap = *bytes;
-  }
-  const bool quiet = o.quiet;
-  po.pipeline.on_window_change = [quiet](const runtime::WindowChange& c) {
-    if (quiet) return;
-    std::fprintf(stderr, "window: %u frames%s (limited by %s; host budget %s, %u record buffers)%s\n", c.plan.frames,
-                 c.previous_frames ? (" (was " + std::to_string(c.previous_frames) + ")").c_str() : "",
-                 c.plan.limited_by.c_str(), human_bytes(double(c.plan.host_budget)).c_str(), c.plan.record_buffers,
-                 c.plan.over_budget ? ": over budget, two frames do not fit" : "");
-  };
-
+  const runtime::PlayerOptions po = player_options(o, false);
   runtime::HostFrameAllocator allocator;  // the null sink's frames live in host memory
   const runtime::SteadyClock clock;
   runtime::Player player(reader, allocator, clock, po);
@@ -151,18 +121,51 @@ void run_play(const PlayOptions& o) {
 
 }  // namespace
 
+runtime::EndMode end_mode(const PlayOptions& o, bool window) {
+  if (o.bounce) return runtime::EndMode::Bounce;
+  if (o.loop) return runtime::EndMode::Loop;
+  return window && !o.once ? runtime::EndMode::Loop : runtime::EndMode::Stop;
+}
+
+runtime::PlayerOptions player_options(const PlayOptions& o, bool window) {
+  runtime::PlayerOptions po;
+  po.frame_rate = o.fps;
+  po.rate = o.reverse ? -std::abs(o.rate) : o.rate;
+  po.start_frame = o.start;
+  po.end = end_mode(o, window);
+  po.policy = o.policy == "skip" ? runtime::RealTimePolicy::SkipToNewest : runtime::RealTimePolicy::HoldLastFrame;
+  po.on_error = o.on_error == "stop" ? runtime::ErrorPolicy::Stop : runtime::ErrorPolicy::SkipFrame;
+  po.pipeline.decode_threads = o.threads;
+  po.pipeline.read_threads = o.read_threads;
+  po.pipeline.direct_io = o.direct;
+  po.pipeline.budget.max_frames = o.window;
+  if (!o.memory.empty()) {
+    const auto bytes = runtime::parse_byte_size(o.memory);
+    if (!bytes) throw std::runtime_error("--memory: cannot read '" + o.memory + "' as a size (try 8G or 512M)");
+    po.pipeline.budget.memory_cap = *bytes;
+  }
+  if (!o.quiet) po.pipeline.on_window_change = print_window_change;
+  return po;
+}
+
 void add_play(CLI::App& app) {
   auto o = std::make_shared<PlayOptions>();
-  CLI::App* cmd = app.add_subcommand("play", "Play a .sluice file through the streaming pipeline");
-  cmd->footer("Example: sluice play --headless --stats run.sluice --loop --seconds 30\n"
-              "Headless playback feeds a null sink at the file's frame rate and reports stalls, drops and throughput.");
+  CLI::App* cmd = app.add_subcommand("play", "Play a .sluice file as liquid in a window, or headless into a null sink");
+  cmd->footer("Examples:\n"
+              "  sluice play run.sluice                                   # a window; loops; H hides the HUD\n"
+              "  sluice play --headless --stats run.sluice --loop --seconds 30\n"
+              "Frames stream through the prefetch pipeline (read ahead, decoded on every core) at the file's frame\n"
+              "rate; a late frame is held (--policy hold) or skipped (--policy skip). Headless playback feeds a null\n"
+              "sink and reports stalls, drops and throughput.");
   cmd->add_option("file", o->file, ".sluice file")->required()->check(CLI::ExistingFile);
   cmd->add_flag("--headless", o->headless, "No window: play into a null sink");
   cmd->add_flag("--stats", o->stats, "Print stream stats every second");
   cmd->add_option("--fps", o->fps, "Media frame rate (default: the file's, else 30)");
   cmd->add_option("--rate", o->rate, "Playback rate; negative plays in reverse")->capture_default_str();
   cmd->add_flag("--reverse", o->reverse, "Play backwards");
-  cmd->add_flag("--loop", o->loop, "Loop at the end");
+  cmd->add_flag("--loop", o->loop, "Loop at the end (the window's default)");
+  cmd->add_flag("--once", o->once, "Stop at the last frame (the headless default)");
+  cmd->add_flag("--paused", o->paused, "Window: start paused");
   cmd->add_flag("--bounce", o->bounce, "Turn around at either end");
   cmd->add_option("--start", o->start, "First frame")->capture_default_str();
   cmd->add_option("--seconds", o->seconds, "Stop after this long (default: at the end; forever with --loop)");
@@ -180,7 +183,18 @@ void add_play(CLI::App& app) {
   cmd->add_flag("--direct", o->direct, "Read with O_DIRECT (bypass the page cache) where the filesystem allows");
   cmd->add_option("--stats-every", o->stats_every, "Seconds between stats lines")->capture_default_str();
   cmd->add_flag("-q,--quiet", o->quiet, "Only the summary");
-  cmd->callback([o] { run_play(*o); });
+#if SLUICE_WITH_WINDOW
+  std::shared_ptr<WindowPlayOptions> w = add_window_play_options(*cmd);
+  cmd->callback([o, w] { o->headless ? run_play_headless(*o) : run_play_window(*o, *w); });
+#else
+  cmd->callback([o] {
+    if (!o->headless) {
+      throw std::runtime_error("this sluice was built without a window (it needs libglfw3-dev, libimgui-dev and "
+                               "Vulkan): pass --headless to play into a null sink");
+    }
+    run_play_headless(*o);
+  });
+#endif
 }
 
 }  // namespace sluice::app

@@ -1,8 +1,9 @@
-// `sluice play`: a window that plays a .sluice file as liquid, with a Dear
-// ImGui HUD (timeline, play/pause, frame i/N, fps, GPU ms per pass, stream
-// stats, LOD and filter choice) and keyboard/mouse control. Frames are
-// decoded on the main thread for now; the streaming runtime will feed the
-// renderer's staging instead.
+// `sluice play FILE`: a window that plays a .sluice file as liquid, with a
+// Dear ImGui HUD (timeline, play/pause, frame i/N, fps, GPU ms per pass,
+// stream stats, LOD and filter choice) and keyboard/mouse control. Frames
+// come from the streaming runtime (runtime::Player): read ahead and decoded
+// on every core straight into Vulkan staging memory (StagingAllocator), then
+// copied to the GPU when they are due.
 #include <GLFW/glfw3.h>
 #include <imgui.h>
 
@@ -12,7 +13,11 @@
 #include <filesystem>
 
 #include "commands.h"
+#include "human.h"
+#include "play.h"
 #include "sluice/io/reader.h"
+#include "sluice/render/staging_allocator.h"
+#include "sluice/runtime/player.h"
 #include "sluice/render/image_io.h"
 #include "sluice/render/renderer.h"
 #include "sluice/render/window.h"
@@ -32,7 +37,8 @@ constexpr Shortcut kShortcuts[] = {
     {"Left / Right", "previous / next frame"},
     {"Home / End", "first / last frame"},
     {"[ / ]", "half / double playback speed"},
-    {"L", "loop on / off"},
+    {"V", "reverse the playback direction"},
+    {"L", "at the end: loop, bounce, stop"},
     {"+ / -", "LOD level up / down (turns cLOD on)"},
     {"O", "LOD mode: off, clod, density"},
     {"F", "depth filter: narrow-range, bilateral"},
@@ -46,37 +52,47 @@ constexpr Shortcut kShortcuts[] = {
     {"mouse", "left drag: orbit, right or shift+left drag: pan, wheel: zoom"},
 };
 
-struct PlayCommand {
-  std::string input;
+}  // namespace
+
+struct WindowPlayOptions {
   std::string size = "1280x720";
-  uint64_t start = 0;
-  double fps = 0, speed = 1;
-  bool paused = false, no_loop = false, no_hud = false, no_vsync = false;
-  int exit_after = 0;  // presented frames, 0: run until closed
+  bool no_hud = false, no_vsync = false;
+  int exit_after = 0;  // presented frames showing data, 0: run until closed
   std::string screenshot;
+  ViewSettings view;
 };
+
+namespace {
 
 struct Player {
   const io::ContainerReader* reader = nullptr;
-  render::Renderer* renderer = nullptr;
-  render::Window* window = nullptr;
+  runtime::Player* playback = nullptr;
   render::Camera camera, home;
   render::FluidOptions fluid;
   render::LodOptions lod;
-  uint64_t frames = 0, frame = 0, loaded = UINT64_MAX;
-  double clock = 0, fps = 30, speed = 1;
-  bool playing = true, loop = true, hud = true, screenshot = false;
+  uint64_t frames = 0, frame = 0;
+  bool has_frame = false, hud = true, screenshot = false;
   bool orbiting = false, panning = false;
   double mouse_x = 0, mouse_y = 0;
   render::FrameStats stats;
-  double load_ms = 0, frame_ms = 0, shown_fps = 0;
-  std::string device, message;
+  double upload_wall_ms = 0, frame_ms = 0, shown_fps = 0;
+  runtime::PlaybackStats stream;
+  runtime::PipelineRates rates;
+  std::string device, io_mode, message;
 
-  void step(int64_t by) {
-    playing = false;
-    const int64_t n = int64_t(frames);
-    frame = uint64_t(((int64_t(frame) + by) % n + n) % n);
-    clock = double(frame);
+  bool playing() const { return playback->state() == runtime::PlayerState::Playing; }
+  void toggle_play() { playing() ? playback->pause() : playback->play(); }
+  void step(int64_t by) { playback->step(by); }
+  void go_to(uint64_t f) { playback->scrub(std::min(f, frames - 1)); }
+  void set_speed(double factor) {
+    const double r = playback->rate() * factor;
+    playback->set_rate(std::copysign(std::clamp(std::abs(r), 1.0 / 64, 64.0), r));
+  }
+  void next_end_mode() {
+    const runtime::EndMode e = playback->end_mode();
+    playback->set_end_mode(e == runtime::EndMode::Loop     ? runtime::EndMode::Bounce
+                           : e == runtime::EndMode::Bounce ? runtime::EndMode::Stop
+                                                           : runtime::EndMode::Loop);
   }
   void lod_level(float delta) {
     if (lod.mode == render::LodMode::Off) lod.mode = render::LodMode::DensityPreserving;
@@ -97,14 +113,15 @@ void on_key(GLFWwindow* w, int key, int, int action, int mods) {
   if (action == GLFW_RELEASE || ImGui::GetIO().WantCaptureKeyboard) return;
   Player& p = player_of(w);
   switch (key) {
-    case GLFW_KEY_SPACE: p.playing = !p.playing; break;
+    case GLFW_KEY_SPACE: p.toggle_play(); break;
     case GLFW_KEY_RIGHT: p.step(+1); break;
     case GLFW_KEY_LEFT: p.step(-1); break;
-    case GLFW_KEY_HOME: p.step(-int64_t(p.frame)); break;
-    case GLFW_KEY_END: p.step(int64_t(p.frames) - 1 - int64_t(p.frame)); break;
-    case GLFW_KEY_LEFT_BRACKET: p.speed = std::max(p.speed / 2, 1.0 / 64); break;
-    case GLFW_KEY_RIGHT_BRACKET: p.speed = std::min(p.speed * 2, 64.0); break;
-    case GLFW_KEY_L: p.loop = !p.loop; break;
+    case GLFW_KEY_HOME: p.go_to(0); break;
+    case GLFW_KEY_END: p.go_to(p.frames - 1); break;
+    case GLFW_KEY_LEFT_BRACKET: p.set_speed(0.5); break;
+    case GLFW_KEY_RIGHT_BRACKET: p.set_speed(2); break;
+    case GLFW_KEY_V: p.playback->set_rate(-p.playback->rate()); break;
+    case GLFW_KEY_L: p.next_end_mode(); break;
     case GLFW_KEY_EQUAL:
     case GLFW_KEY_KP_ADD: p.lod_level(0.05f); break;
     case GLFW_KEY_MINUS:
@@ -175,24 +192,20 @@ void draw_hud(Player& p, const std::string& file) {
   ImGui::SetNextWindowBgAlpha(0.8f);
   ImGui::Begin("sluice", nullptr, ImGuiWindowFlags_AlwaysAutoResize);
   ImGui::TextUnformatted(std::filesystem::path(file).filename().c_str());
-  ImGui::Text("frame %llu / %llu   t = %.4g s", (unsigned long long)p.frame + 1, (unsigned long long)p.frames,
-              p.reader->index().frames[p.frame].time);
-  if (ImGui::Button(p.playing ? "Pause" : "Play")) p.playing = !p.playing;
+  ImGui::Text("frame %llu / %llu   t = %.4g s   %s", (unsigned long long)p.frame + 1, (unsigned long long)p.frames,
+              p.reader->index().frames[p.frame].time, runtime::state_name(p.playback->state()));
+  if (ImGui::Button(p.playing() ? "Pause" : "Play")) p.toggle_play();
   ImGui::SameLine();
   if (ImGui::Button("<")) p.step(-1);
   ImGui::SameLine();
   if (ImGui::Button(">")) p.step(+1);
   ImGui::SameLine();
-  ImGui::Checkbox("loop", &p.loop);
+  if (ImGui::Button(runtime::end_mode_name(p.playback->end_mode()))) p.next_end_mode();
   ImGui::SameLine();
-  ImGui::Text("x%.3g", p.speed);
+  ImGui::Text("x%.3g", p.playback->rate());
   int f = int(p.frame);
   ImGui::SetNextItemWidth(320);
-  if (ImGui::SliderInt("##timeline", &f, 0, int(p.frames) - 1, "frame %d")) {
-    p.frame = uint64_t(f);
-    p.clock = double(f);
-    p.playing = false;
-  }
+  if (ImGui::SliderInt("##timeline", &f, 0, int(p.frames) - 1, "frame %d")) p.go_to(uint64_t(f));
   ImGui::Separator();
   ImGui::Text("%.1f fps   frame %.1f ms   GPU %.2f ms", p.shown_fps, p.frame_ms, p.stats.gpu_ms);
   if (ImGui::BeginTable("passes", 2, ImGuiTableFlags_SizingFixedFit)) {
@@ -207,7 +220,13 @@ void draw_hud(Player& p, const std::string& file) {
   }
   ImGui::Text("particles %llu drawn of %llu, %llu chunks visible", (unsigned long long)p.stats.drawn,
               (unsigned long long)p.stats.particles, (unsigned long long)p.stats.visible_chunks);
-  ImGui::Text("stream: read+decode %.1f ms, upload %.2f ms (GPU)", p.load_ms, p.stats.upload_ms);
+  const runtime::PlaybackStats& st = p.stream;
+  ImGui::Text("stream: read %s/s, decode %s/s, %zu workers (%s)", human_bytes(p.rates.read_mbps * 1e6).c_str(),
+              human_bytes(p.rates.decode_mbps * 1e6).c_str(), p.rates.worker_decode_mbps.size(), p.io_mode.c_str());
+  ImGui::Text("window %u/%u frames, %u ready, %s held", st.pipeline.active_frames, st.pipeline.window_frames,
+              st.pipeline.frames_ready, human_bytes(double(st.pipeline.held_bytes)).c_str());
+  ImGui::Text("stalls %llu  drops %llu  errors %llu   upload %.2f ms GPU, %.2f ms wall", (unsigned long long)st.stalls,
+              (unsigned long long)st.drops, (unsigned long long)st.errors, p.stats.upload_ms, p.upload_wall_ms);
   ImGui::Separator();
   combo("LOD", p.lod.mode, {"off", "clod", "density"});
   ImGui::SliderFloat("LOD level", &p.lod.level, 0.0f, 1.0f, "%.2f");
@@ -230,13 +249,22 @@ void draw_hud(Player& p, const std::string& file) {
   ImGui::End();
 }
 
-void run_play(const PlayCommand& o, const ViewSettings& v) {
-  const io::ContainerReader reader(o.input);
-  if (reader.frame_count() == 0) throw std::runtime_error(o.input + ": the file has no frames");
+double display_refresh_hz() {
+  GLFWmonitor* monitor = glfwGetPrimaryMonitor();
+  const GLFWvidmode* mode = monitor ? glfwGetVideoMode(monitor) : nullptr;
+  return mode && mode->refreshRate > 0 ? double(mode->refreshRate) : 60.0;
+}
+
+}  // namespace
+
+void run_play_window(const PlayOptions& o, const WindowPlayOptions& wo) {
+  const ViewSettings& v = wo.view;
+  const io::ContainerReader reader(o.file);
+  if (reader.frame_count() == 0) throw std::runtime_error(o.file + ": the file has no frames");
   unsigned w = 0, h = 0;
   char x = 0;
-  if (std::sscanf(o.size.c_str(), "%u%c%u", &w, &x, &h) != 3 || w == 0 || h == 0) {
-    throw std::runtime_error("--size: expected WIDTHxHEIGHT, got '" + o.size + "'");
+  if (std::sscanf(wo.size.c_str(), "%u%c%u", &w, &x, &h) != 3 || w == 0 || h == 0) {
+    throw std::runtime_error("--size: expected WIDTHxHEIGHT, got '" + wo.size + "'");
   }
   render::ContextOptions co = v.context_options();
   co.instance_extensions = render::window_instance_extensions();
@@ -248,30 +276,39 @@ void run_play(const PlayCommand& o, const ViewSettings& v) {
   p.reader = &reader;
   p.frames = reader.frame_count();
   p.frame = std::min<uint64_t>(o.start, p.frames - 1);
-  p.clock = double(p.frame);
-  p.fps = o.fps > 0 ? o.fps : (reader.header().frame_rate > 0 ? reader.header().frame_rate : 30.0);
-  p.speed = o.speed;
-  p.playing = !o.paused;
-  p.loop = !o.no_loop;
-  p.hud = !o.no_hud;
+  p.hud = !wo.no_hud;
   p.fluid = v.fluid_options(scene);
   p.lod = v.lod_options();
   p.device = context.device().name + " (" + context.device().type + ")";
 
-  render::WindowOptions wo;
-  wo.width = w;
-  wo.height = h;
-  wo.title = "sluice - " + std::filesystem::path(o.input).filename().string();
-  wo.vsync = !o.no_vsync;
-  render::Window window(context, wo, {on_key, on_mouse_button, on_cursor, on_scroll, &p});
+  render::WindowOptions options;
+  options.width = w;
+  options.height = h;
+  options.title = "sluice - " + std::filesystem::path(o.file).filename().string();
+  options.vsync = !wo.no_vsync;
+  render::Window window(context, options, {on_key, on_mouse_button, on_cursor, on_scroll, &p});
   render::Renderer renderer(context, scene, std::max(window.width(), 1u), std::max(window.height(), 1u));
-  p.renderer = &renderer;
-  p.window = &window;
   p.camera = p.home = v.camera(scene, float(renderer.width()) / float(renderer.height()));
 
+  // The streaming runtime decodes the colour attribute only (if any), into
+  // staging memory the GPU copies from.
+  render::StagingAllocator staging(context);
+  runtime::PlayerOptions po = player_options(o, true);
+  po.start_frame = p.frame;
+  po.display_rate = o.display_hz > 0 ? o.display_hz : display_refresh_hz();
+  const int color = p.fluid.scalar_visibility ? p.fluid.color_attribute : -1;
+  po.pipeline.attributes = color >= 0 ? std::vector<uint32_t>{uint32_t(color)} : std::vector<uint32_t>{};
+  po.pipeline.device_budget = staging.device_budget();
+  const runtime::SteadyClock clock;
+  runtime::Player playback(reader, staging, clock, po);
+  p.playback = &playback;
+  p.io_mode = playback.pipeline().io_mode();
+  if (!o.paused) playback.play();
+
   auto last = Clock::now(), fps_since = last;
+  runtime::PlaybackStats stats_before = playback.stats();
   int presented = 0, fps_frames = 0;
-  bool capture_for_exit = false;
+  uint64_t errors_printed = 0;
   while (!window.should_close()) {
     render::poll_window_events();
     if (window.width() == 0 || window.height() == 0) {
@@ -282,48 +319,52 @@ void run_play(const PlayCommand& o, const ViewSettings& v) {
       renderer.resize(window.width(), window.height());
     }
     const auto now = Clock::now();
-    const double dt = std::chrono::duration<double>(now - last).count();
+    p.frame_ms = std::chrono::duration<double, std::milli>(now - last).count();
     last = now;
-    p.frame_ms = dt * 1e3;
-    // Frames per second over the last half second or so.
+    // Frame rate and stream rates over the last half second or so.
     ++fps_frames;
-    const double window_s = std::chrono::duration<double>(now - fps_since).count();
-    if (window_s >= 0.5) {
-      p.shown_fps = double(fps_frames) / window_s;
+    const double span = std::chrono::duration<double>(now - fps_since).count();
+    if (span >= 0.5) {
+      p.shown_fps = double(fps_frames) / span;
       fps_frames = 0;
       fps_since = now;
+      const runtime::PlaybackStats s = playback.stats();
+      p.rates = runtime::rates_between(stats_before.pipeline, s.pipeline);
+      stats_before = s;
     }
-    if (p.playing) {
-      p.clock += dt * p.fps * p.speed;
-      if (p.clock >= double(p.frames)) {
-        if (p.loop) {
-          p.clock = std::fmod(p.clock, double(p.frames));
-        } else {
-          p.clock = double(p.frames - 1);
-          p.playing = false;
-        }
-      }
-      p.frame = std::min(uint64_t(p.clock), p.frames - 1);
-    }
-    if (p.frame != p.loaded) {
+    p.stream = playback.stats();
+
+    const runtime::Tick tick = playback.update();
+    if (tick.changed && tick.frame) {
+      const runtime::FrameHandle& f = *tick.frame;
       const auto t0 = Clock::now();
-      renderer.load_frame(reader, p.frame, p.fluid.scalar_visibility ? p.fluid.color_attribute : -1);
-      p.load_ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-      p.loaded = p.frame;
+      renderer.commit_decoded({&f.header(), f.chunk_first(), &f.buffers(), color >= 0 ? 0 : -1, color}, &staging);
+      p.upload_wall_ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+      p.frame = f.frame();
+      p.has_frame = true;
     }
+    while (const auto error = playback.pop_error()) {
+      p.message = error->text();
+      if (errors_printed++ < 20) std::fprintf(stderr, "sluice: frame error: %s\n", p.message.c_str());
+    }
+    if (!p.has_frame && playback.state() == runtime::PlayerState::Stopped) {
+      throw std::runtime_error(o.file + ": playback stopped before any frame could be shown");
+    }
+
     p.stats = renderer.render(p.camera, p.fluid, p.lod);
     window.new_ui_frame();
-    if (p.hud) draw_hud(p, o.input);
-    capture_for_exit = o.exit_after > 0 && presented + 1 >= o.exit_after && !o.screenshot.empty();
-    const bool capture = p.screenshot || capture_for_exit;
+    if (p.hud) draw_hud(p, o.file);
+    // --exit-after counts frames that show data (the first may take a moment to decode).
+    const bool last_for_exit = wo.exit_after > 0 && p.has_frame && presented + 1 >= wo.exit_after;
+    const bool capture = p.screenshot || (last_for_exit && !wo.screenshot.empty());
     if (!window.present(renderer, p.hud, capture)) continue;
-    ++presented;
+    if (p.has_frame) ++presented;
     if (capture) {
       const render::Image shot{window.width(), window.height(), window.read_presented()};
       if (!shot.rgba.empty()) {
         char name[64];
         std::snprintf(name, sizeof name, "sluice_%05llu.png", (unsigned long long)p.frame);
-        const std::string path = capture_for_exit ? o.screenshot : name;
+        const std::string path = last_for_exit && !wo.screenshot.empty() ? wo.screenshot : name;
         render::write_png(path, shot);
         p.message = "saved " + path;
         std::printf("saved %s\n", path.c_str());
@@ -332,7 +373,15 @@ void run_play(const PlayCommand& o, const ViewSettings& v) {
       }
       p.screenshot = false;
     }
-    if (o.exit_after > 0 && presented >= o.exit_after) break;
+    if (wo.exit_after > 0 && presented >= wo.exit_after) break;
+  }
+  const runtime::PlaybackStats s = playback.stats();
+  if (!o.quiet) {
+    std::printf("played %s: %llu frames shown, stalls %llu, drops %llu, errors %llu; staging held %s at most%s\n",
+                o.file.c_str(), (unsigned long long)s.frames_shown, (unsigned long long)s.stalls,
+                (unsigned long long)s.drops, (unsigned long long)s.errors,
+                human_bytes(double(staging.peak_held_bytes())).c_str(),
+                staging.fallback_allocations() ? " (some frames in host memory: the driver refused more staging)" : "");
   }
   if (context.validation_active() && context.validation_errors() > 0) {
     std::fprintf(stderr, "sluice: %llu Vulkan validation errors\n", (unsigned long long)context.validation_errors());
@@ -340,56 +389,28 @@ void run_play(const PlayCommand& o, const ViewSettings& v) {
   }
 }
 
-}  // namespace
-
-// `sluice play` with a window. The streaming runtime registers `play` too
-// (its --headless mode plays into a null sink): this adds the window
-// player's options to that subcommand and runs the window unless --headless
-// is given, before the runtime's callback (which then does not run). Without
-// the runtime's command, it creates `play` itself.
-void add_play_window(CLI::App& app) {
-  auto o = std::make_shared<PlayCommand>();
-  auto v = std::make_shared<ViewSettings>();
-  CLI::App* cmd = nullptr;
-  try {
-    cmd = app.get_subcommand("play");
-  } catch (const CLI::OptionNotFound&) {
-    cmd = app.add_subcommand("play", "Play a .sluice file in a window, with a HUD");
-    cmd->add_option("file", o->input, ".sluice file")->required()->check(CLI::ExistingFile);
-  }
+// The window's options on `sluice play` (the shared ones are cmd_play.cpp's).
+std::shared_ptr<WindowPlayOptions> add_window_play_options(CLI::App& cmd) {
+  auto o = std::make_shared<WindowPlayOptions>();
   std::string keys = "Window keys:\n";
   for (const Shortcut& s : kShortcuts) {
     keys += "  " + std::string(s.keys) + std::string(14 - std::string(s.keys).size(), ' ') + s.what + "\n";
   }
-  cmd->footer(cmd->get_footer() + (cmd->get_footer().empty() ? "" : "\n\n") + keys +
-              "\nWindow examples:\n"
-              "  sluice play dam.sluice\n"
-              "  sluice play big.sluice --lod density --lod-level 0.3 --color-by rho\n"
-              "  xvfb-run -a sluice play dam.sluice --exit-after 10 --screenshot shot.png   # no display\n");
+  cmd.footer(cmd.get_footer() + "\n\n" + keys +
+             "\nWindow examples:\n"
+             "  sluice play dam.sluice\n"
+             "  sluice play big.sluice --lod density --lod-level 0.3 --color-by rho\n"
+             "  xvfb-run -a sluice play dam.sluice --exit-after 10 --screenshot shot.png   # no display\n");
   const std::string group = "Window";
-  cmd->add_option("--size", o->size, "Window size WIDTHxHEIGHT")->capture_default_str()->group(group);
-  cmd->add_option("--frame", o->start, "Frame to start at")->group(group);
-  CLI::Option* fps = cmd->get_option_no_throw("--fps");
-  if (!fps) fps = cmd->add_option("--fps", o->fps, "Playback frame rate (default: the file's)")->group(group);
-  cmd->add_option("--speed", o->speed, "Playback speed factor")->capture_default_str()->group(group);
-  cmd->add_flag("--paused", o->paused, "Start paused")->group(group);
-  cmd->add_flag("--no-loop", o->no_loop, "Stop at the last frame")->group(group);
-  cmd->add_flag("--no-hud", o->no_hud, "Start with the HUD hidden")->group(group);
-  cmd->add_flag("--no-vsync", o->no_vsync, "Present as fast as possible")->group(group);
-  cmd->add_option("--exit-after", o->exit_after, "Quit after presenting this many frames (tests, timing)")->group(group);
-  cmd->add_option("--screenshot", o->screenshot, "With --exit-after: save the last presented frame here (PNG)")
+  cmd.add_option("--size", o->size, "Window size WIDTHxHEIGHT")->capture_default_str()->group(group);
+  cmd.add_flag("--no-hud", o->no_hud, "Start with the HUD hidden")->group(group);
+  cmd.add_flag("--no-vsync", o->no_vsync, "Present as fast as possible")->group(group);
+  cmd.add_option("--exit-after", o->exit_after, "Quit after presenting this many frames with data (tests, timing)")
       ->group(group);
-  add_view_options(*cmd, *v);
-  CLI::Option* headless = cmd->get_option_no_throw("--headless");
-  CLI::Option* file = cmd->get_option_no_throw("file");
-  cmd->parse_complete_callback([cmd, o, v, fps, headless, file] {
-    if (headless && headless->count() > 0) return;  // the runtime's null-sink player runs instead
-    if (file && file->count() > 0) o->input = file->as<std::string>();
-    if (fps && fps->count() > 0) o->fps = fps->as<double>();
-    run_play(*o, *v);
-    (void)cmd;
-    throw ExitCode{0};
-  });
+  cmd.add_option("--screenshot", o->screenshot, "With --exit-after: save the last presented frame here (PNG)")
+      ->group(group);
+  add_view_options(cmd, o->view);
+  return o;
 }
 
 }  // namespace sluice::app

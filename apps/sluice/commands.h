@@ -15,7 +15,6 @@ void add_synth(CLI::App& app);
 // Only in builds with SLUICE_WITH_RENDER:
 void add_render(CLI::App& app);
 void add_bench_render(CLI::App& bench);  // `sluice bench render`, under the bench command
-void add_play_window(CLI::App& app);     // only with SLUICE_WITH_WINDOW (GLFW, Dear ImGui); after add_play
 
 // Thrown by a subcommand that has already printed what went wrong, to set the
 // process exit code without another message.

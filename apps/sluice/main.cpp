@@ -30,9 +30,6 @@ int main(int argc, char** argv) {
   sluice::app::add_render(app);
   sluice::app::add_bench_render(*app.get_subcommand("bench"));
 #endif
-#if SLUICE_WITH_WINDOW
-  sluice::app::add_play_window(app);
-#endif
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

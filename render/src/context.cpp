@@ -279,6 +279,16 @@ uint64_t Context::device_budget_bytes() const {
   return c.info.device_local_bytes;
 }
 
+uint64_t Context::heap_available_bytes(uint32_t heap) const {
+  const Impl& c = *impl_;
+  if (heap >= c.memory.memoryHeapCount) return 0;
+  if (!c.memory_budget) return c.memory.memoryHeaps[heap].size;
+  const auto chain = c.physical.getMemoryProperties2<vk::PhysicalDeviceMemoryProperties2,
+                                                     vk::PhysicalDeviceMemoryBudgetPropertiesEXT>();
+  const auto& budget = chain.get<vk::PhysicalDeviceMemoryBudgetPropertiesEXT>();
+  return budget.heapBudget[heap] > budget.heapUsage[heap] ? budget.heapBudget[heap] - budget.heapUsage[heap] : 0;
+}
+
 uint32_t Context::Impl::memory_type(uint32_t type_bits, vk::MemoryPropertyFlags wanted) const {
   for (uint32_t i = 0; i < memory.memoryTypeCount; ++i) {
     if ((type_bits & (1u << i)) && (memory.memoryTypes[i].propertyFlags & wanted) == wanted) return i;

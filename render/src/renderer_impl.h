@@ -69,6 +69,10 @@ struct Renderer::Impl {
   // Grows a device buffer to at least `size` bytes (contents are lost).
   void ensure(Buffer& b, vk::DeviceSize size, vk::BufferUsageFlags usage, MemoryKind kind);
   void wait_uploads();
+  struct UploadSource {  // where upload_frame() (upload.cpp) copies a frame from
+    vk::Buffer buffer;
+    vk::DeviceSize offset = 0;
+  };
   std::vector<std::byte> read_texture(const Texture& t, size_t texel_bytes);
 };
 

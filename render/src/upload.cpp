@@ -1,6 +1,7 @@
 // Frames to the GPU: persistently mapped staging that decoders write into,
 // then one copy per buffer on the transfer queue (where there is one),
 // signalling a timeline semaphore that the next render waits on.
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include <cstring>
@@ -9,6 +10,7 @@
 #include "renderer_impl.h"
 #include "sluice/io/codec.h"
 #include "sluice/io/reader.h"
+#include "staging_block.h"
 
 namespace sluice::render {
 namespace {
@@ -81,14 +83,19 @@ FrameStaging Renderer::stage_frame(uint64_t particles, uint32_t chunks) {
   return s;
 }
 
-void Renderer::commit_frame() {
-  Impl& r = *impl_;
+namespace {
+
+// Copies r.staged_particles / r.staged_chunks (and the colour attribute when
+// `attribute`) from the sources into the device buffers, which grow to fit.
+// The chunk table source must be r.staging (it is validated there). Waits
+// for the copy, so the sources may be reused when this returns.
+void upload_frame(Renderer::Impl& r, Renderer::Impl::UploadSource particles_src, Renderer::Impl::UploadSource chunks_src,
+                  Renderer::Impl::UploadSource attribute_src, bool attribute) {
   const uint64_t n = r.staged_particles;
   const uint32_t chunks = r.staged_chunks;
-  const StagingLayout l = staging_layout(n, chunks, r.stride, r.staged_attribute);
   // Device buffers sized for this frame; the work lists for its worst case.
   uint64_t blocks = 0;
-  const auto* table = reinterpret_cast<const GpuChunk*>(static_cast<const std::byte*>(r.staging.mapped) + l.chunks);
+  const auto* table = reinterpret_cast<const GpuChunk*>(static_cast<const std::byte*>(r.staging.mapped) + chunks_src.offset);
   for (uint32_t c = 0; c < chunks; ++c) {
     if (uint64_t(table[c].first) + table[c].count > n) {
       throw std::runtime_error("staged chunk " + std::to_string(c) + " reaches past the frame's particles");
@@ -107,10 +114,14 @@ void Renderer::commit_frame() {
   cmd.reset();
   cmd.begin(vk::CommandBufferBeginInfo(vk::CommandBufferUsageFlagBits::eOneTimeSubmit));
   cmd.writeTimestamp2(vk::PipelineStageFlagBits2::eAllCommands, *r.upload_timestamps, 0);
-  if (n > 0) cmd.copyBuffer(*r.staging.buffer, *r.particles.buffer, vk::BufferCopy(l.particles, 0, n * r.stride));
-  if (chunks > 0) cmd.copyBuffer(*r.staging.buffer, *r.chunks.buffer, vk::BufferCopy(l.chunks, 0, chunks * sizeof(GpuChunk)));
-  if (r.staged_attribute && n > 0) {
-    cmd.copyBuffer(*r.staging.buffer, *r.attributes.buffer, vk::BufferCopy(l.attribute, 0, (n * 2 + 3) & ~uint64_t(3)));
+  if (n > 0) cmd.copyBuffer(particles_src.buffer, *r.particles.buffer, vk::BufferCopy(particles_src.offset, 0, n * r.stride));
+  if (chunks > 0) {
+    cmd.copyBuffer(chunks_src.buffer, *r.chunks.buffer, vk::BufferCopy(chunks_src.offset, 0, chunks * sizeof(GpuChunk)));
+  }
+  if (attribute && n > 0) {
+    // Rounded up to 4 bytes: every source has room (streams are padded).
+    cmd.copyBuffer(attribute_src.buffer, *r.attributes.buffer,
+                   vk::BufferCopy(attribute_src.offset, 0, (n * 2 + 3) & ~uint64_t(3)));
   }
   cmd.writeTimestamp2(vk::PipelineStageFlagBits2::eAllCommands, *r.upload_timestamps, 1);
   cmd.end();
@@ -120,15 +131,94 @@ void Renderer::commit_frame() {
   r.ctx.transfer_queue.submit2(vk::SubmitInfo2({}, {}, cb, signal));
   r.particle_count = n;
   r.chunk_count = chunks;
-  r.has_attribute = r.staged_attribute;
+  r.has_attribute = attribute;
 
-  // The copy's GPU time, for the stats (waits: uploads are not overlapped yet).
+  // The copy's GPU time, for the stats (uploads are not overlapped with rendering yet).
   r.wait_uploads();
   std::array<uint64_t, 2> stamps{};
   if ((*r.ctx.device).getQueryPoolResults(*r.upload_timestamps, 0, 2, sizeof stamps, stamps.data(), sizeof(uint64_t),
                                           vk::QueryResultFlagBits::e64) == vk::Result::eSuccess) {
     r.upload_ms = double(stamps[1] - stamps[0]) * r.ctx.properties.limits.timestampPeriod * 1e-6;
   }
+}
+
+// The chunk table rows of a decoded frame; throws if the counts do not add up.
+void fill_chunk_table(const io::FrameHeader& header, std::span<const uint64_t> first, int color_attribute,
+                      std::span<GpuChunk> out) {
+  uint64_t total = 0;
+  for (size_t c = 0; c < out.size(); ++c) {
+    const io::ChunkDesc& d = header.chunks[c];
+    GpuChunk& g = out[c];
+    g = GpuChunk{};
+    for (int a = 0; a < 3; ++a) {
+      g.lo[a] = d.bounds.min[size_t(a)];
+      g.hi[a] = d.bounds.max[size_t(a)];
+    }
+    if (first[c] != total || total > UINT32_MAX) {
+      throw std::runtime_error("chunk particle counts do not add up to the frame's (or exceed 2^32)");
+    }
+    g.first = uint32_t(total);
+    g.count = d.particle_count;
+    if (color_attribute >= 0 && size_t(color_attribute) < d.attribute_ranges.size()) {
+      g.attr_lo = d.attribute_ranges[size_t(color_attribute)][0];
+      g.attr_hi = d.attribute_ranges[size_t(color_attribute)][1];
+    }
+    total += d.particle_count;
+  }
+  if (total != header.particle_count) throw std::runtime_error("chunk particle counts do not add up to the frame's");
+}
+
+}  // namespace
+
+void Renderer::commit_frame() {
+  Impl& r = *impl_;
+  const StagingLayout l = staging_layout(r.staged_particles, r.staged_chunks, r.stride, r.staged_attribute);
+  const vk::Buffer staging = *r.staging.buffer;
+  upload_frame(r, {staging, l.particles}, {staging, l.chunks}, {staging, r.staged_attribute ? l.attribute : 0},
+               r.staged_attribute);
+}
+
+void Renderer::commit_decoded(const DecodedFrameView& frame, const StagingAllocator* from) {
+  Impl& r = *impl_;
+  const io::FrameHeader& header = *frame.header;
+  const uint64_t n = header.particle_count;
+  const uint32_t chunks = uint32_t(header.chunks.size());
+  if (frame.chunk_first.size() != chunks) throw std::invalid_argument("commit_decoded: one first index per chunk");
+  const bool attribute = frame.color_stream >= 0 && size_t(frame.color_stream) < frame.buffers->attributes.size();
+  const size_t stride = io::decoded_particle_bytes(r.scene.coding);
+  if (frame.buffers->particles.size() < n * stride) throw std::invalid_argument("commit_decoded: particle buffer too small");
+  const StagingAllocator::Block* block = from ? &staging_block(*frame.buffers) : nullptr;
+
+  if (!block || block->host) {
+    // Not in Vulkan memory: through the renderer's own staging.
+    FrameStaging s = stage_frame(n, chunks);
+    fill_chunk_table(header, frame.chunk_first, attribute ? frame.color_attribute : -1, s.chunks);
+    const bool copy_attribute = attribute && !s.color_attribute.empty();
+    tbb::parallel_for(tbb::blocked_range<uint64_t>(0, n, 1 << 18), [&](const tbb::blocked_range<uint64_t>& range) {
+      const size_t begin = range.begin(), count = range.size();
+      std::memcpy(s.particles.data() + begin * stride, frame.buffers->particles.data() + begin * stride, count * stride);
+      if (copy_attribute) {
+        std::memcpy(s.color_attribute.data() + begin,
+                    frame.buffers->attributes[size_t(frame.color_stream)].data() + begin, count * 2);
+      }
+    });
+    r.staged_attribute = copy_attribute;
+    commit_frame();
+    return;
+  }
+  // Straight from the allocator's staging: only the chunk table is written here.
+  r.wait_uploads();
+  r.stride = stride;
+  r.ensure(r.staging, std::max<uint64_t>(uint64_t(chunks) * sizeof(GpuChunk), 16), vk::BufferUsageFlagBits::eTransferSrc,
+           MemoryKind::Upload);
+  fill_chunk_table(header, frame.chunk_first, attribute ? frame.color_attribute : -1,
+                   {static_cast<GpuChunk*>(r.staging.mapped), chunks});
+  r.staged_particles = n;
+  r.staged_chunks = chunks;
+  const vk::Buffer src = *block->staging.buffer;
+  const uint64_t attribute_offset =
+      block->attribute_offset + uint64_t(std::max(frame.color_stream, 0)) * block->attribute_stride;
+  upload_frame(r, {src, 0}, {*r.staging.buffer, 0}, {src, attribute ? attribute_offset : 0}, attribute);
 }
 
 void Renderer::load_frame(const io::ContainerReader& reader, uint64_t frame, int color_attribute) {

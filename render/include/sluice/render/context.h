@@ -59,6 +59,9 @@ class Context {
   // VK_EXT_memory_budget where present (else the heap size): for the runtime's
   // prefetch window.
   uint64_t device_budget_bytes() const;
+  // Bytes still free in one memory heap (budget - usage from
+  // VK_EXT_memory_budget where present, else the heap size). Any thread.
+  uint64_t heap_available_bytes(uint32_t heap) const;
 
   bool validation_active() const;
   uint64_t validation_errors() const;

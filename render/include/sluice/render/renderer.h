@@ -13,6 +13,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -20,6 +21,7 @@
 #include "sluice/render/context.h"
 #include "sluice/render/frame.h"
 #include "sluice/render/options.h"
+#include "sluice/render/staging_allocator.h"
 
 namespace sluice::render {
 
@@ -35,6 +37,16 @@ struct FrameStats {
   std::vector<PassTime> passes;
   double gpu_ms = 0;           // first to last timestamp of the frame
   double upload_ms = 0;        // GPU time of the last commit_frame() copy
+};
+
+// A decoded frame as the runtime hands it over (runtime::FrameHandle has
+// every field). Borrowed for the call.
+struct DecodedFrameView {
+  const io::FrameHeader* header = nullptr;       // chunk table: counts, AABBs, attribute ranges
+  std::span<const uint64_t> chunk_first;         // first particle of each chunk
+  const runtime::FrameBuffers* buffers = nullptr;
+  int color_stream = -1;     // index into buffers->attributes of the colour attribute; -1: none
+  int color_attribute = -1;  // that attribute's index in the file header (for the chunk ranges)
 };
 
 class Renderer {
@@ -56,6 +68,12 @@ class Renderer {
   // Copies the staged frame to device memory (on the transfer queue where the
   // device has one; the next render() waits on a timeline semaphore).
   void commit_frame();
+  // Uploads a frame the streaming runtime decoded. With `from` (the
+  // StagingAllocator that handed out frame.buffers, of this renderer's
+  // Context) the GPU copies straight from those buffers; otherwise they are
+  // copied through the renderer's staging. The buffers may be reused once
+  // this returns.
+  void commit_decoded(const DecodedFrameView& frame, const StagingAllocator* from);
   // Reads and decodes `frame` straight into staging (chunks in parallel) and
   // commits it. `color_attribute` < 0 skips attributes.
   void load_frame(const io::ContainerReader& reader, uint64_t frame, int color_attribute);

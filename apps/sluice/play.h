@@ -1,0 +1,37 @@
+// `sluice play`: the options both players share (the window player and the
+// headless null sink) and how they become runtime::PlayerOptions.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "sluice/runtime/player.h"
+
+namespace sluice::app {
+
+struct PlayOptions {
+  std::string file;
+  bool headless = false, stats = false, loop = false, bounce = false, once = false, reverse = false, direct = false,
+       quiet = false, paused = false;
+  double fps = 0, rate = 1, seconds = 0, display_hz = 0, stats_every = 1;
+  std::string memory, policy = "hold", on_error = "skip";
+  uint32_t window = 0;
+  int threads = 0, read_threads = 0;
+  uint64_t start = 0;
+};
+
+// The end mode: --bounce, --loop, --once; a window loops unless told otherwise,
+// headless playback stops at the end (so that it terminates).
+runtime::EndMode end_mode(const PlayOptions& o, bool window);
+// Throws std::runtime_error on a --memory it cannot read.
+runtime::PlayerOptions player_options(const PlayOptions& o, bool window);
+
+// The window player (cmd_play_window.cpp), in builds with a window.
+struct WindowPlayOptions;
+std::shared_ptr<WindowPlayOptions> add_window_play_options(CLI::App& play);
+void run_play_window(const PlayOptions& o, const WindowPlayOptions& w);
+
+}  // namespace sluice::app
