@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The main job on the bundled sample: install what is missing, build, convert
-# the PySPH dam break to .sluice, show what is inside, and decode every frame
-# (verify prints the decode rate).
+# the PySPH dam break to .sluice, show what is inside, decode every frame
+# (verify prints the decode rate), render it to PNG images headless, and play
+# it in a window where there is a display.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 "$root/scripts/deps.sh"
@@ -12,3 +13,13 @@ mkdir -p "$out"
 "$sluice" convert "$root/data/dam_break_3d/dam_break_3d.pvd" -o "$out/dam_break_3d.sluice" --attribute rho --force
 "$sluice" info "$out/dam_break_3d.sluice"
 "$sluice" verify "$out/dam_break_3d.sluice"
+"$sluice" play --headless --quiet "$out/dam_break_3d.sluice"
+if "$sluice" render --help >/dev/null 2>&1; then
+  "$sluice" render "$out/dam_break_3d.sluice" --out "$out/frames" --size 1280x720
+  echo "images: $out/frames/"
+  if [[ -n "${DISPLAY:-}${WAYLAND_DISPLAY:-}" ]]; then
+    "$sluice" play "$out/dam_break_3d.sluice"
+  else
+    echo "no display: to watch it, run  $sluice play $out/dam_break_3d.sluice  on a desktop"
+  fi
+fi

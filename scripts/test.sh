@@ -20,7 +20,10 @@ ctest --test-dir "$root/build" --output-on-failure -j "$jobs"
 
 step "ASan + UBSan build and tests"
 BUILD_DIR="$root/build-asan" "$root/scripts/build.sh" -DSLUICE_SANITIZE=address,undefined -DCMAKE_BUILD_TYPE=RelWithDebInfo
-ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
+# Lavapipe preloaded so its own leaks can be named and suppressed (tests/lsan.supp).
+lvp=$(ls /usr/lib/*/libvulkan_lvp.so 2>/dev/null | head -1 || true)
+LD_PRELOAD=${lvp} ASAN_OPTIONS=detect_leaks=1:verify_asan_link_order=0 UBSAN_OPTIONS=print_stacktrace=1 \
+  LSAN_OPTIONS=suppressions=$root/tests/lsan.supp \
   ctest --test-dir "$root/build-asan" --output-on-failure -j "$jobs"
 
 if [[ -d "$root/runtime" ]]; then

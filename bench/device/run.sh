@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Runs on the GPU machine (see bench/device/README.md): every benchmark the
 # issues ask GPU-machine figures for, in one call. Results go to $OUT.
-#   bash bench/device/run.sh [quick]
+#   bash bench/device/run.sh [io] [render] [stream]   (default: all three)
 set -uo pipefail
 OUT=${OUT:-/tmp/out}
 mkdir -p "$OUT" /tmp/s
@@ -17,18 +17,25 @@ run() { log "$*"; "$@" 2>&1 | tee -a "$OUT/summary.txt"; }
 log "machine"
 { nproc; grep -m1 "model name" /proc/cpuinfo; nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv,noheader; free -g | head -2; df -h /tmp | tail -1; } 2>&1 | tee -a "$OUT/summary.txt"
 
-run $S bench io data/dam_break_3d/dam_break_3d.pvd --min-time 1
-[[ -d /tmp/s/big ]] && run $S bench io '/tmp/s/big/*.vtu' --min-time 1
-
-if $S synth --help >/dev/null 2>&1; then
-  run $S synth -n 10M --frames ${SYNTH_FRAMES:-120} -o /tmp/synth10m.sluice --force
-  run $S bench stream /tmp/synth10m.sluice
-  run $S play --headless --stats --seconds 10 --loop /tmp/synth10m.sluice
-fi
-if $S bench render --help >/dev/null 2>&1; then
-  run $S bench render
-fi
-if $S render --help >/dev/null 2>&1; then
-  $S convert data/dam_break_3d/dam_break_3d.pvd -o /tmp/dam.sluice -a rho -q -f
-  run $S render /tmp/dam.sluice --frames 12:12 --out "$OUT/dam_gpu.png" --size 1920x1080
-fi
+stages=${*:-io render stream}
+for stage in $stages; do
+  case $stage in
+    io)
+      run $S bench io data/dam_break_3d/dam_break_3d.pvd --min-time 1
+      [[ -d /tmp/s/big ]] && run $S bench io '/tmp/s/big/*.vtu' --min-time 1
+      ;;
+    render)
+      $S convert data/dam_break_3d/dam_break_3d.pvd -o /tmp/dam.sluice -a rho -q -f
+      run $S render /tmp/dam.sluice --frames 12 --out "$OUT/dam_gpu.png" --size 1920x1080 --stats -q
+      run $S render /tmp/dam.sluice --frames 12 --out "$OUT/dam_gpu_rho.png" --size 1920x1080 --color-by rho -q \
+        --camera "eye=2.6,-1.2,0.45;target=0.7,0,0.22;up=0,0,1;fov=45"
+      run $S bench render --repeats 7 --real /tmp/dam.sluice --csv "$OUT/render.csv"
+      ;;
+    stream)
+      run $S synth -n 10M --frames ${SYNTH_FRAMES:-120} -o /tmp/synth10m.sluice --force
+      run $S bench stream /tmp/synth10m.sluice --memory 16G
+      run $S play --headless --stats --seconds 10 --loop --fps 60 /tmp/synth10m.sluice
+      run $S play --headless --seconds 10 --loop --fps 60 --policy skip /tmp/synth10m.sluice
+      ;;
+  esac
+done
