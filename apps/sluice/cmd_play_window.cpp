@@ -288,6 +288,7 @@ void run_play_window(const PlayOptions& o, const WindowPlayOptions& wo) {
   options.vsync = !wo.no_vsync;
   render::Window window(context, options, {on_key, on_mouse_button, on_cursor, on_scroll, &p});
   render::Renderer renderer(context, scene, std::max(window.width(), 1u), std::max(window.height(), 1u));
+  v.apply_environment(renderer);
   p.camera = p.home = v.camera(scene, float(renderer.width()) / float(renderer.height()));
 
   // The streaming runtime decodes the colour attribute only (if any), into

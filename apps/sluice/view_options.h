@@ -12,6 +12,7 @@
 #include "sluice/render/context.h"
 #include "sluice/render/frame.h"
 #include "sluice/render/options.h"
+#include "sluice/render/renderer.h"
 
 namespace sluice::app {
 
@@ -24,6 +25,7 @@ struct ViewSettings {
   std::vector<float> color_range, attenuation_color;
   bool no_ground = false, full_res_thickness = false;
   std::string lod_mode = "off";
+  std::string environment;  // equirectangular PNG; empty: the procedural sky
   render::LodOptions lod;
 
   render::ContextOptions context_options() const;
@@ -31,6 +33,8 @@ struct ViewSettings {
   render::FluidOptions fluid_options(const render::SceneInfo& scene) const;
   render::LodOptions lod_options() const;
   render::Camera camera(const render::SceneInfo& scene, float aspect) const;
+  // Loads --environment into the renderer, if given. Throws with the file named.
+  void apply_environment(render::Renderer& renderer) const;
 };
 
 void add_view_options(CLI::App& cmd, ViewSettings& v);

@@ -1,7 +1,23 @@
 // The environment: a procedural sky with a sun, and a checkered ground plane
 // under the data, so a picture stands on its own. World space.
 
+// An equirectangular image from a file (Renderer::set_environment); g.light.w
+// says whether there is one.
+layout(set = 0, binding = 14) uniform sampler2D environment_map;
+
+// The image's texel for a world direction: u = azimuth around the up axis,
+// v = 0 straight up, 1 straight down.
+vec3 environment_texel(vec3 dir) {
+  vec3 a = abs(g.up.x) > 0.5 ? vec3(0, 1, 0) : vec3(1, 0, 0);
+  vec3 b = cross(g.up.xyz, a);
+  a = cross(b, g.up.xyz);
+  float u = atan(dot(dir, b), dot(dir, a)) * (0.5 / 3.14159265) + 0.5;
+  float v = acos(clamp(dot(dir, g.up.xyz), -1.0, 1.0)) * (1.0 / 3.14159265);
+  return textureLod(environment_map, vec2(u, v), 0.0).rgb;
+}
+
 vec3 sky(vec3 dir) {
+  if (g.light.w > 0.5) return environment_texel(dir);
   float h = dot(dir, g.up.xyz);
   vec3 horizon = vec3(0.78, 0.85, 0.92);
   vec3 zenith = vec3(0.22, 0.42, 0.75);

@@ -72,18 +72,24 @@ void Renderer::Impl::create_pipelines() {
   bindings.emplace_back(9, vk::DescriptorType::eStorageImage, 1, kAllStages);
   bindings.emplace_back(10, vk::DescriptorType::eStorageImage, 1, kAllStages);
   for (uint32_t b = 11; b <= 13; ++b) bindings.emplace_back(b, vk::DescriptorType::eStorageImage, 1, kAllStages);
+  bindings.emplace_back(14, vk::DescriptorType::eCombinedImageSampler, 1, kAllStages);
   set_layout = vk::raii::DescriptorSetLayout(device, vk::DescriptorSetLayoutCreateInfo({}, bindings));
   vk::PushConstantRange push(kAllStages, 0, sizeof(PushConstants));
   layout = vk::raii::PipelineLayout(device, vk::PipelineLayoutCreateInfo({}, *set_layout, push));
   const std::array sizes{vk::DescriptorPoolSize(vk::DescriptorType::eUniformBuffer, 1),
                          vk::DescriptorPoolSize(vk::DescriptorType::eStorageImage, 11),
-                         vk::DescriptorPoolSize(vk::DescriptorType::eCombinedImageSampler, 2)};
+                         vk::DescriptorPoolSize(vk::DescriptorType::eCombinedImageSampler, 3)};
   pool = vk::raii::DescriptorPool(device, vk::DescriptorPoolCreateInfo(vk::DescriptorPoolCreateFlagBits::eFreeDescriptorSet, 1, sizes));
   set = std::move(vk::raii::DescriptorSets(device, vk::DescriptorSetAllocateInfo(*pool, *set_layout))[0]);
   sampler = vk::raii::Sampler(device, vk::SamplerCreateInfo({}, vk::Filter::eLinear, vk::Filter::eLinear,
                                                             vk::SamplerMipmapMode::eNearest, vk::SamplerAddressMode::eClampToEdge,
                                                             vk::SamplerAddressMode::eClampToEdge,
                                                             vk::SamplerAddressMode::eClampToEdge));
+  // The environment wraps around in azimuth (u) and clamps at the poles (v).
+  environment_sampler = vk::raii::Sampler(
+      device, vk::SamplerCreateInfo({}, vk::Filter::eLinear, vk::Filter::eLinear, vk::SamplerMipmapMode::eNearest,
+                                    vk::SamplerAddressMode::eRepeat, vk::SamplerAddressMode::eClampToEdge,
+                                    vk::SamplerAddressMode::eClampToEdge));
 
   // Thickness sums need blending on a float format: 32-bit where the device
   // blends it (precision with millions of splats per pixel), else 16-bit.
@@ -159,6 +165,7 @@ void Renderer::Impl::write_descriptors() {
   const vk::DescriptorImageInfo color({}, *t.color.view, gen), aux({}, *t.aux.view, gen);
   const std::array uints{vk::DescriptorImageInfo({}, *t.depth_u.view, gen), vk::DescriptorImageInfo({}, *t.thick_u.view, gen),
                          vk::DescriptorImageInfo({}, *t.thick_attr_u.view, gen)};
+  const vk::DescriptorImageInfo env(*environment_sampler, *environment.view, vk::ImageLayout::eShaderReadOnlyOptimal);
   const std::array writes{
       vk::WriteDescriptorSet(*set, 0, 0, vk::DescriptorType::eUniformBuffer, {}, ubo),
       vk::WriteDescriptorSet(*set, 1, 0, 1, vk::DescriptorType::eStorageImage, &storage[0]),
@@ -174,6 +181,7 @@ void Renderer::Impl::write_descriptors() {
       vk::WriteDescriptorSet(*set, 11, 0, 1, vk::DescriptorType::eStorageImage, &uints[0]),
       vk::WriteDescriptorSet(*set, 12, 0, 1, vk::DescriptorType::eStorageImage, &uints[1]),
       vk::WriteDescriptorSet(*set, 13, 0, 1, vk::DescriptorType::eStorageImage, &uints[2]),
+      vk::WriteDescriptorSet(*set, 14, 0, 1, vk::DescriptorType::eCombinedImageSampler, &env),
   };
   ctx.device.updateDescriptorSets(writes, {});
 }
@@ -216,6 +224,8 @@ Renderer::Renderer(Context& context, const SceneInfo& scene, uint32_t width, uin
                          kBufferUsage | vk::BufferUsageFlagBits::eIndirectBuffer | vk::BufferUsageFlagBits::eTransferSrc,
                          MemoryKind::DeviceLocal);
   r.create_pipelines();
+  const std::array<uint8_t, 4> placeholder{0, 0, 0, 255};
+  r.upload_environment(1, 1, placeholder.data());
   r.create_targets(width, height, true);
   r.command_pool = vk::raii::CommandPool(
       device, vk::CommandPoolCreateInfo(vk::CommandPoolCreateFlagBits::eResetCommandBuffer, r.ctx.graphics_family));
@@ -259,7 +269,8 @@ FrameStats Renderer::render(const Camera& camera, const FluidOptions& options, c
   view.thick_height = t.thick_size.height;
   view.max_point_size = r.ctx.properties.limits.pointSizeRange[1];
   view.write_aux = true;
-  const Globals globals = make_globals(r.scene, camera, options, lod, view);
+  Globals globals = make_globals(r.scene, camera, options, lod, view);
+  globals.light[3] = r.has_environment ? 1.0f : 0.0f;
   std::memcpy(r.globals.mapped, &globals, sizeof globals);
 
   PushConstants pc;
@@ -494,6 +505,54 @@ std::vector<float> Renderer::read_raw_depth() {
   std::vector<float> out(bytes.size() / 4);
   std::memcpy(out.data(), bytes.data(), bytes.size());
   return out;
+}
+
+}  // namespace sluice::render
+
+namespace sluice::render {
+
+void Renderer::Impl::upload_environment(uint32_t width, uint32_t height, const uint8_t* rgba) {
+  const vk::DeviceSize bytes = vk::DeviceSize(width) * height * 4;
+  Buffer staging_env = create_buffer(ctx, bytes, vk::BufferUsageFlagBits::eTransferSrc, MemoryKind::Upload);
+  std::memcpy(staging_env.mapped, rgba, bytes);
+  if (*ctx.device && *environment.image) ctx.device.waitIdle();  // the old texture may be in use
+  environment = create_texture(ctx, {width, height}, vk::Format::eR8G8B8A8Srgb,
+                               vk::ImageUsageFlagBits::eSampled | vk::ImageUsageFlagBits::eTransferDst);
+  ctx.run_once([&](vk::CommandBuffer c) {
+    const auto to_dst = image_barrier(environment, vk::ImageLayout::eUndefined, vk::ImageLayout::eTransferDstOptimal,
+                                      vk::PipelineStageFlagBits2::eNone, vk::AccessFlagBits2::eNone,
+                                      vk::PipelineStageFlagBits2::eCopy, vk::AccessFlagBits2::eTransferWrite);
+    c.pipelineBarrier2(vk::DependencyInfo({}, {}, {}, to_dst));
+    const vk::BufferImageCopy region(0, 0, 0, vk::ImageSubresourceLayers(vk::ImageAspectFlagBits::eColor, 0, 0, 1), {0, 0, 0},
+                                     {width, height, 1});
+    c.copyBufferToImage(*staging_env.buffer, *environment.image, vk::ImageLayout::eTransferDstOptimal, region);
+    const auto to_read = image_barrier(environment, vk::ImageLayout::eTransferDstOptimal, vk::ImageLayout::eShaderReadOnlyOptimal,
+                                       vk::PipelineStageFlagBits2::eCopy, vk::AccessFlagBits2::eTransferWrite,
+                                       vk::PipelineStageFlagBits2::eComputeShader, vk::AccessFlagBits2::eShaderSampledRead);
+    c.pipelineBarrier2(vk::DependencyInfo({}, {}, {}, to_read));
+  });
+}
+
+void Renderer::set_environment(const Image& equirect) {
+  Impl& r = *impl_;
+  if (equirect.width == 0 || equirect.height == 0) {
+    const std::array<uint8_t, 4> placeholder{0, 0, 0, 255};
+    r.upload_environment(1, 1, placeholder.data());
+    r.has_environment = false;
+  } else {
+    if (equirect.rgba.size() != size_t(equirect.width) * equirect.height * 4) {
+      throw std::invalid_argument("set_environment: the image's pixels do not match its size");
+    }
+    const uint32_t limit = r.ctx.properties.limits.maxImageDimension2D;
+    if (equirect.width > limit || equirect.height > limit) {
+      throw std::invalid_argument("environment image of " + std::to_string(equirect.width) + "x" +
+                                  std::to_string(equirect.height) + " exceeds the device's largest image (" +
+                                  std::to_string(limit) + ")");
+    }
+    r.upload_environment(equirect.width, equirect.height, equirect.rgba.data());
+    r.has_environment = true;
+  }
+  r.write_descriptors();
 }
 
 }  // namespace sluice::render

@@ -39,6 +39,10 @@ struct Renderer::Impl {
   vk::raii::Pipeline filter_depth{nullptr}, filter_thickness{nullptr}, composite{nullptr};
   bool half_thickness = true;
   Targets targets;
+  // Equirectangular environment (sRGB); 1x1 placeholder while the procedural sky is used.
+  Texture environment;
+  vk::raii::Sampler environment_sampler{nullptr};
+  bool has_environment = false;
 
   // Per frame: uniforms, counters, readback of counters and images.
   Buffer globals, args, readback;
@@ -66,6 +70,7 @@ struct Renderer::Impl {
   void create_pipelines();
   void create_targets(uint32_t width, uint32_t height, bool half_thickness);
   void write_descriptors();
+  void upload_environment(uint32_t width, uint32_t height, const uint8_t* rgba);
   // Grows a device buffer to at least `size` bytes (contents are lost).
   void ensure(Buffer& b, vk::DeviceSize size, vk::BufferUsageFlags usage, MemoryKind kind);
   void wait_uploads();

@@ -20,6 +20,7 @@
 #include "sluice/render/camera.h"
 #include "sluice/render/context.h"
 #include "sluice/render/frame.h"
+#include "sluice/render/image_io.h"
 #include "sluice/render/options.h"
 #include "sluice/render/staging_allocator.h"
 
@@ -58,6 +59,10 @@ class Renderer {
   Renderer& operator=(const Renderer&) = delete;
 
   void resize(uint32_t width, uint32_t height);
+  // The environment reflected and seen behind the fluid: an equirectangular
+  // image (sRGB; u = azimuth around the scene's up axis, v = 0 straight up),
+  // or an empty Image for the procedural sky. Waits for the GPU.
+  void set_environment(const Image& equirect);
   uint32_t width() const;
   uint32_t height() const;
   const SceneInfo& scene() const;
