@@ -2,6 +2,7 @@
 // synthetic and real frames, cLOD off and on, and the VTK fluid mapper on
 // the same frame as the peer.
 #include "sluice/bench/render_bench.h"
+#include "svg_plot.h"
 
 #include <unistd.h>
 
@@ -287,6 +288,27 @@ void run_render_bench(const RenderBenchOptions& o) {
     }
     if (!csv) throw std::runtime_error(o.csv + ": cannot write");
     std::printf("\nwrote %s\n", o.csv.c_str());
+  }
+
+  if (!o.plot.empty()) {
+    // GPU ms against particles, one line per LOD setting of the synthetic
+    // frames (and VTK's wall ms where it ran).
+    std::vector<PlotSeries> series;
+    auto series_named = [&](const std::string& name) -> PlotSeries& {
+      for (PlotSeries& s : series) {
+        if (s.name == name) return s;
+      }
+      return series.emplace_back(PlotSeries{name, {}});
+    };
+    for (const Case& c : cases) {
+      if (c.name.rfind("synthetic", 0) == 0) {
+        series_named("sluice, LOD " + c.lod).points.emplace_back(double(c.particles), c.stats.gpu_ms);
+      }
+      if (c.vtk_ms >= 0) series_named("VTK fluid mapper (wall)").points.emplace_back(double(c.particles), c.vtk_ms);
+    }
+    write_loglog_svg(o.plot, "Frame time at " + std::to_string(o.width) + "x" + std::to_string(o.height) + ", " + dev.name,
+                     "particles per frame", "GPU ms per frame", std::move(series));
+    std::printf("wrote %s\n", o.plot.c_str());
   }
 
   bool any_vtk = false;

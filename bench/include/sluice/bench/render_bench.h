@@ -22,6 +22,7 @@ struct RenderBenchOptions {
   std::string images;           // directory to save each case's image (and the peer's)
   std::string splat = "auto";   // sphere splatting: auto, compute or raster
   std::string csv;              // also write every case (per-pass ms) here, for plots of ms against particles
+  std::string plot;             // also draw GPU ms against particles (log-log, one line per LOD) as an SVG here
 };
 
 // Runs the benchmark and prints its tables to stdout.
