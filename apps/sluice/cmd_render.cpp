@@ -121,7 +121,7 @@ void run_render(const RenderCommand& o, const ViewSettings& v) {
     if (o.stats) {
       std::string passes;
       for (const render::PassTime& p : stats.passes) passes += " " + p.name + " " + fixed(p.ms, 2);
-      bar.warn("frame " + std::to_string(f) + ": " + std::to_string(stats.drawn) + "/" + std::to_string(stats.particles) +
+      bar.print("frame " + std::to_string(f) + ": " + std::to_string(stats.drawn) + "/" + std::to_string(stats.particles) +
                " particles drawn; GPU ms:" + passes + "; total " + fixed(stats.gpu_ms, 2));
     }
     bar.update(f - first + 1);

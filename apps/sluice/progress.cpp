@@ -21,10 +21,10 @@ void ProgressBar::update(uint64_t done, uint64_t bytes_in, uint64_t bytes_out) {
   draw(false);
 }
 
-void ProgressBar::warn(const std::string& line) {
+void ProgressBar::print(const std::string& line) {
   const std::lock_guard lock(mutex_);
   if (tty_ && drawn_) std::fputs("\r\033[K", stderr);
-  std::fprintf(stderr, "warning: %s\n", line.c_str());
+  std::fprintf(stderr, "%s\n", line.c_str());
   if (tty_ && drawn_) draw(true);
 }
 

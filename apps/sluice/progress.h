@@ -16,7 +16,9 @@ class ProgressBar {
   // Sets progress to `done` units; `bytes_in`/`bytes_out` so far give MB/s.
   void update(uint64_t done, uint64_t bytes_in = 0, uint64_t bytes_out = 0);
   // Prints a warning above the bar without garbling it.
-  void warn(const std::string& line);
+  void warn(const std::string& line) { print("warning: " + line); }
+  // Prints a line (stats, notes) above the bar without garbling it.
+  void print(const std::string& line);
   void finish();
   double elapsed() const;
 
