@@ -31,7 +31,7 @@ void ensure_glfw() {
       const char* why = nullptr;
       glfwGetError(&why);
       throw std::runtime_error(std::string("cannot open a window: ") + (why ? why : "GLFW failed to start") +
-                               " (no display? run under X11/Wayland, or xvfb-run)");
+                               " (no display? run it on a desktop, under xvfb-run, or use `sluice play --headless` or `sluice render`)");
     }
     if (!glfwVulkanSupported()) throw std::runtime_error("cannot open a window: GLFW finds no Vulkan loader");
     std::atexit(glfwTerminate);
