@@ -10,6 +10,15 @@
 #include "tsan_handoff.h"
 
 namespace sluice::runtime {
+
+ThreadSplit default_thread_split(int cores) {
+  cores = std::max(cores, 1);
+  ThreadSplit split;
+  split.read = std::clamp(cores / 8, 1, 4);
+  split.decode = cores >= 8 ? cores - split.read : cores;
+  return split;
+}
+
 namespace detail {
 namespace {
 
@@ -41,7 +50,8 @@ PipelineCore::PipelineCore(const io::ContainerReader& reader, FrameAllocator& al
     : reader_(reader),
       allocator_(allocator),
       options_(std::move(options)),
-      decode_threads_(options_.decode_threads > 0 ? options_.decode_threads : tbb::info::default_concurrency()),
+      decode_threads_(options_.decode_threads > 0 ? options_.decode_threads
+                                                  : default_thread_split(tbb::info::default_concurrency()).decode),
       delivery_(std::max<uint32_t>(2, options_.budget.ring_capacity)),
       returns_(std::max<uint32_t>(2, options_.budget.ring_capacity)),
       record_returns_(size_t(decode_threads_) + 1),
@@ -54,7 +64,8 @@ PipelineCore::PipelineCore(const io::ContainerReader& reader, FrameAllocator& al
   slots_ = std::make_unique<Slot[]>(slot_count_);
   workers_ = std::make_unique<WorkerCounters[]>(worker_slots());
 
-  read_threads_ = options_.read_threads > 0 ? options_.read_threads : std::clamp(decode_threads_ / 4, 1, 4);
+  read_threads_ = options_.read_threads > 0 ? options_.read_threads
+                                            : default_thread_split(tbb::info::default_concurrency()).read;
   // Workers wanted: every decode slot, and the read helpers (the reader
   // thread itself takes the read arena's reserved slot).
   const int workers = decode_threads_ + read_threads_ - 1;

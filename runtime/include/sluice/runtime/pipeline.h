@@ -50,8 +50,8 @@ struct WindowChange {
 };
 
 struct PipelineOptions {
-  int decode_threads = 0;   // TBB workers decoding chunks; 0: one per core
-  int read_threads = 0;     // threads reading a record's pieces at once; 0: decode_threads / 4, 1 to 4
+  int decode_threads = 0;   // TBB workers decoding chunks; 0: default_thread_split()
+  int read_threads = 0;     // threads reading a record's pieces at once; 0: default_thread_split()
   bool direct_io = false;   // read with O_DIRECT where the filesystem allows it (else buffered, said in stats)
   // Attribute streams to decode (indices into the file header's list); nullopt: all of them.
   std::optional<std::vector<uint32_t>> attributes;
@@ -71,6 +71,18 @@ struct PipelineOptions {
   std::shared_ptr<RecordSource> source;
   uint64_t read_piece_bytes = 8 << 20;  // reads are split (a seek cancels a big read early; pieces go in parallel)
 };
+
+// How the pipeline shares `cores` by default: one read thread per 8 cores
+// (1 to 4) and, from 8 cores on, the others decode, so that readers and
+// workers do not fight over cores; below 8 cores every core decodes. On the
+// 16-core GPU machine, 14 workers + 2 readers stream 10M-particle frames from
+// the page cache at 139-152 frames/s, 16 + 4 at 131-140 (runs vary by about
+// 8%; docs/measurements.md).
+struct ThreadSplit {
+  int decode = 1;
+  int read = 1;
+};
+ThreadSplit default_thread_split(int cores);
 
 enum class EntryStatus : uint8_t {
   None,     // not fetched yet (or the schedule has ended: see NextEntry::end)
