@@ -64,8 +64,11 @@ PipelineCore::PipelineCore(const io::ContainerReader& reader, FrameAllocator& al
   slots_ = std::make_unique<Slot[]>(slot_count_);
   workers_ = std::make_unique<WorkerCounters[]>(worker_slots());
 
-  read_threads_ = options_.read_threads > 0 ? options_.read_threads
-                                            : default_thread_split(tbb::info::default_concurrency()).read;
+  // Readers come out of the cores by default; with a worker count given they
+  // come on top of it: a quarter as many (1 to 4).
+  read_threads_ = options_.read_threads > 0    ? options_.read_threads
+                  : options_.decode_threads > 0 ? std::clamp(decode_threads_ / 4, 1, 4)
+                                                : default_thread_split(tbb::info::default_concurrency()).read;
   // Workers wanted: every decode slot, and the read helpers (the reader
   // thread itself takes the read arena's reserved slot).
   const int workers = decode_threads_ + read_threads_ - 1;

@@ -51,7 +51,8 @@ struct WindowChange {
 
 struct PipelineOptions {
   int decode_threads = 0;   // TBB workers decoding chunks; 0: default_thread_split()
-  int read_threads = 0;     // threads reading a record's pieces at once; 0: default_thread_split()
+  int read_threads = 0;     // threads reading a record's pieces at once; 0: default_thread_split(), or
+                            // a quarter of decode_threads (1 to 4) when that is given
   bool direct_io = false;   // read with O_DIRECT where the filesystem allows it (else buffered, said in stats)
   // Attribute streams to decode (indices into the file header's list); nullopt: all of them.
   std::optional<std::vector<uint32_t>> attributes;
