@@ -261,11 +261,7 @@ void run_play_window(const PlayOptions& o, const WindowPlayOptions& wo) {
   const ViewSettings& v = wo.view;
   const io::ContainerReader reader(o.file);
   if (reader.frame_count() == 0) throw std::runtime_error(o.file + ": the file has no frames");
-  unsigned w = 0, h = 0;
-  char x = 0;
-  if (std::sscanf(wo.size.c_str(), "%u%c%u", &w, &x, &h) != 3 || w == 0 || h == 0) {
-    throw std::runtime_error("--size: expected WIDTHxHEIGHT, got '" + wo.size + "'");
-  }
+  const auto [w, h] = parse_size(wo.size);
   render::ContextOptions co = v.context_options();
   co.instance_extensions = render::window_instance_extensions();
   co.presentation = true;
@@ -329,11 +325,11 @@ void run_play_window(const PlayOptions& o, const WindowPlayOptions& wo) {
       p.shown_fps = double(fps_frames) / span;
       fps_frames = 0;
       fps_since = now;
-      const runtime::PlaybackStats s = playback.stats();
-      p.rates = runtime::rates_between(stats_before.pipeline, s.pipeline);
-      stats_before = s;
+      // Stream stats refresh with the rates, not every frame (a snapshot allocates).
+      p.stream = playback.stats();
+      p.rates = runtime::rates_between(stats_before.pipeline, p.stream.pipeline);
+      stats_before = p.stream;
     }
-    p.stream = playback.stats();
 
     const runtime::Tick tick = playback.update();
     if (tick.changed && tick.frame) {

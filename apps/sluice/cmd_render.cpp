@@ -25,16 +25,6 @@ struct RenderCommand {
   bool quiet = false, stats = false;
 };
 
-std::pair<uint32_t, uint32_t> parse_size(const std::string& s) {
-  unsigned w = 0, h = 0;
-  char x = 0;
-  std::istringstream in(s);
-  if (!(in >> w >> x >> h) || (x != 'x' && x != 'X') || w == 0 || h == 0 || w > 16384 || h > 16384 || !in.eof()) {
-    throw std::runtime_error("--size: expected WIDTHxHEIGHT (e.g. 1920x1080), got '" + s + "'");
-  }
-  return {w, h};
-}
-
 std::pair<uint64_t, uint64_t> parse_frames(const std::string& s, uint64_t count) {
   if (count == 0) throw std::runtime_error("the file has no frames");
   if (s.empty()) return {0, count - 1};

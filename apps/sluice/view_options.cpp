@@ -2,6 +2,7 @@
 // conversion into the renderer's types.
 #include "view_options.h"
 
+#include <sstream>
 #include <stdexcept>
 
 #include "sluice/render/image_io.h"
@@ -61,6 +62,16 @@ render::Camera ViewSettings::camera(const render::SceneInfo& scene, float aspect
     }
   }
   return c;
+}
+
+std::pair<uint32_t, uint32_t> parse_size(const std::string& s) {
+  unsigned w = 0, h = 0;
+  char x = 0;
+  std::istringstream in(s);
+  if (!(in >> w >> x >> h) || (x != 'x' && x != 'X') || w == 0 || h == 0 || w > 16384 || h > 16384 || !in.eof()) {
+    throw std::runtime_error("--size: expected WIDTHxHEIGHT (e.g. 1920x1080), got '" + s + "'");
+  }
+  return {w, h};
 }
 
 void ViewSettings::apply_environment(render::Renderer& renderer) const {

@@ -6,6 +6,7 @@
 #include <CLI/CLI.hpp>
 
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "sluice/render/camera.h"
@@ -38,5 +39,8 @@ struct ViewSettings {
 };
 
 void add_view_options(CLI::App& cmd, ViewSettings& v);
+
+// "1920x1080" -> {1920, 1080}; throws std::runtime_error naming --size otherwise.
+std::pair<uint32_t, uint32_t> parse_size(const std::string& text);
 
 }  // namespace sluice::app

@@ -5,12 +5,18 @@
 // says whether there is one.
 layout(set = 0, binding = 14) uniform sampler2D environment_map;
 
+// Two axes perpendicular to up: a (x, or y when x is up) and b = up x a.
+void plane_axes(out vec3 a, out vec3 b) {
+  a = abs(g.up.x) > 0.5 ? vec3(0, 1, 0) : vec3(1, 0, 0);
+  b = cross(g.up.xyz, a);
+  a = cross(b, g.up.xyz);
+}
+
 // The image's texel for a world direction: u = azimuth around the up axis,
 // v = 0 straight up, 1 straight down.
 vec3 environment_texel(vec3 dir) {
-  vec3 a = abs(g.up.x) > 0.5 ? vec3(0, 1, 0) : vec3(1, 0, 0);
-  vec3 b = cross(g.up.xyz, a);
-  a = cross(b, g.up.xyz);
+  vec3 a, b;
+  plane_axes(a, b);
   float u = atan(dot(dir, b), dot(dir, a)) * (0.5 / 3.14159265) + 0.5;
   float v = acos(clamp(dot(dir, g.up.xyz), -1.0, 1.0)) * (1.0 / 3.14159265);
   return textureLod(environment_map, vec2(u, v), 0.0).rgb;
@@ -39,9 +45,8 @@ float ground_hit(vec3 origin, vec3 dir) {
 
 vec3 ground_color(vec3 p, vec3 dir, float dist) {
   // Two axes in the plane, tiles of a power of ten near a tenth of the data.
-  vec3 a = abs(g.up.x) > 0.5 ? vec3(0, 1, 0) : vec3(1, 0, 0);
-  vec3 b = cross(g.up.xyz, a);
-  a = cross(b, g.up.xyz);
+  vec3 a, b;
+  plane_axes(a, b);
   float tile = pow(10.0, floor(log(max(g.scene.w, 1e-6) * 0.25) / log(10.0) + 0.5)) * 0.5;
   vec2 uv = vec2(dot(p, a), dot(p, b)) / tile;
   // Filtered checker: fade to grey where tiles get smaller than a pixel.

@@ -224,8 +224,7 @@ Renderer::Renderer(Context& context, const SceneInfo& scene, uint32_t width, uin
                          kBufferUsage | vk::BufferUsageFlagBits::eIndirectBuffer | vk::BufferUsageFlagBits::eTransferSrc,
                          MemoryKind::DeviceLocal);
   r.create_pipelines();
-  const std::array<uint8_t, 4> placeholder{0, 0, 0, 255};
-  r.upload_environment(1, 1, placeholder.data());
+  r.upload_environment({});
   r.create_targets(width, height, true);
   r.command_pool = vk::raii::CommandPool(
       device, vk::CommandPoolCreateInfo(vk::CommandPoolCreateFlagBits::eResetCommandBuffer, r.ctx.graphics_family));
@@ -416,30 +415,22 @@ FrameStats Renderer::render(const Camera& camera, const FluidOptions& options, c
   }
 
   // Filters: separable passes raw -> B -> A, then A -> B -> A per iteration.
-  if (depth_filtered(options)) {
-    cmd.bindPipeline(vk::PipelineBindPoint::eCompute, *r.filter_depth);
-    const auto gd = groups(t.size, 16);
-    for (int i = 0; i < options.surface_filter_iterations; ++i) {
+  const auto separable = [&](const vk::raii::Pipeline& pipeline, vk::Extent2D size, int iterations) {
+    cmd.bindPipeline(vk::PipelineBindPoint::eCompute, *pipeline);
+    const auto g = groups(size, 16);
+    for (int i = 0; i < iterations; ++i) {
       push(i == 0 ? 0u : 1u, 2u, 0u);
-      cmd.dispatch(gd[0], gd[1], 1);
+      cmd.dispatch(g[0], g[1], 1);
       compute_to_compute();
       push(2u, 1u, 1u);
-      cmd.dispatch(gd[0], gd[1], 1);
+      cmd.dispatch(g[0], g[1], 1);
       compute_to_compute();
     }
-  }
+  };
+  if (depth_filtered(options)) separable(r.filter_depth, t.size, options.surface_filter_iterations);
   stamp("filter");
   if (thickness_filtered(options)) {
-    cmd.bindPipeline(vk::PipelineBindPoint::eCompute, *r.filter_thickness);
-    const auto gt = groups(t.thick_size, 16);
-    for (int i = 0; i < options.thickness_and_volume_color_filter_iterations; ++i) {
-      push(i == 0 ? 0u : 1u, 2u, 0u);
-      cmd.dispatch(gt[0], gt[1], 1);
-      compute_to_compute();
-      push(2u, 1u, 1u);
-      cmd.dispatch(gt[0], gt[1], 1);
-      compute_to_compute();
-    }
+    separable(r.filter_thickness, t.thick_size, options.thickness_and_volume_color_filter_iterations);
   }
   stamp("thickness filter");
 
@@ -511,7 +502,12 @@ std::vector<float> Renderer::read_raw_depth() {
 
 namespace sluice::render {
 
-void Renderer::Impl::upload_environment(uint32_t width, uint32_t height, const uint8_t* rgba) {
+void Renderer::Impl::upload_environment(const Image& equirect) {
+  // No image: a 1x1 placeholder so the descriptor stays valid (the shader uses the procedural sky).
+  static const Image kPlaceholder{1, 1, {0, 0, 0, 255}};
+  const Image& image = equirect.width == 0 || equirect.height == 0 ? kPlaceholder : equirect;
+  const uint32_t width = image.width, height = image.height;
+  const uint8_t* rgba = image.rgba.data();
   const vk::DeviceSize bytes = vk::DeviceSize(width) * height * 4;
   Buffer staging_env = create_buffer(ctx, bytes, vk::BufferUsageFlagBits::eTransferSrc, MemoryKind::Upload);
   std::memcpy(staging_env.mapped, rgba, bytes);
@@ -535,23 +531,18 @@ void Renderer::Impl::upload_environment(uint32_t width, uint32_t height, const u
 
 void Renderer::set_environment(const Image& equirect) {
   Impl& r = *impl_;
-  if (equirect.width == 0 || equirect.height == 0) {
-    const std::array<uint8_t, 4> placeholder{0, 0, 0, 255};
-    r.upload_environment(1, 1, placeholder.data());
-    r.has_environment = false;
-  } else {
-    if (equirect.rgba.size() != size_t(equirect.width) * equirect.height * 4) {
-      throw std::invalid_argument("set_environment: the image's pixels do not match its size");
-    }
-    const uint32_t limit = r.ctx.properties.limits.maxImageDimension2D;
-    if (equirect.width > limit || equirect.height > limit) {
-      throw std::invalid_argument("environment image of " + std::to_string(equirect.width) + "x" +
-                                  std::to_string(equirect.height) + " exceeds the device's largest image (" +
-                                  std::to_string(limit) + ")");
-    }
-    r.upload_environment(equirect.width, equirect.height, equirect.rgba.data());
-    r.has_environment = true;
+  const bool has_image = equirect.width > 0 && equirect.height > 0;
+  if (has_image && equirect.rgba.size() != size_t(equirect.width) * equirect.height * 4) {
+    throw std::invalid_argument("set_environment: the image's pixels do not match its size");
   }
+  const uint32_t limit = r.ctx.properties.limits.maxImageDimension2D;
+  if (equirect.width > limit || equirect.height > limit) {
+    throw std::invalid_argument("environment image of " + std::to_string(equirect.width) + "x" +
+                                std::to_string(equirect.height) + " exceeds the device's largest image (" +
+                                std::to_string(limit) + ")");
+  }
+  r.upload_environment(equirect);
+  r.has_environment = has_image;
   r.write_descriptors();
 }
 

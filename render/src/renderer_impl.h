@@ -70,7 +70,7 @@ struct Renderer::Impl {
   void create_pipelines();
   void create_targets(uint32_t width, uint32_t height, bool half_thickness);
   void write_descriptors();
-  void upload_environment(uint32_t width, uint32_t height, const uint8_t* rgba);
+  void upload_environment(const Image& equirect);  // empty: a 1x1 placeholder
   // Grows a device buffer to at least `size` bytes (contents are lost).
   void ensure(Buffer& b, vk::DeviceSize size, vk::BufferUsageFlags usage, MemoryKind kind);
   void wait_uploads();

@@ -142,9 +142,11 @@ void upload_frame(Renderer::Impl& r, Renderer::Impl::UploadSource particles_src,
   }
 }
 
-// The chunk table rows of a decoded frame; throws if the counts do not add up.
+// The chunk table rows of a frame: AABBs, first particle, count and the
+// colour attribute's range (`color_attribute` < 0: none). `first`, when given
+// (the runtime's chunk_first), must agree with the running sum of the counts.
 void fill_chunk_table(const io::FrameHeader& header, std::span<const uint64_t> first, int color_attribute,
-                      std::span<GpuChunk> out) {
+                      std::span<GpuChunk> out, const io::ErrorLocation& where) {
   uint64_t total = 0;
   for (size_t c = 0; c < out.size(); ++c) {
     const io::ChunkDesc& d = header.chunks[c];
@@ -154,8 +156,8 @@ void fill_chunk_table(const io::FrameHeader& header, std::span<const uint64_t> f
       g.lo[a] = d.bounds.min[size_t(a)];
       g.hi[a] = d.bounds.max[size_t(a)];
     }
-    if (first[c] != total || total > UINT32_MAX) {
-      throw std::runtime_error("chunk particle counts do not add up to the frame's (or exceed 2^32)");
+    if ((!first.empty() && first[c] != total) || total > UINT32_MAX) {
+      throw io::Error(where, "chunk particle counts do not add up to the frame's (or exceed 2^32)");
     }
     g.first = uint32_t(total);
     g.count = d.particle_count;
@@ -165,7 +167,9 @@ void fill_chunk_table(const io::FrameHeader& header, std::span<const uint64_t> f
     }
     total += d.particle_count;
   }
-  if (total != header.particle_count) throw std::runtime_error("chunk particle counts do not add up to the frame's");
+  if (total != header.particle_count || total > UINT32_MAX) {
+    throw io::Error(where, "chunk particle counts do not add up to the frame's (or exceed 2^32)");
+  }
 }
 
 }  // namespace
@@ -192,7 +196,8 @@ void Renderer::commit_decoded(const DecodedFrameView& frame, const StagingAlloca
   if (!block || block->host) {
     // Not in Vulkan memory: through the renderer's own staging.
     FrameStaging s = stage_frame(n, chunks);
-    fill_chunk_table(header, frame.chunk_first, attribute ? frame.color_attribute : -1, s.chunks);
+    fill_chunk_table(header, frame.chunk_first, attribute ? frame.color_attribute : -1, s.chunks,
+                     io::ErrorLocation{{}, header.frame_number, {}});
     const bool copy_attribute = attribute && !s.color_attribute.empty();
     tbb::parallel_for(tbb::blocked_range<uint64_t>(0, n, 1 << 18), [&](const tbb::blocked_range<uint64_t>& range) {
       const size_t begin = range.begin(), count = range.size();
@@ -212,7 +217,7 @@ void Renderer::commit_decoded(const DecodedFrameView& frame, const StagingAlloca
   r.ensure(r.staging, std::max<uint64_t>(uint64_t(chunks) * sizeof(GpuChunk), 16), vk::BufferUsageFlagBits::eTransferSrc,
            MemoryKind::Upload);
   fill_chunk_table(header, frame.chunk_first, attribute ? frame.color_attribute : -1,
-                   {static_cast<GpuChunk*>(r.staging.mapped), chunks});
+                   {static_cast<GpuChunk*>(r.staging.mapped), chunks}, io::ErrorLocation{{}, header.frame_number, {}});
   r.staged_particles = n;
   r.staged_chunks = chunks;
   const vk::Buffer src = *block->staging.buffer;
@@ -229,26 +234,7 @@ void Renderer::load_frame(const io::ContainerReader& reader, uint64_t frame, int
   const uint32_t chunks = uint32_t(header.chunks.size());
   FrameStaging s = stage_frame(header.particle_count, chunks);
   const bool attr = color_attribute >= 0 && size_t(color_attribute) < fh.attributes.size() && !s.color_attribute.empty();
-  uint64_t first = 0;
-  for (uint32_t c = 0; c < chunks; ++c) {
-    const io::ChunkDesc& d = header.chunks[c];
-    GpuChunk& g = s.chunks[c];
-    g = GpuChunk{};
-    for (int a = 0; a < 3; ++a) {
-      g.lo[a] = d.bounds.min[size_t(a)];
-      g.hi[a] = d.bounds.max[size_t(a)];
-    }
-    g.first = uint32_t(first);
-    g.count = d.particle_count;
-    if (attr) {
-      g.attr_lo = d.attribute_ranges[size_t(color_attribute)][0];
-      g.attr_hi = d.attribute_ranges[size_t(color_attribute)][1];
-    }
-    first += d.particle_count;
-  }
-  if (first != header.particle_count || first > UINT32_MAX) {
-    throw io::Error(reader.location(frame), "chunk particle counts do not add up to the frame's (or exceed 2^32)");
-  }
+  fill_chunk_table(header, {}, attr ? color_attribute : -1, s.chunks, reader.location(frame));
   // Decode every chunk straight into the mapped staging memory.
   tbb::parallel_for(uint32_t(0), chunks, [&](uint32_t c) {
     thread_local io::DecodeScratch scratch;
