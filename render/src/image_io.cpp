@@ -63,6 +63,14 @@ Image read_png(const std::string& path) {
   if (!png_image_begin_read_from_file(&img, path.c_str())) {
     throw std::runtime_error(path + ": not a readable PNG (" + img.message + ")");
   }
+  // The header's size is checked before any allocation: a few bytes may claim gigapixels.
+  constexpr uint32_t kMaxSide = 32768;
+  if (img.width > kMaxSide || img.height > kMaxSide) {
+    const std::string claim = std::to_string(img.width) + "x" + std::to_string(img.height);
+    png_image_free(&img);
+    throw std::runtime_error(path + ": the PNG claims " + claim + " pixels, more than sluice reads (" +
+                             std::to_string(kMaxSide) + " per side)");
+  }
   img.format = PNG_FORMAT_RGBA;
   Image out;
   out.width = img.width;

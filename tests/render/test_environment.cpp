@@ -4,7 +4,11 @@
 // looking up, down, along +y and along -y each has a known colour.
 #include <gtest/gtest.h>
 
+#include <zlib.h>
+
 #include <cmath>
+#include <cstdio>
+#include <fstream>
 
 #include "render_test_util.h"
 #include "sluice/render/image_io.h"
@@ -92,6 +96,47 @@ TEST(Environment, RejectsAnImageWhosePixelsDoNotMatchItsSize) {
   SceneInfo scene = scene_for_points(std::vector<float>{0, 0, 0, 1, 1, 1}, 0.1f);
   Renderer r(context(), scene, 16, 16);
   EXPECT_THROW(r.set_environment(Image{4, 4, std::vector<uint8_t>(10)}), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace sluice::render
+
+namespace sluice::render {
+namespace {
+
+// A PNG of a signature, an IHDR chunk claiming `width` x `height` and an
+// empty IDAT (libpng reads the header up to the first IDAT).
+std::string png_claiming(uint32_t width, uint32_t height) {
+  auto be32 = [](std::string& out, uint32_t v) {
+    for (int s = 24; s >= 0; s -= 8) out.push_back(char((v >> s) & 0xff));
+  };
+  std::string ihdr = "IHDR";
+  be32(ihdr, width);
+  be32(ihdr, height);
+  ihdr += std::string("\x08\x06\x00\x00\x00", 5);  // 8-bit RGBA, no interlace
+  std::string png = "\x89PNG\r\n\x1a\n";
+  be32(png, 13);
+  png += ihdr;
+  be32(png, uint32_t(crc32(0, reinterpret_cast<const Bytef*>(ihdr.data()), uInt(ihdr.size()))));
+  be32(png, 0);
+  png += "IDAT";
+  be32(png, uint32_t(crc32(0, reinterpret_cast<const Bytef*>("IDAT"), 4)));
+  return png;
+}
+
+TEST(Environment, APngClaimingGigapixelsIsRefusedBeforeAllocating) {
+  const std::string path = ::testing::TempDir() + "sluice_huge_claim.png";
+  {
+    std::ofstream out(path, std::ios::binary);
+    out << png_claiming(200000, 200000);  // 160 GB of RGBA if believed
+  }
+  try {
+    read_png(path);
+    FAIL() << "a 200000x200000 claim was accepted";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("200000x200000"), std::string::npos) << e.what();
+  }
+  std::remove(path.c_str());
 }
 
 }  // namespace

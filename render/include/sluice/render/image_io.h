@@ -18,7 +18,7 @@ struct Image {
 };
 
 void write_png(const std::string& path, const Image& image);
-Image read_png(const std::string& path);  // converted to RGBA8
+Image read_png(const std::string& path);  // converted to RGBA8; at most 32768 per side, checked before allocating
 
 // Peak signal-to-noise ratio over R, G and B in dB (infinity when equal).
 // Throws if the sizes differ.
