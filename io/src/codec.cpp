@@ -14,14 +14,12 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
-#if defined(__x86_64__)
-#include <immintrin.h>
-#endif
 #include <limits>
 
 #include "bytes.h"
 #include "chunking.h"
 #include "morton.h"
+#include "quantized_unpack.h"
 #include "records.h"
 
 namespace sluice::io {
@@ -30,7 +28,6 @@ struct DecodeScratch::State {
   ZSTD_DCtx* zstd = ZSTD_createDCtx();
   std::vector<std::byte> raw;
   std::vector<const uint8_t*> planes;
-  std::vector<uint64_t> codes;
   ~State() { ZSTD_freeDCtx(zstd); }
 };
 
@@ -97,69 +94,6 @@ void compress_planes(std::vector<std::byte>& raw, size_t n, int level, std::vect
     payload = std::move(raw);
     codec = ChunkCodec::Stored;
   }
-}
-
-// Morton deltas from their 6 byte planes; a loop the compiler vectorizes.
-// An AVX2 copy is picked at run time by a plain flag rather than an ifunc
-// (target_clones): ifunc resolvers run before TSan initialises and crash it.
-// Inlined into the AVX2 copy below too, where it is vectorized for AVX2.
-__attribute__((always_inline)) inline void gather_deltas_portable(const uint8_t* const* b, size_t n,
-                                                                  uint64_t* deltas) {
-  const uint8_t *b0 = b[0], *b1 = b[1], *b2 = b[2], *b3 = b[3], *b4 = b[4], *b5 = b[5];
-  for (size_t i = 0; i < n; ++i) {
-    deltas[i] = uint64_t(b0[i]) | uint64_t(b1[i]) << 8 | uint64_t(b2[i]) << 16 | uint64_t(b3[i]) << 24 |
-                uint64_t(b4[i]) << 32 | uint64_t(b5[i]) << 40;
-  }
-}
-
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
-__attribute__((target("avx2"))) void gather_deltas_avx2(const uint8_t* const* b, size_t n, uint64_t* deltas) {
-  gather_deltas_portable(b, n, deltas);
-}
-const bool kHaveAvx2 = __builtin_cpu_supports("avx2");
-#endif
-
-void gather_deltas(const uint8_t* const* b, size_t n, uint64_t* deltas) {
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
-  if (kHaveAvx2) return gather_deltas_avx2(b, n, deltas);
-#endif
-  gather_deltas_portable(b, n, deltas);
-}
-
-// Codes + LOD bytes -> packed (x, y, z, lod) uint16 quadruples, written with
-// unaligned-safe stores (the destination may be mapped staging memory).
-template <class Decode>
-inline void unpack_with(Decode decode, const uint64_t* deltas, const uint8_t* lod_lo, const uint8_t* lod_hi, size_t n,
-                        uint64_t* dst) {
-  uint64_t code = 0;
-  for (size_t i = 0; i < n; ++i) {
-    code += deltas[i];
-    const uint64_t packed = decode(code) | (uint64_t(lod_lo[i]) | uint64_t(lod_hi[i]) << 8) << 48;
-    std::memcpy(dst + i, &packed, 8);
-  }
-}
-
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
-__attribute__((target("bmi2"))) void unpack_codes_bmi2(const uint64_t* deltas, const uint8_t* lod_lo,
-                                                       const uint8_t* lod_hi, size_t n, uint64_t* dst) {
-  uint64_t c = 0;
-  for (size_t i = 0; i < n; ++i) {
-    c += deltas[i];
-    const uint64_t packed = _pext_u64(c, 0x249249249249ull) | _pext_u64(c, 0x492492492492ull) << 16 |
-                            _pext_u64(c, 0x924924924924ull) << 32 |
-                            (uint64_t(lod_lo[i]) | uint64_t(lod_hi[i]) << 8) << 48;
-    std::memcpy(dst + i, &packed, 8);
-  }
-}
-const bool kHaveBmi2 = __builtin_cpu_supports("bmi2");
-#endif
-
-// Running sum of the deltas -> Morton codes -> packed (x, y, z, lod).
-void unpack_codes(const uint64_t* deltas, const uint8_t* lod_lo, const uint8_t* lod_hi, size_t n, uint64_t* dst) {
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
-  if (kHaveBmi2) return unpack_codes_bmi2(deltas, lod_lo, lod_hi, n, dst);
-#endif
-  unpack_with(morton_to_packed16, deltas, lod_lo, lod_hi, n, dst);
 }
 
 // Finds (and decompresses where needed) every plane of a chunk payload.
@@ -359,10 +293,7 @@ void decode_chunk(std::span<const std::byte> record, const ChunkDesc& chunk, con
   const uint8_t* lod_lo = planes[first_lod];
   const uint8_t* lod_hi = planes[first_lod + 1];
   if (coding == PositionCoding::Quantized16) {
-    state.codes.resize(n);
-    uint64_t* codes = state.codes.data();
-    gather_deltas(planes.data(), n, codes);
-    unpack_codes(codes, lod_lo, lod_hi, n, reinterpret_cast<uint64_t*>(out.particles.data()));
+    unpack_quantized16(planes.data(), n, out.particles.data());
   } else {
     auto* dst = reinterpret_cast<uint32_t*>(out.particles.data());
     for (size_t i = 0; i < n; ++i) {
