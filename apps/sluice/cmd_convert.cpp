@@ -25,6 +25,7 @@ struct ConvertOptions {
   float spacing = 0, radius = 0, fps = 30;
   uint32_t chunk = 65536;
   int level = 3;
+  bool smallest = false;
   int jobs = 0;
   bool force = false, quiet = false;
   size_t max_warnings = 20;
@@ -90,6 +91,7 @@ void run_convert(const ConvertOptions& o) {
   io::EncodeOptions encode;
   encode.chunk_particles = o.chunk;
   encode.zstd_level = o.level;
+  encode.pack_planes = !o.smallest;
   ProgressBar bar("frames", frames, o.quiet);
   size_t warnings = 0, suppressed = 0;
   uint64_t bytes_in = 0;
@@ -145,6 +147,9 @@ void add_convert(CLI::App& app) {
       ->check(CLI::Range(1u, 1u << 20));
   cmd->add_option("--level", o->level, "zstd level, 1 (fast) to 19 (small)")->capture_default_str()
       ->check(CLI::Range(1, 19));
+  cmd->add_flag("--smallest", o->smallest,
+                "zstd on every plane it shrinks most: files 1-3% smaller, decoding up to 1.4x slower "
+                "(default: small-valued planes are bit-packed)");
   cmd->add_option("-j,--jobs", o->jobs, "Worker threads (default: all cores)");
   cmd->add_flag("-f,--force", o->force, "Overwrite the output if it exists");
   cmd->add_flag("-q,--quiet", o->quiet, "No progress bar or notes");

@@ -137,6 +137,7 @@ SynthResult write_synthetic(const SynthOptions& o, const std::function<void(uint
   io::EncodeOptions encode;
   encode.chunk_particles = o.chunk_particles;
   encode.zstd_level = o.zstd_level;
+  encode.pack_planes = o.pack_planes;
   const size_t jobs = o.jobs > 0 ? size_t(o.jobs) : size_t(tbb::info::default_concurrency());
   const io::ConvertResult r = io::convert_frames(*source, std::nullopt, writer, encode, jobs + 1,
                                                  [&](const io::ConvertProgress& p) {

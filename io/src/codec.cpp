@@ -19,6 +19,7 @@
 #include "bytes.h"
 #include "chunking.h"
 #include "morton.h"
+#include "packed_plane.h"
 #include "quantized_unpack.h"
 #include "records.h"
 
@@ -65,31 +66,52 @@ ZSTD_CCtx* thread_compressor() {
   return holder.ctx;
 }
 
-// Chunk payload (codec Zstd): a table of one u32 per plane, then the planes.
-// A plane whose table entry is n is stored as is (read in place, no copy);
-// any other entry is the size of the zstd frame holding the plane. Planes
-// that zstd cannot shrink by kMinPlaneGain are stored: decoding them costs
-// nothing, and they are typically noise (LOD values, low bytes).
+// Chunk payload (codecs Zstd and Packed): a table of one u32 per plane, then
+// the planes. An entry equal to n: the plane is stored as is (read in place,
+// no copy). Codec Packed only: an entry with kPackedFlag set is a packed
+// plane (packed_plane.h) of the remaining size. Any other entry is the size
+// of the zstd frame holding the plane.
+//
+// Each plane takes the cheapest form to decode that is small enough:
+// stored when nothing saves kMinPlaneGain of it (noise: LOD values, low
+// bytes); zstd only where it saves kZstdGainOverPacked over bit packing
+// (structured planes of lattice-like data); bit-packed otherwise (the small
+// high bytes of Morton deltas, which zstd's entropy decoder takes about 1 ns
+// per byte to decode and unpacking 0.1-0.2).
 constexpr double kMinPlaneGain = 0.15;
+constexpr double kZstdGainOverPacked = 1.0 / 3.0;
+constexpr uint32_t kPackedFlag = 0x80000000u;
 
-void compress_planes(std::vector<std::byte>& raw, size_t n, int level, std::vector<std::byte>& payload,
-                     ChunkCodec& codec) {
+void compress_planes(std::vector<std::byte>& raw, size_t n, const EncodeOptions& options,
+                     std::vector<std::byte>& payload, ChunkCodec& codec) {
   const size_t planes = raw.size() / n;
   ZSTD_CCtx* cctx = thread_compressor();
   std::vector<std::byte> frame(ZSTD_compressBound(n));
   payload.assign(4 * planes, std::byte{0});
+  bool any_packed = false;
   for (size_t p = 0; p < planes; ++p) {
     const std::byte* plane = raw.data() + p * n;
-    size_t size = ZSTD_compressCCtx(cctx, frame.data(), frame.size(), plane, n, level);
-    if (ZSTD_isError(size)) throw Error({}, std::string("zstd: ") + ZSTD_getErrorName(size));
-    const bool stored = double(size) > double(n) * (1.0 - kMinPlaneGain);
-    const std::byte* bytes = stored ? plane : frame.data();
-    if (stored) size = n;
-    const auto size32 = static_cast<uint32_t>(size);
-    std::memcpy(payload.data() + 4 * p, &size32, 4);
-    payload.insert(payload.end(), bytes, bytes + size);
+    const std::span<const uint8_t> values(reinterpret_cast<const uint8_t*>(plane), n);
+    const size_t zstd_size = ZSTD_compressCCtx(cctx, frame.data(), frame.size(), plane, n, options.zstd_level);
+    if (ZSTD_isError(zstd_size)) throw Error({}, std::string("zstd: ") + ZSTD_getErrorName(zstd_size));
+    const PackedPlan packed = options.pack_planes ? plan_packed_plane(values) : PackedPlan{};
+    const bool use_zstd =
+        packed.width == 0 || double(zstd_size) < double(packed.bytes) * (1.0 - kZstdGainOverPacked);
+    const size_t size = use_zstd ? zstd_size : packed.bytes;
+    uint32_t entry = static_cast<uint32_t>(size);
+    if (double(size) > double(n) * (1.0 - kMinPlaneGain)) {
+      entry = static_cast<uint32_t>(n);
+      payload.insert(payload.end(), plane, plane + n);
+    } else if (use_zstd) {
+      payload.insert(payload.end(), frame.data(), frame.data() + zstd_size);
+    } else {
+      pack_plane(values, packed.width, payload);
+      entry |= kPackedFlag;
+      any_packed = true;
+    }
+    std::memcpy(payload.data() + 4 * p, &entry, 4);
   }
-  codec = ChunkCodec::Zstd;
+  codec = any_packed ? ChunkCodec::Packed : ChunkCodec::Zstd;
   if (payload.size() >= raw.size()) {  // nothing shrank: store the planes, no table
     payload = std::move(raw);
     codec = ChunkCodec::Stored;
@@ -109,19 +131,25 @@ void locate_planes(std::span<const std::byte> payload, ChunkCodec codec, size_t 
   if (s.raw.size() < n * planes) s.raw.resize(n * planes);
   size_t at = 4 * planes;
   for (size_t p = 0; p < planes; ++p) {
-    uint32_t size;
-    std::memcpy(&size, payload.data() + 4 * p, 4);
-    if (size > payload.size() - at) throw Error(where, "plane " + std::to_string(p) + " runs past the chunk payload");
+    uint32_t entry;
+    std::memcpy(&entry, payload.data() + 4 * p, 4);
+    const bool packed = codec == ChunkCodec::Packed && (entry & kPackedFlag) != 0;
+    const uint32_t size = packed ? entry & ~kPackedFlag : entry;
+    const std::string what = "plane " + std::to_string(p);
+    if (size > payload.size() - at) throw Error(where, what + " runs past the chunk payload");
     const std::byte* src = payload.data() + at;
-    if (size == n) {
+    if (packed) {
+      auto* dst = reinterpret_cast<uint8_t*>(s.raw.data() + p * n);
+      unpack_plane({src, size}, n, dst, where, what);
+      out[p] = dst;
+    } else if (size == n) {
       out[p] = reinterpret_cast<const uint8_t*>(src);
     } else {
       std::byte* dst = s.raw.data() + p * n;
       const size_t got = ZSTD_decompressDCtx(s.zstd, dst, n, src, size);
-      if (ZSTD_isError(got)) throw Error(where, "plane " + std::to_string(p) + ": zstd: " + ZSTD_getErrorName(got));
+      if (ZSTD_isError(got)) throw Error(where, what + ": zstd: " + ZSTD_getErrorName(got));
       if (got != n) {
-        throw Error(where, "plane " + std::to_string(p) + " decompressed to " + std::to_string(got) + " bytes, expected " +
-                               std::to_string(n));
+        throw Error(where, what + " decompressed to " + std::to_string(got) + " bytes, expected " + std::to_string(n));
       }
       out[p] = reinterpret_cast<const uint8_t*>(dst);
     }
@@ -203,7 +231,7 @@ EncodedChunk encode_chunk(const FrameInput& in, std::span<const uint32_t> member
   }
 
   out.raw_bytes = raw_size;
-  compress_planes(raw, n, options.zstd_level, out.payload, desc.codec);
+  compress_planes(raw, n, options, out.payload, desc.codec);
   desc.compressed_size = static_cast<uint32_t>(out.payload.size());
   desc.checksum = checksum(out.payload);
   return out;

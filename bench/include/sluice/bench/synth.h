@@ -32,6 +32,7 @@ struct SynthOptions {
   bool lossless = false;               // float32 positions instead of 16-bit quantized
   uint32_t chunk_particles = 65536;
   int zstd_level = 1;
+  bool pack_planes = true;             // false: zstd wherever smaller (EncodeOptions)
   int jobs = 0;                        // frames encoded at once; 0: one per core
   uint32_t seed = 1;
 };

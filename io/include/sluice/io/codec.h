@@ -17,6 +17,10 @@ namespace sluice::io {
 struct EncodeOptions {
   uint32_t chunk_particles = 65536;  // upper bound per chunk; chunks follow octree cells
   int zstd_level = 3;                // 1 (fast) .. 19 (small); decode speed barely changes
+  // Bit-pack planes of small values unless zstd saves a third over packing:
+  // decoding 1.4-2x faster for 1-2% more bytes (docs/format.md). false:
+  // zstd wherever it is smaller (files readable by format 1.0 readers).
+  bool pack_planes = true;
 };
 
 // One frame to encode. Spans are borrowed for the duration of the call.

@@ -15,7 +15,7 @@
 namespace sluice::io {
 
 inline constexpr uint16_t kFormatMajor = 1;  // readers reject other majors
-inline constexpr uint16_t kFormatMinor = 0;  // readers accept any minor of their major
+inline constexpr uint16_t kFormatMinor = 1;  // readers accept any minor of their major
 
 // Hard limits. A header that claims more is rejected before any allocation.
 inline constexpr uint32_t kMaxHeaderBytes = 1u << 20;
@@ -48,7 +48,11 @@ enum class Layer : uint8_t {
 inline constexpr int kLayerCount = 4;
 
 // Chunk payload compression.
-enum class ChunkCodec : uint8_t { Zstd = 0, Stored = 1 };
+enum class ChunkCodec : uint8_t {
+  Zstd = 0,    // planes, each stored or zstd
+  Stored = 1,  // planes concatenated, no table
+  Packed = 2,  // planes, each stored, zstd or bit-packed (format 1.1)
+};
 
 struct FileHeader {
   uint16_t version_major = kFormatMajor;
