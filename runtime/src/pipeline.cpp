@@ -69,14 +69,13 @@ PipelineCore::PipelineCore(const io::ContainerReader& reader, FrameAllocator& al
   read_threads_ = options_.read_threads > 0    ? options_.read_threads
                   : options_.decode_threads > 0 ? std::clamp(decode_threads_ / 4, 1, 4)
                                                 : default_thread_split(tbb::info::default_concurrency()).read;
-  // Workers wanted: every decode slot, and the read helpers (the reader
-  // thread itself takes the read arena's reserved slot).
-  const int workers = decode_threads_ + read_threads_ - 1;
-  if (workers + 1 > tbb::info::default_concurrency()) {
-    parallelism_.emplace(tbb::global_control::max_allowed_parallelism, size_t(workers) + 1);
+  // TBB workers wanted: every decode slot (the read helpers are threads of
+  // their own, read_crew.h).
+  if (decode_threads_ + 1 > tbb::info::default_concurrency()) {
+    parallelism_.emplace(tbb::global_control::max_allowed_parallelism, size_t(decode_threads_) + 1);
   }
-  arena_.initialize(decode_threads_, 0);       // no slot reserved: only workers decode
-  read_arena_.initialize(read_threads_, 1);   // the reader thread's own slot, and helpers
+  arena_.initialize(decode_threads_, 0);  // no slot reserved: only workers decode
+  read_crew_.start(read_threads_ - 1);
 
   initial_plan_ = plan_now(0);
   counters_.window_frames.store(initial_plan_.frames, kRelaxed);

@@ -8,6 +8,8 @@
 #include <tbb/task_arena.h>
 #include <tbb/task_group.h>
 
+#include "read_crew.h"
+
 #include <atomic>
 #include <chrono>
 #include <deque>
@@ -168,10 +170,10 @@ class PipelineCore {
   std::optional<tbb::global_control> parallelism_;
   tbb::task_arena arena_;
   tbb::task_group decode_group_;
-  // Reads: the reader thread plus read_threads_ - 1 helpers copy the pieces
-  // of one record at once (page-cache copies and O_DIRECT requests both
-  // scale with it).
-  tbb::task_arena read_arena_;
+  // Reads: the reader thread plus read_threads_ - 1 helper threads copy the
+  // pieces of one record at once (page-cache copies and O_DIRECT requests
+  // both scale with it).
+  ReadCrew read_crew_;
 
   std::thread reader_thread_;  // last: started once everything above exists
 };

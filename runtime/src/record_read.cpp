@@ -1,14 +1,10 @@
 // Reading a frame record: in pieces (so a seek cancels a big read early),
-// several at once when read_threads > 1. One thread copying out of the page
+// several at once when read_threads > 1 (read_crew.h). One thread copying out of the page
 // cache tops out well below what the decode workers can take.
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
-
 #include <algorithm>
 #include <chrono>
 
 #include "pipeline_core.h"
-#include "tsan_handoff.h"
 
 namespace sluice::runtime::detail {
 namespace {
@@ -55,21 +51,13 @@ bool PipelineCore::read_pieces(std::span<std::byte> dst, uint64_t offset, uint64
     for (uint64_t p = 0; p < count && !(cancelled = stale()); ++p) read_one(p);
   } else {
     std::atomic<bool> gave_up{false};
-    handoff_release(&read_arena_);  // helpers read what this thread set up (TBB is invisible to TSan)
-    read_arena_.execute([&] {
-      tbb::parallel_for(tbb::blocked_range<uint64_t>(0, count, 1), [&](const tbb::blocked_range<uint64_t>& r) {
-        handoff_acquire(&read_arena_);
-        for (uint64_t p = r.begin(); p != r.end(); ++p) {
-          if (gave_up.load(kRelaxed) || stale()) {
-            gave_up.store(true, kRelaxed);
-            break;
-          }
-          read_one(p);
-        }
-        handoff_release(&read_arena_);
-      });
+    read_crew_.run(count, [&](uint64_t p) {
+      if (gave_up.load(kRelaxed) || stale()) {
+        gave_up.store(true, kRelaxed);
+        return;
+      }
+      read_one(p);
     });
-    handoff_acquire(&read_arena_);
     cancelled = gave_up.load(kRelaxed);
   }
   counters_.read_ns.fetch_add(static_cast<uint64_t>(std::chrono::duration_cast<std::chrono::nanoseconds>(

@@ -1,0 +1,52 @@
+// The threads that copy one record's pieces at once: the reader thread and
+// `helpers` threads of their own. Dedicated threads rather than TBB workers:
+// TBB hands its workers to arenas lazily, so a read helper borrowed from the
+// pool is often missing while the decode arena keeps every worker busy, and
+// the record is then copied by one thread (measured on 16 cores: the
+// pipeline read at 8.5 GB/s against 14.8 for two threads alone).
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <exception>
+#include <functional>
+#include <thread>
+#include <vector>
+
+namespace sluice::runtime::detail {
+
+class ReadCrew {
+ public:
+  ReadCrew() = default;
+  ~ReadCrew();  // stops and joins the helpers
+  // Starts the helper threads; once, before the first run().
+  void start(int helpers);
+  ReadCrew(const ReadCrew&) = delete;
+  ReadCrew& operator=(const ReadCrew&) = delete;
+
+  // Runs body(p) for every p in [0, count), each exactly once, on the calling
+  // thread and the helpers; returns when all are done. If a body throws, the
+  // pieces not yet started are skipped and the first exception is rethrown
+  // here. One caller at a time (the reader thread). Waiting is on futex words
+  // (std::atomic::wait): no mutex.
+  void run(uint64_t count, const std::function<void(uint64_t)>& body);
+
+  int helpers() const { return static_cast<int>(threads_.size()); }
+
+ private:
+  void helper_main();
+  void work();
+
+  std::vector<std::thread> threads_;
+  std::atomic<uint64_t> round_{0};   // bumped for every run(); helpers wait on it
+  std::atomic<uint64_t> next_{0};    // next piece to take
+  std::atomic<int> working_{0};      // helpers not yet done with this round
+  std::atomic<bool> stopping_{false};
+  std::atomic<bool> failed_{false};
+  // Written by run() before round_ is bumped (release), read by helpers after.
+  uint64_t count_ = 0;
+  const std::function<void(uint64_t)>* body_ = nullptr;
+  std::exception_ptr error_;  // written by whoever sets failed_ first
+};
+
+}  // namespace sluice::runtime::detail
