@@ -14,7 +14,7 @@ namespace sluice::runtime {
 ThreadSplit default_thread_split(int cores) {
   cores = std::max(cores, 1);
   ThreadSplit split;
-  split.read = std::clamp(cores / 8, 1, 4);
+  split.read = std::clamp(cores / 4, 1, 4);
   split.decode = cores >= 8 ? cores - split.read : cores;
   return split;
 }

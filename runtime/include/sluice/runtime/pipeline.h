@@ -73,12 +73,13 @@ struct PipelineOptions {
   uint64_t read_piece_bytes = 8 << 20;  // reads are split (a seek cancels a big read early; pieces go in parallel)
 };
 
-// How the pipeline shares `cores` by default: one read thread per 8 cores
+// How the pipeline shares `cores` by default: one read thread per 4 cores
 // (1 to 4) and, from 8 cores on, the others decode, so that readers and
 // workers do not fight over cores; below 8 cores every core decodes. On the
-// 16-core GPU machine, 14 workers + 2 readers stream 10M-particle frames from
-// the page cache at 139-152 frames/s, 16 + 4 at 131-140 (runs vary by about
-// 8%; docs/measurements.md).
+// 16-core GPU machine, 10M-particle frames stream from the page cache at 227
+// frames/s with 12 workers + 4 readers, 200 with 13 + 3, 120 with 14 + 2:
+// copying out of the page cache slows to under 4 GB/s per thread while the
+// workers load memory (docs/measurements.md).
 struct ThreadSplit {
   int decode = 1;
   int read = 1;
