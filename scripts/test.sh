@@ -3,7 +3,7 @@
 #   1. Release build, whole suite (CTest)
 #   2. ASan + UBSan build, whole suite
 #   3. TSan build, the pipeline tests (CTest label "pipeline")
-#   4. libFuzzer targets (clang, ASan + UBSan), a short run of each
+#   4. libFuzzer targets (clang, ASan + UBSan), a short run of each (container, chunk, text)
 # Set QUICK=1 to run step 1 only.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
@@ -44,9 +44,10 @@ fi
 step "libFuzzer targets"
 CC=clang CXX=clang++ cmake -S "$root" -B "$root/build-fuzz" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSLUICE_FUZZ=ON \
   -DSLUICE_SANITIZE=address,undefined -DSLUICE_TESTS=ON >/dev/null
-cmake --build "$root/build-fuzz" -j "$jobs" --target fuzz_container fuzz_text_import
+cmake --build "$root/build-fuzz" -j "$jobs" --target fuzz_container fuzz_chunk fuzz_text_import make_chunk_seeds
 corpus="$root/build-fuzz/corpus"
-rm -rf "$corpus" && mkdir -p "$corpus/container" "$corpus/text"
+rm -rf "$corpus" && mkdir -p "$corpus/container" "$corpus/chunk" "$corpus/text"
+"$root/build-fuzz/tests/fuzz/make_chunk_seeds" "$corpus/chunk"
 # Seeds: real containers (small chunks so there are several) and text files.
 "$root/build/apps/sluice/sluice" convert "$root/data/dam_break_3d/dam_break_3d_fluid_00000.vtu" \
   -o "$corpus/container/q.sluice" --chunk 300 -a rho -q -f
@@ -54,5 +55,6 @@ rm -rf "$corpus" && mkdir -p "$corpus/container" "$corpus/text"
 cp "$root"/tests/data/fuzz/text/* "$corpus/text/" 2>/dev/null || true
 secs=${FUZZ_SECONDS:-60}
 "$root/build-fuzz/tests/fuzz/fuzz_container" -max_total_time="$secs" -rss_limit_mb=2048 -timeout=10 "$corpus/container"
+"$root/build-fuzz/tests/fuzz/fuzz_chunk" -max_total_time="$secs" -rss_limit_mb=2048 -timeout=10 "$corpus/chunk"
 "$root/build-fuzz/tests/fuzz/fuzz_text_import" -max_total_time="$secs" -rss_limit_mb=2048 -timeout=10 "$corpus/text"
 step "all tests passed"

@@ -42,14 +42,17 @@ struct Dataset {
   uint64_t input_bytes = 0;
 };
 
-std::string write_container(const std::string& path, const io::FrameSource& source, io::PositionCoding coding) {
+std::string write_container(const std::string& path, const io::FrameSource& source, io::PositionCoding coding,
+                            bool pack_planes = true) {
   io::FileHeader header;
   header.position_coding = coding;
   header.lod_id_array = source.info().id_array;
   header.lod_source = header.lod_id_array.empty() ? io::LodSource::ParticleOrder : io::LodSource::IdHash;
   header.source = source.info().description;
   io::ContainerWriter writer(path, header);
-  io::convert_frames(source, std::nullopt, writer, {}, size_t(core_count()) + 1);
+  io::EncodeOptions encode;
+  encode.pack_planes = pack_planes;
+  io::convert_frames(source, std::nullopt, writer, encode, size_t(core_count()) + 1);
   writer.finish();
   return path;
 }
@@ -156,6 +159,8 @@ void run_io_bench(const IoBenchOptions& o) {
   fs::create_directories(dir);
   const std::string quantized = write_container((dir / "q.sluice").string(), *source, io::PositionCoding::Quantized16);
   const std::string lossless = write_container((dir / "f.sluice").string(), *source, io::PositionCoding::Float32);
+  const std::string smallest =
+      write_container((dir / "z.sluice").string(), *source, io::PositionCoding::Quantized16, false);
   uint64_t vtu_zlib = 0, vtu_raw = 0;
   if (io::has_vtk_support()) {
     for (uint64_t f = 0; f < frame_count; ++f) {
@@ -166,8 +171,9 @@ void run_io_bench(const IoBenchOptions& o) {
     }
   }
   const double n = double(data.particles);
-  const io::ContainerReader q(quantized), l(lossless);
+  const io::ContainerReader q(quantized), l(lossless), z(smallest);
   const double q_bytes = double(fs::file_size(quantized)), l_bytes = double(fs::file_size(lossless));
+  const double z_bytes = double(fs::file_size(smallest));
   Table sizes({"format", "bytes", "bytes/particle", "vs raw float32 xyz"});
   auto size_row = [&](const std::string& name, double bytes) {
     sizes.row({name, num(bytes, 0), num(bytes / n, 2), num(12.0 * n / bytes, 2) + "x smaller"});
@@ -178,6 +184,7 @@ void run_io_bench(const IoBenchOptions& o) {
   if (vtu_zlib) size_row("VTK .vtu float32, zlib", double(vtu_zlib));
   size_row(".sluice lossless float32 + LOD", l_bytes);
   size_row(".sluice quantized 16-bit + LOD", q_bytes);
+  size_row(".sluice quantized, zstd on every plane (--smallest)", z_bytes);
   std::printf("\n%llu frames, %llu particles in all (%.0f per frame), spacing %.4g\n", (unsigned long long)frame_count,
               (unsigned long long)data.particles, n / double(frame_count),
               io::estimate_spacing(data.frames[0].positions));
@@ -188,6 +195,7 @@ void run_io_bench(const IoBenchOptions& o) {
   const double rd_1 = time_passes(o.min_seconds, [&] { read_and_decode_all(q, 1); });
   const double rd_n = time_passes(o.min_seconds, [&] { read_and_decode_all(q, cores); });
   const double rdl_n = time_passes(o.min_seconds, [&] { read_and_decode_all(l, cores); });
+  const double rdz_1 = time_passes(o.min_seconds, [&] { read_and_decode_all(z, 1); });
   Table read({"reader", "threads", "M particles/s", "input MB/s", "output GB/s", "vs VTK (same threads)"});
   if (vtk_full > 0) {
     read.row({"VTK reader, every array (as ParaView)", "1", num(n / vtk_full / 1e6, 2),
@@ -199,6 +207,8 @@ void run_io_bench(const IoBenchOptions& o) {
             num(double(data.input_bytes) / vtk_n / 1e6, 1), num(n * 12 / vtk_n / 1e9, 3), "1.0x"});
   read.row({".sluice quantized read+decode", "1", num(n / rd_1 / 1e6, 1), num(q_bytes / rd_1 / 1e6, 1),
             num(out_bytes / rd_1 / 1e9, 2), num(vtk_1 / rd_1, 0) + "x"});
+  read.row({".sluice quantized --smallest read+decode", "1", num(n / rdz_1 / 1e6, 1), num(z_bytes / rdz_1 / 1e6, 1),
+            num(out_bytes / rdz_1 / 1e9, 2), num(vtk_1 / rdz_1, 0) + "x"});
   read.row({".sluice quantized read+decode", std::to_string(cores), num(n / rd_n / 1e6, 1), num(q_bytes / rd_n / 1e6, 1),
             num(out_bytes / rd_n / 1e9, 2), num(vtk_n / rd_n, 0) + "x"});
   read.row({".sluice lossless read+decode", std::to_string(cores), num(n / rdl_n / 1e6, 1), num(l_bytes / rdl_n / 1e6, 1),
