@@ -20,9 +20,11 @@ rm -rf "$stage"
 # Vulkan loader (the driver is the machine's own).
 mkdir -p "$root/.gl" /tmp/amd64/partial
 o=(-oAPT::Architecture=amd64 -oAPT::Architectures=amd64 -oDir::State::Lists=/tmp/amd64)
-if ! ls "$root"/.gl/libvulkan1_*.deb >/dev/null 2>&1; then
+if ! ls "$root"/.gl/libglvnd0_*.deb >/dev/null 2>&1; then
   apt-get "${o[@]}" update -qq
+  # glvnd too: without it the H200 box's libGLX_nvidia gives the loader no
+  # vkCreateInstance (ErrorIncompatibleDriver).
   (cd "$root/.gl" && apt-get "${o[@]}" download libvulkan1 libwayland-client0 libx11-6 libxcb1 libxau6 libxdmcp6 \
-    libbsd0 libmd0 libffi8 vulkan-tools)
+    libbsd0 libmd0 libffi8 vulkan-tools libegl1 libglvnd0 libopengl0 libgl1 libglx0 libgles2)
 fi
 du -sh "$root/.gpu" "$root/.gl"
