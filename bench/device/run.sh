@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Runs on the GPU machine (see bench/device/README.md): every benchmark the
 # issues ask GPU-machine figures for, in one call. Results go to $OUT.
-#   bash bench/device/run.sh [io] [render] [stream] [split] [codec]   (default: io render stream)
+#   bash bench/device/run.sh [io] [render] [stream] [split] [codec] [huge]   (default: io render stream)
 set -uo pipefail
 OUT=${OUT:-/tmp/out}
 mkdir -p "$OUT" /tmp/s
@@ -40,6 +40,11 @@ for stage in $stages; do
     split)  # after stream: other splits of the cores between reading and decoding
       run $S bench stream /tmp/synth10m.sluice --memory 16G --no-storage --read-threads 3 --threads 13
       run $S bench stream /tmp/synth10m.sluice --memory 16G --no-storage --read-threads 4 --threads 12
+      ;;
+    huge)  # 100M particles per frame
+      run $S synth -n 100M --frames 12 -o /tmp/synth100m.sluice --force -q
+      run $S bench stream /tmp/synth100m.sluice --memory 24G --no-storage --min-time 2
+      rm -f /tmp/synth100m.sluice
       ;;
     codec)  # after stream: the same sequence with zstd on every plane (--smallest)
       run $S synth -n 10M --frames ${SYNTH_FRAMES:-120} -o /tmp/synth10m_zstd.sluice --force --smallest -q
