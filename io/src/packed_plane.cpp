@@ -9,6 +9,8 @@
 // one PDEP into 8 bytes.
 #include "packed_plane.h"
 
+#include "quantized_unpack.h"
+
 #include <algorithm>
 #include <array>
 #include <cstring>
@@ -81,7 +83,7 @@ __attribute__((target("bmi2"))) void spread_groups_bmi2(const uint8_t* packed, s
   }
   spread_tail(packed, n, width, dst, direct);
 }
-const bool kHaveBmi2 = __builtin_cpu_supports("bmi2");
+const bool kFastPdep = fast_pext();  // PDEP is as fast as PEXT (slow on AMD Zen 1/2)
 #endif
 
 // Replaces each escape code in dst[0..n) by the next escape byte. Returns
@@ -164,15 +166,14 @@ void unpack_with(std::span<const std::byte> payload, size_t n, uint8_t* dst, con
   const auto code = uint8_t((1u << width) - 1);
   size_t found = 0;
 #if SLUICE_X86_KERNELS
-  if (!portable && kHaveBmi2 && kHaveAvx2) {
-    spread_groups_bmi2(packed, n, width, dst);
-    found = patch_escapes_avx2(dst, n, code, packed + packed_bytes, count);
-  } else
+  if (!portable && kFastPdep) spread_groups_bmi2(packed, n, width, dst);
+  else spread_groups_portable(packed, n, width, dst);
+  if (!portable && kHaveAvx2) found = patch_escapes_avx2(dst, n, code, packed + packed_bytes, count);
+  else found = patch_escapes_from(dst, 0, n, code, packed + packed_bytes, count, 0);
+#else
+  spread_groups_portable(packed, n, width, dst);
+  found = patch_escapes_from(dst, 0, n, code, packed + packed_bytes, count, 0);
 #endif
-  {
-    spread_groups_portable(packed, n, width, dst);
-    found = patch_escapes_from(dst, 0, n, code, packed + packed_bytes, count, 0);
-  }
   if (found != count) {
     throw Error(where, what + ": packed plane has " + std::to_string(found) + " escape codes but stores " +
                            std::to_string(count) + " escapes");

@@ -1,10 +1,11 @@
-// Two kernels, one result. The portable one gathers each particle's 8 bytes
-// and decodes its Morton code through a table. The x86 one works on blocks
-// of 32 particles: an 8 x 32 byte transpose (unpack instructions) turns the
-// 8 planes into 32 words `delta | lod << 48` at about one shuffle per
-// particle, into a block that stays in L1; a scalar pass then runs the
-// prefix sum and splits each code with three PEXTs. One pass over the
-// planes, no 64-bit delta array in between.
+// Three kernels, one result. The portable one gathers each particle's 8
+// bytes and decodes its Morton code through a table. The x86 ones work on
+// blocks of 32 particles: an 8 x 32 byte transpose (unpack instructions)
+// turns the 8 planes into 32 words `delta | lod << 48` at about one shuffle
+// per particle, into a block that stays in L1; a scalar pass then runs the
+// prefix sum and splits each code with three PEXTs (or the table, on CPUs
+// whose PEXT is slow). One pass over the planes, no 64-bit delta array in
+// between.
 //
 // The kernel is picked by a flag read once rather than an ifunc
 // (target_clones): ifunc resolvers run before TSan initialises and crash it.
@@ -84,7 +85,11 @@ __attribute__((target("avx2"))) inline void transpose_block(const uint8_t* const
 // particle on a 2M-particle frame, one core). Small chunks may well be read
 // again from cache, so they are stored normally.
 constexpr size_t kStreamFrom = 16384;
-__attribute__((target("avx2,bmi2"))) void unpack_avx2_bmi2(const uint8_t* const* p, size_t n, std::byte* dst) {
+
+// The block loop, shared by both x86 kernels; `Split` turns a Morton code
+// into x | y << 16 | z << 32.
+template <class Split>
+__attribute__((target("avx2,bmi2"), always_inline)) inline void unpack_blocks(const uint8_t* const* p, size_t n, std::byte* dst, Split split) {
   alignas(32) uint64_t words[kBlock];
   alignas(32) uint64_t packed[kBlock];
   // Particles before the first 32-byte boundary of dst go the portable way.
@@ -97,8 +102,7 @@ __attribute__((target("avx2,bmi2"))) void unpack_avx2_bmi2(const uint8_t* const*
     for (size_t j = 0; j < kBlock; ++j) {
       const uint64_t word = words[j];
       code += word & kDeltaMask;
-      packed[j] = _pext_u64(code, 0x249249249249ull) | _pext_u64(code, 0x492492492492ull) << 16 |
-                  _pext_u64(code, 0x924924924924ull) << 32 | (word & ~kDeltaMask);
+      packed[j] = split(code) | (word & ~kDeltaMask);
     }
     auto* out = reinterpret_cast<__m256i*>(dst + 8 * i);
     const auto* block = reinterpret_cast<const __m256i*>(packed);
@@ -112,28 +116,69 @@ __attribute__((target("avx2,bmi2"))) void unpack_avx2_bmi2(const uint8_t* const*
   unpack_portable_from(p, i, n, code, dst);
 }
 
+__attribute__((target("avx2,bmi2"))) void unpack_avx2_pext(const uint8_t* const* p, size_t n, std::byte* dst) {
+  unpack_blocks(p, n, dst, [](uint64_t code) __attribute__((target("avx2,bmi2"), always_inline)) {
+    return _pext_u64(code, 0x249249249249ull) | _pext_u64(code, 0x492492492492ull) << 16 |
+           _pext_u64(code, 0x924924924924ull) << 32;
+  });
+}
+
+// Compiled for BMI2 too (the compiler's own shifts, never PEXT), so that one
+// block loop serves both kernels.
+__attribute__((target("avx2,bmi2"))) void unpack_avx2_table(const uint8_t* const* p, size_t n, std::byte* dst) {
+  unpack_blocks(p, n, dst, [](uint64_t code) __attribute__((target("avx2,bmi2"), always_inline)) {
+    return morton_to_packed16(code);
+  });
+}
+
 const bool kHaveAvx2Bmi2 = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("bmi2");
 #endif
 
 }  // namespace
 
-void unpack_quantized16_portable(const uint8_t* const* planes, size_t n, std::byte* dst) {
-  unpack_portable_from(planes, 0, n, 0, dst);
-}
-
-bool quantized_unpack_is_vectorized() {
+bool fast_pext() {
 #if SLUICE_X86_KERNELS
-  return kHaveAvx2Bmi2;
+  // AMD before Zen 3 runs PDEP/PEXT in microcode, at tens to hundreds of
+  // cycles each (one per mask bit): there the table is far faster.
+  static const bool fast = __builtin_cpu_supports("bmi2") && !__builtin_cpu_is("znver1") && !__builtin_cpu_is("znver2");
+  return fast;
 #else
   return false;
 #endif
 }
 
-void unpack_quantized16(const uint8_t* const* planes, size_t n, std::byte* dst) {
+bool unpack_kernel_runs_here(UnpackKernel kernel) {
+  switch (kernel) {
+    case UnpackKernel::Portable: return true;
 #if SLUICE_X86_KERNELS
-  if (kHaveAvx2Bmi2) return unpack_avx2_bmi2(planes, n, dst);
+    case UnpackKernel::Avx2Table:
+    case UnpackKernel::Avx2Pext: return kHaveAvx2Bmi2;
+#else
+    default: return false;
 #endif
-  unpack_quantized16_portable(planes, n, dst);
+  }
+  return false;
+}
+
+UnpackKernel chosen_unpack_kernel() {
+  if (unpack_kernel_runs_here(UnpackKernel::Avx2Pext) && fast_pext()) return UnpackKernel::Avx2Pext;
+  if (unpack_kernel_runs_here(UnpackKernel::Avx2Table)) return UnpackKernel::Avx2Table;
+  return UnpackKernel::Portable;
+}
+
+void unpack_quantized16_with(UnpackKernel kernel, const uint8_t* const* planes, size_t n, std::byte* dst) {
+  switch (kernel) {
+#if SLUICE_X86_KERNELS
+    case UnpackKernel::Avx2Pext: return unpack_avx2_pext(planes, n, dst);
+    case UnpackKernel::Avx2Table: return unpack_avx2_table(planes, n, dst);
+#endif
+    default: unpack_portable_from(planes, 0, n, 0, dst);
+  }
+}
+
+void unpack_quantized16(const uint8_t* const* planes, size_t n, std::byte* dst) {
+  static const UnpackKernel kernel = chosen_unpack_kernel();
+  unpack_quantized16_with(kernel, planes, n, dst);
 }
 
 }  // namespace sluice::io

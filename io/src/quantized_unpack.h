@@ -9,14 +9,23 @@
 namespace sluice::io {
 
 // `planes[0..7]` hold n bytes each; `dst` receives n uint64 (any alignment:
-// it may be mapped staging memory). Picks the fastest kernel this CPU runs
-// (AVX2 + BMI2, else portable); every kernel gives the same bytes.
+// it may be mapped staging memory). Runs chosen_unpack_kernel(); every
+// kernel gives the same bytes.
 void unpack_quantized16(const uint8_t* const* planes, size_t n, std::byte* dst);
 
-// The portable kernel alone, for tests that compare kernels.
-void unpack_quantized16_portable(const uint8_t* const* planes, size_t n, std::byte* dst);
+enum class UnpackKernel {
+  Portable,   // any CPU
+  Avx2Table,  // AVX2 transpose, table Morton decode (needs BMI2 present, not fast)
+  Avx2Pext,   // AVX2 transpose, BMI2 PEXT Morton decode
+};
+// Avx2Pext where PEXT is fast (not AMD Zen 1/2, which run it in microcode),
+// else Avx2Table where there is AVX2, else Portable.
+UnpackKernel chosen_unpack_kernel();
+bool unpack_kernel_runs_here(UnpackKernel kernel);
+// One kernel by name, for tests that compare kernels; it must run here.
+void unpack_quantized16_with(UnpackKernel kernel, const uint8_t* const* planes, size_t n, std::byte* dst);
 
-// Whether unpack_quantized16 runs the AVX2 + BMI2 kernel on this CPU.
-bool quantized_unpack_is_vectorized();
+// Whether BMI2's PDEP/PEXT are there and fast on this CPU.
+bool fast_pext();
 
 }  // namespace sluice::io

@@ -34,8 +34,9 @@ std::vector<uint8_t> unpack(const std::vector<std::byte>& packed, size_t n, bool
 
 }  // namespace
 
-TEST(QuantizedUnpack, VectorKernelMatchesPortableAtEveryLengthAndAlignment) {
-  if (!quantized_unpack_is_vectorized()) GTEST_SKIP() << "this CPU has no AVX2 + BMI2";
+TEST(QuantizedUnpack, EveryKernelMatchesPortableAtEveryLengthAndAlignment) {
+  const UnpackKernel kernels[] = {UnpackKernel::Avx2Table, UnpackKernel::Avx2Pext};
+  if (!unpack_kernel_runs_here(UnpackKernel::Avx2Pext)) GTEST_SKIP() << "this CPU has no AVX2 + BMI2";
   std::mt19937 rng(7);
   for (size_t n : {size_t(1), size_t(7), size_t(31), size_t(32), size_t(33), size_t(100), size_t(16383),
                    size_t(16384), size_t(20001)}) {
@@ -47,10 +48,17 @@ TEST(QuantizedUnpack, VectorKernelMatchesPortableAtEveryLengthAndAlignment) {
     const uint8_t* ptrs[8];
     for (int k = 0; k < 8; ++k) ptrs[k] = planes[size_t(k)].data();
     for (size_t offset : {0, 8, 16, 24, 3}) {  // 3: no 32-byte boundary on an 8-byte grid
-      std::vector<std::byte> a(8 * n + 32), b(8 * n + 32);
-      unpack_quantized16(ptrs, n, a.data() + offset);
-      unpack_quantized16_portable(ptrs, n, b.data() + offset);
-      ASSERT_EQ(0, std::memcmp(a.data() + offset, b.data() + offset, 8 * n)) << "n=" << n << " offset=" << offset;
+      std::vector<std::byte> expected(8 * n + 32);
+      unpack_quantized16_with(UnpackKernel::Portable, ptrs, n, expected.data() + offset);
+      for (UnpackKernel kernel : kernels) {
+        std::vector<std::byte> got(8 * n + 32);
+        unpack_quantized16_with(kernel, ptrs, n, got.data() + offset);
+        ASSERT_EQ(0, std::memcmp(got.data() + offset, expected.data() + offset, 8 * n))
+            << "kernel " << int(kernel) << " n=" << n << " offset=" << offset;
+      }
+      std::vector<std::byte> chosen(8 * n + 32);
+      unpack_quantized16(ptrs, n, chosen.data() + offset);
+      ASSERT_EQ(0, std::memcmp(chosen.data() + offset, expected.data() + offset, 8 * n));
     }
   }
 }
