@@ -1,9 +1,11 @@
 // The threads that copy one record's pieces at once: the reader thread and
-// `helpers` threads of their own. Dedicated threads rather than TBB workers:
-// TBB hands its workers to arenas lazily, so a read helper borrowed from the
-// pool is often missing while the decode arena keeps every worker busy, and
-// the record is then copied by one thread (measured on 16 cores: the
-// pipeline read at 8.5 GB/s against 14.8 for two threads alone).
+// `helpers` threads of their own. Dedicated threads rather than TBB workers
+// in a second arena: a read never waits for TBB to move a worker over from
+// the decode arena, the hand-off is plain atomics that ThreadSanitizer sees
+// (no annotations), and the count of threads reading is exactly what was
+// asked. Throughput was the same within run-to-run variation (16 cores, 14
+// decode + 2 read: 135.8 frames/s with TBB helpers, 120.4 with these, on two
+// boxes that vary by about 15%).
 #pragma once
 
 #include <atomic>
