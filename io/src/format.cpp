@@ -205,7 +205,7 @@ FrameHeader parse_frame_table(std::span<const std::byte> record, size_t attribut
       check_range(r, range);
     }
     if (layer >= kLayerCount) r.fail("unknown layer " + std::to_string(layer));
-    if (codec > 2) r.fail("unknown chunk codec " + std::to_string(codec));
+    if (codec > uint8_t(ChunkCodec::Packed)) r.fail("unknown chunk codec " + std::to_string(codec));
     c.layer = static_cast<Layer>(layer);
     c.codec = static_cast<ChunkCodec>(codec);
     if (c.particle_count == 0 || c.particle_count > kMaxChunkParticles) {

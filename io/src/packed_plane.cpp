@@ -35,13 +35,14 @@ inline uint64_t spread_portable(uint64_t bits, int width) {
   return out;
 }
 
-// Group g's bits; the last groups may end within 8 bytes of the packed area's
-// end, so they are copied out rather than loaded past it.
+// Group g's bits (only the low 8 * width are used); the last groups may end
+// within 8 bytes of the packed area's end, so they are copied out rather
+// than loaded past it.
 inline uint64_t load_group(const uint8_t* packed, size_t packed_bytes, size_t g, int width) {
   uint64_t bits = 0;
   const size_t at = g * size_t(width);
   std::memcpy(&bits, packed + at, std::min<size_t>(8, packed_bytes - at));
-  return bits & (width == 8 ? ~0ull : (uint64_t{1} << (8 * width)) - 1);
+  return bits;
 }
 
 // The groups whose 8 bytes can be loaded before the packed area ends and
@@ -61,11 +62,10 @@ void spread_tail(const uint8_t* packed, size_t n, int width, uint8_t* dst, size_
 
 void spread_groups_portable(const uint8_t* packed, size_t n, int width, uint8_t* dst) {
   const size_t direct = direct_groups(n, width);
-  const uint64_t keep = (uint64_t{1} << (8 * width)) - 1;
   for (size_t g = 0; g < direct; ++g) {
     uint64_t bits;
     std::memcpy(&bits, packed + g * size_t(width), 8);
-    const uint64_t bytes = spread_portable(bits & keep, width);
+    const uint64_t bytes = spread_portable(bits, width);  // reads only the low 8 * width bits
     std::memcpy(dst + 8 * g, &bytes, 8);
   }
   spread_tail(packed, n, width, dst, direct);

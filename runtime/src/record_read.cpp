@@ -1,6 +1,6 @@
 // Reading a frame record: in pieces (so a seek cancels a big read early),
-// several at once when read_threads > 1 (read_crew.h). One thread copying out of the page
-// cache tops out well below what the decode workers can take.
+// several at once when read_threads > 1 (read_crew.h). One thread copying
+// out of the page cache tops out well below what the decode workers take.
 #include <algorithm>
 #include <chrono>
 
@@ -46,20 +46,15 @@ bool PipelineCore::read_pieces(std::span<std::byte> dst, uint64_t offset, uint64
   };
 
   const auto t0 = std::chrono::steady_clock::now();
-  bool cancelled = false;
-  if (read_threads_ <= 1 || count == 1) {
-    for (uint64_t p = 0; p < count && !(cancelled = stale()); ++p) read_one(p);
-  } else {
-    std::atomic<bool> gave_up{false};
-    read_crew_.run(count, [&](uint64_t p) {
-      if (gave_up.load(kRelaxed) || stale()) {
-        gave_up.store(true, kRelaxed);
-        return;
-      }
-      read_one(p);
-    });
-    cancelled = gave_up.load(kRelaxed);
-  }
+  std::atomic<bool> gave_up{false};  // with no helpers the crew runs the pieces in order on this thread
+  read_crew_.run(count, [&](uint64_t p) {
+    if (gave_up.load(kRelaxed) || stale()) {
+      gave_up.store(true, kRelaxed);
+      return;
+    }
+    read_one(p);
+  });
+  const bool cancelled = gave_up.load(kRelaxed);
   counters_.read_ns.fetch_add(static_cast<uint64_t>(std::chrono::duration_cast<std::chrono::nanoseconds>(
                                                         std::chrono::steady_clock::now() - t0)
                                                         .count()),
