@@ -313,3 +313,18 @@ TEST_F(PipelineTest, RejectsSchedulesOutsideTheFile) {
   p.restart(prefix);
   EXPECT_EQ(take_all(p, 7), (std::vector<uint64_t>{3, 4, 0, 1, 2, 3, 4}));
 }
+
+TEST(ThreadSplit, OneReaderPerFourCoresFromEightCoresOn) {
+  // Below 8 cores every core decodes and one reader comes on top.
+  EXPECT_EQ(default_thread_split(1).decode, 1);
+  EXPECT_EQ(default_thread_split(2).decode, 2);
+  EXPECT_EQ(default_thread_split(2).read, 1);
+  EXPECT_EQ(default_thread_split(4).read, 1);
+  // From 8 cores the readers come out of the cores: 6 + 2, 12 + 4, at most 4 readers.
+  EXPECT_EQ(default_thread_split(8).decode, 6);
+  EXPECT_EQ(default_thread_split(8).read, 2);
+  EXPECT_EQ(default_thread_split(16).decode, 12);
+  EXPECT_EQ(default_thread_split(16).read, 4);
+  EXPECT_EQ(default_thread_split(64).decode, 60);
+  EXPECT_EQ(default_thread_split(64).read, 4);
+}
