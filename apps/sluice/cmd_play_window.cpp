@@ -20,7 +20,8 @@
 #include "sluice/runtime/player.h"
 #include "sluice/render/image_io.h"
 #include "sluice/render/renderer.h"
-#include "sluice/render/window.h"
+#include "sluice/desktop/window.h"
+#include "sluice/render/frame_feed.h"
 #include "view_options.h"
 
 namespace sluice::app {
@@ -263,7 +264,7 @@ void run_play_window(const PlayOptions& o, const WindowPlayOptions& wo) {
   if (reader.frame_count() == 0) throw std::runtime_error(o.file + ": the file has no frames");
   const auto [w, h] = parse_size(wo.size);
   render::ContextOptions co = v.context_options();
-  co.instance_extensions = render::window_instance_extensions();
+  co.instance_extensions = desktop::window_instance_extensions();
   co.presentation = true;
   render::Context context(co);
   const render::SceneInfo scene = render::scene_info(reader);
@@ -277,15 +278,15 @@ void run_play_window(const PlayOptions& o, const WindowPlayOptions& wo) {
   p.lod = v.lod_options();
   p.device = context.device().name + " (" + context.device().type + ")";
 
-  render::WindowOptions options;
+  desktop::WindowOptions options;
   options.width = w;
   options.height = h;
   options.title = "sluice - " + std::filesystem::path(o.file).filename().string();
   options.vsync = !wo.no_vsync;
-  render::Window window(context, options, {on_key, on_mouse_button, on_cursor, on_scroll, &p});
-  render::Renderer renderer(context, scene, std::max(window.width(), 1u), std::max(window.height(), 1u));
+  desktop::Window window(context, options, {on_key, on_mouse_button, on_cursor, on_scroll, &p});
+  render::Renderer renderer(context, scene);
   v.apply_environment(renderer);
-  p.camera = p.home = v.camera(scene, float(renderer.width()) / float(renderer.height()));
+  p.camera = p.home = v.camera(scene, float(std::max(window.width(), 1u)) / float(std::max(window.height(), 1u)));
 
   // The streaming runtime decodes the colour attribute only (if any), into
   // staging memory the GPU copies from.
@@ -301,19 +302,17 @@ void run_play_window(const PlayOptions& o, const WindowPlayOptions& wo) {
   p.playback = &playback;
   p.io_mode = playback.pipeline().io_mode();
   if (!o.paused) playback.play();
+  render::FrameFeed feed(renderer, playback, &staging, color);
 
   auto last = Clock::now(), fps_since = last;
   runtime::PlaybackStats stats_before = playback.stats();
   int presented = 0, fps_frames = 0;
   uint64_t errors_printed = 0;
   while (!window.should_close()) {
-    render::poll_window_events();
+    desktop::poll_window_events();
     if (window.width() == 0 || window.height() == 0) {
       glfwWaitEventsTimeout(0.1);  // minimized
       continue;
-    }
-    if (window.width() != renderer.width() || window.height() != renderer.height()) {
-      renderer.resize(window.width(), window.height());
     }
     const auto now = Clock::now();
     p.frame_ms = std::chrono::duration<double, std::milli>(now - last).count();
@@ -331,13 +330,10 @@ void run_play_window(const PlayOptions& o, const WindowPlayOptions& wo) {
       stats_before = p.stream;
     }
 
-    const runtime::Tick tick = playback.update();
-    if (tick.changed && tick.frame) {
-      const runtime::FrameHandle& f = *tick.frame;
-      const auto t0 = Clock::now();
-      renderer.commit_decoded({&f.header(), f.chunk_first(), &f.buffers(), color >= 0 ? 0 : -1, color}, &staging);
-      p.upload_wall_ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-      p.frame = f.frame();
+    const render::FeedUpdate fed = feed.update();
+    if (fed.changed) {
+      p.upload_wall_ms = fed.commit_wall_ms;
+      p.frame = fed.frame;
       p.has_frame = true;
     }
     while (const auto error = playback.pop_error()) {
@@ -348,13 +344,13 @@ void run_play_window(const PlayOptions& o, const WindowPlayOptions& wo) {
       throw std::runtime_error(o.file + ": playback stopped before any frame could be shown");
     }
 
-    p.stats = renderer.render(p.camera, p.fluid, p.lod);
+    p.stats = renderer.last_stats();
     window.new_ui_frame();
     if (p.hud) draw_hud(p, o.file);
     // --exit-after counts frames that show data (the first may take a moment to decode).
     const bool last_for_exit = wo.exit_after > 0 && p.has_frame && presented + 1 >= wo.exit_after;
     const bool capture = p.screenshot || (last_for_exit && !wo.screenshot.empty());
-    if (!window.present(renderer, p.hud, capture)) continue;
+    if (!window.present(renderer, p.camera, p.fluid, p.lod, p.hud, capture)) continue;
     if (p.has_frame) ++presented;
     if (capture) {
       const render::Image shot{window.width(), window.height(), window.read_presented()};

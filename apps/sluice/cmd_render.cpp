@@ -11,6 +11,7 @@
 #include "sluice/bench/render_bench.h"
 #include "sluice/io/reader.h"
 #include "sluice/render/image_io.h"
+#include "sluice/render/offscreen.h"
 #include "sluice/render/renderer.h"
 
 namespace sluice::app {
@@ -84,7 +85,8 @@ void run_render(const RenderCommand& o, const ViewSettings& v) {
 
   render::Context context(v.context_options());
   render::SceneInfo scene = render::scene_info(reader);
-  render::Renderer renderer(context, scene, width, height);
+  render::Renderer renderer(context, scene);
+  render::OffscreenTarget target(context, width, height);
   v.apply_environment(renderer);
   const render::FluidOptions fluid = v.fluid_options(scene);
   const render::LodOptions lod = v.lod_options();
@@ -104,8 +106,8 @@ void run_render(const RenderCommand& o, const ViewSettings& v) {
   render::Image image{width, height, {}};
   for (uint64_t f = first; f <= last; ++f) {
     renderer.load_frame(reader, f, fluid.scalar_visibility ? fluid.color_attribute : -1);
-    const render::FrameStats stats = renderer.render(camera, fluid, lod);
-    image.rgba = renderer.read_rgba8();
+    const render::FrameStats stats = target.render(renderer, camera, fluid, lod);
+    image.rgba = target.read_rgba8();
     if (writer) writer->add(image);
     else render::write_png(frame_path(o.out, f, single), image);
     if (o.stats) {

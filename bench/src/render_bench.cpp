@@ -18,6 +18,7 @@
 #include "machine.h"
 #include "sluice/io/reader.h"
 #include "sluice/render/image_io.h"
+#include "sluice/render/offscreen.h"
 #include "sluice/render/renderer.h"
 #include "sluice/render/synthetic.h"
 #include "table.h"
@@ -106,16 +107,16 @@ double median(std::vector<double> v) {
 }
 
 // Renders `repeats` times after one warm-up; per-pass medians.
-Case measure(render::Renderer& r, const render::Camera& cam, const render::FluidOptions& fluid,
+Case measure(render::Renderer& r, render::OffscreenTarget& out, const render::Camera& cam, const render::FluidOptions& fluid,
              const render::LodOptions& lod, int repeats) {
   Case c;
-  r.render(cam, fluid, lod);  // warm-up: first-use costs (shader JIT on lavapipe)
+  out.render(r, cam, fluid, lod);  // warm-up: first-use costs (shader JIT on lavapipe)
   std::map<std::string, std::vector<double>> passes;
   std::vector<double> total, wall;
   render::FrameStats last;
   for (int i = 0; i < std::max(repeats, 1); ++i) {
     const auto t0 = Clock::now();
-    last = r.render(cam, fluid, lod);
+    last = out.render(r, cam, fluid, lod);
     wall.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
     for (const render::PassTime& p : last.passes) passes[p.name].push_back(p.ms);
     total.push_back(last.gpu_ms);
@@ -194,6 +195,7 @@ void run_render_bench(const RenderBenchOptions& o) {
   render::ContextOptions co;
   co.device = o.device;
   render::Context context(co);
+  render::OffscreenTarget out(context, o.width, o.height);
   const render::DeviceInfo& dev = context.device();
   std::printf("sluice bench render: %ux%u, median of %d renders after a warm-up\n", o.width, o.height, o.repeats);
   std::printf("device: %s (%s, %s)%s\n", dev.name.c_str(), dev.type.c_str(), dev.driver.c_str(),
@@ -213,13 +215,13 @@ void run_render_bench(const RenderBenchOptions& o) {
         lod.mode = render::LodMode::DensityPreserving;
         lod.level = o.lod_level;
       }
-      Case c = measure(r, cam, fluid, lod, o.repeats);
+      Case c = measure(r, out, cam, fluid, lod, o.repeats);
       c.name = name;
       c.particles = c.stats.particles;
       c.lod = lod_on ? "density " + num(o.lod_level, 2) : "off";
       if (!o.images.empty()) {
         render::write_png((fs::path(o.images) / (name + (lod_on ? "_lod" : "") + ".png")).string(),
-                          {o.width, o.height, r.read_rgba8()});
+                          {o.width, o.height, out.read_rgba8()});
       }
       if (!lod_on && o.vtk && xyz && c.particles <= o.vtk_max) {
         std::fprintf(stderr, "running the VTK peer on %s (%s particles)...\n", name.c_str(), count_name(c.particles).c_str());
@@ -235,7 +237,7 @@ void run_render_bench(const RenderBenchOptions& o) {
   if (!o.real.empty()) {
     const io::ContainerReader reader(o.real);
     const render::SceneInfo scene = render::scene_info(reader);
-    render::Renderer r(context, scene, o.width, o.height);
+    render::Renderer r(context, scene);
     const uint64_t frame = reader.frame_count() - 1;
     r.load_frame(reader, frame, -1);
     std::vector<float> xyz;
@@ -245,7 +247,7 @@ void run_render_bench(const RenderBenchOptions& o) {
   for (uint64_t n : o.sizes) {
     std::fprintf(stderr, "generating %s synthetic particles...\n", count_name(n).c_str());
     const render::SyntheticFluid f = render::synthetic_fluid(n);
-    render::Renderer r(context, f.scene, o.width, o.height);
+    render::Renderer r(context, f.scene);
     render::upload_synthetic(r, f);
     std::vector<float> xyz;
     if (o.vtk && f.particles <= o.vtk_max) xyz = render::synthetic_points(f);

@@ -11,7 +11,7 @@ layout(set = 0, binding = 0, std140) uniform Globals {
   vec4 eye;             // world eye position; w: near plane distance
   vec4 viewport;        // output width, height, 1/width, 1/height
   vec4 thick_viewport;  // the thickness buffer's width, height, 1/width, 1/height
-  vec4 proj;            // P00 (f / aspect), P11 (f), tan(fov/2), ndc->pixel scale unused
+  vec4 proj;            // P00 (x scale), y scale (-P11: image rows go down), 1 / y scale (tan of half the vertical fov), far-plane depth of the target
   vec4 radius;          // sphere radius, largest point size (px), largest splat (px), near-cull distance
   vec4 lod;             // level, threshold -ln(level), 1 / reference distance, largest splat scale
   uvec4 modes;          // lod mode, lod random, position coding, has colour attribute
@@ -26,6 +26,7 @@ layout(set = 0, binding = 0, std140) uniform Globals {
   vec4 light;           // world direction towards the sun
   vec4 scene;           // scene centre xyz; w: scene extent (diagonal)
   vec4 splat;           // thickness fixed-point scale (units per world unit), its inverse, largest small-splat area (px)
+  vec4 frustum;         // ndc offset x, y of an asymmetric frustum; target depth = z + w / distance
 } g;
 
 struct Chunk {
@@ -133,8 +134,8 @@ vec2 tangent_range(float u, float d, float r) {
 // perspective projection of a sphere at eye-space c with radius r.
 void sphere_bounds(vec3 c, float r, vec4 vp, out vec2 lo, out vec2 hi) {
   float d = -c.z;
-  vec2 tx = tangent_range(c.x, d, r) * g.proj.x;    // ndc x range
-  vec2 ty = tangent_range(c.y, d, r) * -g.proj.y;   // ndc y (flipped: image rows go down)
+  vec2 tx = tangent_range(c.x, d, r) * g.proj.x + g.frustum.x;    // ndc x range
+  vec2 ty = tangent_range(c.y, d, r) * -g.proj.y + g.frustum.y;   // ndc y (flipped: image rows go down)
   lo = (vec2(tx.x, min(ty.x, ty.y)) * 0.5 + 0.5) * vp.xy;
   hi = (vec2(tx.y, max(ty.x, ty.y)) * 0.5 + 0.5) * vp.xy;
 }
@@ -142,5 +143,5 @@ void sphere_bounds(vec3 c, float r, vec4 vp, out vec2 lo, out vec2 hi) {
 // Eye-space ray direction through a pixel (not normalized; z = -1).
 vec3 eye_ray(vec2 pixel, vec4 vp) {
   vec2 ndc = pixel * vp.zw * 2.0 - 1.0;
-  return vec3(ndc.x / g.proj.x, -ndc.y / g.proj.y, -1.0);
+  return vec3((ndc.x - g.frustum.x) / g.proj.x, -(ndc.y - g.frustum.y) / g.proj.y, -1.0);
 }

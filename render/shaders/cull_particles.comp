@@ -39,7 +39,7 @@ void main() {
 
   if (g.modes.x != 0u && keep) {
     // Importance w (formula 3.1 with CLOD = 1000 / d_ref) and random term.
-    vec2 ndc = vec2(g.proj.x * e.x, -g.proj.y * e.y) / max(dist, 1e-20);
+    vec2 ndc = vec2(g.proj.x * e.x, -g.proj.y * e.y) / max(dist, 1e-20) + g.frustum.xy;
     float centre = max(1.0 - 0.7 * min(length(ndc) * 0.70710678, 1.0), 0.3);
     float w = centre / (max(length(e), 1e-20) * g.lod.z);
     float u = g.modes.y == 0u ? (float(lod_value) + 0.5) * (1.0 / 65536.0) : position_hash(pos);

@@ -52,12 +52,16 @@ std::string missing_features(const vk::raii::PhysicalDevice& pd, bool presentati
   const auto& f = chain.get<vk::PhysicalDeviceFeatures2>().features;
   const auto& f12 = chain.get<vk::PhysicalDeviceVulkan12Features>();
   const auto& f13 = chain.get<vk::PhysicalDeviceVulkan13Features>();
+  const auto f11 = pd.getFeatures2<vk::PhysicalDeviceFeatures2, vk::PhysicalDeviceVulkan11Features>()
+                       .get<vk::PhysicalDeviceVulkan11Features>();
   if (!f.largePoints) return "no largePoints";
+  if (!f11.multiview) return "no multiview";
   if (!f12.bufferDeviceAddress) return "no bufferDeviceAddress";
   if (!f12.timelineSemaphore) return "no timelineSemaphore";
   if (!f13.synchronization2) return "no synchronization2";
   if (!f13.dynamicRendering) return "no dynamicRendering";
   if (!f13.maintenance4) return "no maintenance4";
+  if (!f12.hostQueryReset) return "no hostQueryReset";
   if (!props.limits.timestampComputeAndGraphics) return "no timestamps on graphics/compute queues";
   if (presentation && !has_extension(pd.enumerateDeviceExtensionProperties(), VK_KHR_SWAPCHAIN_EXTENSION_NAME)) {
     return "no VK_KHR_swapchain";
@@ -229,27 +233,126 @@ Context::Context(const ContextOptions& options) : impl_(std::make_unique<Impl>()
   c.memory_budget = has_extension(device_extensions, VK_EXT_MEMORY_BUDGET_EXTENSION_NAME);
   if (c.memory_budget) extensions.push_back(VK_EXT_MEMORY_BUDGET_EXTENSION_NAME);
 
-  vk::StructureChain<vk::DeviceCreateInfo, vk::PhysicalDeviceFeatures2, vk::PhysicalDeviceVulkan12Features,
-                     vk::PhysicalDeviceVulkan13Features>
-      chain;
-  chain.get<vk::DeviceCreateInfo>().setQueueCreateInfos(queues).setPEnabledExtensionNames(extensions);
-  auto& f = chain.get<vk::PhysicalDeviceFeatures2>().features;
-  f.largePoints = VK_TRUE;
-  auto& f12 = chain.get<vk::PhysicalDeviceVulkan12Features>();
-  f12.bufferDeviceAddress = VK_TRUE;
-  f12.timelineSemaphore = VK_TRUE;
-  f12.hostQueryReset = VK_TRUE;
-  auto& f13 = chain.get<vk::PhysicalDeviceVulkan13Features>();
-  f13.synchronization2 = VK_TRUE;
-  f13.dynamicRendering = VK_TRUE;
-  f13.maintenance4 = VK_TRUE;  // required by 1.3; SPIR-V 1.6 uses LocalSizeId
-  c.device = vk::raii::Device(c.physical, chain.get<vk::DeviceCreateInfo>());
+  // The same features a host is asked to enable (required_device_features).
+  DeviceFeatures features = required_device_features();
+  vk::DeviceCreateInfo info({}, queues, {}, extensions);
+  info.pNext = &features.features2;
+  c.device = vk::raii::Device(c.physical, info);
   c.graphics_queue = vk::raii::Queue(c.device, c.graphics_family, 0);
   c.transfer_queue = vk::raii::Queue(c.device, c.transfer_family, 0);
+  c.handles = {static_cast<VkInstance>(*c.instance), static_cast<VkPhysicalDevice>(*c.physical),
+               static_cast<VkDevice>(*c.device),      c.graphics_family,
+               static_cast<VkQueue>(*c.graphics_queue), c.transfer_family != c.graphics_family ? c.transfer_family : UINT32_MAX,
+               c.transfer_family != c.graphics_family ? static_cast<VkQueue>(*c.transfer_queue) : VK_NULL_HANDLE};
 }
 
-Context::~Context() {
-  if (impl_ && *impl_->device) impl_->device.waitIdle();
+Context::Context(const HostVulkan& host) : impl_(std::make_unique<Impl>()) {
+  Impl& c = *impl_;
+  const VulkanHandles& h = host.handles;
+  if (!h.instance || !h.physical_device || !h.device || !h.graphics_queue) {
+    throw std::invalid_argument("sluice context: the host's instance, physical device, device and graphics queue are required");
+  }
+  if (h.transfer_family != UINT32_MAX && !h.transfer_queue) {
+    throw std::invalid_argument("sluice context: a transfer family was given without its queue");
+  }
+  c.owning = false;
+  c.handles = h;
+  c.instance = vk::raii::Instance(c.context, h.instance);
+  c.physical = vk::raii::PhysicalDevice(c.instance, h.physical_device);
+  const std::string why = missing_features(c.physical, false);
+  if (!why.empty()) {
+    throw std::runtime_error("the host's Vulkan device cannot run sluice: " + why);
+  }
+  c.info = describe(c.physical, 0, false);
+  c.properties = c.physical.getProperties();
+  c.memory = c.physical.getMemoryProperties();
+  c.memory_budget = host.memory_budget_enabled;
+  c.device = vk::raii::Device(c.physical, h.device);
+  c.graphics_family = h.graphics_family;
+  c.graphics_queue = vk::raii::Queue(c.device, h.graphics_queue);
+  const bool transfer = h.transfer_family != UINT32_MAX && h.transfer_family != h.graphics_family;
+  c.transfer_family = transfer ? h.transfer_family : h.graphics_family;
+  c.transfer_queue = vk::raii::Queue(c.device, transfer ? h.transfer_queue : h.graphics_queue);
+}
+
+Context::Impl::~Impl() {
+  if (*device && owning) device.waitIdle();
+  if (!owning) {
+    // The host's handles: let go of them without destroying anything.
+    transfer_queue.release();
+    graphics_queue.release();
+    device.release();
+    physical.release();
+    instance.release();
+  }
+}
+
+Context::~Context() = default;
+
+const VulkanHandles& Context::vulkan() const { return impl_->handles; }
+bool Context::owns_device() const { return impl_->owning; }
+
+std::vector<const char*> required_instance_extensions() { return {}; }
+
+std::vector<const char*> required_device_extensions(VkPhysicalDevice physical_device) {
+  uint32_t count = 0;
+  vkEnumerateDeviceExtensionProperties(physical_device, nullptr, &count, nullptr);
+  std::vector<VkExtensionProperties> list(count);
+  vkEnumerateDeviceExtensionProperties(physical_device, nullptr, &count, list.data());
+  std::vector<const char*> out;
+  for (const VkExtensionProperties& e : list) {
+    if (std::strcmp(e.extensionName, VK_EXT_MEMORY_BUDGET_EXTENSION_NAME) == 0) out.push_back(VK_EXT_MEMORY_BUDGET_EXTENSION_NAME);
+  }
+  return out;
+}
+
+DeviceFeatures::DeviceFeatures() {
+  features2.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2;
+  vulkan11.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_1_FEATURES;
+  vulkan12.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES;
+  vulkan13.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_3_FEATURES;
+  chain();
+}
+DeviceFeatures::DeviceFeatures(const DeviceFeatures& other)
+    : features2(other.features2), vulkan11(other.vulkan11), vulkan12(other.vulkan12), vulkan13(other.vulkan13) {
+  chain(other.vulkan13.pNext);
+}
+DeviceFeatures& DeviceFeatures::operator=(const DeviceFeatures& other) {
+  features2 = other.features2;
+  vulkan11 = other.vulkan11;
+  vulkan12 = other.vulkan12;
+  vulkan13 = other.vulkan13;
+  chain(other.vulkan13.pNext);
+  return *this;
+}
+void DeviceFeatures::chain(void* next) {
+  features2.pNext = &vulkan11;
+  vulkan11.pNext = &vulkan12;
+  vulkan12.pNext = &vulkan13;
+  vulkan13.pNext = next;
+}
+
+DeviceFeatures required_device_features() {
+  DeviceFeatures f;
+  f.features2.features.largePoints = VK_TRUE;
+  f.vulkan11.multiview = VK_TRUE;  // stereo (OpenXR) renders both eyes in one pass
+  f.vulkan12.bufferDeviceAddress = VK_TRUE;
+  f.vulkan12.timelineSemaphore = VK_TRUE;
+  f.vulkan12.hostQueryReset = VK_TRUE;
+  f.vulkan13.synchronization2 = VK_TRUE;
+  f.vulkan13.dynamicRendering = VK_TRUE;
+  f.vulkan13.maintenance4 = VK_TRUE;  // required by 1.3; SPIR-V 1.6 uses LocalSizeId
+  return f;
+}
+
+std::string device_unusable_reason(VkInstance instance, VkPhysicalDevice physical_device) {
+  vk::raii::Context context;
+  vk::raii::Instance borrowed(context, instance);
+  vk::raii::PhysicalDevice pd(borrowed, physical_device);
+  std::string why = missing_features(pd, false);
+  pd.release();
+  borrowed.release();
+  return why;
 }
 
 const DeviceInfo& Context::device() const { return impl_->info; }

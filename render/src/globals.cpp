@@ -40,35 +40,42 @@ bool thickness_filtered(const FluidOptions& o) {
          o.display_mode != DisplayMode::ThicknessBuffer;
 }
 
-Globals make_globals(const SceneInfo& scene, const Camera& camera, const FluidOptions& o, const LodOptions& lod,
+Globals make_globals(const SceneInfo& scene, const View& view_in, const FluidOptions& o, const LodOptions& lod,
                      const ViewSetup& v) {
   Globals g{};
-  const float aspect = float(v.width) / float(std::max(v.height, 1u));
-  const Mat4 view = camera.view();
-  const Mat4 proj = camera.projection(aspect);
+  const Mat4& view = view_in.view;
+  const Mat4& proj = view_in.projection;
   g.view = view;
   g.inv_view = inverse(view);
+  // Target depth of a point at distance d along the view axis: A + B / d
+  // (perspective projections only). B > 0: reversed depth (near is 1).
+  const float depth_a = -proj.at(2, 2), depth_b = proj.at(2, 3);
+  const bool reversed = depth_b > 0;
+  const float near = reversed ? depth_b / std::max(1.0f - depth_a, 1e-20f) : -depth_b / std::max(depth_a, 1e-20f);
   const Mat4 vp = proj * view;
   const Vec4 r0 = row(vp, 0), r1 = row(vp, 1), r2 = row(vp, 2), r3 = row(vp, 3);
+  const Vec4 near_plane = reversed ? Vec4{r3.x - r2.x, r3.y - r2.y, r3.z - r2.z, r3.w - r2.w}  // z <= w
+                                   : r2;                                                      // z >= 0
   const Vec4 planes[5] = {
       {r3.x + r0.x, r3.y + r0.y, r3.z + r0.z, r3.w + r0.w},  // left
       {r3.x - r0.x, r3.y - r0.y, r3.z - r0.z, r3.w - r0.w},  // right
       {r3.x + r1.x, r3.y + r1.y, r3.z + r1.z, r3.w + r1.w},  // y = -w
       {r3.x - r1.x, r3.y - r1.y, r3.z - r1.z, r3.w - r1.w},  // y = +w
-      {r3.x - r2.x, r3.y - r2.y, r3.z - r2.z, r3.w - r2.w},  // near (reversed z: z <= w)
+      near_plane,
   };
   for (int i = 0; i < 5; ++i) {
     const float len = std::sqrt(planes[i].x * planes[i].x + planes[i].y * planes[i].y + planes[i].z * planes[i].z);
     const float s = len > 0 ? 1.0f / len : 0.0f;
     set4(g.planes[i], planes[i].x * s, planes[i].y * s, planes[i].z * s, planes[i].w * s);
   }
-  const float near = camera.near_plane();
-  set4(g.eye, camera.eye.x, camera.eye.y, camera.eye.z, near);
+  const Vec4 eye = g.inv_view * Vec4{0, 0, 0, 1};
+  set4(g.eye, eye.x, eye.y, eye.z, near);
   set4(g.viewport, float(v.width), float(v.height), 1.0f / float(v.width), 1.0f / float(v.height));
   set4(g.thick_viewport, float(v.thick_width), float(v.thick_height), 1.0f / float(v.thick_width),
        1.0f / float(v.thick_height));
-  const float tan_half = std::tan(camera.fov_deg * 0.5f * 3.14159265f / 180.0f);
-  set4(g.proj, proj.at(0, 0), -proj.at(1, 1), tan_half, 0);
+  const float y_scale = -proj.at(1, 1);
+  set4(g.proj, proj.at(0, 0), y_scale, y_scale != 0 ? 1.0f / std::abs(y_scale) : 1.0f, reversed ? 0.0f : 1.0f);
+  set4(g.frustum, -proj.at(0, 2), -proj.at(1, 2), depth_a, depth_b);
 
   const float radius = effective_radius(o, scene);
   const float max_splat = lod.max_splat_pixels > 0 ? std::min(lod.max_splat_pixels, v.max_point_size) : v.max_point_size;

@@ -6,6 +6,7 @@
 #include "sluice/render/camera.h"
 #include "sluice/render/frame.h"
 #include "sluice/render/options.h"
+#include "sluice/render/renderer.h"
 
 namespace sluice::render {
 
@@ -16,8 +17,8 @@ struct ViewSetup {
   bool write_aux = false;
 };
 
-Globals make_globals(const SceneInfo& scene, const Camera& camera, const FluidOptions& options,
-                     const LodOptions& lod, const ViewSetup& view);
+Globals make_globals(const SceneInfo& scene, const View& view, const FluidOptions& options,
+                     const LodOptions& lod, const ViewSetup& setup);
 
 // Depth passes run filtered / thickness passes run filtered for this mode.
 bool depth_filtered(const FluidOptions& o);

@@ -29,8 +29,9 @@ struct Globals {
   float light[4];
   float scene[4];
   float splat[4];
+  float frustum[4];
 };
-static_assert(sizeof(Globals) == 2 * 64 + 23 * 16);
+static_assert(sizeof(Globals) == 2 * 64 + 24 * 16);
 
 struct PushConstants {
   uint64_t particles = 0, chunks = 0, attributes = 0, blocks = 0, draws = 0, args = 0, big = 0;

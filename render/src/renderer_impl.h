@@ -1,8 +1,11 @@
 // Internal: the state behind sluice::render::Renderer, shared by renderer.cpp
-// (pipelines, targets, recording a frame) and upload.cpp (staging, copies).
+// (lifetime, record()), passes.cpp (one function per pass), targets.cpp
+// (screen-space targets) and upload.cpp (staging, copies).
 #pragma once
 
 #include <array>
+#include <deque>
+#include <functional>
 
 #include "gpu_types.h"
 #include "sluice/render/renderer.h"
@@ -10,74 +13,126 @@
 
 namespace sluice::render {
 
-// Timestamp slots per frame: one at the start and one after each pass.
-constexpr uint32_t kMaxStamps = 16;
+constexpr uint32_t kMaxViews = 4;
+// Timestamp slots per frame slot: one at the start and one after each pass of each view.
+constexpr uint32_t kStampsPerSlot = 64;
 
+// The screen-space targets of one view size (views of a frame share them).
 struct Targets {
   vk::Extent2D size, thick_size;
   vk::Format thick_format = vk::Format::eR32G32Sfloat;
-  Texture depth_hw;                            // D32, reversed z
+  bool half_thickness = true;
+  Texture depth_hw;                            // D32, reversed z (point-sprite path)
   Texture depth_raw, depth_a, depth_b;         // R32F linear depth
   Texture thick_raw, thick_a, thick_b;         // thickness, thickness * attribute
   Texture depth_u, thick_u, thick_attr_u;      // R32UI targets of compute splatting
-  Texture color;                               // RGBA8 output
-  Texture aux;                                 // RGBA32F eye normal + depth (tests)
+  Texture color;                               // RGBA8 shaded fluid, before present
+  Texture aux;                                 // RGBA32F eye normal + depth (debug_surfaces)
+  uint64_t generation = 0;                     // bumps on every re-creation
+  bool initialized = false;                    // layouts set and cleared (recorded once)
+};
+
+// One device copy of a frame: what the cull and the passes read.
+struct FrameSet {
+  Buffer particles, chunks, attributes;
+  Buffer staging;                   // the renderer's own staging for this set
+  vk::raii::CommandBuffer copy{nullptr};
+  vk::raii::QueryPool stamps{nullptr};  // start and end of the copy
+  uint64_t particle_count = 0;
+  uint32_t chunk_count = 0;
+  bool has_attribute = false;
+  uint64_t ticket = 0;             // timeline value its copy signals; 0: never filled
+  uint64_t last_drawn = UINT64_MAX;  // record() call that last drew it; UINT64_MAX: never
+  double upload_ms = -1;           // read once the copy is done
+};
+
+// Host-written and host-read resources of one frame in flight.
+struct FrameSlot {
+  vk::raii::DescriptorSet set{nullptr};
+  uint64_t set_generation = UINT64_MAX;  // targets generation the set was written for
+  Buffer readback;                        // GpuArgs of the last view
+  uint64_t frame = UINT64_MAX;            // record() call that used it last
+  std::vector<const char*> stamp_names;   // per timestamp after the first
+  uint64_t particles = 0;
+  double upload_ms = 0;
+  bool collected = true;
 };
 
 struct Renderer::Impl {
   Context::Impl& ctx;
   SceneInfo scene;
+  RendererOptions options;
 
   vk::raii::DescriptorSetLayout set_layout{nullptr};
   vk::raii::PipelineLayout layout{nullptr};
   vk::raii::DescriptorPool pool{nullptr};
-  vk::raii::DescriptorSet set{nullptr};
   vk::raii::Sampler sampler{nullptr};
   vk::raii::Pipeline cull_chunks{nullptr}, cull_args{nullptr}, cull_particles{nullptr};
   vk::raii::Pipeline depth_pass{nullptr}, thickness_pass{nullptr};
   vk::raii::Pipeline splat{nullptr}, resolve{nullptr};
   vk::raii::Pipeline filter_depth{nullptr}, filter_thickness{nullptr}, composite{nullptr};
-  bool half_thickness = true;
+  struct PresentPipeline {
+    vk::Format color, depth;
+    vk::raii::Pipeline pipeline{nullptr};
+  };
+  std::vector<PresentPipeline> present_pipelines;
+  vk::Format thick_format = vk::Format::eR32G32Sfloat;
   Targets targets;
   // Equirectangular environment (sRGB); 1x1 placeholder while the procedural sky is used.
   Texture environment;
+  uint64_t environment_generation = 0;
   vk::raii::Sampler environment_sampler{nullptr};
   bool has_environment = false;
 
-  // Per frame: uniforms, counters, readback of counters and images.
-  Buffer globals, args, readback;
+  // Uniforms: frames_in_flight * kMaxViews Globals, each at its dynamic offset.
+  Buffer globals;
+  vk::DeviceSize globals_stride = 0;
+  // Counters and work lists written and read by the GPU only (ordered by
+  // barriers on the graphics queue, so frames in flight share them).
+  Buffer args, blocks, draws, big;
+  std::vector<FrameSlot> slots;
+  vk::raii::QueryPool timestamps{nullptr};  // frames_in_flight * kStampsPerSlot
+  bool timestamps_valid = false;
+  uint64_t frames_recorded = 0;
+  FrameStats stats;  // the newest collected
 
-  // The frame on the GPU (quantized particles, chunk table, colour attribute)
-  // and the work lists the cull writes.
-  Buffer staging;    // persistently mapped: particles | chunks | attribute
-  Buffer particles, chunks, attributes, blocks, draws, big;
-  uint64_t particle_count = 0, staged_particles = 0;
-  uint32_t chunk_count = 0, staged_chunks = 0;
+  vk::raii::CommandPool transfer_pool{nullptr};  // before the sets: their command buffers come from it
+  std::vector<FrameSet> sets;  // frames_in_flight + 1
+  int shown = -1;              // set record() draws
+  int staged = -1;             // set stage_frame() filled
   size_t stride = 8;
-  bool has_attribute = false, staged_attribute = false;
-
-  vk::raii::CommandPool command_pool{nullptr}, transfer_pool{nullptr};
-  vk::raii::CommandBuffer cmd{nullptr}, transfer_cmd{nullptr};
-  vk::raii::Fence fence{nullptr};
-  vk::raii::Semaphore upload_done{nullptr};  // timeline: value = uploads committed
+  vk::raii::Semaphore upload_done{nullptr};  // timeline: value = uploads submitted
   uint64_t upload_value = 0;
-  vk::raii::QueryPool timestamps{nullptr}, upload_timestamps{nullptr};
-  bool upload_timed = false;
-  double upload_ms = 0;
 
-  Impl(Context::Impl& c, const SceneInfo& s) : ctx(c), scene(s) {}
+  // Objects the GPU may still use, destroyed frames_in_flight record() calls later.
+  struct Retired {
+    uint64_t after_frame;
+    std::function<void()> keep;  // owns the objects through its captures
+  };
+  std::deque<Retired> retired;
+
+  Impl(Context::Impl& c, const SceneInfo& s, const RendererOptions& o) : ctx(c), scene(s), options(o) {}
 
   void create_pipelines();
-  void create_targets(uint32_t width, uint32_t height, bool half_thickness);
-  void write_descriptors();
+  const vk::raii::Pipeline& present_pipeline(vk::Format color, vk::Format depth);
+  // Makes the targets `width` x `height` (retiring the old ones).
+  void ensure_targets(uint32_t width, uint32_t height, bool half_thickness);
+  void write_descriptors(FrameSlot& slot);
   void upload_environment(const Image& equirect);  // empty: a 1x1 placeholder
-  // Grows a device buffer to at least `size` bytes (contents are lost).
+  // Grows a buffer to at least `size` bytes (contents are lost; the old one is retired).
   void ensure(Buffer& b, vk::DeviceSize size, vk::BufferUsageFlags usage, MemoryKind kind);
-  void wait_uploads();
-  struct UploadSource {  // where upload_frame() (upload.cpp) copies a frame from
-    vk::Buffer buffer;
-    vk::DeviceSize offset = 0;
-  };
+  template <class T>
+  void retire(T&& object) {
+    auto holder = std::make_shared<T>(std::move(object));
+    retired.push_back({frames_recorded + options.frames_in_flight, [holder] {}});
+  }
+  void collect_retired();
+  // The newest set whose copy is done, if newer than the shown one.
+  void pick_shown_set();
+  // A set the next copy may write: not drawn by a frame that may still run.
+  int free_set();
+  bool set_in_use(const FrameSet& s) const;
+  void collect_slot(FrameSlot& slot, uint32_t slot_index);
   std::vector<std::byte> read_texture(const Texture& t, size_t texel_bytes);
 };
 

@@ -37,6 +37,12 @@ const uint32_t kFilterThickness[] =
 const uint32_t kComposite[] =
 #include "composite.comp.inc"
     ;
+const uint32_t kPresentVert[] =
+#include "present.vert.inc"
+    ;
+const uint32_t kPresentFrag[] =
+#include "present.frag.inc"
+    ;
 }  // namespace
 
 std::span<const uint32_t> spirv(Shader s) {
@@ -52,6 +58,8 @@ std::span<const uint32_t> spirv(Shader s) {
     case Shader::FilterDepth: return kFilterDepth;
     case Shader::FilterThickness: return kFilterThickness;
     case Shader::Composite: return kComposite;
+    case Shader::PresentVert: return kPresentVert;
+    case Shader::PresentFrag: return kPresentFrag;
   }
   return {};
 }

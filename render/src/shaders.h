@@ -19,6 +19,8 @@ enum class Shader {
   FilterDepth,
   FilterThickness,
   Composite,
+  PresentVert,
+  PresentFrag,
 };
 
 std::span<const uint32_t> spirv(Shader s);

@@ -35,7 +35,7 @@ class StagingAllocator::HeapBudget final : public runtime::DeviceMemoryBudget {
 };
 
 StagingAllocator::StagingAllocator(Context& context) : context_(context) {
-  const Context::Impl& c = context.impl();
+  const Context::Impl& c = context_impl(context);
   for (uint32_t t = 0; t < c.memory.memoryTypeCount; ++t) {
     if ((c.memory.memoryTypes[t].propertyFlags & kStagingProps) == kStagingProps) {
       heap_ = c.memory.memoryTypes[t].heapIndex;
@@ -87,7 +87,7 @@ runtime::FrameBuffers StagingAllocator::allocate(const runtime::FrameLayout& lay
       block = blocks_.back().get();
     }
     try {
-      block->staging = create_buffer(context_.impl(), need, vk::BufferUsageFlagBits::eTransferSrc, MemoryKind::Upload);
+      block->staging = create_buffer(context_impl(context_), need, vk::BufferUsageFlagBits::eTransferSrc, MemoryKind::Upload);
     } catch (const vk::SystemError&) {
       // The driver has no more host-visible memory for us: plain host memory,
       // copied through the renderer's staging at upload.

@@ -133,7 +133,7 @@ void upload_points(Renderer& renderer, std::span<const float> xyz, std::span<con
       }
     }
   });
-  renderer.commit_frame();
+  renderer.wait_upload(renderer.commit_frame());
 }
 
 SyntheticFluid synthetic_fluid(uint64_t target) {
@@ -285,7 +285,7 @@ void upload_synthetic(Renderer& renderer, const SyntheticFluid& f) {
       if (!st.color_attribute.empty()) st.color_attribute[i] = quantize(value[p], c.attr_lo, c.attr_hi);
     }
   });
-  renderer.commit_frame();
+  renderer.wait_upload(renderer.commit_frame());
 }
 
 }  // namespace sluice::render

@@ -1,6 +1,7 @@
 // Frames to the GPU: persistently mapped staging that decoders write into,
-// then one copy per buffer on the transfer queue (where there is one),
-// signalling a timeline semaphore that the next render waits on.
+// then one copy per buffer on the transfer queue (where there is one) into
+// one of the renderer's device frame sets, signalling a timeline semaphore;
+// record() draws the newest set whose copy is done.
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
@@ -55,26 +56,81 @@ SceneInfo scene_info(const io::ContainerReader& reader) {
   return s;
 }
 
-void Renderer::Impl::wait_uploads() {
-  if (upload_value == 0) return;
+bool Renderer::upload_complete(uint64_t ticket) const {
+  return ticket == 0 || impl_->upload_done.getCounterValue() >= ticket;
+}
+
+void Renderer::wait_upload(uint64_t ticket) const {
+  if (ticket == 0 || upload_complete(ticket)) return;
+  const vk::Semaphore sem = *impl_->upload_done;
+  const vk::SemaphoreWaitInfo info({}, sem, ticket);
+  while (impl_->ctx.device.waitSemaphores(info, UINT64_MAX) == vk::Result::eTimeout) {
+  }
+}
+
+bool Renderer::Impl::set_in_use(const FrameSet& s) const {
+  // The host guarantees that record() call n - 1 - frames_in_flight has
+  // finished by the time call n - 1 was made (n calls made so far).
+  return s.last_drawn != UINT64_MAX && s.last_drawn + options.frames_in_flight >= frames_recorded;
+}
+
+int Renderer::Impl::free_set() {
+  int best = -1;
+  for (int i = 0; i < int(sets.size()); ++i) {
+    if (i == shown || set_in_use(sets[size_t(i)])) continue;
+    if (best < 0 || sets[size_t(i)].ticket < sets[size_t(best)].ticket) best = i;
+  }
+  if (best < 0) {
+    throw std::logic_error("renderer: every frame buffer is in use by frames in flight; commit at most one frame per "
+                           "recorded frame (see the frames-in-flight contract in renderer.h)");
+  }
+  // A newer frame supersedes one whose copy may still run: wait for that copy
+  // only (the transfer queue), never for rendering.
   const vk::Semaphore sem = *upload_done;
-  const vk::SemaphoreWaitInfo info({}, sem, upload_value);
-  while (ctx.device.waitSemaphores(info, UINT64_MAX) == vk::Result::eTimeout) {
+  const uint64_t ticket = sets[size_t(best)].ticket;
+  if (ticket > 0 && upload_done.getCounterValue() < ticket) {
+    const vk::SemaphoreWaitInfo info({}, sem, ticket);
+    while (ctx.device.waitSemaphores(info, UINT64_MAX) == vk::Result::eTimeout) {
+    }
+  }
+  return best;
+}
+
+void Renderer::Impl::pick_shown_set() {
+  const uint64_t done = upload_done.getCounterValue();
+  int newest = shown;
+  for (int i = 0; i < int(sets.size()); ++i) {
+    const FrameSet& s = sets[size_t(i)];
+    if (s.ticket == 0 || s.ticket > done) continue;
+    if (newest < 0 || s.ticket > sets[size_t(newest)].ticket) newest = i;
+  }
+  shown = newest;
+  if (shown < 0) return;
+  FrameSet& s = sets[size_t(shown)];
+  if (s.upload_ms < 0) {
+    std::array<uint64_t, 2> stamps{};
+    if ((*ctx.device).getQueryPoolResults(*s.stamps, 0, 2, sizeof stamps, stamps.data(), sizeof(uint64_t),
+                                          vk::QueryResultFlagBits::e64) == vk::Result::eSuccess) {
+      s.upload_ms = double(stamps[1] - stamps[0]) * ctx.properties.limits.timestampPeriod * 1e-6;
+    } else {
+      s.upload_ms = 0;
+    }
   }
 }
 
 FrameStaging Renderer::stage_frame(uint64_t particles, uint32_t chunks) {
   Impl& r = *impl_;
-  // The previous copy must be done reading staging before it is rewritten.
-  r.wait_uploads();
+  r.staged = r.free_set();
+  FrameSet& set = r.sets[size_t(r.staged)];
   r.stride = io::decoded_particle_bytes(r.scene.coding);
   const bool attribute = !r.scene.attribute_names.empty();
   const StagingLayout l = staging_layout(particles, chunks, r.stride, attribute);
-  r.ensure(r.staging, l.total, vk::BufferUsageFlagBits::eTransferSrc, MemoryKind::Upload);
-  r.staged_particles = particles;
-  r.staged_chunks = chunks;
-  r.staged_attribute = attribute;
-  auto* base = static_cast<std::byte*>(r.staging.mapped);
+  r.ensure(set.staging, l.total, vk::BufferUsageFlagBits::eTransferSrc, MemoryKind::Upload);
+  set.particle_count = particles;
+  set.chunk_count = chunks;
+  set.has_attribute = attribute;
+  set.ticket = 0;  // being refilled: never shown until its new copy is done
+  auto* base = static_cast<std::byte*>(set.staging.mapped);
   FrameStaging s;
   s.stride = r.stride;
   s.particles = {base + l.particles, size_t(particles * r.stride)};
@@ -85,61 +141,60 @@ FrameStaging Renderer::stage_frame(uint64_t particles, uint32_t chunks) {
 
 namespace {
 
-// Copies r.staged_particles / r.staged_chunks (and the colour attribute when
-// `attribute`) from the sources into the device buffers, which grow to fit.
-// The chunk table source must be r.staging (it is validated there). Waits
-// for the copy, so the sources may be reused when this returns.
-void upload_frame(Renderer::Impl& r, Renderer::Impl::UploadSource particles_src, Renderer::Impl::UploadSource chunks_src,
-                  Renderer::Impl::UploadSource attribute_src, bool attribute) {
-  const uint64_t n = r.staged_particles;
-  const uint32_t chunks = r.staged_chunks;
+struct UploadSource {  // where upload_frame() copies a part of a frame from
+  vk::Buffer buffer;
+  vk::DeviceSize offset = 0;
+};
+
+// Submits the copy of `set`'s frame (particle_count, chunk_count,
+// has_attribute) from the sources into its device buffers, which grow to
+// fit. The chunk table source must be set.staging at `chunks_offset` (it is
+// validated there). Returns the ticket the copy signals.
+uint64_t upload_frame(Renderer::Impl& r, FrameSet& set, UploadSource particles_src, vk::DeviceSize chunks_offset,
+                      UploadSource attribute_src) {
+  const uint64_t n = set.particle_count;
+  const uint32_t chunks = set.chunk_count;
   // Device buffers sized for this frame; the work lists for its worst case.
   uint64_t blocks = 0;
-  const auto* table = reinterpret_cast<const GpuChunk*>(static_cast<const std::byte*>(r.staging.mapped) + chunks_src.offset);
+  const auto* table = reinterpret_cast<const GpuChunk*>(static_cast<const std::byte*>(set.staging.mapped) + chunks_offset);
   for (uint32_t c = 0; c < chunks; ++c) {
     if (uint64_t(table[c].first) + table[c].count > n) {
+      set.chunk_count = 0;
+      set.particle_count = 0;
       throw std::runtime_error("staged chunk " + std::to_string(c) + " reaches past the frame's particles");
     }
     blocks += (table[c].count + 255) / 256;
   }
-  r.ensure(r.particles, std::max<uint64_t>(n * r.stride, 16), kDeviceUsage, MemoryKind::DeviceLocal);
-  r.ensure(r.chunks, std::max<uint64_t>(chunks * sizeof(GpuChunk), 16), kDeviceUsage, MemoryKind::DeviceLocal);
-  r.ensure(r.attributes, std::max<uint64_t>(n * 2 + 4, 16), kDeviceUsage, MemoryKind::DeviceLocal);
+  r.ensure(set.particles, std::max<uint64_t>(n * r.stride, 16), kDeviceUsage, MemoryKind::DeviceLocal);
+  r.ensure(set.chunks, std::max<uint64_t>(chunks * sizeof(GpuChunk), 16), kDeviceUsage, MemoryKind::DeviceLocal);
+  r.ensure(set.attributes, std::max<uint64_t>(n * 2 + 4, 16), kDeviceUsage, MemoryKind::DeviceLocal);
   r.ensure(r.blocks, std::max<uint64_t>(blocks * 8, 16), kDeviceUsage, MemoryKind::DeviceLocal);
   r.ensure(r.draws, std::max<uint64_t>(n * 8, 16), kDeviceUsage, MemoryKind::DeviceLocal);
   r.ensure(r.big, std::max<uint64_t>(n * 4, 16), kDeviceUsage, MemoryKind::DeviceLocal);
 
-  (*r.ctx.device).resetQueryPool(*r.upload_timestamps, 0, 2);
-  vk::CommandBuffer cmd = *r.transfer_cmd;
+  (*r.ctx.device).resetQueryPool(*set.stamps, 0, 2);
+  vk::CommandBuffer cmd = *set.copy;
   cmd.reset();
   cmd.begin(vk::CommandBufferBeginInfo(vk::CommandBufferUsageFlagBits::eOneTimeSubmit));
-  cmd.writeTimestamp2(vk::PipelineStageFlagBits2::eAllCommands, *r.upload_timestamps, 0);
-  if (n > 0) cmd.copyBuffer(particles_src.buffer, *r.particles.buffer, vk::BufferCopy(particles_src.offset, 0, n * r.stride));
+  cmd.writeTimestamp2(vk::PipelineStageFlagBits2::eAllCommands, *set.stamps, 0);
+  if (n > 0) cmd.copyBuffer(particles_src.buffer, *set.particles.buffer, vk::BufferCopy(particles_src.offset, 0, n * r.stride));
   if (chunks > 0) {
-    cmd.copyBuffer(chunks_src.buffer, *r.chunks.buffer, vk::BufferCopy(chunks_src.offset, 0, chunks * sizeof(GpuChunk)));
+    cmd.copyBuffer(*set.staging.buffer, *set.chunks.buffer, vk::BufferCopy(chunks_offset, 0, chunks * sizeof(GpuChunk)));
   }
-  if (attribute && n > 0) {
+  if (set.has_attribute && n > 0) {
     // Rounded up to 4 bytes: every source has room (streams are padded).
-    cmd.copyBuffer(attribute_src.buffer, *r.attributes.buffer,
+    cmd.copyBuffer(attribute_src.buffer, *set.attributes.buffer,
                    vk::BufferCopy(attribute_src.offset, 0, (n * 2 + 3) & ~uint64_t(3)));
   }
-  cmd.writeTimestamp2(vk::PipelineStageFlagBits2::eAllCommands, *r.upload_timestamps, 1);
+  cmd.writeTimestamp2(vk::PipelineStageFlagBits2::eAllCommands, *set.stamps, 1);
   cmd.end();
   ++r.upload_value;
   const vk::CommandBufferSubmitInfo cb(cmd);
   const vk::SemaphoreSubmitInfo signal(*r.upload_done, r.upload_value, vk::PipelineStageFlagBits2::eAllCommands);
   r.ctx.transfer_queue.submit2(vk::SubmitInfo2({}, {}, cb, signal));
-  r.particle_count = n;
-  r.chunk_count = chunks;
-  r.has_attribute = attribute;
-
-  // The copy's GPU time, for the stats (uploads are not overlapped with rendering yet).
-  r.wait_uploads();
-  std::array<uint64_t, 2> stamps{};
-  if ((*r.ctx.device).getQueryPoolResults(*r.upload_timestamps, 0, 2, sizeof stamps, stamps.data(), sizeof(uint64_t),
-                                          vk::QueryResultFlagBits::e64) == vk::Result::eSuccess) {
-    r.upload_ms = double(stamps[1] - stamps[0]) * r.ctx.properties.limits.timestampPeriod * 1e-6;
-  }
+  set.ticket = r.upload_value;
+  set.upload_ms = -1;
+  return set.ticket;
 }
 
 // The chunk table rows of a frame: AABBs, first particle, count and the
@@ -174,15 +229,17 @@ void fill_chunk_table(const io::FrameHeader& header, std::span<const uint64_t> f
 
 }  // namespace
 
-void Renderer::commit_frame() {
+uint64_t Renderer::commit_frame() {
   Impl& r = *impl_;
-  const StagingLayout l = staging_layout(r.staged_particles, r.staged_chunks, r.stride, r.staged_attribute);
-  const vk::Buffer staging = *r.staging.buffer;
-  upload_frame(r, {staging, l.particles}, {staging, l.chunks}, {staging, r.staged_attribute ? l.attribute : 0},
-               r.staged_attribute);
+  if (r.staged < 0) throw std::logic_error("commit_frame: no staged frame (call stage_frame first)");
+  FrameSet& set = r.sets[size_t(r.staged)];
+  r.staged = -1;
+  const StagingLayout l = staging_layout(set.particle_count, set.chunk_count, r.stride, set.has_attribute);
+  const vk::Buffer staging = *set.staging.buffer;
+  return upload_frame(r, set, {staging, l.particles}, l.chunks, {staging, set.has_attribute ? l.attribute : 0});
 }
 
-void Renderer::commit_decoded(const DecodedFrameView& frame, const StagingAllocator* from) {
+uint64_t Renderer::commit_decoded(const DecodedFrameView& frame, const StagingAllocator* from) {
   Impl& r = *impl_;
   const io::FrameHeader& header = *frame.header;
   const uint64_t n = header.particle_count;
@@ -196,6 +253,7 @@ void Renderer::commit_decoded(const DecodedFrameView& frame, const StagingAlloca
   if (!block || block->host) {
     // Not in Vulkan memory: through the renderer's own staging.
     FrameStaging s = stage_frame(n, chunks);
+    FrameSet& set = r.sets[size_t(r.staged)];
     fill_chunk_table(header, frame.chunk_first, attribute ? frame.color_attribute : -1, s.chunks,
                      io::ErrorLocation{{}, header.frame_number, {}});
     const bool copy_attribute = attribute && !s.color_attribute.empty();
@@ -207,23 +265,25 @@ void Renderer::commit_decoded(const DecodedFrameView& frame, const StagingAlloca
                     frame.buffers->attributes[size_t(frame.color_stream)].data() + begin, count * 2);
       }
     });
-    r.staged_attribute = copy_attribute;
-    commit_frame();
-    return;
+    set.has_attribute = copy_attribute;
+    return commit_frame();
   }
   // Straight from the allocator's staging: only the chunk table is written here.
-  r.wait_uploads();
+  const int index = r.free_set();
+  FrameSet& set = r.sets[size_t(index)];
   r.stride = stride;
-  r.ensure(r.staging, std::max<uint64_t>(uint64_t(chunks) * sizeof(GpuChunk), 16), vk::BufferUsageFlagBits::eTransferSrc,
+  r.ensure(set.staging, std::max<uint64_t>(uint64_t(chunks) * sizeof(GpuChunk), 16), vk::BufferUsageFlagBits::eTransferSrc,
            MemoryKind::Upload);
+  set.ticket = 0;
   fill_chunk_table(header, frame.chunk_first, attribute ? frame.color_attribute : -1,
-                   {static_cast<GpuChunk*>(r.staging.mapped), chunks}, io::ErrorLocation{{}, header.frame_number, {}});
-  r.staged_particles = n;
-  r.staged_chunks = chunks;
+                   {static_cast<GpuChunk*>(set.staging.mapped), chunks}, io::ErrorLocation{{}, header.frame_number, {}});
+  set.particle_count = n;
+  set.chunk_count = chunks;
+  set.has_attribute = attribute;
   const vk::Buffer src = *block->staging.buffer;
   const uint64_t attribute_offset =
       block->attribute_offset + uint64_t(std::max(frame.color_stream, 0)) * block->attribute_stride;
-  upload_frame(r, {src, 0}, {*r.staging.buffer, 0}, {src, attribute ? attribute_offset : 0}, attribute);
+  return upload_frame(r, set, {src, 0}, 0, {src, attribute ? attribute_offset : 0});
 }
 
 void Renderer::load_frame(const io::ContainerReader& reader, uint64_t frame, int color_attribute) {
@@ -245,7 +305,7 @@ void Renderer::load_frame(const io::ContainerReader& reader, uint64_t frame, int
     const io::ChunkDestination dest{s.particles.subspan(begin * s.stride, size_t(d.particle_count) * s.stride), attributes};
     io::decode_chunk(record, d, fh, dest, scratch, reader.location(frame, c));
   });
-  commit_frame();
+  wait_upload(commit_frame());
 }
 
 }  // namespace sluice::render

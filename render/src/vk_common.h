@@ -22,6 +22,8 @@ namespace sluice::render {
 
 struct Context::Impl {
   ContextOptions options;
+  bool owning = true;     // false: the handles are a host's; released, not destroyed
+  VulkanHandles handles;  // raw copies of the handles below
   vk::raii::Context context;
   vk::raii::Instance instance{nullptr};
   vk::raii::DebugUtilsMessengerEXT messenger{nullptr};
@@ -42,11 +44,17 @@ struct Context::Impl {
   mutable std::mutex messages_mutex;
   std::vector<std::string> messages;
 
+  Impl() = default;
+  ~Impl();
+
   uint32_t memory_type(uint32_t type_bits, vk::MemoryPropertyFlags wanted) const;
   // Records `record` into a fresh command buffer on the graphics queue, submits
   // it and waits. For setup work only.
   void run_once(const std::function<void(vk::CommandBuffer)>& record) const;
 };
+
+inline Context::Impl& context_impl(Context& c) { return *c.impl_; }
+inline const Context::Impl& context_impl(const Context& c) { return *c.impl_; }
 
 // A buffer with its own memory. Host-visible buffers are persistently mapped.
 struct Buffer {

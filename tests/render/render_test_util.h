@@ -9,6 +9,8 @@
 #include <memory>
 
 #include "sluice/render/context.h"
+#include "sluice/render/offscreen.h"
+#include "sluice/render/renderer.h"
 
 namespace sluice::render::testing {
 
@@ -42,6 +44,43 @@ class ValidationGuard {
 
  private:
   uint64_t before_;
+};
+
+// A Renderer drawing into an OffscreenTarget of its own, synchronously: the
+// shape most tests want (one frame in, one image out). Uploads are waited for,
+// so decoded buffers may be reused as soon as a commit returns.
+class OffscreenRenderer {
+ public:
+  OffscreenRenderer(Context& c, const SceneInfo& scene, uint32_t width, uint32_t height)
+      : renderer(c, scene, debug_options()), target(c, width, height) {}
+  FrameStats render(const Camera& camera, const FluidOptions& options, const LodOptions& lod) {
+    return target.render(renderer, camera, options, lod);
+  }
+  std::vector<uint8_t> read_rgba8() { return target.read_rgba8(); }
+  std::vector<float> read_surface() { return renderer.read_surface(); }
+  std::vector<float> read_raw_depth() { return renderer.read_raw_depth(); }
+  void load_frame(const io::ContainerReader& reader, uint64_t frame, int color_attribute) {
+    renderer.load_frame(reader, frame, color_attribute);
+  }
+  void commit_decoded(const DecodedFrameView& frame, const StagingAllocator* from) {
+    renderer.wait_upload(renderer.commit_decoded(frame, from));
+  }
+  FrameStaging stage_frame(uint64_t particles, uint32_t chunks) { return renderer.stage_frame(particles, chunks); }
+  void commit_frame() { renderer.wait_upload(renderer.commit_frame()); }
+  void set_environment(const Image& image) { renderer.set_environment(image); }
+  operator Renderer&() { return renderer; }  // NOLINT: tests hand it to upload helpers
+  uint32_t width() const { return target.width(); }
+  uint32_t height() const { return target.height(); }
+
+  Renderer renderer;
+  OffscreenTarget target;
+
+ private:
+  static RendererOptions debug_options() {
+    RendererOptions o;
+    o.debug_surfaces = true;
+    return o;
+  }
 };
 
 }  // namespace sluice::render::testing

@@ -67,7 +67,7 @@ void expect_pixel(const std::vector<uint8_t>& img, uint32_t x, uint32_t y, uint8
 TEST(Environment, BackgroundIsTheImageInTheViewDirection) {
   ValidationGuard guard;
   SceneInfo scene = scene_for_points(std::vector<float>{0, 0, 0, 1, 1, 1}, 0.1f);
-  Renderer r(context(), scene, kW, kH);
+  testing::OffscreenRenderer r(context(), scene, kW, kH);
   upload_points(r, {}, {});
   r.set_environment(quadrant_environment());
   FluidOptions o;
@@ -94,7 +94,7 @@ TEST(Environment, BackgroundIsTheImageInTheViewDirection) {
 
 TEST(Environment, RejectsAnImageWhosePixelsDoNotMatchItsSize) {
   SceneInfo scene = scene_for_points(std::vector<float>{0, 0, 0, 1, 1, 1}, 0.1f);
-  Renderer r(context(), scene, 16, 16);
+  testing::OffscreenRenderer r(context(), scene, 16, 16);
   EXPECT_THROW(r.set_environment(Image{4, 4, std::vector<uint8_t>(10)}), std::invalid_argument);
 }
 

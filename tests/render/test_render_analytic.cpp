@@ -91,7 +91,7 @@ TEST_P(LoneSphere, DepthIsExact) {
   std::vector<float> xyz;
   for (const Vec3& c : centers) xyz.insert(xyz.end(), {c.x, c.y, c.z});
   SceneInfo scene = scene_for_points(xyz, 0.5f);
-  Renderer r(context(), scene, kW, kH);
+  testing::OffscreenRenderer r(context(), scene, kW, kH);
   // One chunk per sphere: a single-point chunk dequantizes exactly (lo == hi).
   upload_points(r, xyz, std::vector<uint16_t>(centers.size(), 0), {}, 1);
   const float radius = 0.4f;
@@ -156,7 +156,7 @@ void check_slab_normals(SurfaceFilterMethod method, int iterations, double max_d
   ValidationGuard guard;
   const Slab slab = make_slab();
   SceneInfo scene = scene_for_points(slab.xyz, slab.spacing);
-  Renderer r(context(), scene, kW, kH);
+  testing::OffscreenRenderer r(context(), scene, kW, kH);
   upload_points(r, slab.xyz, slab.lod);
   const Camera cam = camera_at({0.4f, -1.7f, 1.3f}, {0, 0, 0});
   FluidOptions o = plain(DisplayMode::FilteredSurfaceNormal, 0);  // radius = spacing
@@ -239,7 +239,7 @@ TEST(RenderAnalytic, LodKeepRatiosFollowTheThreshold) {
   ValidationGuard guard;
   const Cloud cloud = make_cloud(200000, 7);
   SceneInfo scene = scene_for_points(cloud.xyz, 0.01f);
-  Renderer r(context(), scene, kW, kH);
+  testing::OffscreenRenderer r(context(), scene, kW, kH);
   upload_points(r, cloud.xyz, cloud.lod, {}, 4096);
   const Camera cam = camera_at({0.5f, -6.0f, 1.0f}, {0, 0, 0});
   const FluidOptions o = plain(DisplayMode::FilteredDepth, 0.002f);
@@ -286,7 +286,7 @@ TEST(RenderAnalytic, LodOneKeepsEverythingInTheFrustum) {
     cloud.lod.push_back(outside.lod[i]);
   }
   SceneInfo scene = scene_for_points(cloud.xyz, 0.01f);
-  Renderer r(context(), scene, kW, kH);
+  testing::OffscreenRenderer r(context(), scene, kW, kH);
   upload_points(r, cloud.xyz, cloud.lod, {}, 5000);  // 10 chunks in view, 4 outside
   const Camera cam = camera_at({0.5f, -6.0f, 1.0f}, {0, 0, 0});
   for (LodMode mode : {LodMode::Off, LodMode::Clod, LodMode::DensityPreserving}) {
@@ -314,7 +314,7 @@ TEST(RenderAnalytic, LodOneKeepsEverythingInTheFrustum) {
 TEST(RenderAnalytic, EmptyFrameRendersBackground) {
   ValidationGuard guard;
   SceneInfo scene = scene_for_points(std::vector<float>{0, 0, 0, 1, 1, 1}, 0.1f);
-  Renderer r(context(), scene, 64, 48);
+  testing::OffscreenRenderer r(context(), scene, 64, 48);
   upload_points(r, {}, {});
   FluidOptions o;
   const FrameStats s = r.render(camera_at({0.5f, -3, 1}, {0.5f, 0.5f, 0.5f}), o, {});
@@ -328,7 +328,7 @@ TEST(RenderAnalytic, SyntheticFluidCountsAndChunks) {
   ValidationGuard guard;
   const SyntheticFluid f = synthetic_fluid(100000);
   EXPECT_NEAR(double(f.particles), 1e5, 3e3);
-  Renderer r(context(), f.scene, kW, kH);
+  testing::OffscreenRenderer r(context(), f.scene, kW, kH);
   upload_synthetic(r, f);
   Camera cam = Camera::framing(f.scene.bounds, 2, float(kW) / kH);
   cam.fit(f.scene.bounds, float(kW) / kH);  // the whole tank in view
@@ -342,7 +342,7 @@ TEST(RenderAnalytic, SyntheticFluidCountsAndChunks) {
   EXPECT_EQ(s.visible_chunks, f.chunks);
   std::vector<std::string> names;
   for (const PassTime& p : s.passes) names.push_back(p.name);
-  EXPECT_EQ(names, (std::vector<std::string>{"cull", "splat", "resolve", "filter", "thickness filter", "shade"}));
+  EXPECT_EQ(names, (std::vector<std::string>{"cull", "splat", "resolve", "filter", "thickness filter", "shade", "present"}));
   // Point sprites give the same picture (thickness sums differ in rounding).
   o.splatting = Splatting::Raster;
   const FrameStats s2 = r.render(cam, o, {});

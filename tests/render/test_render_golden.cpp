@@ -79,7 +79,7 @@ TEST_P(GoldenImage, MatchesReference) {
   const Golden& g = GetParam();
   const io::ContainerReader reader(sample());
   const SceneInfo scene = scene_info(reader);
-  Renderer r(context(), scene, 320, 240);
+  testing::OffscreenRenderer r(context(), scene, 320, 240);
   FluidOptions o;
   o.display_mode = parse_display_mode(g.display);
   o.scalar_visibility = g.color_by_rho;

@@ -67,7 +67,7 @@ struct Rendered {
   uint64_t particles = 0;
 };
 
-Rendered draw(Renderer& r, const SceneInfo& scene) {
+Rendered draw(testing::OffscreenRenderer& r, const SceneInfo& scene) {
   FluidOptions o;
   o.scalar_visibility = true;
   o.color_attribute = 0;
@@ -81,7 +81,7 @@ Rendered draw(Renderer& r, const SceneInfo& scene) {
 std::vector<Rendered> streamed(const io::ContainerReader& reader, runtime::FrameAllocator& allocator,
                                const StagingAllocator* from) {
   const SceneInfo scene = scene_info(reader);
-  Renderer r(context(), scene, 160, 120);
+  testing::OffscreenRenderer r(context(), scene, 160, 120);
   runtime::PipelineOptions po;
   po.decode_threads = 2;
   po.attributes = std::vector<uint32_t>{0};
@@ -109,7 +109,7 @@ class StreamedUpload : public ::testing::Test {
   // What load_frame renders, frame by frame.
   static std::vector<Rendered> reference(const io::ContainerReader& reader) {
     const SceneInfo scene = scene_info(reader);
-    Renderer r(context(), scene, 160, 120);
+    testing::OffscreenRenderer r(context(), scene, 160, 120);
     std::vector<Rendered> out;
     for (uint64_t f = 0; f < reader.frame_count(); ++f) {
       r.load_frame(reader, f, 0);

@@ -10,10 +10,16 @@
 #include "sluice/render/image_io.h"
 #include "sluice/render/renderer.h"
 #include "sluice/render/synthetic.h"
-#include "sluice/render/window.h"
+#include "sluice/desktop/window.h"
+#include "sluice/render/offscreen.h"
 
 namespace sluice::render {
 namespace {
+
+using desktop::poll_window_events;
+using desktop::Window;
+using desktop::window_instance_extensions;
+using desktop::WindowOptions;
 
 class WindowTest : public ::testing::Test {
  protected:
@@ -48,20 +54,21 @@ TEST_F(WindowTest, PresentsTheRenderersImageAndTheHud) {
   Window window(*context_, wo);
   ASSERT_GT(window.width(), 0u);
   const SyntheticFluid fluid = synthetic_fluid(20000);
-  Renderer renderer(*context_, fluid.scene, window.width(), window.height());
+  Renderer renderer(*context_, fluid.scene);
   upload_synthetic(renderer, fluid);
   const Camera cam = Camera::framing(fluid.scene.bounds, 2, float(window.width()) / float(window.height()));
   const FluidOptions options;
-  const FrameStats stats = renderer.render(cam, options, {});
+  OffscreenTarget target(*context_, window.width(), window.height());
+  const FrameStats stats = target.render(renderer, cam, options, {});
   EXPECT_EQ(stats.drawn, fluid.particles);
-  const Image offscreen{renderer.width(), renderer.height(), renderer.read_rgba8()};
+  const Image offscreen{target.width(), target.height(), target.read_rgba8()};
 
   // A few frames without the HUD: the last presented image is the renderer's.
   int presented = 0;
   for (int i = 0; i < 10 && presented < 3; ++i) {
     poll_window_events();
     window.new_ui_frame();
-    presented += window.present(renderer, false, true) ? 1 : 0;
+    presented += window.present(renderer, cam, options, {}, false, true) ? 1 : 0;
   }
   ASSERT_EQ(presented, 3);
   const Image shown{window.width(), window.height(), window.read_presented()};
@@ -77,7 +84,7 @@ TEST_F(WindowTest, PresentsTheRenderersImageAndTheHud) {
   ImGui::Begin("hud");
   ImGui::TextUnformatted("frame 1 / 1");
   ImGui::End();
-  ASSERT_TRUE(window.present(renderer, true, true));
+  ASSERT_TRUE(window.present(renderer, cam, options, {}, true, true));
   const Image hud{window.width(), window.height(), window.read_presented()};
   size_t changed_inside = 0, changed_outside = 0;
   for (uint32_t y = 0; y < hud.height; ++y) {

@@ -1,15 +1,39 @@
-// sluice/render/renderer.h: one frame of particles in, one shaded image out.
+// sluice/render/renderer.h: frames of particles in, the fluid recorded into
+// the caller's command buffer and images.
 //
-// Pipeline (docs/render.md): chunk frustum cull -> per-particle cull/cLOD and
-// compaction into a draw list (compute, indirect args) -> sphere impostors
-// with exact per-pixel depth -> additive thickness -> depth filter
-// (narrow-range or bilateral) -> thickness filter -> normals, shading and
-// background (compute) -> RGBA8 image. Every pass has a GPU timestamp.
+// Passes (docs/render.md), per view: chunk frustum cull -> per-particle
+// cull/cLOD and compaction into a draw list (compute, indirect args) ->
+// sphere depth and additive thickness (compute splatting or point sprites)
+// -> depth filter (narrow-range or bilateral) -> thickness filter ->
+// normals, shading and background (compute) -> present: the shaded fluid
+// drawn into the caller's colour image, depth-tested against and written to
+// the caller's depth image. Every pass has a GPU timestamp.
+//
+// The frame loop (docs/embedding.md has the whole host loop):
+//   stage_frame() + commit_frame(), or commit_decoded()  when a new frame is due
+//   record(cmd, target, views, ...)                       once per displayed frame
+//   the caller submits cmd, waiting on record()'s FrameSync semaphore
+//
+// Frames in flight: the renderer keeps `frames_in_flight` sets of per-frame
+// resources. Contract: when record() is called for the n-th time, the
+// command buffer of the (n - frames_in_flight)-th call has finished
+// executing on the GPU (or was never submitted); a host that waits on its
+// per-frame fence before reusing a frame slot gives this for free. Nothing on
+// the per-frame path waits for the GPU: no fence, no queue or device idle.
+//
+// Uploads: commit_*() copy a frame on the transfer queue (the graphics queue
+// where the device has none) into one of frames_in_flight + 1 device frame
+// buffers and return at once. record() draws the newest committed frame
+// whose copy has finished (checked without waiting), so a frame is shown
+// only once it is complete, and the next frame's copy overlaps the current
+// frame's rendering.
 //
 // Ownership: a Renderer belongs to one Context, which must outlive it.
 // Threads: one thread calls the members; FrameStaging spans may be filled
 // from any threads between stage_frame() and commit_frame().
 #pragma once
+
+#include <vulkan/vulkan_core.h>
 
 #include <cstdint>
 #include <memory>
@@ -27,17 +51,18 @@
 namespace sluice::render {
 
 struct PassTime {
-  std::string name;  // "cull", "depth", "thickness", "filter", "shade", ...
-  double ms = 0;     // GPU time from timestamps
+  std::string name;  // "cull", "splat", "resolve", "filter", "shade", "present", ...
+  double ms = 0;     // GPU time from timestamps, summed over the frame's views
 };
 
 struct FrameStats {
-  uint64_t particles = 0;      // in the frame
-  uint64_t drawn = 0;          // after frustum, near and LOD culling
-  uint64_t visible_chunks = 0;
+  uint64_t frame = 0;          // which record() call (0-based) these figures are of
+  uint64_t particles = 0;      // in the frame drawn
+  uint64_t drawn = 0;          // after frustum, near and LOD culling (the last view)
+  uint64_t visible_chunks = 0; // the last view
   std::vector<PassTime> passes;
   double gpu_ms = 0;           // first to last timestamp of the frame
-  double upload_ms = 0;        // GPU time of the last commit_frame() copy
+  double upload_ms = 0;        // GPU time of the copy of the frame drawn
 };
 
 // A decoded frame as the runtime hands it over (runtime::FrameHandle has
@@ -50,53 +75,127 @@ struct DecodedFrameView {
   int color_attribute = -1;  // that attribute's index in the file header (for the chunk ranges)
 };
 
+// A rectangle of the target in pixels (origin top left).
+struct Viewport {
+  uint32_t x = 0, y = 0;
+  uint32_t width = 0, height = 0;
+};
+
+// One eye or camera. Matrices are column-major (math.h).
+//  - view: world -> eye space (right-handed, looking down -z, +y up).
+//  - projection: eye -> Vulkan clip space (x right, y down, depth 0..1) as
+//    the host's own rasterizer uses it; asymmetric frusta (OpenXR's per-eye
+//    fov) and reversed or standard depth, finite or infinite far plane, are
+//    all accepted. The fluid's depth is written with this projection, and the
+//    depth test follows its direction (greater-or-equal for reversed depth).
+struct View {
+  Mat4 view = Mat4::identity();
+  Mat4 projection = Mat4::identity();
+  Viewport viewport;
+};
+// The view of `camera` over `viewport` (aspect from the viewport).
+View camera_view(const Camera& camera, const Viewport& viewport);
+
+// The caller's images. Layouts: the images are in `*_layout_before` when the
+// recorded commands start and in `*_layout_after` when they end (sluice
+// records the transitions, synchronized with everything before and after on
+// the queue). A `before` layout of UNDEFINED discards the contents: colour is
+// cleared to transparent black, depth to the far plane.
+struct RenderTarget {
+  uint32_t width = 0, height = 0;  // extent of the images (every view's viewport lies inside)
+  VkImage color_image = VK_NULL_HANDLE;
+  VkImageView color_view = VK_NULL_HANDLE;  // a 2D view of one layer; colour attachment usage
+  VkFormat color_format = VK_FORMAT_UNDEFINED;  // *_SRGB formats get linear values (the hardware encodes)
+  VkImageLayout color_layout_before = VK_IMAGE_LAYOUT_UNDEFINED;
+  VkImageLayout color_layout_after = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
+  // Optional: the host's depth (its opaque geometry). The fluid is hidden
+  // behind it and writes its own depth into it.
+  VkImage depth_image = VK_NULL_HANDLE;
+  VkImageView depth_view = VK_NULL_HANDLE;
+  VkFormat depth_format = VK_FORMAT_UNDEFINED;  // D16, D32, D24S8, D32S8
+  VkImageLayout depth_layout_before = VK_IMAGE_LAYOUT_UNDEFINED;
+  VkImageLayout depth_layout_after = VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL;
+  uint32_t base_layer = 0;   // the array layer the views above show
+  uint32_t layer_count = 1;  // 1 (multiview stereo comes with the XR module)
+  // Draw sluice's sky and ground where the host's depth is still at the far
+  // plane (everywhere without a host depth); off: only the fluid is drawn.
+  bool background = true;
+};
+
+// What the caller's submission of the recorded command buffer must wait on:
+// the timeline semaphore of the uploads, at the value of the copy of the
+// frame drawn. It is already signalled when record() returns (only finished
+// copies are drawn); the wait orders the transfer queue's writes before the
+// reads, as Vulkan's memory model requires. Value 0: nothing to wait for.
+struct FrameSync {
+  VkSemaphore upload_semaphore = VK_NULL_HANDLE;
+  uint64_t upload_value = 0;
+  VkPipelineStageFlags2 wait_stages = VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT;
+};
+
+struct RendererOptions {
+  uint32_t frames_in_flight = 2;  // see the contract above; 1..8
+  // Keep each view's eye normals and depth for read_surface() (tests; costs
+  // 16 bytes per pixel per frame).
+  bool debug_surfaces = false;
+};
+
 class Renderer {
  public:
-  // `width` x `height` is the output image size in pixels.
-  Renderer(Context& context, const SceneInfo& scene, uint32_t width, uint32_t height);
+  Renderer(Context& context, const SceneInfo& scene, const RendererOptions& options = {});
   ~Renderer();
   Renderer(const Renderer&) = delete;
   Renderer& operator=(const Renderer&) = delete;
 
-  void resize(uint32_t width, uint32_t height);
   // The environment reflected and seen behind the fluid: an equirectangular
   // image (sRGB; u = azimuth around the scene's up axis, v = 0 straight up),
-  // or an empty Image for the procedural sky. Waits for the GPU.
+  // or an empty Image for the procedural sky. A setting, not a per-frame
+  // call: submits the image's upload to the graphics queue and waits for
+  // that submission (not for the device).
   void set_environment(const Image& equirect);
-  uint32_t width() const;
-  uint32_t height() const;
   const SceneInfo& scene() const;
+  const RendererOptions& options() const;
 
-  // Staging memory for a frame of `particles` in `chunks` chunks (buffers
-  // grow as needed; that waits for the GPU). Fill it, then commit_frame().
+  // Staging memory for a frame of `particles` in `chunks` chunks. Fill it,
+  // then commit_frame(). May wait for this renderer's own earlier copy out of
+  // the same buffer (never for rendering).
   FrameStaging stage_frame(uint64_t particles, uint32_t chunks);
-  // Copies the staged frame to device memory (on the transfer queue where the
-  // device has one; the next render() waits on a timeline semaphore).
-  void commit_frame();
-  // Uploads a frame the streaming runtime decoded. With `from` (the
-  // StagingAllocator that handed out frame.buffers, of this renderer's
-  // Context) the GPU copies straight from those buffers; otherwise they are
-  // copied through the renderer's staging. The buffers may be reused once
-  // this returns.
-  void commit_decoded(const DecodedFrameView& frame, const StagingAllocator* from);
-  // Reads and decodes `frame` straight into staging (chunks in parallel) and
-  // commits it. `color_attribute` < 0 skips attributes.
+  // Submits the copy of the staged frame to device memory; returns its
+  // upload ticket (see upload_complete()).
+  uint64_t commit_frame();
+  // Submits the copy of a frame the streaming runtime decoded. With `from`
+  // (the StagingAllocator that handed out frame.buffers, of this renderer's
+  // Context) the GPU copies straight from those buffers, which must then stay
+  // untouched until upload_complete(ticket); otherwise they are copied through
+  // the renderer's staging and may be reused when this returns.
+  uint64_t commit_decoded(const DecodedFrameView& frame, const StagingAllocator* from);
+  // Whether the copy with this ticket has finished (no wait).
+  bool upload_complete(uint64_t ticket) const;
+  // Waits for the copy with this ticket (the transfer queue only).
+  void wait_upload(uint64_t ticket) const;
+  // Reads and decodes `frame` straight into staging (chunks in parallel),
+  // commits it and waits for its copy. `color_attribute` < 0 skips attributes.
   void load_frame(const io::ContainerReader& reader, uint64_t frame, int color_attribute);
 
-  // Renders the committed frame and waits for the GPU. Particles get the
-  // radius options.particle_radius (0: scene spacing).
-  FrameStats render(const Camera& camera, const FluidOptions& options, const LodOptions& lod);
+  // Records the fluid for `views` (1..4, all the same size) into `cmd`, a
+  // primary command buffer in the recording state, outside a render pass, of
+  // the graphics family. The caller submits it (with FrameSync's wait).
+  // Particles get the radius options.particle_radius (0: scene spacing).
+  FrameSync record(VkCommandBuffer cmd, const RenderTarget& target, std::span<const View> views,
+                   const FluidOptions& options, const LodOptions& lod);
+  // The figures of the newest recorded frame whose GPU results are back
+  // (read without waiting; frames_in_flight frames behind in a running loop,
+  // the last one after the host waited for it).
+  FrameStats last_stats();
 
-  // The last rendered image: width*height RGBA8, top row first.
-  std::vector<uint8_t> read_rgba8();
-  // For tests: per pixel (eye-space normal x,y,z, linear depth) of the last
-  // render, after filtering; depth 0 where there is no fluid.
+  // For tests, after the caller waited for the frame (with debug_surfaces):
+  // per pixel of the last view (eye-space normal x,y,z, linear depth) after
+  // filtering, depth 0 where there is no fluid; and the unfiltered linear
+  // depth (distance along the view axis). Submit and wait on the graphics queue.
   std::vector<float> read_surface();
-  // For tests: the unfiltered linear depth (distance along the view axis).
   std::vector<float> read_raw_depth();
 
-  struct Impl;
-  Impl& impl() { return *impl_; }
+  struct Impl;  // render/src/renderer_impl.h
 
  private:
   std::unique_ptr<Impl> impl_;

@@ -1,10 +1,15 @@
-// sluice/render/window.h: a desktop window (GLFW) with a Vulkan swapchain
-// that shows a Renderer's image with a Dear ImGui HUD drawn on top. Built
-// only where GLFW and Dear ImGui are found (SLUICE_WITH_WINDOW).
+// sluice/desktop/window.h: a desktop window (GLFW) with a Vulkan swapchain
+// into which a Renderer records the fluid, with a Dear ImGui HUD drawn on
+// top. A host of the renderer like any other: it uses only sluice_render's
+// public API (Context::vulkan() for the handles, Renderer::record() into the
+// swapchain image). Built only where GLFW and Dear ImGui are found.
 //
 // Usage: window_instance_extensions() -> Context(with them, presentation)
-// -> Window -> per frame: poll_events(), Renderer::render(), new_ui_frame(),
-// ImGui:: calls, present().
+// -> Window -> per frame: poll_window_events(), new_ui_frame(), ImGui::
+// calls, present(renderer, camera, ...).
+// Frames in flight: as many as the renderer was made for; present() waits
+// for the fence of the frame that used the same slot that many frames ago
+// (the renderer's contract), never for the device.
 // Threads: everything on the thread that created the window (GLFW's rule).
 // Ownership: the Window borrows the Context, which must outlive it.
 #pragma once
@@ -19,7 +24,7 @@
 
 struct GLFWwindow;
 
-namespace sluice::render {
+namespace sluice::desktop {
 
 struct WindowOptions {
   uint32_t width = 1280, height = 720;  // initial size in screen coordinates
@@ -49,7 +54,7 @@ class Window {
   // The context must have been created with window_instance_extensions() and
   // presentation = true. Also sets up Dear ImGui (context, GLFW and Vulkan
   // backends), which chains to the input callbacks given here.
-  Window(Context& context, const WindowOptions& options, const WindowCallbacks& callbacks = {});
+  Window(render::Context& context, const WindowOptions& options, const WindowCallbacks& callbacks = {});
   ~Window();
   Window(const Window&) = delete;
   Window& operator=(const Window&) = delete;
@@ -63,13 +68,15 @@ class Window {
 
   // Starts a Dear ImGui frame: build the HUD with ImGui:: calls, then present().
   void new_ui_frame();
-  // Shows the renderer's last image (scaled if the sizes differ) with the UI
-  // on top (when `ui`; else the UI frame is discarded) and presents it.
-  // Returns false when the frame was dropped because the swapchain had to be
-  // rebuilt (resize): resize the renderer to width() x height() and go on.
+  // Records `renderer` for `camera` over the whole window into the next
+  // swapchain image, the UI on top (when `ui`; else the UI frame is
+  // discarded), submits and presents. Returns false when the frame was
+  // dropped because the swapchain had to be rebuilt (resize, minimized): go on.
   // `capture` keeps a copy of what was presented for read_presented().
-  bool present(Renderer& renderer, bool ui, bool capture = false);
-  // The last captured presented image: width*height RGBA8, top row first.
+  bool present(render::Renderer& renderer, const render::Camera& camera, const render::FluidOptions& options,
+               const render::LodOptions& lod, bool ui, bool capture = false);
+  // The last captured presented image: width*height RGBA8, top row first
+  // (waits for that frame).
   std::vector<uint8_t> read_presented();
 
   struct Impl;
@@ -78,4 +85,4 @@ class Window {
   std::unique_ptr<Impl> impl_;
 };
 
-}  // namespace sluice::render
+}  // namespace sluice::desktop

@@ -1,7 +1,9 @@
 // GLFW window, Vulkan swapchain, and the Dear ImGui backends (see window.h).
-// A frame: blit the renderer's RGBA8 output into the swapchain image, draw
-// the UI in a render pass on top, optionally copy it out, present.
-#include "renderer_impl.h"  // vk_common.h first: GLFW declares its Vulkan entry points only after vulkan.h
+// A frame: the renderer records the fluid into the swapchain image, the UI
+// is drawn in a render pass on top, optionally copied out, then presented.
+// Vulkan objects are Vulkan-Hpp RAII wrappers around the Context's public
+// handles (borrowed: released, never destroyed, at the end).
+#include <vulkan/vulkan_raii.hpp>  // first: GLFW declares its Vulkan entry points only after vulkan.h
 
 #define GLFW_INCLUDE_NONE
 #include <GLFW/glfw3.h>
@@ -10,12 +12,14 @@
 #include <imgui.h>
 
 #include <algorithm>
+#include <array>
+#include <functional>
 #include <cstring>
 #include <stdexcept>
 
-#include "sluice/render/window.h"
+#include "sluice/desktop/window.h"
 
-namespace sluice::render {
+namespace sluice::desktop {
 namespace {
 
 using Stage = vk::PipelineStageFlagBits2;
@@ -52,8 +56,70 @@ std::vector<std::string> window_instance_extensions() {
 
 void poll_window_events() { glfwPollEvents(); }
 
+namespace {
+
+// The Context's handles as Vulkan-Hpp RAII objects that do not own them.
+struct Borrowed {
+  vk::raii::Context context;
+  vk::raii::Instance instance{nullptr};
+  vk::raii::PhysicalDevice physical{nullptr};
+  vk::raii::Device device{nullptr};
+  vk::raii::Queue queue{nullptr};
+  uint32_t family = 0;
+  explicit Borrowed(const render::VulkanHandles& h) {
+    instance = vk::raii::Instance(context, h.instance);
+    physical = vk::raii::PhysicalDevice(instance, h.physical_device);
+    device = vk::raii::Device(physical, h.device);
+    queue = vk::raii::Queue(device, h.graphics_queue);
+    family = h.graphics_family;
+  }
+  ~Borrowed() {
+    queue.release();
+    device.release();
+    physical.release();
+    instance.release();
+  }
+};
+
+// A host-visible buffer the presented image is copied into.
+struct Readback {
+  vk::raii::Buffer buffer{nullptr};
+  vk::raii::DeviceMemory memory{nullptr};
+  void* mapped = nullptr;
+  vk::DeviceSize size = 0;
+};
+
+Readback make_readback(const Borrowed& vk_, vk::DeviceSize size) {
+  Readback r;
+  r.size = size;
+  r.buffer = vk::raii::Buffer(vk_.device, vk::BufferCreateInfo({}, size, vk::BufferUsageFlagBits::eTransferDst));
+  const vk::MemoryRequirements req = r.buffer.getMemoryRequirements();
+  const auto props = vk_.physical.getMemoryProperties();
+  const auto want = vk::MemoryPropertyFlagBits::eHostVisible | vk::MemoryPropertyFlagBits::eHostCoherent;
+  uint32_t type = UINT32_MAX;
+  for (uint32_t i = 0; i < props.memoryTypeCount && type == UINT32_MAX; ++i) {
+    if ((req.memoryTypeBits & (1u << i)) && (props.memoryTypes[i].propertyFlags & want) == want) type = i;
+  }
+  if (type == UINT32_MAX) throw std::runtime_error("window: no host-visible memory for the capture");
+  r.memory = vk::raii::DeviceMemory(vk_.device, vk::MemoryAllocateInfo(req.size, type));
+  r.buffer.bindMemory(*r.memory, 0);
+  r.mapped = r.memory.mapMemory(0, VK_WHOLE_SIZE);
+  return r;
+}
+
+// One frame in flight: its command buffer, the image-acquired semaphore and
+// the fence of its submission.
+struct Slot {
+  vk::raii::CommandBuffer cmd{nullptr};
+  vk::raii::Semaphore acquired{nullptr};
+  vk::raii::Fence fence{nullptr};
+  bool submitted = false;
+};
+
+}  // namespace
+
 struct Window::Impl {
-  Context::Impl& ctx;
+  Borrowed ctx;
   WindowOptions options;
   GLFWwindow* window = nullptr;
   vk::raii::SurfaceKHR surface{nullptr};
@@ -68,22 +134,57 @@ struct Window::Impl {
   vk::raii::RenderPass render_pass{nullptr};  // Dear ImGui 1.86 draws in a classic render pass
   vk::raii::DescriptorPool ui_pool{nullptr};
   vk::raii::CommandPool pool{nullptr};
-  vk::raii::CommandBuffer cmd{nullptr};
-  vk::raii::Semaphore acquired{nullptr};
-  vk::raii::Fence fence{nullptr};
-  bool submitted = false, ui_started = false, imgui_vulkan = false;
-  Buffer capture;
+  std::vector<Slot> slots;
+  uint64_t frame = 0;
+  bool ui_started = false, imgui_vulkan = false;
+  Readback capture;
   vk::Extent2D captured;
+  int captured_slot = -1;
 
-  Impl(Context::Impl& c, const WindowOptions& o) : ctx(c), options(o) {}
+  Impl(const render::VulkanHandles& h, const WindowOptions& o) : ctx(h), options(o) {}
   void create_swapchain();
-  void wait_idle() {
-    if (*ctx.device) ctx.device.waitIdle();
+  void wait(Slot& s) {
+    if (!s.submitted) return;
+    while (ctx.device.waitForFences(*s.fence, VK_TRUE, UINT64_MAX) == vk::Result::eTimeout) {
+    }
+    s.submitted = false;
   }
+  // Every frame this window submitted is done (its own work, not the device's).
+  void wait_all() {
+    for (Slot& s : slots) wait(s);
+  }
+  void ensure_slots(uint32_t count);
+  void run_once(const std::function<void(vk::CommandBuffer)>& record);
 };
 
+void Window::Impl::ensure_slots(uint32_t count) {
+  if (slots.size() == count) return;
+  wait_all();
+  slots.clear();
+  for (uint32_t i = 0; i < count; ++i) {
+    Slot s;
+    s.cmd = std::move(vk::raii::CommandBuffers(ctx.device, vk::CommandBufferAllocateInfo(*pool, vk::CommandBufferLevel::ePrimary, 1))[0]);
+    s.acquired = vk::raii::Semaphore(ctx.device, vk::SemaphoreCreateInfo());
+    s.fence = vk::raii::Fence(ctx.device, vk::FenceCreateInfo());
+    slots.push_back(std::move(s));
+  }
+}
+
+void Window::Impl::run_once(const std::function<void(vk::CommandBuffer)>& record) {
+  vk::raii::CommandBuffer cmd =
+      std::move(vk::raii::CommandBuffers(ctx.device, vk::CommandBufferAllocateInfo(*pool, vk::CommandBufferLevel::ePrimary, 1))[0]);
+  cmd.begin(vk::CommandBufferBeginInfo(vk::CommandBufferUsageFlagBits::eOneTimeSubmit));
+  record(*cmd);
+  cmd.end();
+  vk::raii::Fence fence(ctx.device, vk::FenceCreateInfo());
+  const vk::CommandBufferSubmitInfo cb(*cmd);
+  ctx.queue.submit2(vk::SubmitInfo2({}, {}, cb), *fence);
+  while (ctx.device.waitForFences(*fence, VK_TRUE, UINT64_MAX) == vk::Result::eTimeout) {
+  }
+}
+
 void Window::Impl::create_swapchain() {
-  wait_idle();
+  wait_all();  // the old images may still be drawn into by this window's frames
   framebuffers.clear();
   views.clear();
   finished.clear();
@@ -113,8 +214,8 @@ void Window::Impl::create_swapchain() {
   if (imgui_vulkan) ImGui_ImplVulkan_SetMinImageCount(std::max(caps.minImageCount, 2u));
 }
 
-Window::Window(Context& context, const WindowOptions& options, const WindowCallbacks& callbacks)
-    : impl_(std::make_unique<Impl>(context.impl(), options)) {
+Window::Window(render::Context& context, const WindowOptions& options, const WindowCallbacks& callbacks)
+    : impl_(std::make_unique<Impl>(context.vulkan(), options)) {
   Impl& w = *impl_;
   ensure_glfw();
   glfwWindowHint(GLFW_CLIENT_API, GLFW_NO_API);
@@ -131,7 +232,7 @@ Window::Window(Context& context, const WindowOptions& options, const WindowCallb
     throw std::runtime_error("cannot create a Vulkan surface for the window");
   }
   w.surface = vk::raii::SurfaceKHR(w.ctx.instance, raw);
-  if (!w.ctx.physical.getSurfaceSupportKHR(w.ctx.graphics_family, *w.surface)) {
+  if (!w.ctx.physical.getSurfaceSupportKHR(w.ctx.family, *w.surface)) {
     throw std::runtime_error("the Vulkan device cannot present to this window");
   }
   // The renderer's output is already sRGB-encoded: a UNORM swapchain passes it through.
@@ -160,10 +261,8 @@ Window::Window(Context& context, const WindowOptions& options, const WindowCallb
                             vk::AccessFlagBits::eColorAttachmentRead | vk::AccessFlagBits::eColorAttachmentWrite);
   w.render_pass = vk::raii::RenderPass(w.ctx.device, vk::RenderPassCreateInfo({}, color, subpass, dep));
   w.pool = vk::raii::CommandPool(w.ctx.device,
-                                 vk::CommandPoolCreateInfo(vk::CommandPoolCreateFlagBits::eResetCommandBuffer, w.ctx.graphics_family));
-  w.cmd = std::move(vk::raii::CommandBuffers(w.ctx.device, vk::CommandBufferAllocateInfo(*w.pool, vk::CommandBufferLevel::ePrimary, 1))[0]);
-  w.acquired = vk::raii::Semaphore(w.ctx.device, vk::SemaphoreCreateInfo());
-  w.fence = vk::raii::Fence(w.ctx.device, vk::FenceCreateInfo());
+                                 vk::CommandPoolCreateInfo(vk::CommandPoolCreateFlagBits::eResetCommandBuffer, w.ctx.family));
+  w.ensure_slots(2);
   w.create_swapchain();
 
   // Dear ImGui: context, GLFW input (chaining to the callbacks set above), Vulkan drawing.
@@ -179,8 +278,8 @@ Window::Window(Context& context, const WindowOptions& options, const WindowCallb
   init.Instance = static_cast<VkInstance>(*w.ctx.instance);
   init.PhysicalDevice = static_cast<VkPhysicalDevice>(*w.ctx.physical);
   init.Device = static_cast<VkDevice>(*w.ctx.device);
-  init.QueueFamily = w.ctx.graphics_family;
-  init.Queue = static_cast<VkQueue>(*w.ctx.graphics_queue);
+  init.QueueFamily = w.ctx.family;
+  init.Queue = static_cast<VkQueue>(*w.ctx.queue);
   init.DescriptorPool = static_cast<VkDescriptorPool>(*w.ui_pool);
   init.MinImageCount = 2;
   init.ImageCount = uint32_t(std::max<size_t>(w.images.size(), 2));
@@ -188,14 +287,14 @@ Window::Window(Context& context, const WindowOptions& options, const WindowCallb
   init.CheckVkResultFn = check_vk;
   ImGui_ImplVulkan_Init(&init, static_cast<VkRenderPass>(*w.render_pass));
   w.imgui_vulkan = true;
-  w.ctx.run_once([](vk::CommandBuffer c) { ImGui_ImplVulkan_CreateFontsTexture(static_cast<VkCommandBuffer>(c)); });
+  w.run_once([](vk::CommandBuffer c) { ImGui_ImplVulkan_CreateFontsTexture(static_cast<VkCommandBuffer>(c)); });
   ImGui_ImplVulkan_DestroyFontUploadObjects();
 }
 
 Window::~Window() {
   if (!impl_) return;
   Impl& w = *impl_;
-  w.wait_idle();
+  w.wait_all();
   if (w.ui_started) ImGui::EndFrame();
   if (w.imgui_vulkan) ImGui_ImplVulkan_Shutdown();
   ImGui_ImplGlfw_Shutdown();
@@ -228,18 +327,19 @@ void Window::new_ui_frame() {
   impl_->ui_started = true;
 }
 
-bool Window::present(Renderer& renderer, bool ui, bool capture) {
+bool Window::present(render::Renderer& renderer, const render::Camera& camera, const render::FluidOptions& options,
+                     const render::LodOptions& lod, bool ui, bool capture) {
   Impl& w = *impl_;
   const bool have_ui = w.ui_started;
   if (w.ui_started) {
     ImGui::Render();  // always close the UI frame, drawn or not
     w.ui_started = false;
   }
-  if (w.submitted) {
-    while (w.ctx.device.waitForFences(*w.fence, VK_TRUE, UINT64_MAX) == vk::Result::eTimeout) {
-    }
-    w.submitted = false;
-  }
+  // One slot per frame the renderer keeps in flight; waiting for this slot's
+  // last frame is what the renderer's frames-in-flight contract asks.
+  w.ensure_slots(renderer.options().frames_in_flight);
+  Slot& slot = w.slots[w.frame % w.slots.size()];
+  w.wait(slot);
   if (!*w.swapchain || w.extent.width != width() || w.extent.height != height()) {
     w.create_swapchain();
     return false;
@@ -247,109 +347,84 @@ bool Window::present(Renderer& renderer, bool ui, bool capture) {
   if (w.extent.width == 0) return false;
   uint32_t index = 0;
   try {
-    const auto [result, i] = w.swapchain.acquireNextImage(UINT64_MAX, *w.acquired, nullptr);
-    if (result == vk::Result::eSuboptimalKHR) {
-      // Still usable this once; rebuilt on the next frame's size check or error.
-    }
+    const auto [result, i] = w.swapchain.acquireNextImage(UINT64_MAX, *slot.acquired, nullptr);
+    (void)result;  // suboptimal: still usable this once; rebuilt on the next size check or error
     index = i;
   } catch (const vk::OutOfDateKHRError&) {
     w.create_swapchain();
     return false;
   }
 
-  const Texture& source = renderer.impl().targets.color;
-  vk::CommandBuffer cmd = *w.cmd;
+  vk::CommandBuffer cmd = *slot.cmd;
   cmd.reset();
   cmd.begin(vk::CommandBufferBeginInfo(vk::CommandBufferUsageFlagBits::eOneTimeSubmit));
-  const vk::ImageSubresourceRange range(vk::ImageAspectFlagBits::eColor, 0, 1, 0, 1);
-  const vk::Image target = w.images[index];
-  // The renderer's image was written by compute (GENERAL); the swapchain
-  // image's old contents do not matter.
-  const std::array to_copy{
-      vk::ImageMemoryBarrier2(Stage::eComputeShader, Access::eShaderStorageWrite, Stage::eBlit, Access::eTransferRead,
-                              vk::ImageLayout::eGeneral, vk::ImageLayout::eTransferSrcOptimal, VK_QUEUE_FAMILY_IGNORED,
-                              VK_QUEUE_FAMILY_IGNORED, *source.image, range),
-      vk::ImageMemoryBarrier2(Stage::eBlit, {}, Stage::eBlit, Access::eTransferWrite, vk::ImageLayout::eUndefined,
-                              vk::ImageLayout::eTransferDstOptimal, VK_QUEUE_FAMILY_IGNORED, VK_QUEUE_FAMILY_IGNORED, target, range)};
-  cmd.pipelineBarrier2(vk::DependencyInfo({}, {}, {}, to_copy));
-  const vk::ImageSubresourceLayers layers(vk::ImageAspectFlagBits::eColor, 0, 0, 1);
-  const std::array<vk::Offset3D, 2> src{vk::Offset3D(0, 0, 0),
-                                        vk::Offset3D(int32_t(source.extent.width), int32_t(source.extent.height), 1)};
-  const std::array<vk::Offset3D, 2> dst{vk::Offset3D(0, 0, 0),
-                                        vk::Offset3D(int32_t(w.extent.width), int32_t(w.extent.height), 1)};
-  cmd.blitImage(*source.image, vk::ImageLayout::eTransferSrcOptimal, target, vk::ImageLayout::eTransferDstOptimal,
-                vk::ImageBlit(layers, src, layers, dst), vk::Filter::eLinear);
-  // The renderer's image goes back to GENERAL for its next frame.
-  const std::array to_draw{
-      vk::ImageMemoryBarrier2(Stage::eBlit, Access::eTransferWrite, Stage::eColorAttachmentOutput,
-                              Access::eColorAttachmentRead | Access::eColorAttachmentWrite, vk::ImageLayout::eTransferDstOptimal,
-                              vk::ImageLayout::eColorAttachmentOptimal, VK_QUEUE_FAMILY_IGNORED, VK_QUEUE_FAMILY_IGNORED, target,
-                              range),
-      vk::ImageMemoryBarrier2(Stage::eBlit, {}, Stage::eComputeShader, Access::eShaderStorageWrite,
-                              vk::ImageLayout::eTransferSrcOptimal, vk::ImageLayout::eGeneral, VK_QUEUE_FAMILY_IGNORED,
-                              VK_QUEUE_FAMILY_IGNORED, *source.image, range)};
-  cmd.pipelineBarrier2(vk::DependencyInfo({}, {}, {}, to_draw));
+  const vk::Image image = w.images[index];
+  render::RenderTarget target;
+  target.width = w.extent.width;
+  target.height = w.extent.height;
+  target.color_image = static_cast<VkImage>(image);
+  target.color_view = static_cast<VkImageView>(*w.views[index]);
+  target.color_format = static_cast<VkFormat>(w.format.format);
+  target.color_layout_before = VK_IMAGE_LAYOUT_UNDEFINED;  // the background covers every pixel
+  target.color_layout_after = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
+  const render::View view = render::camera_view(camera, render::Viewport{0, 0, w.extent.width, w.extent.height});
+  const render::FrameSync sync = renderer.record(static_cast<VkCommandBuffer>(cmd), target, {&view, 1}, options, lod);
   cmd.beginRenderPass(vk::RenderPassBeginInfo(*w.render_pass, *w.framebuffers[index], vk::Rect2D({0, 0}, w.extent)),
                       vk::SubpassContents::eInline);
   if (ui && have_ui) ImGui_ImplVulkan_RenderDrawData(ImGui::GetDrawData(), static_cast<VkCommandBuffer>(cmd));
   cmd.endRenderPass();
-  const bool can_capture = capture && w.images.size() > 0 &&
-                           (w.ctx.physical.getSurfaceCapabilitiesKHR(*w.surface).supportedUsageFlags &
-                            vk::ImageUsageFlagBits::eTransferSrc);
+  const vk::ImageSubresourceRange range(vk::ImageAspectFlagBits::eColor, 0, 1, 0, 1);
+  const vk::ImageSubresourceLayers layers(vk::ImageAspectFlagBits::eColor, 0, 0, 1);
+  const bool can_capture = capture && (w.ctx.physical.getSurfaceCapabilitiesKHR(*w.surface).supportedUsageFlags &
+                                       vk::ImageUsageFlagBits::eTransferSrc);
   if (can_capture) {
+    w.wait_all();  // the capture buffer is shared by the slots
     const vk::DeviceSize bytes = vk::DeviceSize(w.extent.width) * w.extent.height * 4;
-    if (!*w.capture.buffer || w.capture.size < bytes) {
-      w.capture = create_buffer(w.ctx, bytes, vk::BufferUsageFlagBits::eTransferDst, MemoryKind::Readback);
-    }
+    if (!*w.capture.buffer || w.capture.size < bytes) w.capture = make_readback(w.ctx, bytes);
     const auto to_read = vk::ImageMemoryBarrier2(Stage::eColorAttachmentOutput, Access::eColorAttachmentWrite, Stage::eCopy,
                                                  Access::eTransferRead, vk::ImageLayout::ePresentSrcKHR,
                                                  vk::ImageLayout::eTransferSrcOptimal, VK_QUEUE_FAMILY_IGNORED,
-                                                 VK_QUEUE_FAMILY_IGNORED, target, range);
+                                                 VK_QUEUE_FAMILY_IGNORED, image, range);
     cmd.pipelineBarrier2(vk::DependencyInfo({}, {}, {}, to_read));
-    cmd.copyImageToBuffer(target, vk::ImageLayout::eTransferSrcOptimal, *w.capture.buffer,
+    cmd.copyImageToBuffer(image, vk::ImageLayout::eTransferSrcOptimal, *w.capture.buffer,
                           vk::BufferImageCopy(0, 0, 0, layers, {}, vk::Extent3D(w.extent, 1)));
     const auto back = vk::ImageMemoryBarrier2(Stage::eCopy, Access::eTransferRead, Stage::eBottomOfPipe, {},
                                               vk::ImageLayout::eTransferSrcOptimal, vk::ImageLayout::ePresentSrcKHR,
-                                              VK_QUEUE_FAMILY_IGNORED, VK_QUEUE_FAMILY_IGNORED, target, range);
+                                              VK_QUEUE_FAMILY_IGNORED, VK_QUEUE_FAMILY_IGNORED, image, range);
     const vk::MemoryBarrier2 host(Stage::eCopy, Access::eTransferWrite, Stage::eHost, Access::eHostRead);
     cmd.pipelineBarrier2(vk::DependencyInfo({}, host, {}, back));
     w.captured = w.extent;
+    w.captured_slot = int(w.frame % w.slots.size());
   }
   cmd.end();
 
   const vk::CommandBufferSubmitInfo cb(cmd);
-  const vk::SemaphoreSubmitInfo wait(*w.acquired, 0, Stage::eBlit | Stage::eColorAttachmentOutput);
+  const std::array waits{vk::SemaphoreSubmitInfo(*slot.acquired, 0, Stage::eAllCommands),
+                         vk::SemaphoreSubmitInfo(vk::Semaphore(sync.upload_semaphore), sync.upload_value,
+                                                 vk::PipelineStageFlags2(sync.wait_stages))};
   const vk::SemaphoreSubmitInfo signal(*w.finished[index], 0, Stage::eAllCommands);
-  w.ctx.device.resetFences(*w.fence);
-  w.ctx.graphics_queue.submit2(vk::SubmitInfo2({}, wait, cb, signal), *w.fence);
-  w.submitted = true;
+  w.ctx.device.resetFences(*slot.fence);
+  w.ctx.queue.submit2(vk::SubmitInfo2({}, waits, cb, signal), *slot.fence);
+  slot.submitted = true;
+  ++w.frame;
   const vk::Semaphore finished = *w.finished[index];
   const vk::SwapchainKHR chain = *w.swapchain;
   const vk::PresentInfoKHR present(finished, chain, index);
   // Out-of-date results throw in Vulkan-Hpp; the next frame rebuilds the swapchain.
   vk::Result result = vk::Result::eSuccess;
   try {
-    result = w.ctx.graphics_queue.presentKHR(present);
+    result = w.ctx.queue.presentKHR(present);
   } catch (const vk::OutOfDateKHRError&) {
     result = vk::Result::eErrorOutOfDateKHR;
   }
-  if (result != vk::Result::eSuccess) {
-    while (w.ctx.device.waitForFences(*w.fence, VK_TRUE, UINT64_MAX) == vk::Result::eTimeout) {
-    }
-    w.submitted = false;
-    w.create_swapchain();
-  }
+  if (result != vk::Result::eSuccess) w.create_swapchain();
   return true;
 }
 
 std::vector<uint8_t> Window::read_presented() {
   Impl& w = *impl_;
-  if (w.submitted) {
-    while (w.ctx.device.waitForFences(*w.fence, VK_TRUE, UINT64_MAX) == vk::Result::eTimeout) {
-    }
-    w.submitted = false;
-  }
-  if (!*w.capture.buffer || w.captured.width == 0) return {};
+  if (w.captured_slot < 0 || !*w.capture.buffer || w.captured.width == 0) return {};
+  w.wait(w.slots[size_t(w.captured_slot)]);
   const size_t n = size_t(w.captured.width) * w.captured.height;
   std::vector<uint8_t> out(n * 4);
   std::memcpy(out.data(), w.capture.mapped, out.size());
@@ -360,4 +435,4 @@ std::vector<uint8_t> Window::read_presented() {
   return out;
 }
 
-}  // namespace sluice::render
+}  // namespace sluice::desktop

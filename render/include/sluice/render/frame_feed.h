@@ -1,0 +1,50 @@
+// sluice/render/frame_feed.h: the one path from the streaming runtime to the
+// renderer. Once per displayed frame, update() asks the runtime::Player which
+// frame is due and, when it changed, commits it to the Renderer (a copy on
+// the transfer queue, overlapped with rendering; record() shows it once the
+// copy is done).
+//
+// The player gives a frame's buffers back at its next update(); the copy out
+// of them must be finished by then, so update() first waits for the previous
+// commit's copy: the transfer queue only, and in a display loop that copy
+// finished a refresh ago, so the wait returns at once.
+//
+// Ownership: borrows the renderer, the player and the allocator (the one the
+// player decodes into, or nullptr for plain host memory), which outlive it.
+// Threads: the thread that calls the renderer.
+#pragma once
+
+#include <cstdint>
+
+#include "sluice/render/renderer.h"
+#include "sluice/render/staging_allocator.h"
+#include "sluice/runtime/player.h"
+
+namespace sluice::render {
+
+struct FeedUpdate {
+  bool changed = false;      // a new frame was committed by this update()
+  bool has_frame = false;    // some frame has been committed
+  uint64_t frame = 0;        // the newest committed frame
+  double commit_wall_ms = 0; // CPU time of the commit (chunk table, submission)
+};
+
+class FrameFeed {
+ public:
+  // `color_attribute`: the attribute's index in the file header (-1: none);
+  // the player must decode only that attribute (PipelineOptions::attributes).
+  FrameFeed(Renderer& renderer, runtime::Player& player, const StagingAllocator* staging, int color_attribute);
+
+  FeedUpdate update();
+  const FeedUpdate& last() const { return last_; }
+
+ private:
+  Renderer& renderer_;
+  runtime::Player& player_;
+  const StagingAllocator* staging_;
+  int color_attribute_;
+  uint64_t pending_ = 0;  // ticket of the last commit's copy
+  FeedUpdate last_;
+};
+
+}  // namespace sluice::render

@@ -1,0 +1,27 @@
+#version 460
+// The shaded fluid (the composite's RGBA8 output) into the caller's colour
+// image, at the depth the caller's projection gives the fluid's surface, so
+// the host's depth test hides it behind the host's own geometry and the
+// host can draw on top of it. Pixels without fluid get the background at the
+// far plane (where the host has drawn nothing) or are left alone.
+#include "common.glsl"
+#include "images.glsl"
+
+layout(set = 0, binding = 15, rgba8) uniform readonly image2D shaded;
+layout(location = 0) out vec4 frag;
+
+// pc.param0, param1: the viewport's origin in the target; param2: bit 0
+// background on, bit 1 the target is sRGB (it encodes, so write linear).
+void main() {
+  ivec2 p = ivec2(gl_FragCoord.xy) - ivec2(pc.param0, pc.param1);
+  float z = load_depth(g.display.w != 0u ? 1u : 0u, p);
+  if (z > 0.0) {
+    gl_FragDepth = clamp(g.frustum.z + g.frustum.w / z, 0.0, 1.0);
+  } else {
+    if ((pc.param2 & 1u) == 0u) discard;
+    gl_FragDepth = g.proj.w;
+  }
+  vec3 c = imageLoad(shaded, p).rgb;
+  if ((pc.param2 & 2u) != 0u) c = pow(c, vec3(2.2));  // the inverse of the composite's encoding
+  frag = vec4(c, 1.0);
+}

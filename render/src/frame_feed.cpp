@@ -1,0 +1,27 @@
+#include "sluice/render/frame_feed.h"
+
+#include <chrono>
+
+namespace sluice::render {
+
+FrameFeed::FrameFeed(Renderer& renderer, runtime::Player& player, const StagingAllocator* staging, int color_attribute)
+    : renderer_(renderer), player_(player), staging_(staging), color_attribute_(color_attribute) {}
+
+FeedUpdate FrameFeed::update() {
+  renderer_.wait_upload(pending_);  // the player may now take those buffers back
+  const runtime::Tick tick = player_.update();
+  last_.changed = false;
+  if (tick.changed && tick.frame) {
+    const runtime::FrameHandle& f = *tick.frame;
+    const auto t0 = std::chrono::steady_clock::now();
+    const int stream = color_attribute_ >= 0 ? 0 : -1;
+    pending_ = renderer_.commit_decoded({&f.header(), f.chunk_first(), &f.buffers(), stream, color_attribute_}, staging_);
+    last_.commit_wall_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    last_.changed = true;
+    last_.has_frame = true;
+    last_.frame = f.frame();
+  }
+  return last_;
+}
+
+}  // namespace sluice::render

@@ -1,0 +1,333 @@
+// The passes of a frame, one function each (see passes.h), with a timestamp
+// after each.
+#include "passes.h"
+
+#include "globals.h"
+
+#include <algorithm>
+
+namespace sluice::render {
+namespace {
+
+using Stage = vk::PipelineStageFlagBits2;
+using Access = vk::AccessFlagBits2;
+constexpr auto kAllStages = vk::ShaderStageFlagBits::eCompute | vk::ShaderStageFlagBits::eVertex |
+                            vk::ShaderStageFlagBits::eFragment;
+
+std::array<uint32_t, 2> groups(vk::Extent2D e, uint32_t n) { return {(e.width + n - 1) / n, (e.height + n - 1) / n}; }
+
+bool has_stencil(vk::Format f) {
+  return f == vk::Format::eD24UnormS8Uint || f == vk::Format::eD32SfloatS8Uint || f == vk::Format::eD16UnormS8Uint;
+}
+
+bool is_srgb(vk::Format f) {
+  switch (f) {
+    case vk::Format::eR8G8B8A8Srgb:
+    case vk::Format::eB8G8R8A8Srgb:
+    case vk::Format::eA8B8G8R8SrgbPack32:
+    case vk::Format::eR8G8B8Srgb:
+    case vk::Format::eB8G8R8Srgb:
+      return true;
+    default:
+      return false;
+  }
+}
+
+// A caller's image from one layout to another, ordered against all work on
+// the queue before and after (the host's own passes are unknown to us).
+vk::ImageMemoryBarrier2 host_barrier(VkImage image, vk::ImageAspectFlags aspect, uint32_t layer, VkImageLayout from,
+                                     vk::ImageLayout to) {
+  return vk::ImageMemoryBarrier2(Stage::eAllCommands, Access::eMemoryWrite, Stage::eAllCommands,
+                                 Access::eMemoryRead | Access::eMemoryWrite, vk::ImageLayout(from), to, VK_QUEUE_FAMILY_IGNORED,
+                                 VK_QUEUE_FAMILY_IGNORED, vk::Image(image), vk::ImageSubresourceRange(aspect, 0, 1, layer, 1));
+}
+
+vk::ImageAspectFlags depth_aspect(VkFormat f) {
+  vk::ImageAspectFlags a = vk::ImageAspectFlagBits::eDepth;
+  if (has_stencil(vk::Format(f))) a |= vk::ImageAspectFlagBits::eStencil;
+  return a;
+}
+
+}  // namespace
+
+PassRecorder::PassRecorder(Renderer::Impl& r, vk::CommandBuffer cmd, FrameSlot& slot, uint32_t slot_index)
+    : r_(r), cmd_(cmd), slot_(slot), first_stamp_(slot_index * kStampsPerSlot) {}
+
+void PassRecorder::stamp(const char* name) {
+  if (!r_.timestamps_valid) return;
+  const uint32_t n = uint32_t(slot_.stamp_names.size()) + 1;
+  if (n >= kStampsPerSlot) return;
+  cmd_.writeTimestamp2(Stage::eAllCommands, *r_.timestamps, first_stamp_ + n);
+  slot_.stamp_names.push_back(name);
+}
+
+void PassRecorder::push(uint32_t p0, uint32_t p1, uint32_t p2) {
+  pc_.param0 = p0;
+  pc_.param1 = p1;
+  pc_.param2 = p2;
+  cmd_.pushConstants<PushConstants>(*r_.layout, kAllStages, 0, pc_);
+}
+
+void PassRecorder::compute_to_compute() {
+  memory_barrier(cmd_, Stage::eComputeShader, Access::eShaderStorageWrite, Stage::eComputeShader,
+                 Access::eShaderStorageRead | Access::eShaderStorageWrite);
+}
+
+void PassRecorder::begin_frame(const RenderTarget& target) {
+  if (r_.timestamps_valid) {
+    cmd_.resetQueryPool(*r_.timestamps, first_stamp_, kStampsPerSlot);
+    cmd_.writeTimestamp2(Stage::eAllCommands, *r_.timestamps, first_stamp_);
+  }
+  // Shared targets and work lists: after every earlier frame on the queue.
+  memory_barrier(cmd_, Stage::eAllCommands, Access::eMemoryWrite, Stage::eAllCommands, Access::eMemoryRead | Access::eMemoryWrite);
+  Targets& t = r_.targets;
+  if (!t.initialized) {
+    // New targets: every compute image lives in GENERAL; cleared so reads
+    // before the first write are defined. Compute splatting's depth starts
+    // "infinitely far" (all bits set); the resolve pass resets it after use.
+    std::vector<vk::ImageMemoryBarrier2> barriers;
+    const std::array all{&t.depth_raw, &t.depth_a, &t.depth_b, &t.thick_raw, &t.thick_a, &t.thick_b,
+                         &t.depth_u, &t.thick_u, &t.thick_attr_u, &t.color, &t.aux};
+    for (const Texture* x : all) {
+      barriers.push_back(image_barrier(*x, vk::ImageLayout::eUndefined, vk::ImageLayout::eGeneral, Stage::eNone, {},
+                                       Stage::eClear, Access::eTransferWrite));
+    }
+    cmd_.pipelineBarrier2(vk::DependencyInfo({}, {}, {}, barriers));
+    const vk::ClearColorValue zero(std::array<float, 4>{0, 0, 0, 0});
+    const vk::ClearColorValue far(std::array<uint32_t, 4>{0xffffffffu, 0xffffffffu, 0xffffffffu, 0xffffffffu});
+    const vk::ImageSubresourceRange range(vk::ImageAspectFlagBits::eColor, 0, 1, 0, 1);
+    for (const Texture* x : all) cmd_.clearColorImage(*x->image, vk::ImageLayout::eGeneral, x == &t.depth_u ? far : zero, range);
+    memory_barrier(cmd_, Stage::eClear, Access::eTransferWrite, Stage::eAllCommands, Access::eMemoryRead | Access::eMemoryWrite);
+    t.initialized = true;
+  }
+  std::vector<vk::ImageMemoryBarrier2> to;
+  to.push_back(host_barrier(target.color_image, vk::ImageAspectFlagBits::eColor, target.base_layer, target.color_layout_before,
+                            vk::ImageLayout::eAttachmentOptimal));
+  if (target.depth_image) {
+    to.push_back(host_barrier(target.depth_image, depth_aspect(target.depth_format), target.base_layer,
+                              target.depth_layout_before, vk::ImageLayout::eAttachmentOptimal));
+  }
+  cmd_.pipelineBarrier2(vk::DependencyInfo({}, {}, {}, to));
+}
+
+void PassRecorder::begin_view(uint32_t globals_offset, const FrameSet* frame) {
+  const vk::DescriptorSet set = *slot_.set;
+  cmd_.bindDescriptorSets(vk::PipelineBindPoint::eCompute, *r_.layout, 0, set, globals_offset);
+  cmd_.bindDescriptorSets(vk::PipelineBindPoint::eGraphics, *r_.layout, 0, set, globals_offset);
+  pc_ = PushConstants{};
+  have_frame_ = frame && frame->chunk_count > 0 && *frame->particles.buffer;
+  if (frame && *frame->particles.buffer) {
+    pc_.particles = frame->particles.address;
+    pc_.chunks = frame->chunks.address;
+    pc_.attributes = frame->has_attribute ? frame->attributes.address : frame->chunks.address;
+    pc_.chunk_count = frame->chunk_count;
+  }
+  pc_.blocks = r_.blocks.address;
+  pc_.draws = r_.draws.address;
+  pc_.args = r_.args.address;
+  pc_.big = r_.big.address;
+  // The previous view's passes are done with the shared targets and lists.
+  memory_barrier(cmd_, Stage::eAllCommands, Access::eMemoryWrite, Stage::eAllCommands, Access::eMemoryRead | Access::eMemoryWrite);
+}
+
+void PassRecorder::cull() {
+  const GpuArgs reset{0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 1};
+  cmd_.updateBuffer<GpuArgs>(*r_.args.buffer, 0, reset);
+  memory_barrier(cmd_, Stage::eCopy, Access::eTransferWrite, Stage::eComputeShader | Stage::eDrawIndirect,
+                 Access::eShaderStorageRead | Access::eShaderStorageWrite | Access::eIndirectCommandRead);
+  if (have_frame_) {
+    cmd_.bindPipeline(vk::PipelineBindPoint::eCompute, *r_.cull_chunks);
+    push();
+    const uint32_t n = (pc_.chunk_count + 63) / 64;
+    cmd_.dispatch(std::min(n, 65535u), (n + 65534) / 65535, 1);
+    compute_to_compute();
+    cmd_.bindPipeline(vk::PipelineBindPoint::eCompute, *r_.cull_args);
+    push(0);
+    cmd_.dispatch(1, 1, 1);
+    memory_barrier(cmd_, Stage::eComputeShader, Access::eShaderStorageWrite, Stage::eComputeShader | Stage::eDrawIndirect,
+                   Access::eShaderStorageRead | Access::eShaderStorageWrite | Access::eIndirectCommandRead);
+    cmd_.bindPipeline(vk::PipelineBindPoint::eCompute, *r_.cull_particles);
+    cmd_.dispatchIndirect(*r_.args.buffer, offsetof(GpuArgs, groups_x));
+  }
+  memory_barrier(cmd_, Stage::eComputeShader, Access::eShaderStorageWrite,
+                 Stage::eDrawIndirect | Stage::eVertexShader | Stage::eComputeShader,
+                 Access::eIndirectCommandRead | Access::eShaderStorageRead | Access::eShaderStorageWrite);
+  stamp("cull");
+}
+
+void PassRecorder::splat() {
+  const Targets& t = r_.targets;
+  // Small splats one thread each; large ones listed, then one workgroup each.
+  const auto args_then = [&](uint32_t which) {
+    cmd_.bindPipeline(vk::PipelineBindPoint::eCompute, *r_.cull_args);
+    push(which);
+    cmd_.dispatch(1, 1, 1);
+    memory_barrier(cmd_, Stage::eComputeShader, Access::eShaderStorageWrite, Stage::eComputeShader | Stage::eDrawIndirect,
+                   Access::eShaderStorageRead | Access::eShaderStorageWrite | Access::eIndirectCommandRead);
+  };
+  if (have_frame_) {
+    args_then(1);
+    cmd_.bindPipeline(vk::PipelineBindPoint::eCompute, *r_.splat);
+    push(0);
+    cmd_.dispatchIndirect(*r_.args.buffer, offsetof(GpuArgs, splat_x));
+    compute_to_compute();
+    args_then(2);
+    cmd_.bindPipeline(vk::PipelineBindPoint::eCompute, *r_.splat);
+    push(1);
+    cmd_.dispatchIndirect(*r_.args.buffer, offsetof(GpuArgs, big_x));
+    compute_to_compute();
+  }
+  stamp("splat");
+  // The splat targets into the float targets, and reset for the next view.
+  cmd_.bindPipeline(vk::PipelineBindPoint::eCompute, *r_.resolve);
+  push(0);
+  const auto gr = groups(t.size, 16);
+  cmd_.dispatch(gr[0], gr[1], 1);
+  push(1);
+  const auto gt = groups(t.thick_size, 16);
+  cmd_.dispatch(gt[0], gt[1], 1);
+  memory_barrier(cmd_, Stage::eComputeShader, Access::eShaderStorageWrite, Stage::eComputeShader | Stage::eFragmentShader,
+                 Access::eShaderStorageRead | Access::eShaderSampledRead);
+  stamp("resolve");
+}
+
+void PassRecorder::raster_spheres() {
+  const Targets& t = r_.targets;
+  const auto raster = [&](const Texture& target, const Texture* depth, const vk::raii::Pipeline& pipeline, uint32_t flag) {
+    std::vector<vk::ImageMemoryBarrier2> to{image_barrier(target, vk::ImageLayout::eUndefined, vk::ImageLayout::eColorAttachmentOptimal,
+                                                          Stage::eComputeShader | Stage::eFragmentShader,
+                                                          Access::eShaderStorageRead | Access::eShaderSampledRead,
+                                                          Stage::eColorAttachmentOutput, Access::eColorAttachmentWrite)};
+    if (depth) {
+      to.push_back(image_barrier(*depth, vk::ImageLayout::eUndefined, vk::ImageLayout::eDepthAttachmentOptimal,
+                                 Stage::eEarlyFragmentTests | Stage::eLateFragmentTests, Access::eDepthStencilAttachmentWrite,
+                                 Stage::eEarlyFragmentTests | Stage::eLateFragmentTests,
+                                 Access::eDepthStencilAttachmentRead | Access::eDepthStencilAttachmentWrite));
+    }
+    cmd_.pipelineBarrier2(vk::DependencyInfo({}, {}, {}, to));
+    const vk::Rect2D area({0, 0}, target.extent);
+    vk::RenderingAttachmentInfo color(*target.view, vk::ImageLayout::eColorAttachmentOptimal, {}, {}, {},
+                                      vk::AttachmentLoadOp::eClear, vk::AttachmentStoreOp::eStore,
+                                      vk::ClearValue(vk::ClearColorValue(std::array<float, 4>{0, 0, 0, 0})));
+    vk::RenderingAttachmentInfo depth_info;
+    vk::RenderingInfo info({}, area, 1, 0, color);
+    if (depth) {
+      depth_info = vk::RenderingAttachmentInfo(*depth->view, vk::ImageLayout::eDepthAttachmentOptimal, {}, {}, {},
+                                               vk::AttachmentLoadOp::eClear, vk::AttachmentStoreOp::eDontCare,
+                                               vk::ClearValue(vk::ClearDepthStencilValue(0.0f, 0)));
+      info.setPDepthAttachment(&depth_info);
+    }
+    cmd_.beginRendering(info);
+    if (have_frame_) {
+      cmd_.bindPipeline(vk::PipelineBindPoint::eGraphics, *pipeline);
+      cmd_.setViewport(0, vk::Viewport(0, 0, float(target.extent.width), float(target.extent.height), 0, 1));
+      cmd_.setScissor(0, area);
+      push(flag);
+      cmd_.drawIndirect(*r_.args.buffer, 0, 1, sizeof(VkDrawIndirectCommand));
+    }
+    cmd_.endRendering();
+    const auto back = image_barrier(target, vk::ImageLayout::eColorAttachmentOptimal, vk::ImageLayout::eGeneral,
+                                    Stage::eColorAttachmentOutput, Access::eColorAttachmentWrite,
+                                    Stage::eComputeShader | Stage::eFragmentShader,
+                                    Access::eShaderStorageRead | Access::eShaderSampledRead);
+    cmd_.pipelineBarrier2(vk::DependencyInfo({}, {}, {}, back));
+  };
+  raster(t.depth_raw, &t.depth_hw, r_.depth_pass, 0);
+  stamp("depth");
+  raster(t.thick_raw, nullptr, r_.thickness_pass, 1);
+  stamp("thickness");
+}
+
+// Separable passes raw -> B -> A, then A -> B -> A per iteration.
+void PassRecorder::separable(const vk::raii::Pipeline& pipeline, vk::Extent2D size, int iterations) {
+  cmd_.bindPipeline(vk::PipelineBindPoint::eCompute, *pipeline);
+  const auto g = groups(size, 16);
+  for (int i = 0; i < iterations; ++i) {
+    push(i == 0 ? 0u : 1u, 2u, 0u);
+    cmd_.dispatch(g[0], g[1], 1);
+    compute_to_compute();
+    push(2u, 1u, 1u);
+    cmd_.dispatch(g[0], g[1], 1);
+    compute_to_compute();
+  }
+}
+
+void PassRecorder::filters(const FluidOptions& o) {
+  const Targets& t = r_.targets;
+  if (depth_filtered(o)) separable(r_.filter_depth, t.size, o.surface_filter_iterations);
+  stamp("filter");
+  if (thickness_filtered(o)) separable(r_.filter_thickness, t.thick_size, o.thickness_and_volume_color_filter_iterations);
+  stamp("thickness filter");
+}
+
+void PassRecorder::shade() {
+  cmd_.bindPipeline(vk::PipelineBindPoint::eCompute, *r_.composite);
+  push();
+  const auto g = groups(r_.targets.size, 8);
+  cmd_.dispatch(g[0], g[1], 1);
+  memory_barrier(cmd_, Stage::eComputeShader, Access::eShaderStorageWrite, Stage::eFragmentShader, Access::eShaderStorageRead);
+  stamp("shade");
+}
+
+void PassRecorder::present(const RenderTarget& target, const View& view, bool first) {
+  const vk::Format depth_format = target.depth_view ? vk::Format(target.depth_format) : vk::Format::eUndefined;
+  const vk::raii::Pipeline& pipeline = r_.present_pipeline(vk::Format(target.color_format), depth_format);
+  const vk::Rect2D area({int32_t(view.viewport.x), int32_t(view.viewport.y)}, {view.viewport.width, view.viewport.height});
+  const bool clear_color = first && target.color_layout_before == VK_IMAGE_LAYOUT_UNDEFINED;
+  const bool clear_depth = first && target.depth_layout_before == VK_IMAGE_LAYOUT_UNDEFINED;
+  // The far plane of the view's projection (reversed depth: 0).
+  const float depth_b = view.projection.at(2, 3);
+  const bool reversed = depth_b > 0;
+  vk::RenderingAttachmentInfo color(vk::ImageView(target.color_view), vk::ImageLayout::eAttachmentOptimal, {}, {}, {},
+                                    clear_color ? vk::AttachmentLoadOp::eClear : vk::AttachmentLoadOp::eLoad,
+                                    vk::AttachmentStoreOp::eStore,
+                                    vk::ClearValue(vk::ClearColorValue(std::array<float, 4>{0, 0, 0, 0})));
+  vk::RenderingInfo info({}, area, 1, 0, color);
+  vk::RenderingAttachmentInfo depth;
+  if (target.depth_view) {
+    depth = vk::RenderingAttachmentInfo(vk::ImageView(target.depth_view), vk::ImageLayout::eAttachmentOptimal, {}, {}, {},
+                                        clear_depth ? vk::AttachmentLoadOp::eClear : vk::AttachmentLoadOp::eLoad,
+                                        vk::AttachmentStoreOp::eStore,
+                                        vk::ClearValue(vk::ClearDepthStencilValue(reversed ? 0.0f : 1.0f, 0)));
+    info.setPDepthAttachment(&depth);
+    if (has_stencil(depth_format)) {
+      depth.loadOp = vk::AttachmentLoadOp::eLoad;  // stencil keeps the host's; depth cleared below if asked
+      info.setPStencilAttachment(&depth);
+    }
+  }
+  cmd_.beginRendering(info);
+  if (target.depth_view && has_stencil(depth_format) && clear_depth) {
+    const vk::ClearAttachment clear(vk::ImageAspectFlagBits::eDepth, 0, vk::ClearDepthStencilValue(reversed ? 0.0f : 1.0f, 0));
+    cmd_.clearAttachments(clear, vk::ClearRect(area, 0, 1));
+  }
+  cmd_.bindPipeline(vk::PipelineBindPoint::eGraphics, *pipeline);
+  cmd_.setViewport(0, vk::Viewport(float(area.offset.x), float(area.offset.y), float(area.extent.width),
+                                   float(area.extent.height), 0, 1));
+  cmd_.setScissor(0, area);
+  cmd_.setDepthTestEnable(target.depth_view != VK_NULL_HANDLE);
+  cmd_.setDepthWriteEnable(target.depth_view != VK_NULL_HANDLE);
+  cmd_.setDepthCompareOp(reversed ? vk::CompareOp::eGreaterOrEqual : vk::CompareOp::eLessOrEqual);
+  uint32_t flags = target.background ? 1u : 0u;
+  if (is_srgb(vk::Format(target.color_format))) flags |= 2u;
+  push(view.viewport.x, view.viewport.y, flags);
+  cmd_.draw(3, 1, 0, 0);
+  cmd_.endRendering();
+  stamp("present");
+}
+
+void PassRecorder::end_frame(const RenderTarget& target) {
+  memory_barrier(cmd_, Stage::eComputeShader | Stage::eDrawIndirect, Access::eShaderStorageWrite | Access::eIndirectCommandRead,
+                 Stage::eCopy, Access::eTransferRead);
+  cmd_.copyBuffer(*r_.args.buffer, *slot_.readback.buffer, vk::BufferCopy(0, 0, sizeof(GpuArgs)));
+  memory_barrier(cmd_, Stage::eCopy, Access::eTransferWrite, Stage::eHost, Access::eHostRead);
+  std::vector<vk::ImageMemoryBarrier2> after;
+  after.push_back(host_barrier(target.color_image, vk::ImageAspectFlagBits::eColor, target.base_layer,
+                               VK_IMAGE_LAYOUT_ATTACHMENT_OPTIMAL, vk::ImageLayout(target.color_layout_after)));
+  if (target.depth_image) {
+    after.push_back(host_barrier(target.depth_image, depth_aspect(target.depth_format), target.base_layer,
+                                 VK_IMAGE_LAYOUT_ATTACHMENT_OPTIMAL, vk::ImageLayout(target.depth_layout_after)));
+  }
+  cmd_.pipelineBarrier2(vk::DependencyInfo({}, {}, {}, after));
+}
+
+}  // namespace sluice::render

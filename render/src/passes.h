@@ -1,0 +1,46 @@
+// Internal: one function per pass of a frame, recorded into the caller's
+// command buffer. record() (renderer.cpp) calls them in order for each view:
+// cull -> splat | raster_spheres -> filters -> shade -> present.
+#pragma once
+
+#include <vector>
+
+#include "renderer_impl.h"
+
+namespace sluice::render {
+
+class PassRecorder {
+ public:
+  PassRecorder(Renderer::Impl& r, vk::CommandBuffer cmd, FrameSlot& slot, uint32_t slot_index);
+
+  // Orders the frame after everything before it on the queue, initializes
+  // new targets, moves the caller's images to attachment layouts.
+  void begin_frame(const RenderTarget& target);
+  // Binds the view's uniforms (dynamic offset) and the frame's buffers.
+  void begin_view(uint32_t globals_offset, const FrameSet* frame);
+  void cull();                          // chunks -> blocks -> particles -> draw list
+  void splat();                         // compute splatting of depth and thickness, then resolve
+  void raster_spheres();                // point sprites: exact depth, additive thickness
+  void filters(const FluidOptions& o);  // depth, then thickness (separable, ping-pong)
+  void shade();                         // normals, shading, background (compute)
+  // The shaded view into the caller's images; `first` view of the frame
+  // clears what the target's UNDEFINED layouts discard.
+  void present(const RenderTarget& target, const View& view, bool first);
+  // Counters back to the host; the caller's images to their after layouts.
+  void end_frame(const RenderTarget& target);
+
+ private:
+  void stamp(const char* name);
+  void push(uint32_t p0 = 0, uint32_t p1 = 0, uint32_t p2 = 0);
+  void compute_to_compute();
+  void separable(const vk::raii::Pipeline& pipeline, vk::Extent2D size, int iterations);
+
+  Renderer::Impl& r_;
+  vk::CommandBuffer cmd_;
+  FrameSlot& slot_;
+  uint32_t first_stamp_;
+  PushConstants pc_{};
+  bool have_frame_ = false;
+};
+
+}  // namespace sluice::render

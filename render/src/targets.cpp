@@ -1,0 +1,37 @@
+// The screen-space targets of one view size. Re-creating them never waits:
+// the old ones are retired until the frames in flight that use them are done,
+// and the new ones are initialized by the next frame's commands.
+#include "renderer_impl.h"
+
+namespace sluice::render {
+
+void Renderer::Impl::ensure_targets(uint32_t width, uint32_t height, bool half) {
+  Targets& t = targets;
+  if (t.generation > 0 && t.size == vk::Extent2D(width, height) && t.half_thickness == half) return;
+  using U = vk::ImageUsageFlagBits;
+  Targets next;
+  next.generation = t.generation + 1;
+  next.size = vk::Extent2D(width, height);
+  next.thick_size = half ? vk::Extent2D((width + 1) / 2, (height + 1) / 2) : next.size;
+  next.half_thickness = half;
+  next.thick_format = thick_format;
+  const auto cleared = U::eTransferDst;  // cleared at their first frame
+  next.depth_hw = create_texture(ctx, next.size, vk::Format::eD32Sfloat, U::eDepthStencilAttachment);
+  next.depth_raw = create_texture(ctx, next.size, vk::Format::eR32Sfloat, U::eColorAttachment | U::eStorage | U::eTransferSrc | cleared);
+  next.depth_a = create_texture(ctx, next.size, vk::Format::eR32Sfloat, U::eStorage | U::eTransferSrc | cleared);
+  next.depth_b = create_texture(ctx, next.size, vk::Format::eR32Sfloat, U::eStorage | cleared);
+  next.thick_raw = create_texture(ctx, next.thick_size, thick_format, U::eColorAttachment | U::eStorage | U::eSampled | cleared);
+  next.thick_a = create_texture(ctx, next.thick_size, thick_format, U::eStorage | U::eSampled | cleared);
+  next.thick_b = create_texture(ctx, next.thick_size, thick_format, U::eStorage | cleared);
+  next.depth_u = create_texture(ctx, next.size, vk::Format::eR32Uint, U::eStorage | cleared);
+  next.thick_u = create_texture(ctx, next.thick_size, vk::Format::eR32Uint, U::eStorage | cleared);
+  next.thick_attr_u = create_texture(ctx, next.thick_size, vk::Format::eR32Uint, U::eStorage | cleared);
+  next.color = create_texture(ctx, next.size, vk::Format::eR8G8B8A8Unorm, U::eStorage | U::eTransferSrc | cleared);
+  // Eye normals and depth for tests; a 1x1 stand-in keeps the descriptor valid otherwise.
+  next.aux = create_texture(ctx, options.debug_surfaces ? next.size : vk::Extent2D(1, 1), vk::Format::eR32G32B32A32Sfloat,
+                            U::eStorage | U::eTransferSrc | cleared);
+  retire(std::move(t));
+  t = std::move(next);
+}
+
+}  // namespace sluice::render
