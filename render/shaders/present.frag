@@ -22,6 +22,8 @@ void main() {
     gl_FragDepth = g.proj.w;
   }
   vec3 c = imageLoad(shaded, p).rgb;
-  if ((pc.param2 & 2u) != 0u) c = pow(c, vec3(2.2));  // the inverse of the composite's encoding
+  // An sRGB target encodes what it is given: hand it the value whose exact
+  // sRGB encoding is the composite's display value.
+  if ((pc.param2 & 2u) != 0u) c = mix(c / 12.92, pow((c + 0.055) / 1.055, vec3(2.4)), greaterThan(c, vec3(0.04045)));
   frag = vec4(c, 1.0);
 }

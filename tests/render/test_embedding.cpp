@@ -1,0 +1,373 @@
+// The embedding API as a host uses it: a Context built on the host's own
+// instance and device, the fluid recorded into the host's command buffer and
+// images, occluded by the host's depth both ways (standard and reversed
+// depth), asymmetric frusta, several views in one target, frames in flight,
+// sRGB targets. Every test fails on a validation error the host's own
+// messenger counts (when the layer is installed).
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "render_test_util.h"
+#include "sluice/render/offscreen.h"
+#include "sluice/render/renderer.h"
+#include "sluice/render/synthetic.h"
+#include "test_host.h"
+
+namespace sluice::render {
+namespace {
+
+using testing::TestHost;
+constexpr uint32_t kW = 160, kH = 120;
+
+Camera front_camera() {
+  Camera c;
+  c.eye = {0, -4, 0};
+  c.target = {0, 0, 0};
+  c.up = {0, 0, 1};
+  c.fov_deg = 40;
+  c.near = 0.05f;
+  return c;
+}
+
+// Eye -> Vulkan clip with depth 0 at `near` and 1 at `far` (y down).
+Mat4 standard_projection(float fov_deg, float aspect, float near, float far) {
+  const float f = 1.0f / std::tan(fov_deg * 0.5f * 3.14159265f / 180.0f);
+  Mat4 p;
+  p.at(0, 0) = f / aspect;
+  p.at(1, 1) = -f;
+  p.at(2, 2) = far / (near - far);
+  p.at(2, 3) = near * far / (near - far);
+  p.at(3, 2) = -1;
+  return p;
+}
+
+// Target depth of a point `d` along the view axis under projection `p`.
+float depth_at(const Mat4& p, float d) { return -p.at(2, 2) + p.at(2, 3) / d; }
+
+// Pixel of world point `x` (top-left origin).
+std::array<int, 2> pixel_of(const View& v, Vec3 x) {
+  const Vec4 c = v.projection * (v.view * Vec4{x.x, x.y, x.z, 1});
+  return {int((c.x / c.w * 0.5f + 0.5f) * float(v.viewport.width)) + int(v.viewport.x),
+          int((c.y / c.w * 0.5f + 0.5f) * float(v.viewport.height)) + int(v.viewport.y)};
+}
+
+void expect_clean(const TestHost& host) {
+  if (!host.validation) return;
+  std::string all;
+  for (const std::string& m : host.messages) all += m + "\n";
+  EXPECT_EQ(host.errors.load(), 0) << all;
+}
+
+// Two spheres of radius 0.4 at x = -1 and x = +1, 4 units in front of the camera.
+const std::vector<float> kTwoSpheres{-1, 0, 0, 1, 0, 0};
+constexpr float kRadius = 0.4f;
+
+FluidOptions opaque() {
+  FluidOptions o;
+  o.particle_radius = kRadius;
+  o.ground = false;
+  o.display_mode = DisplayMode::UnfilteredOpaqueSurface;  // exact sphere depth
+  return o;
+}
+
+class Occlusion : public ::testing::TestWithParam<bool> {};  // reversed depth?
+
+TEST_P(Occlusion, HostDepthHidesTheFluidAndTheFluidHidesTheHost) {
+  TestHost host;
+  {
+    Context context(host.handles());
+    EXPECT_FALSE(context.owns_device());
+    const SceneInfo scene = scene_for_points(kTwoSpheres, kRadius);
+    Renderer renderer(context, scene);
+    upload_points(renderer, kTwoSpheres, std::vector<uint16_t>(2, 0), {}, 1);
+
+    const bool reversed = GetParam();
+    const Camera cam = front_camera();
+    View view = camera_view(cam, {0, 0, kW, kH});
+    if (!reversed) view.projection = standard_projection(cam.fov_deg, float(kW) / kH, 0.5f, 20.0f);
+    using U = vk::ImageUsageFlagBits;
+    TestHost::Image color = host.image(kW, kH, vk::Format::eR8G8B8A8Unorm, U::eColorAttachment | U::eTransferSrc);
+    TestHost::Image depth = host.image(kW, kH, vk::Format::eD32Sfloat, U::eDepthStencilAttachment | U::eTransferSrc);
+    // The host's geometry: a wall in front of the left sphere (red), one
+    // behind the right sphere (blue); the spheres span 3.6 .. 4.4 in depth.
+    const float near_wall = depth_at(view.projection, 3.2f), far_wall = depth_at(view.projection, 4.8f);
+    const vk::ClearColorValue red(std::array<float, 4>{1, 0, 0, 1}), blue(std::array<float, 4>{0, 0, 1, 1});
+
+    RenderTarget target;
+    target.width = kW;
+    target.height = kH;
+    target.color_image = *color.image;
+    target.color_view = *color.view;
+    target.color_format = VK_FORMAT_R8G8B8A8_UNORM;
+    target.color_layout_before = VK_IMAGE_LAYOUT_ATTACHMENT_OPTIMAL;
+    target.color_layout_after = VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL;
+    target.depth_image = *depth.image;
+    target.depth_view = *depth.view;
+    target.depth_format = VK_FORMAT_D32_SFLOAT;
+    target.depth_layout_before = VK_IMAGE_LAYOUT_ATTACHMENT_OPTIMAL;
+    target.depth_layout_after = VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL;
+    target.background = false;
+    FrameSync sync;
+    host.submit([&](vk::CommandBuffer c) {
+      using S = vk::PipelineStageFlagBits2;
+      const std::array to{
+          vk::ImageMemoryBarrier2(S::eNone, {}, S::eAllCommands, vk::AccessFlagBits2::eMemoryWrite, vk::ImageLayout::eUndefined,
+                                  vk::ImageLayout::eAttachmentOptimal, VK_QUEUE_FAMILY_IGNORED, VK_QUEUE_FAMILY_IGNORED,
+                                  *color.image, vk::ImageSubresourceRange(vk::ImageAspectFlagBits::eColor, 0, 1, 0, 1)),
+          vk::ImageMemoryBarrier2(S::eNone, {}, S::eAllCommands, vk::AccessFlagBits2::eMemoryWrite, vk::ImageLayout::eUndefined,
+                                  vk::ImageLayout::eAttachmentOptimal, VK_QUEUE_FAMILY_IGNORED, VK_QUEUE_FAMILY_IGNORED,
+                                  *depth.image, vk::ImageSubresourceRange(vk::ImageAspectFlagBits::eDepth, 0, 1, 0, 1))};
+      c.pipelineBarrier2(vk::DependencyInfo({}, {}, {}, to));
+      vk::RenderingAttachmentInfo ca(*color.view, vk::ImageLayout::eAttachmentOptimal, {}, {}, {}, vk::AttachmentLoadOp::eDontCare,
+                                     vk::AttachmentStoreOp::eStore);
+      vk::RenderingAttachmentInfo da(*depth.view, vk::ImageLayout::eAttachmentOptimal, {}, {}, {},
+                                     vk::AttachmentLoadOp::eDontCare, vk::AttachmentStoreOp::eStore);
+      vk::RenderingInfo info({}, vk::Rect2D({0, 0}, {kW, kH}), 1, 0, ca, &da);
+      c.beginRendering(info);
+      const vk::ClearRect left(vk::Rect2D({0, 0}, {kW / 2, kH}), 0, 1), right(vk::Rect2D({int32_t(kW / 2), 0}, {kW / 2, kH}), 0, 1);
+      c.clearAttachments({vk::ClearAttachment(vk::ImageAspectFlagBits::eColor, 0, red),
+                          vk::ClearAttachment(vk::ImageAspectFlagBits::eDepth, 0, vk::ClearDepthStencilValue(near_wall, 0))},
+                         left);
+      c.clearAttachments({vk::ClearAttachment(vk::ImageAspectFlagBits::eColor, 0, blue),
+                          vk::ClearAttachment(vk::ImageAspectFlagBits::eDepth, 0, vk::ClearDepthStencilValue(far_wall, 0))},
+                         right);
+      c.endRendering();
+      sync = renderer.record(static_cast<VkCommandBuffer>(c), target, {&view, 1}, opaque(), {});
+    });
+    // (host.submit waits on no semaphore: upload_points already waited for its copy.)
+    const std::vector<uint32_t> rgba = host.read(color, kW, kH);
+    const std::vector<uint32_t> depth_bits = host.read(depth, kW, kH);
+    const auto at = [&](int x, int y) { return rgba[size_t(y) * kW + size_t(x)]; };
+    const auto depth_px = [&](int x, int y) {
+      float d;
+      std::memcpy(&d, &depth_bits[size_t(y) * kW + size_t(x)], 4);
+      return d;
+    };
+    const uint32_t kRed = 0xff0000ffu, kBlue = 0xffff0000u;  // RGBA8 little-endian
+    size_t left_not_red = 0, right_fluid = 0;
+    for (uint32_t y = 0; y < kH; ++y) {
+      for (uint32_t x = 0; x < kW; ++x) {
+        if (x < kW / 2) left_not_red += at(int(x), int(y)) != kRed;
+        else right_fluid += at(int(x), int(y)) != kBlue;
+      }
+    }
+    EXPECT_EQ(left_not_red, 0u) << "the host's wall in front must hide the fluid";
+    EXPECT_GT(right_fluid, 700u) << "the fluid in front of the host's wall must hide it";
+    const auto c = pixel_of(view, {1, 0, 0});
+    EXPECT_NE(at(c[0], c[1]), kBlue);
+    // The fluid's depth is written with the host's projection: its nearest
+    // point is 3.6 along the view axis.
+    const float written = depth_px(c[0], c[1]);
+    EXPECT_NEAR(written, depth_at(view.projection, 3.6f), std::fabs(depth_at(view.projection, 3.6f) - depth_at(view.projection, 3.7f)));
+    EXPECT_EQ(depth_px(2, 2), near_wall);
+    EXPECT_EQ(depth_px(int(kW) - 3, 2), far_wall);
+    std::printf("%s depth: %zu fluid pixels over the far wall, depth at the sphere's centre %.5f (expected %.5f)\n",
+                reversed ? "reversed" : "standard", right_fluid, written, depth_at(view.projection, 3.6f));
+  }
+  expect_clean(host);
+}
+
+INSTANTIATE_TEST_SUITE_P(Embedding, Occlusion, ::testing::Values(true, false),
+                         [](const ::testing::TestParamInfo<bool>& i) { return i.param ? "reversed" : "standard"; });
+
+double psnr_region(const std::vector<uint8_t>& a, uint32_t aw, uint32_t ax, const std::vector<uint8_t>& b, uint32_t bw,
+                   uint32_t bx, uint32_t w, uint32_t h) {
+  double se = 0;
+  for (uint32_t y = 0; y < h; ++y) {
+    for (uint32_t x = 0; x < w; ++x) {
+      for (int k = 0; k < 3; ++k) {
+        const double d = double(a[(size_t(y) * aw + ax + x) * 4 + k]) - double(b[(size_t(y) * bw + bx + x) * 4 + k]);
+        se += d * d;
+      }
+    }
+  }
+  const double mse = se / (double(w) * h * 3);
+  return mse == 0 ? 99.0 : 10 * std::log10(255.0 * 255.0 / mse);
+}
+
+TEST(Embedding, AsymmetricFrustumMatchesTheCropOfAWiderView) {
+  testing::ValidationGuard guard;
+  Context& context = testing::context();
+  const SyntheticFluid f = synthetic_fluid(30000);
+  Renderer renderer(context, f.scene);
+  upload_synthetic(renderer, f);
+  const Camera cam = Camera::framing(f.scene.bounds, 2, 2.0f * kW / kH);
+  FluidOptions o;
+  OffscreenTarget wide(context, 2 * kW, kH), half(context, kW, kH);
+  wide.render(renderer, cam, o, {});
+  const std::vector<uint8_t> full = wide.read_rgba8();
+  // The right half of the wide view through an off-centre projection.
+  View right = camera_view(cam, {0, 0, 2 * kW, kH});
+  for (int c = 0; c < 4; ++c) right.projection.at(0, c) = 2 * right.projection.at(0, c) - right.projection.at(3, c);
+  right.viewport = {0, 0, kW, kH};
+  half.render(renderer, {&right, 1}, o, {});
+  const std::vector<uint8_t> crop = half.read_rgba8();
+  // The screen-space filter sees other neighbours along the cut: leave 12 columns out.
+  const double db = psnr_region(full, 2 * kW, kW + 12, crop, kW, 12, kW - 12, kH);
+  std::printf("asymmetric frustum against the crop of the wider view: %.1f dB PSNR\n", db);
+  EXPECT_GT(db, 40.0);
+}
+
+TEST(Embedding, TwoViewsInOneTargetEachMatchASingleView) {
+  testing::ValidationGuard guard;
+  Context& context = testing::context();
+  const SyntheticFluid f = synthetic_fluid(30000);
+  Renderer renderer(context, f.scene);
+  upload_synthetic(renderer, f);
+  const Camera a = Camera::framing(f.scene.bounds, 2, float(kW) / kH);
+  Camera b = a;
+  b.orbit(0.5f, 0.1f);
+  const FluidOptions o;
+  OffscreenTarget single(context, kW, kH), pair(context, 2 * kW, kH);
+  single.render(renderer, a, o, {});
+  const std::vector<uint8_t> only_a = single.read_rgba8();
+  single.render(renderer, b, o, {});
+  const std::vector<uint8_t> only_b = single.read_rgba8();
+  const std::array views{camera_view(a, {0, 0, kW, kH}), camera_view(b, {kW, 0, kW, kH})};
+  const FrameStats stats = pair.render(renderer, views, o, {});
+  const std::vector<uint8_t> both = pair.read_rgba8();
+  EXPECT_GT(psnr_region(both, 2 * kW, 0, only_a, kW, 0, kW, kH), 60.0);
+  EXPECT_GT(psnr_region(both, 2 * kW, kW, only_b, kW, 0, kW, kH), 60.0);
+  // Each pass is timed once per view and reported summed.
+  ASSERT_FALSE(stats.passes.empty());
+  EXPECT_EQ(stats.passes.back().name, "present");
+}
+
+TEST(Embedding, FramesInFlightWithoutWaitingShowTheNewestCompleteFrame) {
+  TestHost host;
+  {
+    Context context(host.handles());
+    std::vector<float> xyz(kTwoSpheres);
+    const SceneInfo scene = scene_for_points(std::vector<float>{-2, -1, -1, 2, 1, 1}, kRadius);
+    RendererOptions ro;
+    ro.frames_in_flight = 2;
+    Renderer renderer(context, scene, ro);
+    using U = vk::ImageUsageFlagBits;
+    TestHost::Image color = host.image(kW, kH, vk::Format::eR8G8B8A8Unorm, U::eColorAttachment | U::eTransferSrc);
+    RenderTarget target;
+    target.width = kW;
+    target.height = kH;
+    target.color_image = *color.image;
+    target.color_view = *color.view;
+    target.color_format = VK_FORMAT_R8G8B8A8_UNORM;
+    target.color_layout_before = VK_IMAGE_LAYOUT_UNDEFINED;
+    target.color_layout_after = VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL;
+    const View view = camera_view(front_camera(), {0, 0, kW, kH});
+    // The host's loop: one command buffer and fence per slot; a slot's fence
+    // is waited for before its reuse (the frames-in-flight contract).
+    struct Slot {
+      vk::raii::CommandBuffer cmd{nullptr};
+      vk::raii::Fence fence{nullptr};
+      bool used = false;
+    };
+    std::array<Slot, 2> slots;
+    for (Slot& s : slots) {
+      s.cmd = std::move(vk::raii::CommandBuffers(host.device(), vk::CommandBufferAllocateInfo(*host.pool(), vk::CommandBufferLevel::ePrimary, 1))[0]);
+      s.fence = vk::raii::Fence(host.device(), vk::FenceCreateInfo());
+    }
+    uint64_t last_ticket = 0;
+    const int frames = 12;
+    for (int i = 0; i < frames; ++i) {
+      Slot& s = slots[size_t(i) % slots.size()];
+      if (s.used) {
+        while (host.device().waitForFences(*s.fence, VK_TRUE, UINT64_MAX) == vk::Result::eTimeout) {
+        }
+        host.device().resetFences(*s.fence);
+      }
+      if (i % 3 == 0) {
+        // A new frame: the spheres move right by 0.1 per commit.
+        for (size_t p = 0; p < xyz.size(); p += 3) xyz[p] = kTwoSpheres[p] + 0.1f * float(i / 3);
+        FrameStaging st = renderer.stage_frame(2, 2);
+        const std::vector<float> one(xyz);
+        for (uint32_t c = 0; c < 2; ++c) {
+          GpuChunk& g = st.chunks[c];
+          g = GpuChunk{};
+          for (int k = 0; k < 3; ++k) g.lo[k] = g.hi[k] = one[c * 3 + size_t(k)];
+          g.first = c;
+          g.count = 1;
+          std::memset(st.particles.data() + c * st.stride, 0, st.stride);
+        }
+        last_ticket = renderer.commit_frame();
+      }
+      vk::CommandBuffer cmd = *s.cmd;
+      cmd.reset();
+      cmd.begin(vk::CommandBufferBeginInfo(vk::CommandBufferUsageFlagBits::eOneTimeSubmit));
+      const FrameSync sync = renderer.record(static_cast<VkCommandBuffer>(cmd), target, {&view, 1}, opaque(), {});
+      cmd.end();
+      const vk::CommandBufferSubmitInfo cb(cmd);
+      const vk::SemaphoreSubmitInfo wait(vk::Semaphore(sync.upload_semaphore), sync.upload_value,
+                                         vk::PipelineStageFlags2(sync.wait_stages));
+      host.queue().submit2(vk::SubmitInfo2({}, wait, cb), *s.fence);
+      s.used = true;
+    }
+    for (Slot& s : slots) {
+      while (s.used && host.device().waitForFences(*s.fence, VK_TRUE, UINT64_MAX) == vk::Result::eTimeout) {
+      }
+    }
+    EXPECT_TRUE(renderer.upload_complete(last_ticket));
+    const FrameStats stats = renderer.last_stats();
+    EXPECT_EQ(stats.frame, uint64_t(frames - 1));
+    EXPECT_EQ(stats.particles, 2u);
+    // The last frame shows the spheres at their last positions.
+    const std::vector<uint32_t> rgba = host.read(color, kW, kH);
+    OffscreenTarget reference(context, kW, kH);
+    reference.render(renderer, front_camera(), opaque(), {});
+    const std::vector<uint8_t> expect = reference.read_rgba8();
+    std::vector<uint8_t> got(rgba.size() * 4);
+    std::memcpy(got.data(), rgba.data(), got.size());
+    EXPECT_GT(psnr_region(got, kW, 0, expect, kW, 0, kW, kH), 60.0);
+  }
+  expect_clean(host);
+}
+
+TEST(Embedding, SrgbTargetGetsTheSameDisplayValues) {
+  TestHost host;
+  {
+    Context context(host.handles());
+    const SyntheticFluid f = synthetic_fluid(20000);
+    Renderer renderer(context, f.scene);
+    upload_synthetic(renderer, f);
+    const Camera cam = Camera::framing(f.scene.bounds, 2, float(kW) / kH);
+    OffscreenTarget unorm(context, kW, kH);
+    unorm.render(renderer, cam, FluidOptions{}, {});
+    const std::vector<uint8_t> expect = unorm.read_rgba8();
+    using U = vk::ImageUsageFlagBits;
+    TestHost::Image color = host.image(kW, kH, vk::Format::eR8G8B8A8Srgb, U::eColorAttachment | U::eTransferSrc);
+    RenderTarget target;
+    target.width = kW;
+    target.height = kH;
+    target.color_image = *color.image;
+    target.color_view = *color.view;
+    target.color_format = VK_FORMAT_R8G8B8A8_SRGB;
+    target.color_layout_after = VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL;
+    const View view = camera_view(cam, {0, 0, kW, kH});
+    FrameSync sync;
+    host.submit([&](vk::CommandBuffer c) {
+      sync = renderer.record(static_cast<VkCommandBuffer>(c), target, {&view, 1}, FluidOptions{}, {});
+    });
+    const std::vector<uint32_t> rgba = host.read(color, kW, kH);
+    int worst = 0;
+    for (size_t i = 0; i < rgba.size(); ++i) {
+      for (int k = 0; k < 3; ++k) {
+        worst = std::max(worst, std::abs(int((rgba[i] >> (8 * k)) & 0xff) - int(expect[i * 4 + size_t(k)])));
+      }
+    }
+    EXPECT_LE(worst, 1) << "largest difference in 8-bit levels";
+  }
+  expect_clean(host);
+}
+
+TEST(Embedding, HostHandlesAreChecked) {
+  EXPECT_THROW(Context(HostVulkan{}), std::invalid_argument);
+  const DeviceFeatures f = required_device_features();
+  const DeviceFeatures copy = f;  // the copy's chain points into the copy
+  EXPECT_EQ(copy.features2.pNext, &copy.vulkan11);
+  EXPECT_EQ(copy.vulkan12.pNext, &copy.vulkan13);
+  EXPECT_EQ(copy.vulkan13.pNext, nullptr);
+  EXPECT_TRUE(copy.vulkan13.dynamicRendering);
+  EXPECT_TRUE(copy.vulkan11.multiview);
+}
+
+}  // namespace
+}  // namespace sluice::render
