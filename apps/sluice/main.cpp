@@ -17,7 +17,7 @@ int main(int argc, char** argv) {
       "  sluice bench io 'out/fluid_*.vtu'                              # sluice against VTK's reader\n",
       "sluice"};
   app.require_subcommand(1);
-  app.set_version_flag("--version", "sluice 0.2.0 (container format 1.1)");
+  app.set_version_flag("--version", "sluice 0.3.0 (container format 1.1)");
   app.footer("Run `sluice COMMAND --help` for the options of a command.");
   sluice::app::add_convert(app);
   sluice::app::add_info(app);

@@ -1,0 +1,43 @@
+# The installed package: `find_package(sluice)` gives sluice::io,
+# sluice::runtime, sluice::render and (where built) sluice::desktop, with
+# headers under include/sluice and the shaders embedded in the libraries.
+# The importer (sluice_import, which links VTK) is the CLI's and is not
+# installed.
+include(GNUInstallDirs)
+include(CMakePackageConfigHelpers)
+
+set(sluice_targets sluice_io sluice_runtime)
+set_target_properties(sluice_io PROPERTIES EXPORT_NAME io)
+set_target_properties(sluice_runtime PROPERTIES EXPORT_NAME runtime)
+install(DIRECTORY io/include/sluice/io DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/sluice
+        PATTERN "import.h" EXCLUDE PATTERN "convert.h" EXCLUDE)
+install(DIRECTORY runtime/include/sluice/runtime DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/sluice)
+if(TARGET sluice_render)
+  list(APPEND sluice_targets sluice_render)
+  set_target_properties(sluice_render PROPERTIES EXPORT_NAME render)
+  install(DIRECTORY render/include/sluice/render DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/sluice)
+endif()
+set(SLUICE_PACKAGE_DESKTOP OFF)
+if(TARGET sluice_desktop)
+  list(APPEND sluice_targets sluice_desktop)
+  set_target_properties(sluice_desktop PROPERTIES EXPORT_NAME desktop)
+  install(DIRECTORY desktop/include/sluice/desktop DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/sluice)
+  set(SLUICE_PACKAGE_DESKTOP ON)
+endif()
+foreach(t ${sluice_targets})
+  target_include_directories(${t} INTERFACE $<INSTALL_INTERFACE:${CMAKE_INSTALL_INCLUDEDIR}>)
+endforeach()
+
+install(TARGETS ${sluice_targets} EXPORT sluiceTargets
+        ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
+        LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR})
+install(EXPORT sluiceTargets NAMESPACE sluice:: DESTINATION ${CMAKE_INSTALL_LIBDIR}/cmake/sluice)
+set(SLUICE_PACKAGE_RENDER OFF)
+if(TARGET sluice_render)
+  set(SLUICE_PACKAGE_RENDER ON)
+endif()
+configure_package_config_file(cmake/sluiceConfig.cmake.in ${CMAKE_CURRENT_BINARY_DIR}/sluiceConfig.cmake
+                              INSTALL_DESTINATION ${CMAKE_INSTALL_LIBDIR}/cmake/sluice)
+write_basic_package_version_file(${CMAKE_CURRENT_BINARY_DIR}/sluiceConfigVersion.cmake COMPATIBILITY SameMinorVersion)
+install(FILES ${CMAKE_CURRENT_BINARY_DIR}/sluiceConfig.cmake ${CMAKE_CURRENT_BINARY_DIR}/sluiceConfigVersion.cmake
+        DESTINATION ${CMAKE_INSTALL_LIBDIR}/cmake/sluice)

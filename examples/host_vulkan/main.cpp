@@ -1,0 +1,386 @@
+// host_vulkan: an application that owns its Vulkan instance, device, queue and
+// images, draws its own opaque geometry (a floor and a box standing in the
+// fluid) and has sluice record the fluid into the same colour and depth
+// images, frames in flight, no idle waits. It reads top to bottom:
+//
+//   1. instance      (sluice::render::required_instance_extensions)
+//   2. device        (required_device_extensions, required_device_features)
+//   3. sluice        (Context from the host's handles, Renderer, a frame)
+//   4. host things   (images, the box pipeline, per-frame slots)
+//   5. frame loop    (host geometry, then Renderer::record into the same images)
+//   6. output        (a PNG; with --check, the occlusion test below)
+//
+// Usage: host_vulkan [--frames N] [--out image.png] [--check] [FILE.sluice]
+// Without a file it draws sluice's synthetic pool. --check also renders the
+// host geometry alone and the fluid alone and verifies, pixel by pixel, that
+// where both are present the nearer one shows (both ways must occur); the
+// exit status says whether it held.
+#include <vulkan/vulkan_raii.hpp>
+
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "sluice/io/reader.h"
+#include "sluice/render/context.h"
+#include "sluice/render/image_io.h"
+#include "sluice/render/renderer.h"
+#include "sluice/render/synthetic.h"
+
+namespace {
+
+const uint32_t kBoxVert[] =
+#include "box.vert.inc"
+    ;
+const uint32_t kBoxFrag[] =
+#include "box.frag.inc"
+    ;
+
+constexpr uint32_t kWidth = 480, kHeight = 320, kFramesInFlight = 2;
+constexpr vk::Format kColor = vk::Format::eR8G8B8A8Unorm, kDepth = vk::Format::eD32Sfloat;
+int validation_errors = 0;
+
+VKAPI_ATTR VkBool32 VKAPI_CALL on_validation(VkDebugUtilsMessageSeverityFlagBitsEXT, VkDebugUtilsMessageTypeFlagsEXT,
+                                             const VkDebugUtilsMessengerCallbackDataEXT* data, void*) {
+  ++validation_errors;
+  std::fprintf(stderr, "validation: %s\n", data->pMessage);
+  return VK_FALSE;
+}
+
+struct Image {
+  vk::raii::Image image{nullptr};
+  vk::raii::DeviceMemory memory{nullptr};
+  vk::raii::ImageView view{nullptr};
+};
+
+uint32_t memory_type(const vk::raii::PhysicalDevice& pd, uint32_t bits, vk::MemoryPropertyFlags want) {
+  const auto props = pd.getMemoryProperties();
+  for (uint32_t i = 0; i < props.memoryTypeCount; ++i) {
+    if ((bits & (1u << i)) && (props.memoryTypes[i].propertyFlags & want) == want) return i;
+  }
+  throw std::runtime_error("no suitable memory type");
+}
+
+Image make_image(const vk::raii::Device& device, const vk::raii::PhysicalDevice& pd, vk::Format format,
+                 vk::ImageUsageFlags usage, vk::ImageAspectFlags aspect) {
+  Image i;
+  i.image = vk::raii::Image(device, vk::ImageCreateInfo({}, vk::ImageType::e2D, format, vk::Extent3D(kWidth, kHeight, 1), 1, 1,
+                                                        vk::SampleCountFlagBits::e1, vk::ImageTiling::eOptimal, usage));
+  const auto req = i.image.getMemoryRequirements();
+  i.memory = vk::raii::DeviceMemory(device, vk::MemoryAllocateInfo(req.size, memory_type(pd, req.memoryTypeBits, {})));
+  i.image.bindMemory(*i.memory, 0);
+  i.view = vk::raii::ImageView(device, vk::ImageViewCreateInfo({}, *i.image, vk::ImageViewType::e2D, format, {},
+                                                               vk::ImageSubresourceRange(aspect, 0, 1, 0, 1)));
+  return i;
+}
+
+// The host's camera: its own convention, standard depth (0 near, 1 far) with
+// a finite far plane; sluice takes the matrices as they are.
+sluice::render::Mat4 projection(float fov_deg, float aspect, float near, float far) {
+  const float f = 1.0f / std::tan(fov_deg * 0.5f * 3.14159265f / 180.0f);
+  sluice::render::Mat4 p;
+  p.at(0, 0) = f / aspect;
+  p.at(1, 1) = -f;  // Vulkan: y down
+  p.at(2, 2) = far / (near - far);
+  p.at(2, 3) = near * far / (near - far);
+  p.at(3, 2) = -1;
+  return p;
+}
+
+struct BoxPush {
+  sluice::render::Mat4 clip_from_world;
+  float lo[4], size[4], color[4];
+};
+
+}  // namespace
+
+int main(int argc, char** argv) try {
+  int frames = 3;
+  bool check = false;
+  std::string out = "host_vulkan.png", file;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--frames" && i + 1 < argc) frames = std::max(1, std::atoi(argv[++i]));
+    else if (a == "--out" && i + 1 < argc) out = argv[++i];
+    else if (a == "--check") check = true;
+    else if (a == "--help") {
+      std::printf("usage: host_vulkan [--frames N] [--out image.png] [--check] [FILE.sluice]\n");
+      return 0;
+    } else file = a;
+  }
+
+  // 1. Instance: Vulkan 1.3, what sluice asks for, and validation when installed.
+  vk::raii::Context loader;
+  std::vector<const char*> layers, extensions = sluice::render::required_instance_extensions();
+  for (const auto& l : loader.enumerateInstanceLayerProperties()) {
+    if (std::strcmp(l.layerName, "VK_LAYER_KHRONOS_validation") == 0) {
+      layers.push_back("VK_LAYER_KHRONOS_validation");
+      extensions.push_back(VK_EXT_DEBUG_UTILS_EXTENSION_NAME);
+    }
+  }
+  const vk::ApplicationInfo app("host_vulkan", 1, nullptr, 0, VK_API_VERSION_1_3);
+  vk::raii::Instance instance(loader, vk::InstanceCreateInfo({}, &app, layers, extensions));
+  vk::raii::DebugUtilsMessengerEXT messenger{nullptr};
+  if (!layers.empty()) {
+    using S = vk::DebugUtilsMessageSeverityFlagBitsEXT;
+    using T = vk::DebugUtilsMessageTypeFlagBitsEXT;
+    messenger = vk::raii::DebugUtilsMessengerEXT(
+        instance, vk::DebugUtilsMessengerCreateInfoEXT({}, S::eError, T::eValidation | T::eGeneral, &on_validation));
+  }
+
+  // 2. Device: the first sluice can run on, one graphics+compute queue, sluice's extensions and features.
+  vk::raii::PhysicalDevice physical{nullptr};
+  for (auto& pd : vk::raii::PhysicalDevices(instance)) {
+    if (sluice::render::device_unusable_reason(*instance, *pd).empty()) {
+      physical = std::move(pd);
+      break;
+    }
+  }
+  if (!*physical) throw std::runtime_error("no Vulkan device can run sluice");
+  uint32_t family = 0;
+  const auto families = physical.getQueueFamilyProperties();
+  while (family < families.size() && !(families[family].queueFlags & vk::QueueFlagBits::eGraphics)) ++family;
+  const float priority = 1;
+  const vk::DeviceQueueCreateInfo queue_info({}, family, 1, &priority);
+  const std::vector<const char*> device_extensions = sluice::render::required_device_extensions(*physical);
+  sluice::render::DeviceFeatures features = sluice::render::required_device_features();
+  vk::DeviceCreateInfo device_info({}, queue_info, {}, device_extensions);
+  device_info.pNext = &features.features2;
+  vk::raii::Device device(physical, device_info);
+  vk::raii::Queue queue(device, family, 0);
+  std::printf("host device: %s\n", physical.getProperties().deviceName.data());
+
+  // 3. sluice on the host's handles: a renderer and one frame of fluid.
+  sluice::render::HostVulkan host;
+  host.handles = {*instance, *physical, *device, family, *queue};
+  for (const char* e : device_extensions) host.memory_budget_enabled |= std::strcmp(e, VK_EXT_MEMORY_BUDGET_EXTENSION_NAME) == 0;
+  sluice::render::Context context(host);
+  std::optional<sluice::io::ContainerReader> reader;
+  sluice::render::SceneInfo scene;
+  std::optional<sluice::render::SyntheticFluid> synthetic;
+  if (!file.empty()) {
+    reader.emplace(file);
+    scene = sluice::render::scene_info(*reader);
+  } else {
+    synthetic = sluice::render::synthetic_fluid(200000);
+    scene = synthetic->scene;
+  }
+  sluice::render::RendererOptions renderer_options;
+  renderer_options.frames_in_flight = kFramesInFlight;
+  sluice::render::Renderer renderer(context, scene, renderer_options);
+  if (reader) renderer.load_frame(*reader, reader->frame_count() - 1, -1);
+  else sluice::render::upload_synthetic(renderer, *synthetic);
+  sluice::render::FluidOptions fluid;
+  fluid.ground = false;  // the host draws its own floor
+
+  // 4. The host's images, its box pipeline and one command buffer + fence per frame in flight.
+  using U = vk::ImageUsageFlagBits;
+  const Image color = make_image(device, physical, kColor, U::eColorAttachment | U::eTransferSrc, vk::ImageAspectFlagBits::eColor);
+  const Image depth = make_image(device, physical, kDepth, U::eDepthStencilAttachment | U::eTransferSrc, vk::ImageAspectFlagBits::eDepth);
+  const vk::PushConstantRange push_range(vk::ShaderStageFlagBits::eVertex | vk::ShaderStageFlagBits::eFragment, 0, sizeof(BoxPush));
+  vk::raii::PipelineLayout layout(device, vk::PipelineLayoutCreateInfo({}, {}, push_range));
+  const vk::raii::ShaderModule vs(device, vk::ShaderModuleCreateInfo({}, sizeof kBoxVert, kBoxVert));
+  const vk::raii::ShaderModule fs(device, vk::ShaderModuleCreateInfo({}, sizeof kBoxFrag, kBoxFrag));
+  const std::array stages{vk::PipelineShaderStageCreateInfo({}, vk::ShaderStageFlagBits::eVertex, *vs, "main"),
+                          vk::PipelineShaderStageCreateInfo({}, vk::ShaderStageFlagBits::eFragment, *fs, "main")};
+  const vk::PipelineVertexInputStateCreateInfo vertex_input;
+  const vk::PipelineInputAssemblyStateCreateInfo assembly({}, vk::PrimitiveTopology::eTriangleList);
+  const vk::Viewport viewport(0, 0, float(kWidth), float(kHeight), 0, 1);
+  const vk::Rect2D area({0, 0}, {kWidth, kHeight});
+  const vk::PipelineViewportStateCreateInfo viewport_state({}, viewport, area);
+  const vk::PipelineRasterizationStateCreateInfo raster({}, false, false, vk::PolygonMode::eFill, vk::CullModeFlagBits::eNone,
+                                                        vk::FrontFace::eCounterClockwise, false, 0, 0, 0, 1);
+  const vk::PipelineMultisampleStateCreateInfo multisample;
+  const vk::PipelineDepthStencilStateCreateInfo depth_state({}, true, true, vk::CompareOp::eLess);
+  vk::PipelineColorBlendAttachmentState blend;
+  blend.colorWriteMask = vk::ColorComponentFlagBits::eR | vk::ColorComponentFlagBits::eG | vk::ColorComponentFlagBits::eB |
+                         vk::ColorComponentFlagBits::eA;
+  const vk::PipelineColorBlendStateCreateInfo blend_state({}, false, vk::LogicOp::eCopy, blend);
+  vk::PipelineRenderingCreateInfo rendering(0, kColor, kDepth);
+  vk::GraphicsPipelineCreateInfo pipeline_info({}, stages, &vertex_input, &assembly, nullptr, &viewport_state, &raster,
+                                               &multisample, &depth_state, &blend_state, nullptr, *layout);
+  pipeline_info.pNext = &rendering;
+  vk::raii::Pipeline box_pipeline(device, nullptr, pipeline_info);
+  vk::raii::CommandPool pool(device, vk::CommandPoolCreateInfo(vk::CommandPoolCreateFlagBits::eResetCommandBuffer, family));
+  struct Slot {
+    vk::raii::CommandBuffer cmd{nullptr};
+    vk::raii::Fence fence{nullptr};
+    bool busy = false;
+  };
+  std::vector<Slot> slots(kFramesInFlight);
+  for (Slot& s : slots) {
+    s.cmd = std::move(vk::raii::CommandBuffers(device, vk::CommandBufferAllocateInfo(*pool, vk::CommandBufferLevel::ePrimary, 1))[0]);
+    s.fence = vk::raii::Fence(device, vk::FenceCreateInfo());
+  }
+  const auto wait_for = [&](Slot& s) {
+    if (!s.busy) return;
+    while (device.waitForFences(*s.fence, true, UINT64_MAX) == vk::Result::eTimeout) {
+    }
+    device.resetFences(*s.fence);
+    s.busy = false;
+  };
+
+  // The scene: the host's camera, a floor under the fluid and a box standing in its middle.
+  const sluice::render::Bounds& b = scene.bounds;
+  const sluice::render::Vec3 c = b.center(), e = b.max - b.min;
+  const sluice::render::Vec3 eye{c.x - 0.35f * e.x, b.min.y - 1.3f * std::max(e.x, e.y), b.max.z + 0.9f * e.z};
+  sluice::render::View view;
+  view.view = sluice::render::look_at(eye, {c.x, c.y, b.min.z + 0.3f * e.z}, {0, 0, 1});
+  view.projection = projection(45, float(kWidth) / kHeight, 0.05f * e.x, 20 * (e.x + e.y + e.z));
+  view.viewport = {0, 0, kWidth, kHeight};
+  const sluice::render::Mat4 clip_from_world = view.projection * view.view;
+  const BoxPush floor_push{clip_from_world, {b.min.x - 0.3f * e.x, b.min.y - 0.3f * e.y, b.min.z - 0.02f * e.z, 0},
+                           {1.6f * e.x, 1.6f * e.y, 0.02f * e.z, 0}, {0.55f, 0.5f, 0.45f, 1}};
+  const BoxPush box_push{clip_from_world, {c.x - 0.08f * e.x, c.y - 0.12f * e.y, b.min.z, 0},
+                         {0.16f * e.x, 0.24f * e.y, 1.4f * e.z, 0}, {0.85f, 0.25f, 0.2f, 1}};
+
+  // 5. One frame: the host clears and draws its geometry, sluice records the
+  // fluid into the same images (occluded by the host's depth, writing its own).
+  const auto draw_frame = [&](Slot& slot, bool host_geometry, bool with_fluid) {
+    wait_for(slot);  // the frames-in-flight contract: this slot's previous frame is done
+    vk::CommandBuffer cmd = *slot.cmd;
+    cmd.reset();
+    cmd.begin(vk::CommandBufferBeginInfo(vk::CommandBufferUsageFlagBits::eOneTimeSubmit));
+    using S = vk::PipelineStageFlagBits2;
+    using A = vk::AccessFlagBits2;
+    const std::array to_draw{
+        vk::ImageMemoryBarrier2(S::eAllCommands, A::eMemoryRead, S::eColorAttachmentOutput, A::eColorAttachmentWrite,
+                                vk::ImageLayout::eUndefined, vk::ImageLayout::eColorAttachmentOptimal, VK_QUEUE_FAMILY_IGNORED,
+                                VK_QUEUE_FAMILY_IGNORED, *color.image,
+                                vk::ImageSubresourceRange(vk::ImageAspectFlagBits::eColor, 0, 1, 0, 1)),
+        vk::ImageMemoryBarrier2(S::eAllCommands, A::eMemoryRead, S::eEarlyFragmentTests | S::eLateFragmentTests,
+                                A::eDepthStencilAttachmentWrite | A::eDepthStencilAttachmentRead, vk::ImageLayout::eUndefined,
+                                vk::ImageLayout::eDepthStencilAttachmentOptimal, VK_QUEUE_FAMILY_IGNORED, VK_QUEUE_FAMILY_IGNORED,
+                                *depth.image, vk::ImageSubresourceRange(vk::ImageAspectFlagBits::eDepth, 0, 1, 0, 1))};
+    cmd.pipelineBarrier2(vk::DependencyInfo({}, {}, {}, to_draw));
+    vk::RenderingAttachmentInfo color_attachment(*color.view, vk::ImageLayout::eColorAttachmentOptimal, {}, {}, {},
+                                                 vk::AttachmentLoadOp::eClear, vk::AttachmentStoreOp::eStore,
+                                                 vk::ClearColorValue(std::array<float, 4>{0.12f, 0.13f, 0.16f, 1}));
+    vk::RenderingAttachmentInfo depth_attachment(*depth.view, vk::ImageLayout::eDepthStencilAttachmentOptimal, {}, {}, {},
+                                                 vk::AttachmentLoadOp::eClear, vk::AttachmentStoreOp::eStore,
+                                                 vk::ClearDepthStencilValue(1.0f, 0));
+    cmd.beginRendering(vk::RenderingInfo({}, area, 1, 0, color_attachment, &depth_attachment));
+    if (host_geometry) {
+      cmd.bindPipeline(vk::PipelineBindPoint::eGraphics, *box_pipeline);
+      for (const BoxPush* push : {&floor_push, &box_push}) {
+        cmd.pushConstants<BoxPush>(*layout, vk::ShaderStageFlagBits::eVertex | vk::ShaderStageFlagBits::eFragment, 0, *push);
+        cmd.draw(36, 1, 0, 0);
+      }
+    }
+    cmd.endRendering();
+    sluice::render::FrameSync sync;
+    sluice::render::RenderTarget target;
+    target.width = kWidth;
+    target.height = kHeight;
+    target.color_image = *color.image;
+    target.color_view = *color.view;
+    target.color_format = static_cast<VkFormat>(kColor);
+    target.color_layout_before = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
+    target.color_layout_after = VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL;
+    target.depth_image = *depth.image;
+    target.depth_view = *depth.view;
+    target.depth_format = static_cast<VkFormat>(kDepth);
+    target.depth_layout_before = VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL;
+    target.depth_layout_after = VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL;
+    target.background = false;  // the host's clear colour stays where there is no fluid
+    if (with_fluid) {
+      sync = renderer.record(static_cast<VkCommandBuffer>(cmd), target, {&view, 1}, fluid, {});
+    } else {
+      const std::array to_read{
+          vk::ImageMemoryBarrier2(S::eColorAttachmentOutput, A::eColorAttachmentWrite, S::eAllCommands, A::eMemoryRead,
+                                  vk::ImageLayout::eColorAttachmentOptimal, vk::ImageLayout::eTransferSrcOptimal,
+                                  VK_QUEUE_FAMILY_IGNORED, VK_QUEUE_FAMILY_IGNORED, *color.image,
+                                  vk::ImageSubresourceRange(vk::ImageAspectFlagBits::eColor, 0, 1, 0, 1)),
+          vk::ImageMemoryBarrier2(S::eLateFragmentTests, A::eDepthStencilAttachmentWrite, S::eAllCommands, A::eMemoryRead,
+                                  vk::ImageLayout::eDepthStencilAttachmentOptimal, vk::ImageLayout::eTransferSrcOptimal,
+                                  VK_QUEUE_FAMILY_IGNORED, VK_QUEUE_FAMILY_IGNORED, *depth.image,
+                                  vk::ImageSubresourceRange(vk::ImageAspectFlagBits::eDepth, 0, 1, 0, 1))};
+      cmd.pipelineBarrier2(vk::DependencyInfo({}, {}, {}, to_read));
+    }
+    cmd.end();
+    const vk::CommandBufferSubmitInfo cb(cmd);
+    const vk::SemaphoreSubmitInfo wait(vk::Semaphore(sync.upload_semaphore), sync.upload_value,
+                                       vk::PipelineStageFlags2(sync.wait_stages));
+    queue.submit2(vk::SubmitInfo2({}, with_fluid ? 1u : 0u, &wait, 1, &cb), *slot.fence);
+    slot.busy = true;
+  };
+
+  // Reads the colour and depth images of the last frame (after waiting for it).
+  const auto read_back = [&](std::vector<uint32_t>& rgba, std::vector<float>& z) {
+    for (Slot& s : slots) wait_for(s);
+    const vk::DeviceSize bytes = vk::DeviceSize(kWidth) * kHeight * 4;
+    vk::raii::Buffer buffer(device, vk::BufferCreateInfo({}, 2 * bytes, vk::BufferUsageFlagBits::eTransferDst));
+    const auto req = buffer.getMemoryRequirements();
+    vk::raii::DeviceMemory memory(device, vk::MemoryAllocateInfo(req.size, memory_type(physical, req.memoryTypeBits,
+                                                                                       vk::MemoryPropertyFlagBits::eHostVisible |
+                                                                                           vk::MemoryPropertyFlagBits::eHostCoherent)));
+    buffer.bindMemory(*memory, 0);
+    Slot& slot = slots[0];
+    vk::CommandBuffer cmd = *slot.cmd;
+    cmd.reset();
+    cmd.begin(vk::CommandBufferBeginInfo(vk::CommandBufferUsageFlagBits::eOneTimeSubmit));
+    cmd.copyImageToBuffer(*color.image, vk::ImageLayout::eTransferSrcOptimal, *buffer,
+                          vk::BufferImageCopy(0, 0, 0, {vk::ImageAspectFlagBits::eColor, 0, 0, 1}, {}, {kWidth, kHeight, 1}));
+    cmd.copyImageToBuffer(*depth.image, vk::ImageLayout::eTransferSrcOptimal, *buffer,
+                          vk::BufferImageCopy(bytes, 0, 0, {vk::ImageAspectFlagBits::eDepth, 0, 0, 1}, {}, {kWidth, kHeight, 1}));
+    cmd.end();
+    const vk::CommandBufferSubmitInfo cb(cmd);
+    queue.submit2(vk::SubmitInfo2({}, {}, cb), *slot.fence);
+    slot.busy = true;
+    wait_for(slot);
+    const auto* mapped = static_cast<const std::byte*>(memory.mapMemory(0, 2 * bytes));
+    rgba.resize(size_t(kWidth) * kHeight);
+    z.resize(rgba.size());
+    std::memcpy(rgba.data(), mapped, bytes);
+    std::memcpy(z.data(), mapped + bytes, bytes);
+  };
+
+  for (int f = 0; f < frames; ++f) draw_frame(slots[size_t(f) % slots.size()], true, true);
+  std::vector<uint32_t> both, host_only, fluid_only;
+  std::vector<float> both_z, host_z, fluid_z;
+  read_back(both, both_z);
+
+  // 6. Output, and with --check the occlusion test.
+  sluice::render::Image png{kWidth, kHeight, std::vector<uint8_t>(both.size() * 4)};
+  std::memcpy(png.rgba.data(), both.data(), png.rgba.size());
+  sluice::render::write_png(out, png);
+  std::printf("wrote %s (%ux%u, %d frames, %d validation errors)\n", out.c_str(), kWidth, kHeight, frames, validation_errors);
+  int status = validation_errors == 0 ? 0 : 1;
+  if (check) {
+    draw_frame(slots[0], true, false);
+    read_back(host_only, host_z);
+    draw_frame(slots[0], false, true);
+    read_back(fluid_only, fluid_z);
+    // Where the host drew (depth < 1) and the fluid drew (depth < 1), the
+    // nearer one must show: the box in front hides the fluid, the fluid in
+    // front of the box hides it.
+    size_t host_in_front = 0, fluid_in_front = 0, wrong = 0, fluid_pixels = 0;
+    for (size_t i = 0; i < both.size(); ++i) {
+      const bool has_host = host_z[i] < 1.0f, has_fluid = fluid_z[i] < 1.0f;
+      fluid_pixels += has_fluid;
+      if (!has_host || !has_fluid || host_z[i] == fluid_z[i]) continue;
+      if (fluid_z[i] < host_z[i]) {
+        ++fluid_in_front;
+        wrong += both[i] != fluid_only[i] || both_z[i] != fluid_z[i];
+      } else {
+        ++host_in_front;
+        wrong += both[i] != host_only[i] || both_z[i] != host_z[i];
+      }
+    }
+    std::printf("occlusion: %zu fluid pixels; where both drew, the host's geometry is in front at %zu pixels and the fluid at "
+                "%zu; %zu pixels show the wrong one\n",
+                fluid_pixels, host_in_front, fluid_in_front, wrong);
+    const bool ok = host_in_front > 200 && fluid_in_front > 200 && wrong == 0;
+    std::printf("check %s\n", ok ? "passed" : "FAILED");
+    if (!ok || validation_errors > 0) status = 1;
+  }
+  return status;
+} catch (const std::exception& e) {
+  std::fprintf(stderr, "host_vulkan: %s\n", e.what());
+  return 1;
+}

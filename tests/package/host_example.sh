@@ -1,0 +1,19 @@
+#!/usr/bin/env bash
+# The installed package as a host app uses it: install this build into a
+# scratch prefix, build examples/host_vulkan against it with
+# find_package(sluice) (nothing from the source tree), run it on the local
+# Vulkan device and let it check the occlusion both ways.
+# Usage: host_example.sh BUILD_DIR SOURCE_DIR SCRATCH_DIR [SANITIZERS]
+set -euo pipefail
+build=$1 src=$2 scratch=$3 sanitize=${4:-}
+rm -rf "$scratch" && mkdir -p "$scratch"
+cmake --install "$build" --prefix "$scratch/prefix" >/dev/null
+flags=()
+if [[ -n "$sanitize" ]]; then
+  flags=(-DCMAKE_CXX_FLAGS="-fsanitize=$sanitize -fno-omit-frame-pointer" -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=$sanitize")
+fi
+cmake -S "$src/examples/host_vulkan" -B "$scratch/build" -DCMAKE_PREFIX_PATH="$scratch/prefix" \
+  -DCMAKE_BUILD_TYPE=Release "${flags[@]}" >/dev/null
+cmake --build "$scratch/build" -j 2 >/dev/null
+cd "$scratch"
+"$scratch/build/host_vulkan" --check --frames 4 --out "$scratch/host_vulkan.png"
