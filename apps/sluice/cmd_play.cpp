@@ -185,7 +185,11 @@ void add_play(CLI::App& app) {
   cmd->add_flag("-q,--quiet", o->quiet, "Only the summary");
 #if SLUICE_WITH_WINDOW
   std::shared_ptr<WindowPlayOptions> w = add_window_play_options(*cmd);
-  cmd->callback([o, w] { o->headless ? run_play_headless(*o) : run_play_window(*o, *w); });
+  cmd->callback([o, w] {
+    if (o->headless && w->gpu) run_play_gpu(*o, *w);
+    else if (o->headless) run_play_headless(*o);
+    else run_play_window(*o, *w);
+  });
 #else
   cmd->callback([o] {
     if (!o->headless) {

@@ -55,14 +55,6 @@ constexpr Shortcut kShortcuts[] = {
 
 }  // namespace
 
-struct WindowPlayOptions {
-  std::string size = "1280x720";
-  bool no_hud = false, no_vsync = false;
-  int exit_after = 0;  // presented frames showing data, 0: run until closed
-  std::string screenshot;
-  ViewSettings view;
-};
-
 namespace {
 
 struct Player {
@@ -401,6 +393,10 @@ std::shared_ptr<WindowPlayOptions> add_window_play_options(CLI::App& cmd) {
   cmd.add_option("--exit-after", o->exit_after, "Quit after presenting this many frames with data (tests, timing)")
       ->group(group);
   cmd.add_option("--screenshot", o->screenshot, "With --exit-after: save the last presented frame here (PNG)")
+      ->group(group);
+  cmd.add_flag("--gpu", o->gpu,
+               "With --headless: play through the renderer into an offscreen image of --size (frames in flight, no "
+               "window) and report frame, upload and render times")
       ->group(group);
   add_view_options(cmd, o->view);
   return o;

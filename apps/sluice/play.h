@@ -9,6 +9,9 @@
 #include <string>
 
 #include "sluice/runtime/player.h"
+#if SLUICE_WITH_WINDOW
+#include "view_options.h"
+#endif
 
 namespace sluice::app {
 
@@ -29,9 +32,20 @@ runtime::EndMode end_mode(const PlayOptions& o, bool window);
 // Throws std::runtime_error on a --memory it cannot read.
 runtime::PlayerOptions player_options(const PlayOptions& o, bool window);
 
-// The window player (cmd_play_window.cpp), in builds with a window.
-struct WindowPlayOptions;
+#if SLUICE_WITH_WINDOW
+// The window player (cmd_play_window.cpp) and headless playback through the
+// renderer (cmd_play_gpu.cpp), in builds with a window.
+struct WindowPlayOptions {
+  std::string size = "1280x720";
+  bool no_hud = false, no_vsync = false;
+  int exit_after = 0;  // presented frames showing data, 0: run until closed
+  std::string screenshot;
+  bool gpu = false;    // --headless --gpu: through the renderer into an offscreen image
+  ViewSettings view;
+};
 std::shared_ptr<WindowPlayOptions> add_window_play_options(CLI::App& play);
 void run_play_window(const PlayOptions& o, const WindowPlayOptions& w);
+void run_play_gpu(const PlayOptions& o, const WindowPlayOptions& w);
+#endif
 
 }  // namespace sluice::app

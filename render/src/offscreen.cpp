@@ -1,6 +1,5 @@
 // OffscreenTarget: an RGBA8 image (and optionally D32 depth) of its own, a
-// command buffer and a fence; one record() per render(), submitted and
-// waited for.
+// command buffer, fence and readback buffer per frame in flight.
 #include "sluice/render/offscreen.h"
 
 #include <cstring>
@@ -10,58 +9,81 @@
 
 namespace sluice::render {
 
-struct OffscreenTarget::Impl {
-  Context::Impl& ctx;
-  bool with_depth = false;
-  Texture color, depth;
-  Buffer readback;
-  vk::raii::CommandPool pool{nullptr};
+namespace {
+
+struct Slot {
   vk::raii::CommandBuffer cmd{nullptr};
   vk::raii::Fence fence{nullptr};
+  Buffer readback;
   bool submitted = false;
-  bool rendered = false;
+};
 
-  Impl(Context::Impl& c, bool d) : ctx(c), with_depth(d) {}
-  void wait() {
-    if (!submitted) return;
-    while (ctx.device.waitForFences(*fence, VK_TRUE, UINT64_MAX) == vk::Result::eTimeout) {
+}  // namespace
+
+struct OffscreenTarget::Impl {
+  Context::Impl& ctx;
+  OffscreenOptions options;
+  Texture color, depth;
+  vk::raii::CommandPool pool{nullptr};
+  std::vector<Slot> slots;
+  uint64_t frames = 0;
+  int last = -1;  // slot of the last frame submitted
+
+  Impl(Context::Impl& c, const OffscreenOptions& o) : ctx(c), options(o) {}
+  void wait(Slot& s) {
+    if (!s.submitted) return;
+    while (ctx.device.waitForFences(*s.fence, VK_TRUE, UINT64_MAX) == vk::Result::eTimeout) {
     }
-    submitted = false;
+    s.submitted = false;
+  }
+  void wait_all() {
+    for (Slot& s : slots) wait(s);
   }
   void create(uint32_t width, uint32_t height) {
     if (width == 0 || height == 0) throw std::invalid_argument("offscreen target: size must be at least 1x1");
     using U = vk::ImageUsageFlagBits;
     color = create_texture(ctx, {width, height}, vk::Format::eR8G8B8A8Unorm, U::eColorAttachment | U::eTransferSrc);
-    if (with_depth) depth = create_texture(ctx, {width, height}, vk::Format::eD32Sfloat, U::eDepthStencilAttachment);
-    readback = create_buffer(ctx, vk::DeviceSize(width) * height * 4, vk::BufferUsageFlagBits::eTransferDst, MemoryKind::Readback);
-    rendered = false;
+    if (options.depth) depth = create_texture(ctx, {width, height}, vk::Format::eD32Sfloat, U::eDepthStencilAttachment);
+    for (Slot& s : slots) {
+      s.readback = options.read_back ? create_buffer(ctx, vk::DeviceSize(width) * height * 4, vk::BufferUsageFlagBits::eTransferDst,
+                                                     MemoryKind::Readback)
+                                     : Buffer{};
+    }
+    last = -1;
   }
 };
 
-OffscreenTarget::OffscreenTarget(Context& context, uint32_t width, uint32_t height, bool depth)
-    : impl_(std::make_unique<Impl>(context_impl(context), depth)) {
+OffscreenTarget::OffscreenTarget(Context& context, uint32_t width, uint32_t height, const OffscreenOptions& options)
+    : impl_(std::make_unique<Impl>(context_impl(context), options)) {
   Impl& o = *impl_;
-  o.create(width, height);
+  if (options.frames_in_flight < 1 || options.frames_in_flight > 8) {
+    throw std::invalid_argument("offscreen target: frames_in_flight must be 1..8");
+  }
   o.pool = vk::raii::CommandPool(o.ctx.device, vk::CommandPoolCreateInfo(vk::CommandPoolCreateFlagBits::eResetCommandBuffer,
                                                                          o.ctx.graphics_family));
-  o.cmd = std::move(vk::raii::CommandBuffers(o.ctx.device,
-                                             vk::CommandBufferAllocateInfo(*o.pool, vk::CommandBufferLevel::ePrimary, 1))[0]);
-  o.fence = vk::raii::Fence(o.ctx.device, vk::FenceCreateInfo());
+  o.slots.resize(options.frames_in_flight);
+  for (Slot& s : o.slots) {
+    s.cmd = std::move(vk::raii::CommandBuffers(o.ctx.device,
+                                               vk::CommandBufferAllocateInfo(*o.pool, vk::CommandBufferLevel::ePrimary, 1))[0]);
+    s.fence = vk::raii::Fence(o.ctx.device, vk::FenceCreateInfo());
+  }
+  o.create(width, height);
 }
 
 OffscreenTarget::~OffscreenTarget() {
-  if (impl_) impl_->wait();
+  if (impl_) impl_->wait_all();
 }
 
 void OffscreenTarget::resize(uint32_t width, uint32_t height) {
   Impl& o = *impl_;
   if (width == o.color.extent.width && height == o.color.extent.height) return;
-  o.wait();
+  o.wait_all();
   o.create(width, height);
 }
 
 uint32_t OffscreenTarget::width() const { return impl_->color.extent.width; }
 uint32_t OffscreenTarget::height() const { return impl_->color.extent.height; }
+void OffscreenTarget::finish() { impl_->wait_all(); }
 
 FrameStats OffscreenTarget::render(Renderer& renderer, const Camera& camera, const FluidOptions& options, const LodOptions& lod) {
   const View view = camera_view(camera, Viewport{0, 0, width(), height()});
@@ -71,7 +93,12 @@ FrameStats OffscreenTarget::render(Renderer& renderer, const Camera& camera, con
 FrameStats OffscreenTarget::render(Renderer& renderer, std::span<const View> views, const FluidOptions& options,
                                    const LodOptions& lod, bool background) {
   Impl& o = *impl_;
-  o.wait();
+  if (o.slots.size() > renderer.options().frames_in_flight) {
+    throw std::invalid_argument("offscreen target: more frames in flight than the renderer keeps");
+  }
+  const int index = int(o.frames % o.slots.size());
+  Slot& slot = o.slots[size_t(index)];
+  o.wait(slot);  // the renderer's contract: this slot's previous frame is done
   RenderTarget target;
   target.width = width();
   target.height = height();
@@ -80,42 +107,44 @@ FrameStats OffscreenTarget::render(Renderer& renderer, std::span<const View> vie
   target.color_format = VK_FORMAT_R8G8B8A8_UNORM;
   target.color_layout_before = VK_IMAGE_LAYOUT_UNDEFINED;
   target.color_layout_after = VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL;
-  if (o.with_depth) {
+  if (o.options.depth) {
     target.depth_image = static_cast<VkImage>(*o.depth.image);
     target.depth_view = static_cast<VkImageView>(*o.depth.view);
     target.depth_format = VK_FORMAT_D32_SFLOAT;
     target.depth_layout_before = VK_IMAGE_LAYOUT_UNDEFINED;
   }
   target.background = background;
-  vk::CommandBuffer cmd = *o.cmd;
+  vk::CommandBuffer cmd = *slot.cmd;
   cmd.reset();
   cmd.begin(vk::CommandBufferBeginInfo(vk::CommandBufferUsageFlagBits::eOneTimeSubmit));
   const FrameSync sync = renderer.record(static_cast<VkCommandBuffer>(cmd), target, views, options, lod);
-  // The image to the readback buffer while we are at it: a copy is cheap
-  // next to the frame and read_rgba8() then needs no second submission.
-  const vk::BufferImageCopy region(0, 0, 0, vk::ImageSubresourceLayers(vk::ImageAspectFlagBits::eColor, 0, 0, 1), {},
-                                   vk::Extent3D(o.color.extent, 1));
-  cmd.copyImageToBuffer(*o.color.image, vk::ImageLayout::eTransferSrcOptimal, *o.readback.buffer, region);
-  memory_barrier(cmd, vk::PipelineStageFlagBits2::eCopy, vk::AccessFlagBits2::eTransferWrite, vk::PipelineStageFlagBits2::eHost,
-                 vk::AccessFlagBits2::eHostRead);
+  if (o.options.read_back) {
+    // The image to this slot's readback buffer: read_rgba8() then needs no second submission.
+    const vk::BufferImageCopy region(0, 0, 0, vk::ImageSubresourceLayers(vk::ImageAspectFlagBits::eColor, 0, 0, 1), {},
+                                     vk::Extent3D(o.color.extent, 1));
+    cmd.copyImageToBuffer(*o.color.image, vk::ImageLayout::eTransferSrcOptimal, *slot.readback.buffer, region);
+    memory_barrier(cmd, vk::PipelineStageFlagBits2::eCopy, vk::AccessFlagBits2::eTransferWrite,
+                   vk::PipelineStageFlagBits2::eHost, vk::AccessFlagBits2::eHostRead);
+  }
   cmd.end();
   const vk::CommandBufferSubmitInfo cb(cmd);
   const vk::SemaphoreSubmitInfo wait(vk::Semaphore(sync.upload_semaphore), sync.upload_value,
                                      vk::PipelineStageFlags2(sync.wait_stages));
-  o.ctx.device.resetFences(*o.fence);
-  o.ctx.graphics_queue.submit2(vk::SubmitInfo2({}, wait, cb), *o.fence);
-  o.submitted = true;
-  o.rendered = true;
-  o.wait();
+  o.ctx.device.resetFences(*slot.fence);
+  o.ctx.graphics_queue.submit2(vk::SubmitInfo2({}, wait, cb), *slot.fence);
+  slot.submitted = true;
+  o.last = index;
+  ++o.frames;
+  if (o.slots.size() == 1) o.wait(slot);
   return renderer.last_stats();
 }
 
 std::vector<uint8_t> OffscreenTarget::read_rgba8() {
   Impl& o = *impl_;
-  o.wait();
+  o.wait_all();
   const size_t bytes = size_t(width()) * height() * 4;
   std::vector<uint8_t> out(bytes, 0);
-  if (o.rendered) std::memcpy(out.data(), o.readback.mapped, bytes);
+  if (o.last >= 0 && o.options.read_back) std::memcpy(out.data(), o.slots[size_t(o.last)].readback.mapped, bytes);
   return out;
 }
 

@@ -1,8 +1,10 @@
 // sluice/render/offscreen.h: an RGBA8 image of sluice's own that a Renderer
-// records into and that is read back: the target of `sluice render`, the
-// benches and the tests. It is a client of Renderer::record() like any host;
-// unlike a host's loop it submits and waits for every frame (a synchronous
-// path for batch work, not for a display loop).
+// records into and that is read back: the target of `sluice render`, headless
+// GPU playback, the benches and the tests. It is a client of
+// Renderer::record() like any host. With one frame in flight (the default)
+// render() submits and waits, so the image and the figures it returns are
+// that frame's; with more, it waits only for the frame that used the same
+// slot (the renderer's contract) and returns the newest figures that are back.
 //
 // Ownership: borrows the Context, which must outlive it. Threads: one thread.
 #pragma once
@@ -16,15 +18,20 @@
 
 namespace sluice::render {
 
+struct OffscreenOptions {
+  uint32_t frames_in_flight = 1;  // at most the renderer's
+  bool depth = false;             // also a D32 depth image, cleared to the far plane each frame
+  bool read_back = true;          // copy each frame out for read_rgba8()
+};
+
 class OffscreenTarget {
  public:
-  // `depth`: also a D32 depth image (cleared to the far plane each frame).
-  OffscreenTarget(Context& context, uint32_t width, uint32_t height, bool depth = false);
+  OffscreenTarget(Context& context, uint32_t width, uint32_t height, const OffscreenOptions& options = {});
   ~OffscreenTarget();
   OffscreenTarget(const OffscreenTarget&) = delete;
   OffscreenTarget& operator=(const OffscreenTarget&) = delete;
 
-  // Waits for the last frame, then recreates the images.
+  // Waits for the frames in flight, then recreates the images.
   void resize(uint32_t width, uint32_t height);
   uint32_t width() const;
   uint32_t height() const;
@@ -35,7 +42,9 @@ class OffscreenTarget {
   FrameStats render(Renderer& renderer, std::span<const View> views, const FluidOptions& options, const LodOptions& lod,
                     bool background = true);
 
-  // The last rendered image: width*height RGBA8, top row first.
+  // Waits for the frames in flight.
+  void finish();
+  // The last rendered image (waits for it): width*height RGBA8, top row first.
   std::vector<uint8_t> read_rgba8();
 
   struct Impl;

@@ -1,0 +1,140 @@
+// `sluice play --headless --gpu FILE`: playback through the renderer without a
+// window. The same path as the window player (runtime::Player -> FrameFeed ->
+// Renderer::record), into an OffscreenTarget with two frames in flight, so
+// uploads of the next frame overlap rendering of the current one. Reports,
+// per new frame: the interval between new frames (wall), the GPU time of the
+// frame's render and of its upload copy.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <thread>
+
+#include "commands.h"
+#include "human.h"
+#include "play.h"
+#include "sluice/io/reader.h"
+#include "sluice/render/frame_feed.h"
+#include "sluice/render/offscreen.h"
+#include "sluice/render/renderer.h"
+#include "sluice/render/staging_allocator.h"
+#include "sluice/runtime/player.h"
+#include "view_options.h"
+
+namespace sluice::app {
+namespace {
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
+
+}  // namespace
+
+void run_play_gpu(const PlayOptions& o, const WindowPlayOptions& w) {
+  const io::ContainerReader reader(o.file);
+  if (reader.frame_count() == 0) throw std::runtime_error(o.file + ": no frames to play");
+  const auto [width, height] = parse_size(w.size);
+  const ViewSettings& v = w.view;
+  render::Context context(v.context_options());
+  const render::SceneInfo scene = render::scene_info(reader);
+  constexpr uint32_t kInFlight = 2;
+  render::RendererOptions ro;
+  ro.frames_in_flight = kInFlight;
+  render::Renderer renderer(context, scene, ro);
+  v.apply_environment(renderer);
+  const render::FluidOptions fluid = v.fluid_options(scene);
+  const render::LodOptions lod = v.lod_options();
+  const render::Camera camera = v.camera(scene, float(width) / float(height));
+  render::OffscreenOptions oo;
+  oo.frames_in_flight = kInFlight;
+  oo.read_back = false;
+  render::OffscreenTarget target(context, width, height, oo);
+
+  // Decoded straight into staging memory the transfer queue copies from.
+  render::StagingAllocator staging(context);
+  runtime::PlayerOptions po = player_options(o, false);
+  const int color = fluid.scalar_visibility ? fluid.color_attribute : -1;
+  po.pipeline.attributes = color >= 0 ? std::vector<uint32_t>{uint32_t(color)} : std::vector<uint32_t>{};
+  po.pipeline.device_budget = staging.device_budget();
+  const runtime::SteadyClock clock;
+  runtime::Player player(reader, staging, clock, po);
+  render::FrameFeed feed(renderer, player, &staging, color);
+  const double display_hz = o.display_hz > 0 ? o.display_hz : player.frame_rate() * std::max(std::abs(po.rate), 1e-3);
+  if (!o.quiet) {
+    std::fprintf(stderr, "playing %s through the renderer on %s (%s) at %ux%u: %llu frames at %.4g fps, display %.4g Hz, %s\n",
+                 o.file.c_str(), context.device().name.c_str(), context.device().type.c_str(), width, height,
+                 (unsigned long long)reader.frame_count(), player.frame_rate(), display_hz,
+                 runtime::end_mode_name(po.end));
+  }
+
+  using Steady = std::chrono::steady_clock;
+  const auto period = std::chrono::duration_cast<Steady::duration>(std::chrono::duration<double>(1.0 / display_hz));
+  const auto start = Steady::now();
+  auto next_tick = start;
+  std::optional<Steady::time_point> last_new;
+  std::vector<double> intervals, render_ms, upload_ms;
+  uint64_t last_stats_frame = UINT64_MAX, ticks = 0, new_frames = 0, errors_printed = 0;
+  double next_stats = o.stats_every;
+  player.play();
+  while (true) {
+    const render::FeedUpdate fed = feed.update();
+    while (const auto error = player.pop_error()) {
+      if (errors_printed++ < 20) std::fprintf(stderr, "sluice: frame error: %s\n", error->text().c_str());
+    }
+    const render::FrameStats stats = target.render(renderer, camera, fluid, lod);
+    ++ticks;
+    const auto now = Steady::now();
+    if (fed.changed) {
+      ++new_frames;
+      // The first loop over the file warms up (first decode, shader JIT).
+      if (last_new && new_frames > reader.frame_count()) {
+        intervals.push_back(std::chrono::duration<double, std::milli>(now - *last_new).count());
+      }
+      last_new = now;
+    }
+    // Figures come back frames_in_flight frames later: take each frame's once.
+    if (stats.frame != last_stats_frame && stats.particles > 0 && new_frames > reader.frame_count()) {
+      render_ms.push_back(stats.gpu_ms);
+      upload_ms.push_back(stats.upload_ms);
+      last_stats_frame = stats.frame;
+    }
+    const double elapsed = std::chrono::duration<double>(now - start).count();
+    if (o.stats && elapsed >= next_stats) {
+      std::fprintf(stderr, "%7.1f s  frame %llu  new frames %llu  render %.2f ms  upload %.2f ms (GPU)\n", elapsed,
+                   (unsigned long long)fed.frame, (unsigned long long)new_frames, stats.gpu_ms, stats.upload_ms);
+      next_stats += o.stats_every;
+    }
+    const runtime::PlayerState state = player.state();
+    if (state == runtime::PlayerState::Ended || state == runtime::PlayerState::Stopped) break;
+    if (o.seconds > 0 && elapsed >= o.seconds) break;
+    next_tick += period;
+    if (next_tick < now - period) next_tick = now;
+    std::this_thread::sleep_until(next_tick);
+  }
+  target.finish();
+  if (context.validation_active() && context.validation_errors() > 0) {
+    std::fprintf(stderr, "sluice: %llu Vulkan validation errors\n", (unsigned long long)context.validation_errors());
+    throw ExitCode{1};
+  }
+  const double elapsed = std::chrono::duration<double>(Steady::now() - start).count();
+  const runtime::PlaybackStats s = player.stats();
+  const double frame = median(intervals), draw = median(render_ms), copy = median(upload_ms);
+  std::printf("played %s through the renderer: %llu new frames in %s (%s frames/s), %llu refreshes; stalls %llu, "
+              "drops %llu, errors %llu, frames served from memory %llu\n",
+              o.file.c_str(), (unsigned long long)new_frames, human_duration(elapsed).c_str(),
+              fixed(double(new_frames) / elapsed, 1).c_str(), (unsigned long long)ticks, (unsigned long long)s.stalls,
+              (unsigned long long)s.drops, (unsigned long long)s.errors, (unsigned long long)s.pipeline.cache_hits);
+  if (intervals.empty()) {
+    std::printf("  (play more than one pass over the file, e.g. --loop --seconds 10, for per-frame medians)\n");
+    return;
+  }
+  std::printf("  per new frame after the first pass (medians of %zu): interval %s ms, GPU render %s ms, GPU upload copy %s ms\n",
+              intervals.size(), fixed(frame, 2).c_str(), fixed(draw, 2).c_str(), fixed(copy, 2).c_str());
+  std::printf("  interval / (render + upload) = %s; interval / max(render, upload) = %s (1.0: the copy is hidden "
+              "behind rendering or the other way round)\n",
+              fixed(frame / std::max(draw + copy, 1e-9), 2).c_str(), fixed(frame / std::max(std::max(draw, copy), 1e-9), 2).c_str());
+}
+
+}  // namespace sluice::app
