@@ -16,6 +16,8 @@ if [[ -d "$big" ]]; then
 fi
 tar -C "$stage" -cf - lib big | xz -6 -T2 > "$root/.gpu/pack.tar.xz"
 cp "$root/build/apps/sluice/sluice" "$root/.gpu/sluice"
+# A second binary to measure side by side in the same run (e.g. the last release): BASE=path/to/sluice.
+if [[ -n "${BASE:-}" ]]; then cp "$BASE" "$root/.gpu/sluice_base"; else rm -f "$root/.gpu/sluice_base"; fi
 rm -rf "$stage"
 # Vulkan loader (the driver is the machine's own).
 mkdir -p "$root/.gl" /tmp/amd64/partial

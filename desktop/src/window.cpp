@@ -137,6 +137,7 @@ struct Window::Impl {
   std::vector<Slot> slots;
   uint64_t frame = 0;
   bool ui_started = false, imgui_vulkan = false;
+  bool storage = false;  // the swapchain images take storage writes: the renderer shades straight into them
   Readback capture;
   vk::Extent2D captured;
   int captured_slot = -1;
@@ -200,6 +201,11 @@ void Window::Impl::create_swapchain() {
   if (caps.maxImageCount > 0) count = std::min(count, caps.maxImageCount);
   vk::ImageUsageFlags usage = vk::ImageUsageFlagBits::eColorAttachment | vk::ImageUsageFlagBits::eTransferDst;
   if (caps.supportedUsageFlags & vk::ImageUsageFlagBits::eTransferSrc) usage |= vk::ImageUsageFlagBits::eTransferSrc;
+  // Storage where the surface and format allow it: the renderer then skips
+  // its present pass (a raster pass, slow on compute-first GPUs).
+  storage = (caps.supportedUsageFlags & vk::ImageUsageFlagBits::eStorage) &&
+            (ctx.physical.getFormatProperties(format.format).optimalTilingFeatures & vk::FormatFeatureFlagBits::eStorageImage);
+  if (storage) usage |= vk::ImageUsageFlagBits::eStorage;
   vk::SwapchainCreateInfoKHR info({}, *surface, count, format.format, format.colorSpace, extent, 1, usage,
                                   vk::SharingMode::eExclusive, {}, caps.currentTransform,
                                   vk::CompositeAlphaFlagBitsKHR::eOpaque, present_mode, VK_TRUE, *swapchain);
@@ -367,6 +373,7 @@ bool Window::present(render::Renderer& renderer, const render::Camera& camera, c
   target.color_format = static_cast<VkFormat>(w.format.format);
   target.color_layout_before = VK_IMAGE_LAYOUT_UNDEFINED;  // the background covers every pixel
   target.color_layout_after = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
+  target.color_storage = w.storage;
   const render::View view = render::camera_view(camera, render::Viewport{0, 0, w.extent.width, w.extent.height});
   const render::FrameSync sync = renderer.record(static_cast<VkCommandBuffer>(cmd), target, {&view, 1}, options, lod);
   cmd.beginRenderPass(vk::RenderPassBeginInfo(*w.render_pass, *w.framebuffers[index], vk::Rect2D({0, 0}, w.extent)),

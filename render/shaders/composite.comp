@@ -104,6 +104,9 @@ void main() {
     }
   }
   bool raw_view = mode >= 2u && mode <= 7u;
-  imageStore(out_color, p, vec4(raw_view ? clamp(color, 0.0, 1.0) : to_srgb(color), 1.0));
+  // pc.param0, param1: the view's origin in the output; param2 bit 0: leave
+  // pixels without fluid alone (the caller's image, background off).
+  bool store = fluid || (pc.param2 & 1u) == 0u;
+  if (store) imageStore(out_color, p + ivec2(pc.param0, pc.param1), vec4(raw_view ? clamp(color, 0.0, 1.0) : to_srgb(color), 1.0));
   if (g.display.z != 0u) imageStore(out_aux, p, vec4(n, fluid ? z : 0.0));
 }

@@ -9,7 +9,10 @@ layout(set = 0, binding = 5, rg32f) uniform image2D thick_a;
 layout(set = 0, binding = 6, rg32f) uniform image2D thick_b;
 layout(set = 0, binding = 7) uniform sampler2D thick_raw_tex;
 layout(set = 0, binding = 8) uniform sampler2D thick_a_tex;
-layout(set = 0, binding = 9, rgba8) uniform writeonly image2D out_color;
+// The shaded output: sluice's own RGBA8 image, or the caller's colour image
+// when the target allows storage (any 4-channel format: written without a
+// format qualifier, shaderStorageImageWriteWithoutFormat).
+layout(set = 0, binding = 9) uniform writeonly image2D out_color;
 layout(set = 0, binding = 10, rgba32f) uniform writeonly image2D out_aux;
 // Compute splatting: depth as the bits of a positive float (ordered like
 // uints, so atomicMin keeps the nearest), thickness as fixed point sums.

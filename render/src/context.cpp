@@ -55,6 +55,7 @@ std::string missing_features(const vk::raii::PhysicalDevice& pd, bool presentati
   const auto f11 = pd.getFeatures2<vk::PhysicalDeviceFeatures2, vk::PhysicalDeviceVulkan11Features>()
                        .get<vk::PhysicalDeviceVulkan11Features>();
   if (!f.largePoints) return "no largePoints";
+  if (!f.shaderStorageImageWriteWithoutFormat) return "no shaderStorageImageWriteWithoutFormat";
   if (!f11.multiview) return "no multiview";
   if (!f12.bufferDeviceAddress) return "no bufferDeviceAddress";
   if (!f12.timelineSemaphore) return "no timelineSemaphore";
@@ -335,6 +336,7 @@ void DeviceFeatures::chain(void* next) {
 DeviceFeatures required_device_features() {
   DeviceFeatures f;
   f.features2.features.largePoints = VK_TRUE;
+  f.features2.features.shaderStorageImageWriteWithoutFormat = VK_TRUE;  // shading straight into the caller's image
   f.vulkan11.multiview = VK_TRUE;  // stereo (OpenXR) renders both eyes in one pass
   f.vulkan12.bufferDeviceAddress = VK_TRUE;
   f.vulkan12.timelineSemaphore = VK_TRUE;

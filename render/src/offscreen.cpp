@@ -42,7 +42,7 @@ struct OffscreenTarget::Impl {
   void create(uint32_t width, uint32_t height) {
     if (width == 0 || height == 0) throw std::invalid_argument("offscreen target: size must be at least 1x1");
     using U = vk::ImageUsageFlagBits;
-    color = create_texture(ctx, {width, height}, vk::Format::eR8G8B8A8Unorm, U::eColorAttachment | U::eTransferSrc);
+    color = create_texture(ctx, {width, height}, vk::Format::eR8G8B8A8Unorm, U::eColorAttachment | U::eStorage | U::eTransferSrc);
     if (options.depth) depth = create_texture(ctx, {width, height}, vk::Format::eD32Sfloat, U::eDepthStencilAttachment);
     for (Slot& s : slots) {
       s.readback = options.read_back ? create_buffer(ctx, vk::DeviceSize(width) * height * 4, vk::BufferUsageFlagBits::eTransferDst,
@@ -107,6 +107,7 @@ FrameStats OffscreenTarget::render(Renderer& renderer, std::span<const View> vie
   target.color_format = VK_FORMAT_R8G8B8A8_UNORM;
   target.color_layout_before = VK_IMAGE_LAYOUT_UNDEFINED;
   target.color_layout_after = VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL;
+  target.color_storage = true;
   if (o.options.depth) {
     target.depth_image = static_cast<VkImage>(*o.depth.image);
     target.depth_view = static_cast<VkImageView>(*o.depth.view);

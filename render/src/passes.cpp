@@ -20,19 +20,6 @@ bool has_stencil(vk::Format f) {
   return f == vk::Format::eD24UnormS8Uint || f == vk::Format::eD32SfloatS8Uint || f == vk::Format::eD16UnormS8Uint;
 }
 
-bool is_srgb(vk::Format f) {
-  switch (f) {
-    case vk::Format::eR8G8B8A8Srgb:
-    case vk::Format::eB8G8R8A8Srgb:
-    case vk::Format::eA8B8G8R8SrgbPack32:
-    case vk::Format::eR8G8B8Srgb:
-    case vk::Format::eB8G8R8Srgb:
-      return true;
-    default:
-      return false;
-  }
-}
-
 // A caller's image from one layout to another, ordered against all work on
 // the queue before and after (the host's own passes are unknown to us).
 vk::ImageMemoryBarrier2 host_barrier(VkImage image, vk::ImageAspectFlags aspect, uint32_t layer, VkImageLayout from,
@@ -49,6 +36,19 @@ vk::ImageAspectFlags depth_aspect(VkFormat f) {
 }
 
 }  // namespace
+
+bool is_srgb(vk::Format f) {
+  switch (f) {
+    case vk::Format::eR8G8B8A8Srgb:
+    case vk::Format::eB8G8R8A8Srgb:
+    case vk::Format::eA8B8G8R8SrgbPack32:
+    case vk::Format::eR8G8B8Srgb:
+    case vk::Format::eB8G8R8Srgb:
+      return true;
+    default:
+      return false;
+  }
+}
 
 PassRecorder::PassRecorder(Renderer::Impl& r, vk::CommandBuffer cmd, FrameSlot& slot, uint32_t slot_index)
     : r_(r), cmd_(cmd), slot_(slot), first_stamp_(slot_index * kStampsPerSlot) {}
@@ -73,7 +73,7 @@ void PassRecorder::compute_to_compute() {
                  Access::eShaderStorageRead | Access::eShaderStorageWrite);
 }
 
-void PassRecorder::begin_frame(const RenderTarget& target) {
+void PassRecorder::begin_frame(const RenderTarget& target, bool direct) {
   if (r_.timestamps_valid) {
     cmd_.resetQueryPool(*r_.timestamps, first_stamp_, kStampsPerSlot);
     cmd_.writeTimestamp2(Stage::eAllCommands, *r_.timestamps, first_stamp_);
@@ -102,7 +102,7 @@ void PassRecorder::begin_frame(const RenderTarget& target) {
   }
   std::vector<vk::ImageMemoryBarrier2> to;
   to.push_back(host_barrier(target.color_image, vk::ImageAspectFlagBits::eColor, target.base_layer, target.color_layout_before,
-                            vk::ImageLayout::eAttachmentOptimal));
+                            direct ? vk::ImageLayout::eGeneral : vk::ImageLayout::eAttachmentOptimal));
   if (target.depth_image) {
     to.push_back(host_barrier(target.depth_image, depth_aspect(target.depth_format), target.base_layer,
                               target.depth_layout_before, vk::ImageLayout::eAttachmentOptimal));
@@ -260,9 +260,9 @@ void PassRecorder::filters(const FluidOptions& o) {
   stamp("thickness filter");
 }
 
-void PassRecorder::shade() {
+void PassRecorder::shade(const Viewport& origin, bool fluid_only) {
   cmd_.bindPipeline(vk::PipelineBindPoint::eCompute, *r_.composite);
-  push();
+  push(origin.x, origin.y, fluid_only ? 1u : 0u);
   const auto g = groups(r_.targets.size, 8);
   cmd_.dispatch(g[0], g[1], 1);
   memory_barrier(cmd_, Stage::eComputeShader, Access::eShaderStorageWrite, Stage::eFragmentShader, Access::eShaderStorageRead);
@@ -315,14 +315,15 @@ void PassRecorder::present(const RenderTarget& target, const View& view, bool fi
   stamp("present");
 }
 
-void PassRecorder::end_frame(const RenderTarget& target) {
+void PassRecorder::end_frame(const RenderTarget& target, bool direct) {
   memory_barrier(cmd_, Stage::eComputeShader | Stage::eDrawIndirect, Access::eShaderStorageWrite | Access::eIndirectCommandRead,
                  Stage::eCopy, Access::eTransferRead);
   cmd_.copyBuffer(*r_.args.buffer, *slot_.readback.buffer, vk::BufferCopy(0, 0, sizeof(GpuArgs)));
   memory_barrier(cmd_, Stage::eCopy, Access::eTransferWrite, Stage::eHost, Access::eHostRead);
   std::vector<vk::ImageMemoryBarrier2> after;
   after.push_back(host_barrier(target.color_image, vk::ImageAspectFlagBits::eColor, target.base_layer,
-                               VK_IMAGE_LAYOUT_ATTACHMENT_OPTIMAL, vk::ImageLayout(target.color_layout_after)));
+                               direct ? VK_IMAGE_LAYOUT_GENERAL : VK_IMAGE_LAYOUT_ATTACHMENT_OPTIMAL,
+                               vk::ImageLayout(target.color_layout_after)));
   if (target.depth_image) {
     after.push_back(host_barrier(target.depth_image, depth_aspect(target.depth_format), target.base_layer,
                                  VK_IMAGE_LAYOUT_ATTACHMENT_OPTIMAL, vk::ImageLayout(target.depth_layout_after)));

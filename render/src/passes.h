@@ -15,19 +15,22 @@ class PassRecorder {
 
   // Orders the frame after everything before it on the queue, initializes
   // new targets, moves the caller's images to attachment layouts.
-  void begin_frame(const RenderTarget& target);
+  // `direct`: shading writes the caller's colour image (GENERAL layout).
+  void begin_frame(const RenderTarget& target, bool direct);
   // Binds the view's uniforms (dynamic offset) and the frame's buffers.
   void begin_view(uint32_t globals_offset, const FrameSet* frame);
   void cull();                          // chunks -> blocks -> particles -> draw list
   void splat();                         // compute splatting of depth and thickness, then resolve
   void raster_spheres();                // point sprites: exact depth, additive thickness
   void filters(const FluidOptions& o);  // depth, then thickness (separable, ping-pong)
-  void shade();                         // normals, shading, background (compute)
+  // Normals, shading, background (compute), into binding 9 at `origin`;
+  // `fluid_only`: pixels without fluid are left alone.
+  void shade(const Viewport& origin, bool fluid_only);
   // The shaded view into the caller's images; `first` view of the frame
   // clears what the target's UNDEFINED layouts discard.
   void present(const RenderTarget& target, const View& view, bool first);
   // Counters back to the host; the caller's images to their after layouts.
-  void end_frame(const RenderTarget& target);
+  void end_frame(const RenderTarget& target, bool direct);
 
  private:
   void stamp(const char* name);

@@ -196,6 +196,14 @@ void Renderer::Impl::write_descriptors(FrameSlot& slot) {
   };
   ctx.device.updateDescriptorSets(writes, {});
   slot.set_generation = targets.generation + (environment_generation << 32);
+  slot.output = static_cast<VkImageView>(*t.color.view);
+}
+
+void Renderer::Impl::bind_output(FrameSlot& slot, VkImageView view) {
+  if (slot.output == view) return;
+  const vk::DescriptorImageInfo image({}, vk::ImageView(view), vk::ImageLayout::eGeneral);
+  ctx.device.updateDescriptorSets(vk::WriteDescriptorSet(*slot.set, 9, 0, 1, vk::DescriptorType::eStorageImage, &image), {});
+  slot.output = view;
 }
 
 std::vector<std::byte> Renderer::Impl::read_texture(const Texture& t, size_t texel_bytes) {
@@ -335,6 +343,11 @@ FrameSync Renderer::record(VkCommandBuffer command_buffer, const RenderTarget& t
   r.pick_shown_set();
   r.ensure_targets(size.width, size.height, options.half_resolution_thickness);
   if (slot.set_generation != r.targets.generation + (r.environment_generation << 32)) r.write_descriptors(slot);
+  // Shading straight into the caller's image where it allows storage and no
+  // depth test is needed; else into sluice's image, then the present pass.
+  const bool direct = target.color_storage && !target.depth_view && !is_srgb(vk::Format(target.color_format)) &&
+                      (target.background || target.color_layout_before != VK_IMAGE_LAYOUT_UNDEFINED);
+  r.bind_output(slot, direct ? target.color_view : static_cast<VkImageView>(*r.targets.color.view));
   FrameSet* frame = r.shown >= 0 ? &r.sets[size_t(r.shown)] : nullptr;
   if (frame) frame->last_drawn = r.frames_recorded;
 
@@ -345,7 +358,7 @@ FrameSync Renderer::record(VkCommandBuffer command_buffer, const RenderTarget& t
   slot.upload_ms = frame ? std::max(frame->upload_ms, 0.0) : 0;
 
   PassRecorder pass(r, vk::CommandBuffer(command_buffer), slot, slot_index);
-  pass.begin_frame(target);
+  pass.begin_frame(target, direct);
   for (uint32_t v = 0; v < views.size(); ++v) {
     ViewSetup setup;
     setup.width = size.width;
@@ -368,10 +381,14 @@ FrameSync Renderer::record(VkCommandBuffer command_buffer, const RenderTarget& t
       pass.raster_spheres();
     }
     pass.filters(options);
-    pass.shade();
-    pass.present(target, views[v], v == 0);
+    if (direct) {
+      pass.shade(views[v].viewport, !target.background);
+    } else {
+      pass.shade({}, false);
+      pass.present(target, views[v], v == 0);
+    }
   }
-  pass.end_frame(target);
+  pass.end_frame(target, direct);
   ++r.frames_recorded;
   FrameSync sync;
   sync.upload_semaphore = static_cast<VkSemaphore>(*r.upload_done);

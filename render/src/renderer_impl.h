@@ -50,6 +50,7 @@ struct FrameSet {
 struct FrameSlot {
   vk::raii::DescriptorSet set{nullptr};
   uint64_t set_generation = UINT64_MAX;  // targets generation the set was written for
+  VkImageView output = VK_NULL_HANDLE;    // what the shading pass writes (binding 9)
   Buffer readback;                        // GpuArgs of the last view
   uint64_t frame = UINT64_MAX;            // record() call that used it last
   std::vector<const char*> stamp_names;   // per timestamp after the first
@@ -118,6 +119,7 @@ struct Renderer::Impl {
   // Makes the targets `width` x `height` (retiring the old ones).
   void ensure_targets(uint32_t width, uint32_t height, bool half_thickness);
   void write_descriptors(FrameSlot& slot);
+  void bind_output(FrameSlot& slot, VkImageView view);  // binding 9: where shading writes
   void upload_environment(const Image& equirect);  // empty: a 1x1 placeholder
   // Grows a buffer to at least `size` bytes (contents are lost; the old one is retired).
   void ensure(Buffer& b, vk::DeviceSize size, vk::BufferUsageFlags usage, MemoryKind kind);
@@ -135,5 +137,8 @@ struct Renderer::Impl {
   void collect_slot(FrameSlot& slot, uint32_t slot_index);
   std::vector<std::byte> read_texture(const Texture& t, size_t texel_bytes);
 };
+
+// Formats the hardware sRGB-encodes on write (no storage, present pass only).
+bool is_srgb(vk::Format f);
 
 }  // namespace sluice::render

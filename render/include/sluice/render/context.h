@@ -91,7 +91,7 @@ std::vector<const char*> required_device_extensions(VkPhysicalDevice physical_de
 // VkDeviceCreateInfo (copying the struct keeps the chain valid). Fields sluice
 // does not need are VK_FALSE.
 struct DeviceFeatures {
-  VkPhysicalDeviceFeatures2 features2{};  // .features.largePoints
+  VkPhysicalDeviceFeatures2 features2{};  // .features: largePoints, shaderStorageImageWriteWithoutFormat
   VkPhysicalDeviceVulkan11Features vulkan11{};  // multiview
   VkPhysicalDeviceVulkan12Features vulkan12{};  // bufferDeviceAddress, timelineSemaphore, hostQueryReset
   VkPhysicalDeviceVulkan13Features vulkan13{};  // synchronization2, dynamicRendering, maintenance4

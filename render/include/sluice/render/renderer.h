@@ -108,6 +108,11 @@ struct RenderTarget {
   VkFormat color_format = VK_FORMAT_UNDEFINED;  // *_SRGB formats get linear values (the hardware encodes)
   VkImageLayout color_layout_before = VK_IMAGE_LAYOUT_UNDEFINED;
   VkImageLayout color_layout_after = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
+  // The colour image was created with VK_IMAGE_USAGE_STORAGE_BIT and its
+  // (non-sRGB) format allows storage. Then, without a depth image, the
+  // shading pass writes it directly and the present pass (a full-viewport
+  // raster pass, slow on compute-first GPUs such as the H100/H200) is skipped.
+  bool color_storage = false;
   // Optional: the host's depth (its opaque geometry). The fluid is hidden
   // behind it and writes its own depth into it.
   VkImage depth_image = VK_NULL_HANDLE;
