@@ -46,6 +46,13 @@ for stage in $stages; do
       run $S bench stream /tmp/synth100m.sluice --memory 24G --no-storage --min-time 2
       rm -f /tmp/synth100m.sluice
       ;;
+    compare)  # render figures of this binary against the baseline binary (BASE= in pack.sh), alternating
+      run $S bench render --sizes 1M --repeats 3 >/dev/null  # warm-up
+      for pass in 1 2; do
+        [[ -x ./.gpu/sluice_base ]] && run ./.gpu/sluice_base bench render --repeats 7 --sizes 10M,100M
+        run $S bench render --repeats 7 --sizes 10M,100M
+      done
+      ;;
     embed)  # the embeddable renderer: render figures against the baseline binary (BASE= in pack.sh), and
             # playback through the renderer with frames in flight (upload against render time)
       run $S bench render --sizes 1M --repeats 3 >/dev/null  # warm-up
@@ -54,9 +61,9 @@ for stage in $stages; do
         run $S bench render --repeats 7 --sizes 10M,100M
       done
       run $S synth -n 10M --frames 24 -o /tmp/synth10m_24.sluice --force -q
-      run $S play --headless --gpu /tmp/synth10m_24.sluice --loop --seconds 20 --fps 1000 --display-hz 1000 \
+      run $S play --headless --gpu /tmp/synth10m_24.sluice --loop --seconds 12 --fps 1000 --display-hz 1000 \
         --window 32 --memory 48G --size 1920x1080
-      run $S play --headless --gpu /tmp/synth10m_24.sluice --loop --seconds 20 --fps 1000 --display-hz 1000 \
+      run $S play --headless --gpu /tmp/synth10m_24.sluice --loop --seconds 12 --fps 1000 --display-hz 1000 \
         --window 32 --memory 48G --size 3840x2160
       ;;
     codec)  # after stream: the same sequence with zstd on every plane (--smallest)

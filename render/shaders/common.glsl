@@ -27,6 +27,8 @@ layout(set = 0, binding = 0, std140) uniform Globals {
   vec4 scene;           // scene centre xyz; w: scene extent (diagonal)
   vec4 splat;           // thickness fixed-point scale (units per world unit), its inverse, largest small-splat area (px)
   vec4 frustum;         // ndc offset x, y of an asymmetric frustum; target depth = z + w / distance
+  vec4 ray;             // pixel centre -> eye ray (z = -1): x = px * ray.x + ray.y, y = py * ray.z + ray.w
+  vec4 thick_ray;       // the same for the thickness buffer's pixels
 } g;
 
 struct Chunk {
@@ -140,8 +142,8 @@ void sphere_bounds(vec3 c, float r, vec4 vp, out vec2 lo, out vec2 hi) {
   hi = (vec2(tx.y, max(ty.x, ty.y)) * 0.5 + 0.5) * vp.xy;
 }
 
-// Eye-space ray direction through a pixel (not normalized; z = -1).
-vec3 eye_ray(vec2 pixel, vec4 vp) {
-  vec2 ndc = pixel * vp.zw * 2.0 - 1.0;
-  return vec3((ndc.x - g.frustum.x) / g.proj.x, -(ndc.y - g.frustum.y) / g.proj.y, -1.0);
+// Eye-space ray direction through a pixel (not normalized; z = -1), with the
+// coefficients of the image it belongs to (g.ray or g.thick_ray): two FMAs.
+vec3 eye_ray(vec2 pixel, vec4 k) {
+  return vec3(pixel.x * k.x + k.y, pixel.y * k.z + k.w, -1.0);
 }

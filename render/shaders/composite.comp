@@ -13,7 +13,7 @@ layout(local_size_x = 8, local_size_y = 8) in;
 
 uint depth_source() { return g.display.w != 0u ? 1u : 0u; }
 
-vec3 eye_point(ivec2 p, float z) { return eye_ray(vec2(p) + 0.5, g.viewport) * z; }
+vec3 eye_point(ivec2 p, float z) { return eye_ray(vec2(p) + 0.5, g.ray) * z; }
 
 // Of the two one-sided differences, the one with the smaller depth step (or
 // the only one with fluid): no smearing across silhouettes.
@@ -44,7 +44,7 @@ vec3 to_srgb(vec3 c) {
 void main() {
   ivec2 p = ivec2(gl_GlobalInvocationID.xy);
   if (any(greaterThanEqual(p, ivec2(g.viewport.xy)))) return;
-  vec3 de = eye_ray(vec2(p) + 0.5, g.viewport);
+  vec3 de = eye_ray(vec2(p) + 0.5, g.ray);
   vec3 dir = normalize(mat3(g.inv_view) * de);
   vec3 eye = g.eye.xyz;
   uint mode = g.display.x;

@@ -10,7 +10,7 @@ layout(location = 0) out float o_depth;  // distance along the view axis
 layout(depth_less) out float gl_FragDepth;
 
 void main() {
-  vec3 dir = eye_ray(gl_FragCoord.xy, g.viewport);
+  vec3 dir = eye_ray(gl_FragCoord.xy, g.ray);
   float inv_len = inversesqrt(dot(dir, dir));
   vec3 n = dir * inv_len;
   // Closest approach first: stable when the sphere is tiny and far away.

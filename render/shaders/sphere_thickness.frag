@@ -9,7 +9,7 @@ layout(location = 2) flat in float v_attr;
 layout(location = 0) out vec2 o_thickness;
 
 void main() {
-  vec3 n = normalize(eye_ray(gl_FragCoord.xy, g.thick_viewport));
+  vec3 n = normalize(eye_ray(gl_FragCoord.xy, g.thick_ray));
   float tc = dot(n, v_center);
   vec3 perp = v_center - tc * n;
   float h2 = v_radius * v_radius - dot(perp, perp);

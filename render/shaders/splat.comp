@@ -36,8 +36,8 @@ void pixel_box(Sphere s, vec4 vp, out ivec2 lo, out ivec2 hi) {
 }
 
 // h^2 of the pixel's ray against the sphere (< 0: miss) and the hit depth.
-float ray_sphere(Sphere s, ivec2 p, vec4 vp, out float z) {
-  vec3 dir = eye_ray(vec2(p) + 0.5, vp);
+float ray_sphere(Sphere s, ivec2 p, vec4 k, out float z) {
+  vec3 dir = eye_ray(vec2(p) + 0.5, k);
   float inv_len = inversesqrt(dot(dir, dir));
   vec3 n = dir * inv_len;
   float tc = dot(n, s.c);
@@ -49,14 +49,14 @@ float ray_sphere(Sphere s, ivec2 p, vec4 vp, out float z) {
 
 void depth_pixel(Sphere s, ivec2 p) {
   float z;
-  if (ray_sphere(s, p, g.viewport, z) < 0.0) return;
+  if (ray_sphere(s, p, g.ray, z) < 0.0) return;
   uint bits = floatBitsToUint(z);
   if (imageLoad(depth_u, p).x > bits) imageAtomicMin(depth_u, p, bits);
 }
 
 void thickness_pixel(Sphere s, ivec2 p, bool attr) {
   float z;
-  float h2 = ray_sphere(s, p, g.thick_viewport, z);
+  float h2 = ray_sphere(s, p, g.thick_ray, z);
   if (h2 < 0.0) return;
   float chord = 2.0 * sqrt(h2) * g.splat.x;
   uint t = uint(chord + 0.5);

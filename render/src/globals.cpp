@@ -76,6 +76,13 @@ Globals make_globals(const SceneInfo& scene, const View& view_in, const FluidOpt
   const float y_scale = -proj.at(1, 1);
   set4(g.proj, proj.at(0, 0), y_scale, y_scale != 0 ? 1.0f / std::abs(y_scale) : 1.0f, reversed ? 0.0f : 1.0f);
   set4(g.frustum, -proj.at(0, 2), -proj.at(1, 2), depth_a, depth_b);
+  // Pixel centre -> eye ray: ndc = px * 2 / w - 1; tan = (ndc - offset) / scale.
+  const float sx = proj.at(0, 0) != 0 ? proj.at(0, 0) : 1.0f, sy = y_scale != 0 ? y_scale : 1.0f;
+  const auto ray = [&](float* k, float w, float h) {
+    set4(k, 2.0f / (w * sx), (-1.0f - g.frustum[0]) / sx, -2.0f / (h * sy), (1.0f + g.frustum[1]) / sy);
+  };
+  ray(g.ray, float(v.width), float(v.height));
+  ray(g.thick_ray, float(v.thick_width), float(v.thick_height));
 
   const float radius = effective_radius(o, scene);
   const float max_splat = lod.max_splat_pixels > 0 ? std::min(lod.max_splat_pixels, v.max_point_size) : v.max_point_size;

@@ -30,8 +30,9 @@ struct Globals {
   float scene[4];
   float splat[4];
   float frustum[4];
+  float ray[4], thick_ray[4];
 };
-static_assert(sizeof(Globals) == 2 * 64 + 24 * 16);
+static_assert(sizeof(Globals) == 2 * 64 + 26 * 16);
 
 struct PushConstants {
   uint64_t particles = 0, chunks = 0, attributes = 0, blocks = 0, draws = 0, args = 0, big = 0;
