@@ -11,6 +11,7 @@
 #include "sluice/bench/render_bench.h"
 #include "sluice/io/reader.h"
 #include "sluice/render/image_io.h"
+#include "sluice/bench/live_bench.h"
 #include "sluice/render/offscreen.h"
 #include "sluice/render/renderer.h"
 
@@ -185,6 +186,26 @@ void add_bench_render(CLI::App& bench) {
     o->width = w;
     o->height = h;
     bench::run_render_bench(*o);
+  });
+
+  auto live = std::make_shared<bench::LiveBenchOptions>();
+  auto live_sizes = std::make_shared<std::string>("1M,10M");
+  auto live_size = std::make_shared<std::string>("1920x1080");
+  CLI::App* lc = bench.add_subcommand("live", "Frames pushed from memory (a host's running simulation): encode, decode, copy, render");
+  lc->footer("Synthetic frames (the `sluice synth` slosh) are generated first, then pushed through\n"
+             "render::LiveSource as a host would, and drawn.\n\n"
+             "Example: sluice bench live --sizes 1M,10M --record /tmp/live.sluice\n");
+  lc->add_option("--sizes", *live_sizes, "Particles per frame (k, M suffixes)")->capture_default_str();
+  lc->add_option("--frames", live->frames, "Distinct frames pushed (each 3 times after a warm-up)")->capture_default_str();
+  lc->add_option("--size", *live_size, "Image size WIDTHxHEIGHT")->capture_default_str();
+  lc->add_option("--device", live->device, "Vulkan device: index or part of its name");
+  lc->add_option("--record", live->record, "Also record the pushed frames to this .sluice file (overwritten)");
+  lc->callback([live, live_sizes, live_size] {
+    live->sizes = bench::parse_counts(*live_sizes);
+    const auto [w, h] = parse_size(*live_size);
+    live->width = w;
+    live->height = h;
+    bench::run_live_bench(*live);
   });
 }
 

@@ -286,26 +286,32 @@ uint64_t Renderer::commit_decoded(const DecodedFrameView& frame, const StagingAl
   return upload_frame(r, set, {src, 0}, 0, {src, attribute ? attribute_offset : 0});
 }
 
-void Renderer::load_frame(const io::ContainerReader& reader, uint64_t frame, int color_attribute) {
-  const std::vector<std::byte> record = reader.read_record(frame);
-  const io::FrameHeader header = reader.parse_record(frame, record);
-  const io::FileHeader& fh = reader.header();
-  if (fh.position_coding != impl_->scene.coding) throw std::runtime_error("frame coding differs from the scene's");
+uint64_t Renderer::commit_record(std::span<const std::byte> record, const io::FrameHeader& header, const io::FileHeader& file,
+                                 int color_attribute, const io::ErrorLocation& where) {
+  if (file.position_coding != impl_->scene.coding) throw io::Error(where, "frame coding differs from the scene's");
   const uint32_t chunks = uint32_t(header.chunks.size());
   FrameStaging s = stage_frame(header.particle_count, chunks);
-  const bool attr = color_attribute >= 0 && size_t(color_attribute) < fh.attributes.size() && !s.color_attribute.empty();
-  fill_chunk_table(header, {}, attr ? color_attribute : -1, s.chunks, reader.location(frame));
+  const bool attr = color_attribute >= 0 && size_t(color_attribute) < file.attributes.size() && !s.color_attribute.empty();
+  fill_chunk_table(header, {}, attr ? color_attribute : -1, s.chunks, where);
   // Decode every chunk straight into the mapped staging memory.
   tbb::parallel_for(uint32_t(0), chunks, [&](uint32_t c) {
     thread_local io::DecodeScratch scratch;
     const io::ChunkDesc& d = header.chunks[c];
     const uint64_t begin = s.chunks[c].first;
-    std::vector<uint16_t*> attributes(fh.attributes.size(), nullptr);
+    std::vector<uint16_t*> attributes(file.attributes.size(), nullptr);
     if (attr) attributes[size_t(color_attribute)] = s.color_attribute.data() + begin;
     const io::ChunkDestination dest{s.particles.subspan(begin * s.stride, size_t(d.particle_count) * s.stride), attributes};
-    io::decode_chunk(record, d, fh, dest, scratch, reader.location(frame, c));
+    io::ErrorLocation at = where;
+    at.chunk = c;
+    io::decode_chunk(record, d, file, dest, scratch, at);
   });
-  wait_upload(commit_frame());
+  return commit_frame();
+}
+
+void Renderer::load_frame(const io::ContainerReader& reader, uint64_t frame, int color_attribute) {
+  const std::vector<std::byte> record = reader.read_record(frame);
+  const io::FrameHeader header = reader.parse_record(frame, record);
+  wait_upload(commit_record(record, header, reader.header(), color_attribute, reader.location(frame)));
 }
 
 }  // namespace sluice::render

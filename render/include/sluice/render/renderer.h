@@ -41,6 +41,7 @@
 #include <string>
 #include <vector>
 
+#include "sluice/io/error.h"
 #include "sluice/render/camera.h"
 #include "sluice/render/context.h"
 #include "sluice/render/frame.h"
@@ -178,8 +179,13 @@ class Renderer {
   bool upload_complete(uint64_t ticket) const;
   // Waits for the copy with this ticket (the transfer queue only).
   void wait_upload(uint64_t ticket) const;
-  // Reads and decodes `frame` straight into staging (chunks in parallel),
-  // commits it and waits for its copy. `color_attribute` < 0 skips attributes.
+  // Decodes a container frame record (`header` parsed from it, `file` the
+  // file header it belongs to) straight into staging, chunks in parallel (TBB),
+  // and commits it; returns the upload ticket. `color_attribute` < 0 skips
+  // attributes. Throws io::Error at `where` (chunk filled in) on a bad chunk.
+  uint64_t commit_record(std::span<const std::byte> record, const io::FrameHeader& header, const io::FileHeader& file,
+                         int color_attribute, const io::ErrorLocation& where);
+  // Reads `frame`, commit_record()s it and waits for its copy.
   void load_frame(const io::ContainerReader& reader, uint64_t frame, int color_attribute);
 
   // Records the fluid for `views` (1..4, all the same size) into `cmd`, a
