@@ -10,8 +10,11 @@
 //   5. frame loop    (host geometry, then Renderer::record into the same images)
 //   6. output        (a PNG; with --check, the occlusion test below)
 //
-// Usage: host_vulkan [--frames N] [--out image.png] [--check] [FILE.sluice]
-// Without a file it draws sluice's synthetic pool. --check also renders the
+// Usage: host_vulkan [--frames N] [--out image.png] [--check] [--live [--record R.sluice]] [FILE.sluice]
+// Without a file it draws sluice's synthetic pool. With --live it runs a
+// small "simulation" of its own (a block of water with a travelling wave)
+// and pushes every frame from its memory (render::LiveSource), recording it
+// to R.sluice when asked. --check also renders the
 // host geometry alone and the fluid alone and verifies, pixel by pixel, that
 // where both are present the nearer one shows (both ways must occur); the
 // exit status says whether it held.
@@ -29,6 +32,7 @@
 #include "sluice/io/reader.h"
 #include "sluice/render/context.h"
 #include "sluice/render/image_io.h"
+#include "sluice/render/live_source.h"
 #include "sluice/render/renderer.h"
 #include "sluice/render/synthetic.h"
 
@@ -101,15 +105,17 @@ struct BoxPush {
 
 int main(int argc, char** argv) try {
   int frames = 3;
-  bool check = false;
-  std::string out = "host_vulkan.png", file;
+  bool check = false, live_mode = false;
+  std::string out = "host_vulkan.png", file, record;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--frames" && i + 1 < argc) frames = std::max(1, std::atoi(argv[++i]));
     else if (a == "--out" && i + 1 < argc) out = argv[++i];
     else if (a == "--check") check = true;
+    else if (a == "--live") live_mode = true;
+    else if (a == "--record" && i + 1 < argc) record = argv[++i];
     else if (a == "--help") {
-      std::printf("usage: host_vulkan [--frames N] [--out image.png] [--check] [FILE.sluice]\n");
+      std::printf("usage: host_vulkan [--frames N] [--out image.png] [--check] [--live [--record R.sluice]] [FILE.sluice]\n");
       return 0;
     } else file = a;
   }
@@ -163,7 +169,14 @@ int main(int argc, char** argv) try {
   std::optional<sluice::io::ContainerReader> reader;
   sluice::render::SceneInfo scene;
   std::optional<sluice::render::SyntheticFluid> synthetic;
-  if (!file.empty()) {
+  sluice::render::LiveOptions live_options;
+  live_options.particle_spacing = 0.02f;
+  live_options.frame_rate = 30;
+  live_options.record = record;
+  live_options.ids = false;  // the host keeps its particle order: LOD values follow the index
+  if (live_mode) {
+    scene = sluice::render::live_scene({{0, 0, 0}, {2, 1, 1}}, live_options);
+  } else if (!file.empty()) {
     reader.emplace(file);
     scene = sluice::render::scene_info(*reader);
   } else {
@@ -173,8 +186,24 @@ int main(int argc, char** argv) try {
   sluice::render::RendererOptions renderer_options;
   renderer_options.frames_in_flight = kFramesInFlight;
   sluice::render::Renderer renderer(context, scene, renderer_options);
-  if (reader) renderer.load_frame(*reader, reader->frame_count() - 1, -1);
+  std::optional<sluice::render::LiveSource> live;
+  if (live_mode) live.emplace(renderer, live_options);
+  else if (reader) renderer.load_frame(*reader, reader->frame_count() - 1, -1);
   else sluice::render::upload_synthetic(renderer, *synthetic);
+  // The host's own "simulation": a 2 x 1 block of water, 0.5 deep, with a
+  // wave travelling along x; particle i keeps its id, so LOD is stable.
+  const auto simulate = [&](int step) {
+    std::vector<float> xyz;
+    const float h = live_options.particle_spacing;
+    for (int i = 0; i < 100; ++i) {
+      for (int j = 0; j < 50; ++j) {
+        const float x = (i + 0.5f) * h, y = (j + 0.5f) * h;
+        const float top = 0.45f + 0.12f * std::sin(3.0f * x - 0.25f * float(step));
+        for (float z = 0.5f * h; z < top; z += h) xyz.insert(xyz.end(), {x, y, z});
+      }
+    }
+    return xyz;
+  };
   sluice::render::FluidOptions fluid;
   fluid.ground = false;  // the host draws its own floor
 
@@ -340,7 +369,19 @@ int main(int argc, char** argv) try {
     std::memcpy(z.data(), mapped + bytes, bytes);
   };
 
-  for (int f = 0; f < frames; ++f) draw_frame(slots[size_t(f) % slots.size()], true, true);
+  for (int f = 0; f < frames; ++f) {
+    if (live) {
+      // A new frame from the host's memory each displayed frame; drawn once its copy is done.
+      const std::vector<float> xyz = simulate(f);
+      live->push({xyz, {}, {}, f / 30.0});
+    }
+    draw_frame(slots[size_t(f) % slots.size()], true, true);
+  }
+  if (live) {
+    live->finish();
+    std::printf("pushed %llu live frames%s%s\n", (unsigned long long)live->frames_pushed(), record.empty() ? "" : ", recorded to ",
+                record.c_str());
+  }
   std::vector<uint32_t> both, host_only, fluid_only;
   std::vector<float> both_z, host_z, fluid_z;
   read_back(both, both_z);

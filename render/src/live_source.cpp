@@ -41,6 +41,8 @@ LiveSource::LiveSource(Renderer& renderer, const LiveOptions& options) : rendere
   header_.particle_spacing = options.particle_spacing;
   header_.particle_radius = options.particle_radius;
   header_.frame_rate = options.frame_rate;
+  header_.lod_source = options.ids ? io::LodSource::IdHash : io::LodSource::ParticleOrder;
+  if (options.ids) header_.lod_id_array = "ids pushed with each frame";
   for (const std::string& name : options.attributes) header_.attributes.push_back({name});
   header_.source = "live frames pushed through sluice::render::LiveSource";
   if (!options.record.empty()) writer_ = std::make_unique<io::ContainerWriter>(options.record, header_);
@@ -52,8 +54,12 @@ uint64_t LiveSource::push(const LiveFrame& frame) {
   const std::string what = "live frame " + std::to_string(pushed_) + ": ";
   if (frame.positions.size() % 3 != 0) throw std::invalid_argument(what + "positions are not x,y,z triples");
   const uint64_t n = frame.positions.size() / 3;
-  if (!frame.ids.empty() && frame.ids.size() != n) {
-    throw std::invalid_argument(what + std::to_string(frame.ids.size()) + " ids for " + std::to_string(n) + " particles");
+  if (options_.ids && frame.ids.size() != n) {
+    throw std::invalid_argument(what + std::to_string(frame.ids.size()) + " ids for " + std::to_string(n) +
+                                " particles (the source was declared with ids: LiveOptions::ids)");
+  }
+  if (!options_.ids && !frame.ids.empty()) {
+    throw std::invalid_argument(what + "ids given to a source declared without them (LiveOptions::ids = false)");
   }
   if (!frame.attributes.empty() && frame.attributes.size() != header_.attributes.size()) {
     throw std::invalid_argument(what + std::to_string(frame.attributes.size()) + " attributes for the " +

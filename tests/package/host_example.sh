@@ -17,3 +17,6 @@ cmake -S "$src/examples/host_vulkan" -B "$scratch/build" -DCMAKE_PREFIX_PATH="$s
 cmake --build "$scratch/build" -j 2 >/dev/null
 cd "$scratch"
 "$scratch/build/host_vulkan" --check --frames 4 --out "$scratch/host_vulkan.png"
+# The same host pushing frames of its own simulation (render::LiveSource), recorded as it goes.
+"$scratch/build/host_vulkan" --live --check --frames 6 --record "$scratch/live.sluice" --out "$scratch/host_live.png"
+test -s "$scratch/live.sluice"

@@ -142,6 +142,7 @@ TEST(Live, AMovingBallIsDrawnWhereItIsAndRecorded) {
 TEST(Live, RefusesInputThatDoesNotFitTheScene) {
   LiveOptions lo;
   lo.attributes = {"speed"};
+  lo.ids = false;
   Renderer plain(context(), live_scene({{0, 0, 0}, {1, 1, 1}}, LiveOptions{}));
   EXPECT_THROW(LiveSource(plain, lo), std::invalid_argument);  // the scene has no attributes
   Renderer renderer(context(), live_scene({{0, 0, 0}, {1, 1, 1}}, lo));
@@ -150,7 +151,7 @@ TEST(Live, RefusesInputThatDoesNotFitTheScene) {
   EXPECT_THROW(live.push({xyz, {}, {}, 0}), std::invalid_argument);  // not triples
   const std::vector<float> one{0.5f, 0.5f, 0.5f};
   const std::vector<uint64_t> two_ids{1, 2};
-  EXPECT_THROW(live.push({one, two_ids, {}, 0}), std::invalid_argument);
+  EXPECT_THROW(live.push({one, two_ids, {}, 0}), std::invalid_argument);  // ids on a source without them
   const std::vector<float> values{1, 2};
   EXPECT_THROW(live.push({one, {}, {values}, 0}), std::invalid_argument);
   EXPECT_NO_THROW(renderer.wait_upload(live.push({one, {}, {}, 0})));  // attributes left out: zero

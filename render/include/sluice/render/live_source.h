@@ -32,7 +32,7 @@ namespace sluice::render {
 
 struct LiveFrame {
   std::span<const float> positions;                // x,y,z interleaved, finite
-  std::span<const uint64_t> ids;                   // empty, or one stable id per particle
+  std::span<const uint64_t> ids;                   // one stable id per particle (LiveOptions::ids), else empty
   std::vector<std::span<const float>> attributes;  // one per scene attribute (or none), one value per particle
   double time = 0;                                 // simulation time in seconds
 };
@@ -43,6 +43,7 @@ struct LiveOptions {
   float particle_spacing = 0, particle_radius = 0, frame_rate = 0;
   std::vector<std::string> attributes;
   int color_attribute = -1;             // which attribute the renderer colours by (-1: none)
+  bool ids = true;                      // frames carry stable ids; false: LOD values follow the particle index
   std::filesystem::path record;         // empty: not recorded
   io::EncodeOptions encode{65536, 1, true};  // chunk size; zstd level of the recording
 };
