@@ -346,3 +346,39 @@ void decode_chunk(std::span<const std::byte> record, const ChunkDesc& chunk, con
 }
 
 }  // namespace sluice::io
+
+namespace sluice::io {
+
+uint64_t chunk_starts(const FrameHeader& header, std::span<uint64_t> out) {
+  uint64_t first = 0;
+  for (size_t c = 0; c < header.chunks.size() && c < out.size(); ++c) {
+    out[c] = first;
+    first += header.chunks[c].particle_count;
+  }
+  return first;
+}
+
+void decode_record(std::span<const std::byte> record, const FrameHeader& header, const FileHeader& file,
+                   std::span<const uint64_t> starts, std::span<std::byte> particles, std::span<uint16_t* const> attributes,
+                   const ErrorLocation& where) {
+  const size_t stride = decoded_particle_bytes(file.position_coding);
+  if (starts.size() != header.chunks.size() || particles.size() < header.particle_count * stride) {
+    throw Error(where, "decode_record: the destination does not match the frame");
+  }
+  tbb::parallel_for(size_t(0), header.chunks.size(), [&](size_t c) {
+    thread_local DecodeScratch scratch;
+    thread_local std::vector<uint16_t*> bases;
+    const ChunkDesc& chunk = header.chunks[c];
+    const uint64_t begin = starts[c];
+    bases.assign(attributes.size(), nullptr);
+    for (size_t a = 0; a < attributes.size(); ++a) {
+      if (attributes[a]) bases[a] = attributes[a] + begin;
+    }
+    const ChunkDestination dest{particles.subspan(begin * stride, size_t(chunk.particle_count) * stride), bases};
+    ErrorLocation at = where;  // copied only here: once per chunk of a load, not on the streaming path
+    at.chunk = c;
+    decode_chunk(record, chunk, file, dest, scratch, at);
+  });
+}
+
+}  // namespace sluice::io

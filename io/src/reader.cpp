@@ -83,25 +83,14 @@ DecodedFrame decode_frame(const ContainerReader& reader, uint64_t frame) {
   DecodedFrame out;
   out.header = reader.parse_record(frame, record);
   const FileHeader& fh = reader.header();
-  const size_t stride = decoded_particle_bytes(fh.position_coding);
   const size_t n = out.header.particle_count;
-  out.particles.resize(n * stride);
+  out.particles.resize(n * decoded_particle_bytes(fh.position_coding));
   out.attributes.assign(fh.attributes.size(), std::vector<uint16_t>(n));
-  uint64_t first = 0;
-  for (const ChunkDesc& c : out.header.chunks) {
-    out.chunk_first.push_back(first);
-    first += c.particle_count;
-  }
-  tbb::parallel_for(size_t(0), out.header.chunks.size(), [&](size_t c) {
-    thread_local DecodeScratch scratch;
-    const ChunkDesc& chunk = out.header.chunks[c];
-    const uint64_t begin = out.chunk_first[c];
-    std::vector<uint16_t*> attributes;
-    for (auto& a : out.attributes) attributes.push_back(a.data() + begin);
-    const ChunkDestination dest{std::span(out.particles).subspan(begin * stride, chunk.particle_count * stride),
-                                attributes};
-    decode_chunk(record, chunk, fh, dest, scratch, reader.location(frame, c));
-  });
+  out.chunk_first.resize(out.header.chunks.size());
+  chunk_starts(out.header, out.chunk_first);
+  std::vector<uint16_t*> attributes;
+  for (auto& a : out.attributes) attributes.push_back(a.data());
+  decode_record(record, out.header, fh, out.chunk_first, out.particles, attributes, reader.location(frame));
   return out;
 }
 

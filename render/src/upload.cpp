@@ -293,18 +293,12 @@ uint64_t Renderer::commit_record(std::span<const std::byte> record, const io::Fr
   FrameStaging s = stage_frame(header.particle_count, chunks);
   const bool attr = color_attribute >= 0 && size_t(color_attribute) < file.attributes.size() && !s.color_attribute.empty();
   fill_chunk_table(header, {}, attr ? color_attribute : -1, s.chunks, where);
-  // Decode every chunk straight into the mapped staging memory.
-  tbb::parallel_for(uint32_t(0), chunks, [&](uint32_t c) {
-    thread_local io::DecodeScratch scratch;
-    const io::ChunkDesc& d = header.chunks[c];
-    const uint64_t begin = s.chunks[c].first;
-    std::vector<uint16_t*> attributes(file.attributes.size(), nullptr);
-    if (attr) attributes[size_t(color_attribute)] = s.color_attribute.data() + begin;
-    const io::ChunkDestination dest{s.particles.subspan(begin * s.stride, size_t(d.particle_count) * s.stride), attributes};
-    io::ErrorLocation at = where;
-    at.chunk = c;
-    io::decode_chunk(record, d, file, dest, scratch, at);
-  });
+  std::vector<uint64_t> starts(chunks);
+  io::chunk_starts(header, starts);
+  std::vector<uint16_t*> attributes(file.attributes.size(), nullptr);
+  if (attr) attributes[size_t(color_attribute)] = s.color_attribute.data();
+  // Every chunk straight into the mapped staging memory.
+  io::decode_record(record, header, file, starts, s.particles, attributes, where);
   return commit_frame();
 }
 

@@ -303,11 +303,7 @@ bool PipelineCore::read_record(ReaderState& rs, Slot& slot, uint32_t record) {
 void PipelineCore::prepare_decode(ReaderState& rs, Slot& slot) {
   const io::FrameHeader& h = slot.header;
   slot.chunk_first.resize(h.chunks.size());
-  uint64_t first = 0;  // parse_record checked that the counts add up to the index's
-  for (size_t c = 0; c < h.chunks.size(); ++c) {
-    slot.chunk_first[c] = first;
-    first += h.chunks[c].particle_count;
-  }
+  io::chunk_starts(h, slot.chunk_first);  // parse_record checked that the counts add up to the index's
   slot.layout.frame = slot.frame;
   slot.layout.particles = h.particle_count;
   slot.layout.particle_stride = static_cast<uint32_t>(io::decoded_particle_bytes(reader_.header().position_coding));

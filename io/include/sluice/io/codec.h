@@ -76,6 +76,20 @@ struct ChunkDestination {
 void decode_chunk(std::span<const std::byte> record, const ChunkDesc& chunk, const FileHeader& header,
                   const ChunkDestination& out, DecodeScratch& scratch, const ErrorLocation& where);
 
+// The first particle of each chunk of a frame (the running sum of the
+// chunks' counts) into `out`, which has one entry per chunk. Returns the total.
+uint64_t chunk_starts(const FrameHeader& header, std::span<uint64_t> out);
+
+// Decodes every chunk of a frame record in parallel (TBB) into the frame's
+// layout: chunk c's particles at particles[starts[c] * stride] and, for each
+// attribute a whose base pointer is non-null, its values at attributes[a] +
+// starts[c]. `particles` holds particle_count * decoded_particle_bytes()
+// bytes; `starts` comes from chunk_starts(). Throws io::Error at `where` with
+// the chunk filled in (the first failure wins).
+void decode_record(std::span<const std::byte> record, const FrameHeader& header, const FileHeader& file,
+                   std::span<const uint64_t> starts, std::span<std::byte> particles, std::span<uint16_t* const> attributes,
+                   const ErrorLocation& where);
+
 // World position of a quantized coordinate, exactly as the GPU computes it.
 inline float dequantize(uint16_t q, float lo, float hi) {
   return lo + float(q) * ((hi - lo) * (1.0f / 65535.0f));
