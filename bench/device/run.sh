@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Runs on the GPU machine (see bench/device/README.md): every benchmark the
 # issues ask GPU-machine figures for, in one call. Results go to $OUT.
-#   bash bench/device/run.sh [io] [render] [stream] [split] [codec] [huge] [embed]   (default: io render stream)
+#   bash bench/device/run.sh [io] [render] [stream] [split] [codec] [huge] [embed] [compare] [live]   (default: io render stream)
 set -uo pipefail
 OUT=${OUT:-/tmp/out}
 mkdir -p "$OUT" /tmp/s
@@ -45,6 +45,10 @@ for stage in $stages; do
       run $S synth -n 100M --frames 12 -o /tmp/synth100m.sluice --force -q
       run $S bench stream /tmp/synth100m.sluice --memory 24G --no-storage --min-time 2
       rm -f /tmp/synth100m.sluice
+      ;;
+    live)  # frames pushed from memory (render::LiveSource), not recorded and recorded
+      run $S bench live --sizes 1M,10M --frames 6
+      run $S bench live --sizes 1M,10M --frames 6 --record /tmp/live.sluice
       ;;
     compare)  # render figures of this binary against the baseline binary (BASE= in pack.sh), alternating
       run $S bench render --sizes 1M --repeats 3 >/dev/null  # warm-up

@@ -84,6 +84,11 @@ constexpr uint32_t kPackedFlag = 0x80000000u;
 
 void compress_planes(std::vector<std::byte>& raw, size_t n, const EncodeOptions& options,
                      std::vector<std::byte>& payload, ChunkCodec& codec) {
+  if (!options.compress) {
+    payload = std::move(raw);
+    codec = ChunkCodec::Stored;
+    return;
+  }
   const size_t planes = raw.size() / n;
   ZSTD_CCtx* cctx = thread_compressor();
   std::vector<std::byte> frame(ZSTD_compressBound(n));

@@ -46,6 +46,8 @@ LiveSource::LiveSource(Renderer& renderer, const LiveOptions& options) : rendere
   for (const std::string& name : options.attributes) header_.attributes.push_back({name});
   header_.source = "live frames pushed through sluice::render::LiveSource";
   if (!options.record.empty()) writer_ = std::make_unique<io::ContainerWriter>(options.record, header_);
+  // Frames that are only decoded, not kept, need no compression.
+  if (!writer_) options_.encode.compress = false;
 }
 
 LiveSource::~LiveSource() = default;

@@ -45,7 +45,9 @@ struct LiveOptions {
   int color_attribute = -1;             // which attribute the renderer colours by (-1: none)
   bool ids = true;                      // frames carry stable ids; false: LOD values follow the particle index
   std::filesystem::path record;         // empty: not recorded
-  io::EncodeOptions encode{65536, 1, true};  // chunk size; zstd level of the recording
+  // Chunk size; zstd level and plane packing of the recording (frames not
+  // recorded are not compressed: only decoded at once).
+  io::EncodeOptions encode{65536, 1, true};
 };
 
 // The SceneInfo to make the Renderer with for live frames inside `bounds`.
