@@ -187,3 +187,40 @@ TEST(RoundTrip, NonFiniteInputIsRefusedByTheEncoder) {
   f.positions[7] = NAN;
   EXPECT_THROW(test::encode(f, h), Error);
 }
+
+namespace sluice::io {
+namespace {
+
+// EncodeOptions::compress = false: every chunk stored, the same particles
+// decoded as from the compressed encoding, 8 bytes per particle in payloads.
+TEST(RoundTrip, UncompressedChunksDecodeToTheSameParticles) {
+  const FileHeader h = test::test_header(PositionCoding::Quantized16);
+  const ParticleFrame f = test::lattice_frame(20000, 0.5);
+  const std::vector<uint16_t> lod = lod_values(f.ids, f.count());
+  FrameInput in{f.positions, lod, {f.attributes[0]}, f.time};
+  EncodeOptions packed;
+  packed.chunk_particles = 4096;
+  EncodeOptions stored = packed;
+  stored.compress = false;
+  const EncodedFrame a = encode_frame(in, h, packed), b = encode_frame(in, h, stored);
+  ASSERT_EQ(a.header.chunks.size(), b.header.chunks.size());
+  const auto decode = [&](const EncodedFrame& e) {
+    std::vector<uint64_t> starts(e.header.chunks.size());
+    chunk_starts(e.header, starts);
+    std::vector<std::byte> particles(e.header.particle_count * decoded_particle_bytes(h.position_coding));
+    std::vector<uint16_t> attribute(e.header.particle_count);
+    const std::vector<uint16_t*> attributes{attribute.data()};
+    decode_record(e.record, e.header, h, starts, particles, attributes, {"test", 0, {}});
+    return std::make_pair(particles, attribute);
+  };
+  uint64_t payload = 0;
+  for (const ChunkDesc& c : b.header.chunks) {
+    EXPECT_EQ(c.codec, ChunkCodec::Stored);
+    payload += c.compressed_size;
+  }
+  EXPECT_EQ(payload, b.header.particle_count * 10);  // 8 bytes of position and LOD, 2 of the attribute
+  EXPECT_EQ(decode(a), decode(b));
+}
+
+}  // namespace
+}  // namespace sluice::io
