@@ -12,7 +12,10 @@
 #include "sluice/io/reader.h"
 #include "sluice/render/image_io.h"
 #include "sluice/bench/live_bench.h"
+#include "sluice/render/frame_feed.h"
 #include "sluice/render/offscreen.h"
+#include "sluice/render/staging_allocator.h"
+#include "sluice/runtime/player.h"
 #include "sluice/render/renderer.h"
 
 namespace sluice::app {
@@ -103,10 +106,36 @@ void run_render(const RenderCommand& o, const ViewSettings& v) {
     const double fps = o.fps > 0 ? o.fps : (reader.header().frame_rate > 0 ? reader.header().frame_rate : 30.0);
     writer = std::make_unique<render::VideoWriter>(o.out, width, height, fps);
   }
+  // Frames stream through the runtime (read ahead, decoded on every core into
+  // staging) and the frame feed, like playback: every frame due at once, none
+  // skipped (hold), the first bad frame stops the render with its error.
+  render::StagingAllocator staging(context);
+  runtime::PlayerOptions po;
+  po.frame_rate = 1e9;
+  po.start_frame = first;
+  po.end = runtime::EndMode::Stop;
+  po.policy = runtime::RealTimePolicy::HoldLastFrame;
+  po.on_error = runtime::ErrorPolicy::Stop;
+  const int color = fluid.scalar_visibility ? fluid.color_attribute : -1;
+  po.pipeline.attributes = color >= 0 ? std::vector<uint32_t>{uint32_t(color)} : std::vector<uint32_t>{};
+  po.pipeline.device_budget = staging.device_budget();
+  const runtime::SteadyClock clock;
+  runtime::Player player(reader, staging, clock, po);
+  render::FrameFeed feed(renderer, player, &staging, color);
+  player.play();
   ProgressBar bar("frames", last - first + 1, o.quiet);
   render::Image image{width, height, {}};
-  for (uint64_t f = first; f <= last; ++f) {
-    renderer.load_frame(reader, f, fluid.scalar_visibility ? fluid.color_attribute : -1);
+  for (uint64_t f = first; f <= last;) {
+    player.wait_for_due();
+    const render::FeedUpdate fed = feed.update();
+    if (const auto error = player.pop_error()) throw std::runtime_error(error->text());
+    if (!fed.changed || fed.frame != f) {
+      if (player.state() == runtime::PlayerState::Ended || player.state() == runtime::PlayerState::Stopped) {
+        throw std::runtime_error(o.input + ": playback ended before frame " + std::to_string(f));
+      }
+      continue;
+    }
+    renderer.wait_upload(fed.ticket);  // draw exactly this frame
     const render::FrameStats stats = target.render(renderer, camera, fluid, lod);
     image.rgba = target.read_rgba8();
     if (writer) writer->add(image);
@@ -118,6 +147,7 @@ void run_render(const RenderCommand& o, const ViewSettings& v) {
                " particles drawn; GPU ms:" + passes + "; total " + fixed(stats.gpu_ms, 2));
     }
     bar.update(f - first + 1);
+    ++f;
   }
   if (writer) writer->finish();
   bar.finish();

@@ -20,6 +20,7 @@ FeedUpdate FrameFeed::update() {
     last_.changed = true;
     last_.has_frame = true;
     last_.frame = f.frame();
+    last_.ticket = pending_;
   }
   return last_;
 }

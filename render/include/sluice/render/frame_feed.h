@@ -26,6 +26,7 @@ struct FeedUpdate {
   bool changed = false;      // a new frame was committed by this update()
   bool has_frame = false;    // some frame has been committed
   uint64_t frame = 0;        // the newest committed frame
+  uint64_t ticket = 0;       // its upload ticket (Renderer::upload_complete, wait_upload)
   double commit_wall_ms = 0; // CPU time of the commit (chunk table, submission)
 };
 
