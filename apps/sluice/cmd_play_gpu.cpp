@@ -56,8 +56,7 @@ void run_play_gpu(const PlayOptions& o, const WindowPlayOptions& w) {
   render::StagingAllocator staging(context);
   runtime::PlayerOptions po = player_options(o, false);
   const int color = fluid.scalar_visibility ? fluid.color_attribute : -1;
-  po.pipeline.attributes = color >= 0 ? std::vector<uint32_t>{uint32_t(color)} : std::vector<uint32_t>{};
-  po.pipeline.device_budget = staging.device_budget();
+  render::FrameFeed::configure(po, staging, color);
   const runtime::SteadyClock clock;
   runtime::Player player(reader, staging, clock, po);
   render::FrameFeed feed(renderer, player, &staging, color);

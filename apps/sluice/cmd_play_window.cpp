@@ -287,8 +287,7 @@ void run_play_window(const PlayOptions& o, const WindowPlayOptions& wo) {
   po.start_frame = p.frame;
   po.display_rate = o.display_hz > 0 ? o.display_hz : display_refresh_hz();
   const int color = p.fluid.scalar_visibility ? p.fluid.color_attribute : -1;
-  po.pipeline.attributes = color >= 0 ? std::vector<uint32_t>{uint32_t(color)} : std::vector<uint32_t>{};
-  po.pipeline.device_budget = staging.device_budget();
+  render::FrameFeed::configure(po, staging, color);
   const runtime::SteadyClock clock;
   runtime::Player playback(reader, staging, clock, po);
   p.playback = &playback;

@@ -7,6 +7,11 @@ namespace sluice::render {
 FrameFeed::FrameFeed(Renderer& renderer, runtime::Player& player, const StagingAllocator* staging, int color_attribute)
     : renderer_(renderer), player_(player), staging_(staging), color_attribute_(color_attribute) {}
 
+void FrameFeed::configure(runtime::PlayerOptions& options, const StagingAllocator& staging, int color_attribute) {
+  options.pipeline.attributes = color_attribute >= 0 ? std::vector<uint32_t>{uint32_t(color_attribute)} : std::vector<uint32_t>{};
+  options.pipeline.device_budget = staging.device_budget();
+}
+
 FeedUpdate FrameFeed::update() {
   renderer_.wait_upload(pending_);  // the player may now take those buffers back
   const runtime::Tick tick = player_.update();

@@ -11,8 +11,6 @@ namespace {
 
 using Stage = vk::PipelineStageFlagBits2;
 using Access = vk::AccessFlagBits2;
-constexpr auto kAllStages = vk::ShaderStageFlagBits::eCompute | vk::ShaderStageFlagBits::eVertex |
-                            vk::ShaderStageFlagBits::eFragment;
 
 std::array<uint32_t, 2> groups(vk::Extent2D e, uint32_t n) { return {(e.width + n - 1) / n, (e.height + n - 1) / n}; }
 

@@ -14,8 +14,6 @@ namespace {
 
 using Stage = vk::PipelineStageFlagBits2;
 using Access = vk::AccessFlagBits2;
-constexpr auto kAllStages = vk::ShaderStageFlagBits::eCompute | vk::ShaderStageFlagBits::eVertex |
-                            vk::ShaderStageFlagBits::eFragment;
 
 
 vk::raii::ShaderModule module(const vk::raii::Device& device, Shader s) {

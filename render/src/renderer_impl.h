@@ -14,6 +14,9 @@
 namespace sluice::render {
 
 constexpr uint32_t kMaxViews = 4;
+// Every stage that reads the uniforms and push constants.
+constexpr auto kAllStages = vk::ShaderStageFlagBits::eCompute | vk::ShaderStageFlagBits::eVertex |
+                            vk::ShaderStageFlagBits::eFragment;
 // Timestamp slots per frame slot: one at the start and one after each pass of each view.
 constexpr uint32_t kStampsPerSlot = 64;
 

@@ -32,6 +32,10 @@ struct FeedUpdate {
 
 class FrameFeed {
  public:
+  // What a player that feeds a renderer decodes: only the colour attribute
+  // (`color_attribute` < 0: none), into `staging` within its device budget.
+  static void configure(runtime::PlayerOptions& options, const StagingAllocator& staging, int color_attribute);
+
   // `color_attribute`: the attribute's index in the file header (-1: none);
   // the player must decode only that attribute (PipelineOptions::attributes).
   FrameFeed(Renderer& renderer, runtime::Player& player, const StagingAllocator* staging, int color_attribute);
