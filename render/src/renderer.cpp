@@ -272,8 +272,11 @@ Renderer::~Renderer() {
 const SceneInfo& Renderer::scene() const { return impl_->scene; }
 const RendererOptions& Renderer::options() const { return impl_->options; }
 
-void Renderer::Impl::collect_slot(FrameSlot& slot, uint32_t slot_index) {
+void Renderer::Impl::collect_slot(FrameSlot& slot, uint32_t slot_index, bool finished) {
   if (slot.collected || slot.frame == UINT64_MAX) return;
+  // Without timestamps nothing says whether the frame is done: only when
+  // the frames-in-flight contract does.
+  if (!timestamps_valid && !finished) return;
   const uint32_t count = uint32_t(slot.stamp_names.size()) + 1;
   std::array<uint64_t, kStampsPerSlot> stamps{};
   if (timestamps_valid) {
@@ -310,7 +313,7 @@ void Renderer::Impl::collect_slot(FrameSlot& slot, uint32_t slot_index) {
 
 FrameStats Renderer::last_stats() {
   Impl& r = *impl_;
-  for (uint32_t i = 0; i < r.slots.size(); ++i) r.collect_slot(r.slots[i], i);
+  for (uint32_t i = 0; i < r.slots.size(); ++i) r.collect_slot(r.slots[i], i, false);
   return r.stats;
 }
 
@@ -337,7 +340,7 @@ FrameSync Renderer::record(VkCommandBuffer command_buffer, const RenderTarget& t
   r.collect_retired();
   const uint32_t slot_index = uint32_t(r.frames_recorded % r.slots.size());
   FrameSlot& slot = r.slots[slot_index];
-  r.collect_slot(slot, slot_index);  // its last use has finished (the frames-in-flight contract)
+  r.collect_slot(slot, slot_index, true);  // its last use has finished (the frames-in-flight contract)
   r.pick_shown_set();
   r.ensure_targets(size.width, size.height, options.half_resolution_thickness);
   if (slot.set_generation != r.targets.generation + (r.environment_generation << 32)) r.write_descriptors(slot);

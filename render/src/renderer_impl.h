@@ -137,7 +137,9 @@ struct Renderer::Impl {
   // A set the next copy may write: not drawn by a frame that may still run.
   int free_set();
   bool set_in_use(const FrameSet& s) const;
-  void collect_slot(FrameSlot& slot, uint32_t slot_index);
+  // Reads a slot's figures into `stats` once they are back; `finished`: the
+  // caller knows the slot's frame is done.
+  void collect_slot(FrameSlot& slot, uint32_t slot_index, bool finished);
   std::vector<std::byte> read_texture(const Texture& t, size_t texel_bytes);
 };
 
