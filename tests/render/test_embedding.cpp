@@ -381,3 +381,45 @@ TEST(Embedding, HostHandlesAreChecked) {
 
 }  // namespace
 }  // namespace sluice::render
+
+namespace sluice::render {
+namespace {
+
+TEST(Embedding, RecordRefusesTargetsAndViewsThatDoNotFit) {
+  TestHost host;
+  {
+    Context context(host.handles());
+    Renderer renderer(context, scene_for_points(kTwoSpheres, kRadius));
+    using U = vk::ImageUsageFlagBits;
+    TestHost::Image color = host.image(kW, kH, vk::Format::eR8G8B8A8Unorm, U::eColorAttachment | U::eTransferSrc);
+    RenderTarget target;
+    target.width = kW;
+    target.height = kH;
+    target.color_image = *color.image;
+    target.color_view = *color.view;
+    target.color_format = VK_FORMAT_R8G8B8A8_UNORM;
+    const View whole = camera_view(front_camera(), {0, 0, kW, kH});
+    host.submit([&](vk::CommandBuffer c) {
+      const auto cmd = static_cast<VkCommandBuffer>(c);
+      const FluidOptions o;
+      EXPECT_THROW(renderer.record(cmd, target, {}, o, {}), std::invalid_argument);  // no view
+      View outside = whole;
+      outside.viewport.x = 1;  // reaches one pixel past the right edge
+      EXPECT_THROW(renderer.record(cmd, target, {&outside, 1}, o, {}), std::invalid_argument);
+      const std::array uneven{whole, camera_view(front_camera(), {0, 0, kW / 2, kH})};
+      EXPECT_THROW(renderer.record(cmd, target, uneven, o, {}), std::invalid_argument);
+      RenderTarget no_view = target;
+      no_view.color_view = VK_NULL_HANDLE;
+      EXPECT_THROW(renderer.record(cmd, no_view, {&whole, 1}, o, {}), std::invalid_argument);
+      RenderTarget layers = target;
+      layers.layer_count = 2;
+      EXPECT_THROW(renderer.record(cmd, layers, {&whole, 1}, o, {}), std::invalid_argument);
+      EXPECT_THROW(renderer.record(VK_NULL_HANDLE, target, {&whole, 1}, o, {}), std::invalid_argument);
+    });
+    EXPECT_EQ(renderer.last_stats().frame, 0u);  // nothing was recorded
+  }
+  expect_clean(host);
+}
+
+}  // namespace
+}  // namespace sluice::render
