@@ -1,27 +1,29 @@
-// Internal: one frame's memory handed out by StagingAllocator, shared with
-// upload.cpp, which copies from it.
+// Internal: the memory of one frame block handed out by StagingAllocator,
+// shared with upload.cpp, which copies from it.
 #pragma once
+
+#include <cstdlib>
 
 #include "sluice/render/staging_allocator.h"
 #include "vk_common.h"
 
 namespace sluice::render {
 
-struct StagingAllocator::Block {
-  Buffer staging;              // host-visible, mapped; empty for a host fallback
-  std::byte* host = nullptr;   // the fallback's memory (aligned_alloc)
-  uint64_t capacity = 0;
-  uint64_t attribute_offset = 0;  // of the first attribute stream, in bytes
-  uint64_t attribute_stride = 0;  // between streams
-  bool in_use = false;
+struct StagingAllocator::Memory {
+  struct Free {
+    void operator()(std::byte* p) const { std::free(p); }
+  };
+  Buffer staging;                          // host-visible, mapped; empty for a host fallback
+  std::unique_ptr<std::byte, Free> host;   // the fallback's memory (aligned_alloc)
+  uint64_t attribute_offset = 0;           // of the first attribute stream, in bytes (the frame in it now)
+  uint64_t attribute_stride = 0;           // between streams
 
-  std::byte* data() const { return host ? host : static_cast<std::byte*>(staging.mapped); }
-  ~Block();
+  std::byte* data() const { return host ? host.get() : static_cast<std::byte*>(staging.mapped); }
 };
 
-// The block behind buffers a StagingAllocator handed out.
-inline const StagingAllocator::Block& staging_block(const runtime::FrameBuffers& buffers) {
-  return *reinterpret_cast<const StagingAllocator::Block*>(static_cast<uintptr_t>(buffers.tag));
+// The memory behind buffers a StagingAllocator handed out.
+inline const StagingAllocator::Memory& staging_memory(const runtime::FrameBuffers& buffers) {
+  return reinterpret_cast<const StagingAllocator::Pool::Block*>(static_cast<uintptr_t>(buffers.tag))->memory;
 }
 
 }  // namespace sluice::render

@@ -248,7 +248,7 @@ uint64_t Renderer::commit_decoded(const DecodedFrameView& frame, const StagingAl
   const bool attribute = frame.color_stream >= 0 && size_t(frame.color_stream) < frame.buffers->attributes.size();
   const size_t stride = io::decoded_particle_bytes(r.scene.coding);
   if (frame.buffers->particles.size() < n * stride) throw std::invalid_argument("commit_decoded: particle buffer too small");
-  const StagingAllocator::Block* block = from ? &staging_block(*frame.buffers) : nullptr;
+  const StagingAllocator::Memory* block = from ? &staging_memory(*frame.buffers) : nullptr;
 
   if (!block || block->host) {
     // Not in Vulkan memory: through the renderer's own staging.

@@ -1,99 +1,69 @@
-#include "sluice/runtime/frame_allocator.h"
-
 #include <algorithm>
 #include <cstdlib>
 #include <new>
+
+#include "sluice/runtime/block_pool.h"
+#include "sluice/runtime/frame_allocator.h"
 
 namespace sluice::runtime {
 namespace {
 
 constexpr size_t kAlignment = 64;  // a cache line: streams never share one
 
-uint64_t align_up(uint64_t n) { return (n + kAlignment - 1) / kAlignment * kAlignment; }
+uint64_t align_up(uint64_t n, uint64_t alignment) { return (n + alignment - 1) / alignment * alignment; }
 
 }  // namespace
 
-struct HostFrameAllocator::Block {
-  std::byte* memory = nullptr;
-  uint64_t capacity = 0;
-  bool in_use = false;
-  ~Block() { std::free(memory); }
-};
-
-HostFrameAllocator::HostFrameAllocator() = default;
-HostFrameAllocator::~HostFrameAllocator() = default;
-
-void HostFrameAllocator::account(int64_t delta) {
-  const uint64_t now = held_.fetch_add(static_cast<uint64_t>(delta), std::memory_order_relaxed) + static_cast<uint64_t>(delta);
-  uint64_t peak = peak_.load(std::memory_order_relaxed);
-  while (now > peak && !peak_.compare_exchange_weak(peak, now, std::memory_order_relaxed)) {
-  }
+BlockLayout block_layout(const FrameLayout& layout, uint64_t alignment) {
+  BlockLayout b;
+  b.attribute_offset = align_up(layout.particle_bytes(), alignment);
+  b.attribute_stride = align_up(layout.attribute_bytes(), alignment);
+  b.bytes = std::max<uint64_t>(alignment, b.attribute_offset + layout.attribute_streams * b.attribute_stride);
+  return b;
 }
 
-uint64_t HostFrameAllocator::bytes_for(const FrameLayout& layout) const {
-  return std::max<uint64_t>(kAlignment,
-                            align_up(layout.particle_bytes()) + layout.attribute_streams * align_up(layout.attribute_bytes()));
-}
-
-FrameBuffers HostFrameAllocator::allocate(const FrameLayout& layout) {
-  const uint64_t stream = align_up(layout.attribute_bytes());
-  const uint64_t need = bytes_for(layout);
-
-  // Reuse the smallest kept block that fits; if none fits, give one kept
-  // block back first so the count of blocks does not grow.
-  auto fits = kept_.end();
-  for (auto it = kept_.begin(); it != kept_.end(); ++it) {
-    const uint64_t capacity = blocks_[*it]->capacity;
-    if (capacity >= need && (fits == kept_.end() || capacity < blocks_[*fits]->capacity)) fits = it;
-  }
-  uint64_t tag;
-  if (fits != kept_.end()) {
-    tag = *fits;
-    kept_.erase(fits);
-  } else {
-    if (!kept_.empty()) {
-      Block& old = *blocks_[kept_.back()];
-      account(-static_cast<int64_t>(old.capacity));
-      std::free(old.memory);
-      old.memory = nullptr;
-      old.capacity = 0;
-      tag = kept_.back();
-      kept_.pop_back();
-    } else {
-      tag = blocks_.size();
-      blocks_.push_back(std::make_unique<Block>());
-    }
-    Block& b = *blocks_[tag];
-    b.memory = static_cast<std::byte*>(std::aligned_alloc(kAlignment, need));
-    if (!b.memory) {
-      kept_.push_back(tag);  // an empty block: reusable, costs nothing
-      throw std::bad_alloc();
-    }
-    b.capacity = need;
-    account(static_cast<int64_t>(need));
-    allocations_.fetch_add(1, std::memory_order_relaxed);
-  }
-  Block& b = *blocks_[tag];
-  b.in_use = true;
-  in_use_.fetch_add(1, std::memory_order_relaxed);
-
+FrameBuffers lay_out_frame(std::byte* base, const FrameLayout& layout, const BlockLayout& at, uint64_t tag) {
   FrameBuffers out;
   out.tag = tag;
-  out.particles = {b.memory, layout.particle_bytes()};
-  std::byte* at = b.memory + align_up(layout.particle_bytes());
-  for (uint32_t s = 0; s < layout.attribute_streams; ++s, at += stream) {
-    out.attributes.emplace_back(reinterpret_cast<uint16_t*>(at), layout.particles);
+  out.particles = {base, layout.particle_bytes()};
+  for (uint32_t s = 0; s < layout.attribute_streams; ++s) {
+    out.attributes.emplace_back(reinterpret_cast<uint16_t*>(base + at.attribute_offset + s * at.attribute_stride), layout.particles);
   }
   return out;
 }
 
+struct HostFrameAllocator::Memory {
+  struct Free {
+    void operator()(std::byte* p) const { std::free(p); }
+  };
+  std::unique_ptr<std::byte, Free> bytes;
+};
+
+HostFrameAllocator::HostFrameAllocator() : pool_(std::make_unique<Pool>()) {}
+HostFrameAllocator::~HostFrameAllocator() = default;
+
+uint64_t HostFrameAllocator::bytes_for(const FrameLayout& layout) const { return block_layout(layout, kAlignment).bytes; }
+
+FrameBuffers HostFrameAllocator::allocate(const FrameLayout& layout) {
+  const BlockLayout at = block_layout(layout, kAlignment);
+  Pool::Block& block = pool_->acquire(at.bytes, [](uint64_t need) {
+    Memory m;
+    m.bytes.reset(static_cast<std::byte*>(std::aligned_alloc(kAlignment, need)));
+    if (!m.bytes) throw std::bad_alloc();
+    return m;
+  });
+  return lay_out_frame(block.memory.bytes.get(), layout, at, reinterpret_cast<uintptr_t>(&block));
+}
+
 void HostFrameAllocator::release(FrameBuffers& buffers) {
-  Block& b = *blocks_.at(buffers.tag);
-  if (!b.in_use) return;
-  b.in_use = false;
-  in_use_.fetch_sub(1, std::memory_order_relaxed);
-  kept_.push_back(buffers.tag);
+  if (!buffers.tag) return;
+  pool_->release(*reinterpret_cast<Pool::Block*>(static_cast<uintptr_t>(buffers.tag)));
   buffers = {};
 }
+
+uint64_t HostFrameAllocator::held_bytes() const { return pool_->held_bytes(); }
+uint64_t HostFrameAllocator::peak_held_bytes() const { return pool_->peak_held_bytes(); }
+uint64_t HostFrameAllocator::in_use_buffers() const { return pool_->in_use_blocks(); }
+uint64_t HostFrameAllocator::allocations() const { return pool_->allocations(); }
 
 }  // namespace sluice::runtime

@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "sluice/render/context.h"
+#include "sluice/runtime/block_pool.h"
 #include "sluice/runtime/budget.h"
 #include "sluice/runtime/frame_allocator.h"
 
@@ -44,23 +45,22 @@ class StagingAllocator final : public runtime::FrameAllocator {
   const runtime::DeviceMemoryBudget* device_budget() const;
   bool staging_in_device_heap() const { return device_heap_; }
 
-  uint64_t held_bytes() const { return held_.load(std::memory_order_relaxed); }
-  uint64_t peak_held_bytes() const { return peak_.load(std::memory_order_relaxed); }
+  uint64_t held_bytes() const;
+  uint64_t peak_held_bytes() const;
   uint64_t fallback_allocations() const { return fallbacks_.load(std::memory_order_relaxed); }
 
-  struct Block;  // render/src/staging_block.h; FrameBuffers::tag points at one
+  struct Memory;  // render/src/staging_block.h: a block's staging buffer (or host fallback)
+  using Pool = runtime::BlockPool<Memory>;  // FrameBuffers::tag points at one of its blocks
 
  private:
   class HeapBudget;
-  void account(int64_t delta);
 
   Context& context_;
-  std::vector<std::unique_ptr<Block>> blocks_;  // every block; reader thread only
-  std::vector<Block*> kept_;                    // released blocks ready for reuse
+  std::unique_ptr<Pool> pool_;
   bool device_heap_ = false;
   uint32_t heap_ = 0;
   std::unique_ptr<HeapBudget> budget_;
-  std::atomic<uint64_t> held_{0}, peak_{0}, fallbacks_{0};
+  std::atomic<uint64_t> fallbacks_{0};
 };
 
 }  // namespace sluice::render

@@ -17,6 +17,9 @@
 
 namespace sluice::runtime {
 
+template <class Memory>
+class BlockPool;
+
 // What one frame needs. Sizes come from the frame index.
 struct FrameLayout {
   uint64_t frame = 0;              // frame number in the file (for the allocator's logs)
@@ -70,18 +73,15 @@ class HostFrameAllocator final : public FrameAllocator {
   uint64_t bytes_for(const FrameLayout& layout) const override;
 
   // Readable from any thread.
-  uint64_t held_bytes() const { return held_.load(std::memory_order_relaxed); }       // in use + kept
-  uint64_t peak_held_bytes() const { return peak_.load(std::memory_order_relaxed); }
-  uint64_t in_use_buffers() const { return in_use_.load(std::memory_order_relaxed); }
-  uint64_t allocations() const { return allocations_.load(std::memory_order_relaxed); }  // fresh, not reused
+  uint64_t held_bytes() const;       // in use + kept
+  uint64_t peak_held_bytes() const;
+  uint64_t in_use_buffers() const;
+  uint64_t allocations() const;      // fresh, not reused
 
  private:
-  struct Block;
-  void account(int64_t delta);
-
-  std::vector<std::unique_ptr<Block>> blocks_;  // every block, indexed by FrameBuffers::tag
-  std::vector<uint64_t> kept_;                  // tags of released blocks ready for reuse
-  std::atomic<uint64_t> held_{0}, peak_{0}, in_use_{0}, allocations_{0};
+  struct Memory;
+  using Pool = BlockPool<Memory>;
+  std::unique_ptr<Pool> pool_;  // block_pool.h
 };
 
 }  // namespace sluice::runtime
