@@ -198,7 +198,8 @@ void Renderer::Impl::write_descriptors(FrameSlot& slot) {
 }
 
 void Renderer::Impl::bind_output(FrameSlot& slot, VkImageView view) {
-  if (slot.output == view) return;
+  // Written every frame, not only when the handle changes: a caller's view
+  // destroyed and re-created may come back with the same handle value.
   const vk::DescriptorImageInfo image({}, vk::ImageView(view), vk::ImageLayout::eGeneral);
   ctx.device.updateDescriptorSets(vk::WriteDescriptorSet(*slot.set, 9, 0, 1, vk::DescriptorType::eStorageImage, &image), {});
   slot.output = view;
