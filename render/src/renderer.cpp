@@ -194,7 +194,6 @@ void Renderer::Impl::write_descriptors(FrameSlot& slot) {
   };
   ctx.device.updateDescriptorSets(writes, {});
   slot.set_generation = targets.generation + (environment_generation << 32);
-  slot.output = static_cast<VkImageView>(*t.color.view);
 }
 
 void Renderer::Impl::bind_output(FrameSlot& slot, VkImageView view) {
@@ -202,7 +201,6 @@ void Renderer::Impl::bind_output(FrameSlot& slot, VkImageView view) {
   // destroyed and re-created may come back with the same handle value.
   const vk::DescriptorImageInfo image({}, vk::ImageView(view), vk::ImageLayout::eGeneral);
   ctx.device.updateDescriptorSets(vk::WriteDescriptorSet(*slot.set, 9, 0, 1, vk::DescriptorType::eStorageImage, &image), {});
-  slot.output = view;
 }
 
 std::vector<std::byte> Renderer::Impl::read_texture(const Texture& t, size_t texel_bytes) {

@@ -53,7 +53,6 @@ struct FrameSet {
 struct FrameSlot {
   vk::raii::DescriptorSet set{nullptr};
   uint64_t set_generation = UINT64_MAX;  // targets generation the set was written for
-  VkImageView output = VK_NULL_HANDLE;    // what the shading pass writes (binding 9)
   Buffer readback;                        // GpuArgs of the last view
   uint64_t frame = UINT64_MAX;            // record() call that used it last
   std::vector<const char*> stamp_names;   // per timestamp after the first
