@@ -46,6 +46,12 @@ for stage in $stages; do
       run $S bench stream /tmp/synth100m.sluice --memory 24G --no-storage --min-time 2
       rm -f /tmp/synth100m.sluice
       ;;
+    xrsize)  # one eye at 2064x2208: shading into the image against the present pass with a host depth image
+      run $S bench render --sizes 1M --repeats 3 >/dev/null  # warm-up
+      run $S bench render --repeats 7 --sizes 10M,100M --size 2064x2208
+      run $S bench render --repeats 7 --sizes 10M,100M --size 2064x2208 --with-depth
+      run $S bench render --repeats 7 --sizes 10M --size 1920x1080 --with-depth
+      ;;
     live)  # frames pushed from memory (render::LiveSource), not recorded and recorded
       run $S bench live --sizes 1M,10M --frames 6
       run $S bench live --sizes 1M,10M --frames 6 --record /tmp/live.sluice

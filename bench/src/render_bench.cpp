@@ -195,12 +195,15 @@ void run_render_bench(const RenderBenchOptions& o) {
   render::ContextOptions co;
   co.device = o.device;
   render::Context context(co);
-  render::OffscreenTarget out(context, o.width, o.height);
+  render::OffscreenOptions oo;
+  oo.depth = o.with_depth;
+  render::OffscreenTarget out(context, o.width, o.height, oo);
   const render::DeviceInfo& dev = context.device();
   std::printf("sluice bench render: %ux%u, median of %d renders after a warm-up\n", o.width, o.height, o.repeats);
   std::printf("device: %s (%s, %s)%s\n", dev.name.c_str(), dev.type.c_str(), dev.driver.c_str(),
               dev.type == "cpu" ? "  -- a CPU implementation: these are CPU milliseconds, not GPU ones" : "");
-  std::printf("host: %s, %d cores; splatting %s\n", cpu_model().c_str(), core_count(), o.splat.c_str());
+  std::printf("host: %s, %d cores; splatting %s; target %s\n", cpu_model().c_str(), core_count(), o.splat.c_str(),
+              o.with_depth ? "colour + depth (present pass with the depth test)" : "colour only (shading writes it)");
   if (!o.images.empty()) fs::create_directories(o.images);
 
   render::FluidOptions fluid;  // transparent fluid, narrow-range filter, defaults

@@ -23,6 +23,8 @@ struct RenderBenchOptions {
   std::string splat = "auto";   // sphere splatting: auto, compute or raster
   std::string csv;              // also write every case (per-pass ms) here, for plots of ms against particles
   std::string plot;             // also draw GPU ms against particles (log-log, one line per LOD) as an SVG here
+  bool with_depth = false;      // render into a target with a depth image, as a host with its own geometry does
+                                // (the present pass with the depth test; without, shading writes the image)
 };
 
 // Runs the benchmark and prints its tables to stdout.
