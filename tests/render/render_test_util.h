@@ -46,6 +46,18 @@ class ValidationGuard {
   uint64_t before_;
 };
 
+// A camera `distance` in front of the origin on -y, looking along +y, z up,
+// 40 degrees, near plane 0.05.
+inline Camera camera_looking_along_y(float distance) {
+  Camera c;
+  c.eye = {0, -distance, 0};
+  c.target = {0, 0, 0};
+  c.up = {0, 0, 1};
+  c.fov_deg = 40;
+  c.near = 0.05f;
+  return c;
+}
+
 // A Renderer drawing into an OffscreenTarget of its own, synchronously: the
 // shape most tests want (one frame in, one image out). Uploads are waited for,
 // so decoded buffers may be reused as soon as a commit returns.

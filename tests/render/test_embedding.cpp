@@ -20,15 +20,7 @@ namespace {
 using testing::TestHost;
 constexpr uint32_t kW = 160, kH = 120;
 
-Camera front_camera() {
-  Camera c;
-  c.eye = {0, -4, 0};
-  c.target = {0, 0, 0};
-  c.up = {0, 0, 1};
-  c.fov_deg = 40;
-  c.near = 0.05f;
-  return c;
-}
+Camera front_camera() { return testing::camera_looking_along_y(4); }
 
 // Eye -> Vulkan clip with depth 0 at `near` and 1 at `far` (y down).
 Mat4 standard_projection(float fov_deg, float aspect, float near, float far) {
@@ -57,6 +49,20 @@ void expect_clean(const TestHost& host) {
   std::string all;
   for (const std::string& m : host.messages) all += m + "\n";
   EXPECT_EQ(host.errors.load(), 0) << all;
+}
+
+// A host's kW x kH colour image as a target: contents discarded before,
+// left ready for the host's read-back after.
+RenderTarget color_target(const TestHost::Image& color) {
+  RenderTarget t;
+  t.width = kW;
+  t.height = kH;
+  t.color_image = *color.image;
+  t.color_view = *color.view;
+  t.color_format = static_cast<VkFormat>(color.format);
+  t.color_layout_before = VK_IMAGE_LAYOUT_UNDEFINED;
+  t.color_layout_after = VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL;
+  return t;
 }
 
 // Two spheres of radius 0.4 at x = -1 and x = +1, 4 units in front of the camera.
@@ -94,14 +100,8 @@ TEST_P(Occlusion, HostDepthHidesTheFluidAndTheFluidHidesTheHost) {
     const float near_wall = depth_at(view.projection, 3.2f), far_wall = depth_at(view.projection, 4.8f);
     const vk::ClearColorValue red(std::array<float, 4>{1, 0, 0, 1}), blue(std::array<float, 4>{0, 0, 1, 1});
 
-    RenderTarget target;
-    target.width = kW;
-    target.height = kH;
-    target.color_image = *color.image;
-    target.color_view = *color.view;
-    target.color_format = VK_FORMAT_R8G8B8A8_UNORM;
+    RenderTarget target = color_target(color);
     target.color_layout_before = VK_IMAGE_LAYOUT_ATTACHMENT_OPTIMAL;
-    target.color_layout_after = VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL;
     target.depth_image = *depth.image;
     target.depth_view = *depth.view;
     target.depth_format = VK_FORMAT_D32_SFLOAT;
@@ -246,14 +246,7 @@ TEST(Embedding, FramesInFlightWithoutWaitingShowTheNewestCompleteFrame) {
     Renderer renderer(context, scene, ro);
     using U = vk::ImageUsageFlagBits;
     TestHost::Image color = host.image(kW, kH, vk::Format::eR8G8B8A8Unorm, U::eColorAttachment | U::eTransferSrc);
-    RenderTarget target;
-    target.width = kW;
-    target.height = kH;
-    target.color_image = *color.image;
-    target.color_view = *color.view;
-    target.color_format = VK_FORMAT_R8G8B8A8_UNORM;
-    target.color_layout_before = VK_IMAGE_LAYOUT_UNDEFINED;
-    target.color_layout_after = VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL;
+    const RenderTarget target = color_target(color);
     const View view = camera_view(front_camera(), {0, 0, kW, kH});
     // The host's loop: one command buffer and fence per slot; a slot's fence
     // is waited for before its reuse (the frames-in-flight contract).
@@ -340,13 +333,7 @@ TEST(Embedding, PresentPassAndDirectShadingAgree) {
     for (const vk::Format format : {vk::Format::eR8G8B8A8Unorm, vk::Format::eR8G8B8A8Srgb}) {
       using U = vk::ImageUsageFlagBits;
       TestHost::Image color = host.image(kW, kH, format, U::eColorAttachment | U::eTransferSrc);
-      RenderTarget target;
-      target.width = kW;
-      target.height = kH;
-      target.color_image = *color.image;
-      target.color_view = *color.view;
-      target.color_format = static_cast<VkFormat>(format);
-      target.color_layout_after = VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL;
+      const RenderTarget target = color_target(color);
       const View view = camera_view(cam, {0, 0, kW, kH});
       FrameSync sync;
       host.submit([&](vk::CommandBuffer c) {
@@ -392,12 +379,7 @@ TEST(Embedding, RecordRefusesTargetsAndViewsThatDoNotFit) {
     Renderer renderer(context, scene_for_points(kTwoSpheres, kRadius));
     using U = vk::ImageUsageFlagBits;
     TestHost::Image color = host.image(kW, kH, vk::Format::eR8G8B8A8Unorm, U::eColorAttachment | U::eTransferSrc);
-    RenderTarget target;
-    target.width = kW;
-    target.height = kH;
-    target.color_image = *color.image;
-    target.color_view = *color.view;
-    target.color_format = VK_FORMAT_R8G8B8A8_UNORM;
+    const RenderTarget target = color_target(color);
     const View whole = camera_view(front_camera(), {0, 0, kW, kH});
     host.submit([&](vk::CommandBuffer c) {
       const auto cmd = static_cast<VkCommandBuffer>(c);

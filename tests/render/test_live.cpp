@@ -41,15 +41,7 @@ std::vector<float> ball(Vec3 centre, std::vector<float>* speed) {
   return xyz;
 }
 
-Camera front() {
-  Camera c;
-  c.eye = {0, -3, 0};
-  c.target = {0, 0, 0};
-  c.up = {0, 0, 1};
-  c.fov_deg = 40;
-  c.near = 0.05f;
-  return c;
-}
+Camera front() { return testing::camera_looking_along_y(3); }
 
 TEST(Live, AMovingBallIsDrawnWhereItIsAndRecorded) {
   ValidationGuard guard;
