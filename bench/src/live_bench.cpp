@@ -12,20 +12,6 @@
 #include "table.h"
 
 namespace sluice::bench {
-namespace {
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v.empty() ? 0 : v[v.size() / 2];
-}
-
-std::string count_name(uint64_t n) {
-  if (n >= 1'000'000 && n % 1'000'000 == 0) return std::to_string(n / 1'000'000) + "M";
-  if (n >= 1000 && n % 1000 == 0) return std::to_string(n / 1000) + "k";
-  return std::to_string(n);
-}
-
-}  // namespace
 
 void run_live_bench(const LiveBenchOptions& o) {
   render::ContextOptions co;

@@ -95,16 +95,6 @@ struct Case {
   double vtk_ms = -1;        // peer, when run
 };
 
-std::string count_name(uint64_t n) {
-  if (n >= 1'000'000 && n % 100'000 == 0) return num(double(n) / 1e6, n % 1'000'000 ? 1 : 0) + "M";
-  if (n >= 1'000) return num(double(n) / 1e3, n % 1000 ? 1 : 0) + "k";
-  return std::to_string(n);
-}
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v.empty() ? 0 : v[v.size() / 2];
-}
 
 // Renders `repeats` times after one warm-up; per-pass medians.
 Case measure(render::Renderer& r, render::OffscreenTarget& out, const render::Camera& cam, const render::FluidOptions& fluid,

@@ -11,6 +11,17 @@ std::string num(double v, int decimals) {
   return buf;
 }
 
+std::string count_name(uint64_t n) {
+  if (n >= 1'000'000 && n % 100'000 == 0) return num(double(n) / 1e6, n % 1'000'000 ? 1 : 0) + "M";
+  if (n >= 1'000) return num(double(n) / 1e3, n % 1000 ? 1 : 0) + "k";
+  return std::to_string(n);
+}
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v.empty() ? 0 : v[v.size() / 2];
+}
+
 void Table::print(const std::string& title) const {
   std::vector<size_t> width(header_.size());
   for (size_t c = 0; c < header_.size(); ++c) width[c] = header_[c].size();

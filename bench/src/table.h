@@ -1,6 +1,7 @@
 // A plain text table: columns sized to their contents, numbers right-aligned.
 #pragma once
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -18,5 +19,9 @@ class Table {
 };
 
 std::string num(double v, int decimals);
+// "1M", "2.5M", "100k", "950": particle counts in table rows.
+std::string count_name(uint64_t n);
+// The median of `v` (0 when empty).
+double median(std::vector<double> v);
 
 }  // namespace sluice::bench

@@ -1,9 +1,9 @@
 // Internal to sluice_render: the Vulkan-Hpp RAII objects behind the public
 // pimpls, and small helpers for buffers and images.
 //
-// This is the only header that includes vulkan_raii.hpp (a large header);
-// only the four .cpp files that talk to Vulkan include it (context.cpp,
-// renderer.cpp, upload.cpp, window.cpp), to keep the build fast.
+// This is the only header of sluice_render that includes vulkan_raii.hpp (a
+// large header); only the sources that talk to Vulkan include it, so the
+// plain C++ parts (globals, camera, options, lod, ...) compile fast.
 #pragma once
 
 #include <vulkan/vulkan_raii.hpp>
