@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <vector>
 
 #include "commands.h"
 #include "human.h"
@@ -18,6 +19,26 @@ struct InfoOptions {
 
 const char* coding_name(io::PositionCoding c) {
   return c == io::PositionCoding::Quantized16 ? "quantized16" : "float32";
+}
+
+const char* evidence_text(io::UpEvidence e) {
+  switch (e) {
+    case io::UpEvidence::Given: return "given at conversion";
+    case io::UpEvidence::Motion: return "found from the fluid's fall over the first frames";
+    case io::UpEvidence::Pressure: return "found from pressure growing with depth";
+    case io::UpEvidence::Shape: return "found from the fluid lying flat; its sign assumed";
+    case io::UpEvidence::Default: return "assumed: the data did not show it";
+    default: return "not stated (a file older than format 1.2)";
+  }
+}
+
+// Median seconds of simulation between frames (0 with fewer than 2 frames).
+double median_step(const std::vector<io::FrameIndexEntry>& frames) {
+  std::vector<double> steps;
+  for (size_t i = 1; i < frames.size(); ++i) steps.push_back(frames[i].time - frames[i - 1].time);
+  if (steps.empty()) return 0;
+  std::nth_element(steps.begin(), steps.begin() + steps.size() / 2, steps.end());
+  return steps[steps.size() / 2];
 }
 
 std::string json_string(const std::string& s) {
@@ -66,6 +87,8 @@ void print_json(const io::ContainerReader& r) {
   std::printf("  \"particle_spacing\": %s,\n  \"particle_radius\": %s,\n  \"frame_rate\": %s,\n  \"source\": %s,\n",
               json_number(h.particle_spacing).c_str(), json_number(h.particle_radius).c_str(),
               json_number(h.frame_rate).c_str(), json_string(h.source).c_str());
+  std::printf("  \"up\": \"%s\",\n  \"up_evidence\": \"%s\",\n  \"time_source\": \"%s\",\n",
+              io::up_axis_name(h.up).c_str(), io::up_evidence_name(h.up_evidence), io::time_source_name(h.time_source));
   std::printf("  \"bounds\": %s,\n  \"attributes\": [", json_box(r.index().bounds).c_str());
   for (size_t a = 0; a < h.attributes.size(); ++a) {
     std::printf("%s{\"name\": %s, \"min\": %s, \"max\": %s}", a ? ", " : "", json_string(h.attributes[a].name).c_str(),
@@ -107,7 +130,8 @@ void print_text(const io::ContainerReader& r, bool all_frames) {
   std::printf("  LOD values    %s\n", h.lod_source == io::LodSource::IdHash
                                          ? ("hash of id array '" + h.lod_id_array + "' (stable across frames)").c_str()
                                          : "hash of particle order (stable only if the source keeps its order)");
-  std::printf("  spacing       %g (radius %g), %g frames/s\n", h.particle_spacing, h.particle_radius, h.frame_rate);
+  std::printf("  spacing       %g (radius %g)\n", h.particle_spacing, h.particle_radius);
+  std::printf("  up            %s (%s)\n", io::up_axis_name(h.up).c_str(), evidence_text(h.up_evidence));
   std::printf("  bounds        %s\n", text_box(r.index().bounds).c_str());
   for (size_t a = 0; a < h.attributes.size(); ++a) {
     std::printf("  attribute     %s  [%g, %g]\n", h.attributes[a].name.c_str(), r.index().attribute_ranges[a][0],
@@ -117,7 +141,16 @@ void print_text(const io::ContainerReader& r, bool all_frames) {
     std::printf("  frames        0\n");
     return;
   }
-  std::printf("  frames        %zu, time %g .. %g s\n", frames.size(), frames.front().time, frames.back().time);
+  const double step = median_step(frames);
+  if (h.time_source == io::TimeSource::FrameNumber) {
+    std::printf("  frames        %zu, no simulation times (convert with --dt or --fps to give them); played at %g frames/s\n",
+                frames.size(), h.frame_rate);
+  } else {
+    std::printf("  frames        %zu, time %g .. %g s%s, every %g s; played at %g frames/s = %sx simulation speed\n",
+                frames.size(), frames.front().time, frames.back().time,
+                h.time_source == io::TimeSource::Step ? " (step given at conversion)" : "", step, h.frame_rate,
+                step > 0 ? fixed(step * h.frame_rate, 3).c_str() : "?");
+  }
   std::printf("  particles     %s per frame (min %s, max %s), %s in all\n",
               human_count(double(particles) / double(frames.size())).c_str(), human_count(double(lo)).c_str(),
               human_count(double(hi)).c_str(), human_count(double(particles)).c_str());

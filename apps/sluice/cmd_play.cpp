@@ -8,6 +8,7 @@
 
 #include "commands.h"
 #include "play.h"
+#include "playable.h"
 #include "human.h"
 #include "sluice/io/reader.h"
 #include "sluice/runtime/player.h"
@@ -153,11 +154,14 @@ void add_play(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand("play", "Play a .sluice file as liquid in a window, or headless into a null sink");
   cmd->footer("Examples:\n"
               "  sluice play run.sluice                                   # a window; loops; H hides the HUD\n"
+              "  sluice play out/run.pvd                                  # converted once into out/.sluice-cache/\n"
               "  sluice play --headless --stats run.sluice --loop --seconds 30\n"
               "Frames stream through the prefetch pipeline (read ahead, decoded on every core) at the file's frame\n"
               "rate; a late frame is held (--policy hold) or skipped (--policy skip). Headless playback feeds a null\n"
               "sink and reports stalls, drops and throughput.");
-  cmd->add_option("file", o->file, ".sluice file")->required()->check(CLI::ExistingFile);
+  cmd->add_option("file", o->file,
+                  ".sluice file, or anything `convert` reads (converted once into a cache beside it)")->required();
+  cmd->add_flag("--no-cache", o->no_cache, "Input that is not .sluice: convert into a temporary file, not the cache");
   cmd->add_flag("--headless", o->headless, "No window: play into a null sink");
   cmd->add_flag("--stats", o->stats, "Print stream stats every second");
   cmd->add_option("--fps", o->fps, "Media frame rate (default: the file's, else 30)");
@@ -186,9 +190,12 @@ void add_play(CLI::App& app) {
 #if SLUICE_WITH_WINDOW
   std::shared_ptr<WindowPlayOptions> w = add_window_play_options(*cmd);
   cmd->callback([o, w] {
-    if (o->headless && w->gpu) run_play_gpu(*o, *w);
-    else if (o->headless) run_play_headless(*o);
-    else run_play_window(*o, *w);
+    const PlayableFile input = open_playable(o->file, {o->no_cache, o->quiet});
+    PlayOptions p = *o;
+    p.file = input.path();
+    if (p.headless && w->gpu) run_play_gpu(p, *w);
+    else if (p.headless) run_play_headless(p);
+    else run_play_window(p, *w);
   });
 #else
   cmd->callback([o] {
@@ -196,7 +203,10 @@ void add_play(CLI::App& app) {
       throw std::runtime_error("this sluice was built without a window (it needs libglfw3-dev, libimgui-dev and "
                                "Vulkan): pass --headless to play into a null sink");
     }
-    run_play_headless(*o);
+    const PlayableFile input = open_playable(o->file, {o->no_cache, o->quiet});
+    PlayOptions p = *o;
+    p.file = input.path();
+    run_play_headless(p);
   });
 #endif
 }

@@ -6,6 +6,7 @@
 
 #include "commands.h"
 #include "human.h"
+#include "playable.h"
 #include "view_options.h"
 #include "progress.h"
 #include "sluice/bench/render_bench.h"
@@ -27,7 +28,7 @@ struct RenderCommand {
   std::string out = "frames";
   std::string size = "1280x720";
   double fps = 0;
-  bool quiet = false, stats = false;
+  bool quiet = false, stats = false, no_cache = false;
 };
 
 std::pair<uint64_t, uint64_t> parse_frames(const std::string& s, uint64_t count) {
@@ -78,7 +79,8 @@ std::string frame_path(const std::string& out, uint64_t frame, bool single) {
 
 void run_render(const RenderCommand& o, const ViewSettings& v) {
   namespace fs = std::filesystem;
-  const io::ContainerReader reader(o.input);
+  const PlayableFile input = open_playable(o.input, {o.no_cache, o.quiet});
+  const io::ContainerReader reader(input.path());
   const auto [first, last] = parse_frames(o.frames, reader.frame_count());
   const auto [width, height] = parse_size(o.size);
   const bool video = fs::path(o.out).extension() == ".mp4";
@@ -174,7 +176,9 @@ void add_render(CLI::App& app) {
       "  sluice render dam.sluice --frames 12 --out dam.png --size 1920x1080\n"
       "  sluice render dam.sluice --out dam.mp4 --color-by rho --colormap coolwarm\n"
       "  sluice render big.sluice --lod density --lod-level 0.3 --camera \"eye=4,-3,2;target=1,0,0.3\"\n");
-  cmd->add_option("input", o->input, ".sluice file")->required()->check(CLI::ExistingFile);
+  cmd->add_option("input", o->input,
+                  ".sluice file, or anything `convert` reads (converted once into a cache beside it)")->required();
+  cmd->add_flag("--no-cache", o->no_cache, "Input that is not .sluice: convert into a temporary file, not the cache");
   cmd->add_option("--frames", o->frames, "Frames A:B (inclusive), A, A: or :B (default: all)");
   cmd->add_option("-o,--out", o->out, "Output directory, .png, pattern or .mp4")->capture_default_str();
   cmd->add_option("--size", o->size, "Image size WIDTHxHEIGHT")->capture_default_str();

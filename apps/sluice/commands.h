@@ -12,6 +12,7 @@ void add_recover(CLI::App& app);
 void add_bench(CLI::App& app);
 void add_play(CLI::App& app);
 void add_synth(CLI::App& app);
+void add_export(CLI::App& app);
 // Only in builds with SLUICE_WITH_RENDER:
 void add_render(CLI::App& app);
 void add_bench_render(CLI::App& bench);  // `sluice bench render`, under the bench command

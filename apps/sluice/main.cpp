@@ -26,6 +26,7 @@ int main(int argc, char** argv) {
   sluice::app::add_bench(app);
   sluice::app::add_play(app);
   sluice::app::add_synth(app);
+  sluice::app::add_export(app);
 #if SLUICE_WITH_RENDER
   sluice::app::add_render(app);
   sluice::app::add_bench_render(*app.get_subcommand("bench"));

@@ -18,7 +18,7 @@ namespace sluice::app {
 struct PlayOptions {
   std::string file;
   bool headless = false, stats = false, loop = false, bounce = false, once = false, reverse = false, direct = false,
-       quiet = false, paused = false;
+       quiet = false, paused = false, no_cache = false;
   double fps = 0, rate = 1, seconds = 0, display_hz = 0, stats_every = 1;
   std::string memory, policy = "hold", on_error = "skip";
   uint32_t window = 0;

@@ -40,10 +40,13 @@ void ProgressBar::draw(bool force) {
   const double t = std::chrono::duration<double>(now - start_).count();
   const int decile = total_ ? int(10 * done_ / total_) : 10;
   if (tty_ && !force && now - last_draw_ < std::chrono::milliseconds(100) && done_ < total_) return;
-  if (!tty_ && !force && decile == last_decile_) return;
-  if (!tty_ && force && decile == last_decile_ && drawn_) return;
+  // A log gets a line when another tenth is done, at most one a second, and
+  // the last one: a short job writes one line, a long one at most eleven.
+  if (!tty_ && !force && (decile == last_decile_ || now - last_draw_ < std::chrono::seconds(1))) return;
+  if (!tty_ && force && done_ == last_done_ && drawn_) return;
   last_draw_ = now;
   last_decile_ = decile;
+  last_done_ = done_;
   const double fraction = total_ ? double(done_) / double(total_) : 1.0;
   std::string bar;
   const int width = 28;

@@ -1,5 +1,6 @@
 // A progress bar on stderr: bar, count, rates and ETA, redrawn in place on a
-// terminal at most 10 times a second; on a pipe or file, a line per 10%.
+// terminal at most 10 times a second; on a pipe or file, a line per 10% at
+// most once a second, and the final line.
 // Thread-safe: update() may be called from any thread.
 #pragma once
 
@@ -32,6 +33,7 @@ class ProgressBar {
   std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now(), last_draw_{};
   uint64_t done_ = 0, in_ = 0, out_ = 0;
   int last_decile_ = -1;
+  uint64_t last_done_ = UINT64_MAX;
   bool drawn_ = false;
 };
 

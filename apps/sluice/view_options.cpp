@@ -22,7 +22,7 @@ render::FluidOptions ViewSettings::fluid_options(const render::SceneInfo& scene)
   f.surface_filter_method = render::parse_filter_method(filter);
   f.colormap = render::parse_colormap(colormap);
   f.splatting = render::parse_splatting(splat);
-  f.up_axis = render::parse_axis(up);
+  f.up = up_direction(scene);
   f.ground = !no_ground;
   f.half_resolution_thickness = !full_res_thickness;
   f.scalar_visibility = !color_by.empty();
@@ -46,6 +46,15 @@ render::FluidOptions ViewSettings::fluid_options(const render::SceneInfo& scene)
   return f;
 }
 
+render::Vec3 ViewSettings::up_direction(const render::SceneInfo& scene) const {
+  if (up.empty()) return scene.up;
+  try {
+    return render::parse_up(up);
+  } catch (const std::invalid_argument& e) {
+    throw std::runtime_error(std::string("--up: ") + e.what());
+  }
+}
+
 render::LodOptions ViewSettings::lod_options() const {
   render::LodOptions l = lod;
   l.mode = render::parse_lod_mode(lod_mode);
@@ -53,7 +62,7 @@ render::LodOptions ViewSettings::lod_options() const {
 }
 
 render::Camera ViewSettings::camera(const render::SceneInfo& scene, float aspect) const {
-  render::Camera c = render::Camera::framing(scene.bounds, render::parse_axis(up), aspect, fov);
+  render::Camera c = render::Camera::framing(scene.bounds, up_direction(scene), aspect, fov);
   if (!camera_text.empty()) {
     try {
       c.apply(camera_text);
@@ -87,7 +96,7 @@ void add_view_options(CLI::App& cmd, ViewSettings& v) {
   cmd.add_option("--camera", v.camera_text,
                  "View as \"eye=x,y,z;target=x,y,z;up=x,y,z;fov=deg\" (any subset; default: framing the data)");
   cmd.add_option("--fov", v.fov, "Vertical field of view in degrees for the default view")->capture_default_str();
-  cmd.add_option("--up", v.up, "World axis that points up: x, y or z")->capture_default_str();
+  cmd.add_option("--up", v.up, "World axis that points up: x, y, z, -x, -y or -z (default: the file's, see `info`)");
   cmd.add_option("--device", v.device, "Vulkan device: index or part of its name (default: first discrete GPU)");
   cmd.add_flag("--validation", v.validation, "Enable the Vulkan validation layer; errors make the command fail");
   auto& f = v.fluid;

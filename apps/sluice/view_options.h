@@ -18,7 +18,7 @@
 namespace sluice::app {
 
 struct ViewSettings {
-  std::string camera_text, up = "z", device;
+  std::string camera_text, up, device;  // up: empty = the file's
   float fov = 40.0f;
   bool validation = false;
   render::FluidOptions fluid;
@@ -34,6 +34,8 @@ struct ViewSettings {
   render::FluidOptions fluid_options(const render::SceneInfo& scene) const;
   render::LodOptions lod_options() const;
   render::Camera camera(const render::SceneInfo& scene, float aspect) const;
+  // --up, else the file's.
+  render::Vec3 up_direction(const render::SceneInfo& scene) const;
   // Loads --environment into the renderer, if given. Throws with the file named.
   void apply_environment(render::Renderer& renderer) const;
 };

@@ -43,7 +43,7 @@ void run_live_bench(const LiveBenchOptions& o) {
     render::Renderer renderer(context, render::live_scene(bounds, lo, {}, n));
     render::LiveSource live(renderer, lo);
     render::OffscreenTarget target(context, o.width, o.height, {1, false, false});
-    const render::Camera camera = render::Camera::framing(bounds, 2, float(o.width) / float(o.height));
+    const render::Camera camera = render::Camera::framing(bounds, render::Vec3{0, 0, 1}, float(o.width) / float(o.height));
     render::FluidOptions fluid;
     std::vector<double> encode, decode, upload, draw, total;
     for (int pass = 0; pass < 4; ++pass) {  // the first pass warms up

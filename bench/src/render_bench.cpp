@@ -201,7 +201,7 @@ void run_render_bench(const RenderBenchOptions& o) {
   std::vector<Case> cases;
   const auto run_frame = [&](const std::string& name, render::Renderer& r, const render::SceneInfo& scene,
                              const std::vector<float>* xyz) {
-    render::Camera cam = render::Camera::framing(scene.bounds, 2, float(o.width) / float(o.height));
+    render::Camera cam = render::Camera::framing(scene.bounds, render::Vec3{0, 0, 1}, float(o.width) / float(o.height));
     for (bool lod_on : {false, true}) {
       render::LodOptions lod;
       if (lod_on) {

@@ -55,6 +55,7 @@ class SyntheticSource final : public io::FrameSource {
     const uint64_t n = o_.particles;
     io::ParticleFrame f;
     f.time = double(frame) / o_.frame_rate;
+    f.time_given = true;
     f.positions.resize(3 * n);
     f.ids.resize(n);
     if (o_.speed_attribute) f.attributes.assign(1, std::vector<float>(n));
@@ -129,6 +130,9 @@ SynthResult write_synthetic(const SynthOptions& o, const std::function<void(uint
   header.particle_spacing = o.spacing;
   header.particle_radius = o.spacing / 2;
   header.frame_rate = o.frame_rate;
+  header.time_source = io::TimeSource::Step;
+  header.up = io::UpAxis::PosY;  // the block's height runs along y
+  header.up_evidence = io::UpEvidence::Given;
   if (o.speed_attribute) header.attributes.push_back({"speed"});
   header.source = "sluice synth: " + source->info().description;
 
@@ -139,7 +143,7 @@ SynthResult write_synthetic(const SynthOptions& o, const std::function<void(uint
   encode.zstd_level = o.zstd_level;
   encode.pack_planes = o.pack_planes;
   const size_t jobs = o.jobs > 0 ? size_t(o.jobs) : size_t(tbb::info::default_concurrency());
-  const io::ConvertResult r = io::convert_frames(*source, std::nullopt, writer, encode, jobs + 1,
+  const io::ConvertResult r = io::convert_frames(*source, std::nullopt, writer, io::ConvertSettings{encode, jobs + 1},
                                                  [&](const io::ConvertProgress& p) {
                                                    if (on_frame) on_frame(p.frame + 1, writer.bytes_written());
                                                  });

@@ -35,7 +35,32 @@ void check_range(const ByteReader& r, const std::array<float, 2>& range) {
   }
 }
 
+// The header's flags word (format 1.2): bits 0-2 up axis, 3-5 how it was
+// found, 6-7 the time source; the rest stays 0 for later minor versions.
+uint32_t header_flags(const FileHeader& h) {
+  return uint32_t(h.up) | uint32_t(h.up_evidence) << 3 | uint32_t(h.time_source) << 6;
+}
+
+void read_header_flags(ByteReader& r, FileHeader& h) {
+  const uint32_t flags = r.u32();
+  const uint32_t up = flags & 7, evidence = (flags >> 3) & 7, time = (flags >> 6) & 3;
+  if (up > uint32_t(UpAxis::NegZ)) r.fail("unknown up axis code " + std::to_string(up));
+  if (evidence > uint32_t(UpEvidence::Default)) r.fail("unknown up-axis evidence code " + std::to_string(evidence));
+  h.up = static_cast<UpAxis>(up);
+  h.up_evidence = static_cast<UpEvidence>(evidence);
+  h.time_source = static_cast<TimeSource>(time);
+}
+
 }  // namespace
+
+const char* time_source_name(TimeSource t) {
+  switch (t) {
+    case TimeSource::Input: return "input";
+    case TimeSource::Step: return "step";
+    case TimeSource::FrameNumber: return "frame number";
+    default: return "unstated";
+  }
+}
 
 std::vector<std::byte> serialize_file_header(const FileHeader& h) {
   std::vector<std::byte> out;
@@ -50,7 +75,7 @@ std::vector<std::byte> serialize_file_header(const FileHeader& h) {
   w.f32(h.particle_spacing);
   w.f32(h.particle_radius);
   w.f32(h.frame_rate);
-  w.u32(0);  // flags
+  w.u32(header_flags(h));
   for (const AttributeInfo& a : h.attributes) {
     w.name(a.name);
     w.f32(a.declared_min);
@@ -106,7 +131,7 @@ FileHeader parse_file_header(std::span<const std::byte> bytes, const ErrorLocati
   h.particle_spacing = r.f32();
   h.particle_radius = r.f32();
   h.frame_rate = r.f32();
-  r.u32();
+  read_header_flags(r, h);
   h.attributes.resize(attributes);
   for (AttributeInfo& a : h.attributes) {
     a.name = r.name();

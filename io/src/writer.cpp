@@ -37,6 +37,19 @@ void ContainerWriter::append(EncodedFrame frame) {
   write_all(frame.record);
 }
 
+void ContainerWriter::update_header(const FileHeader& header) {
+  if (fd_ < 0) throw Error({path_}, "header update after finish");
+  const std::vector<std::byte> bytes = serialize_file_header(header);
+  if (bytes.size() != serialize_file_header(header_).size() || header.attributes.size() != header_.attributes.size() ||
+      header.position_coding != header_.position_coding) {
+    throw Error({path_}, "header update would change its size or the frames' layout");
+  }
+  if (::pwrite(fd_, bytes.data(), bytes.size(), 0) != ssize_t(bytes.size())) {
+    throw Error({path_}, "could not rewrite the file header");
+  }
+  header_ = header;
+}
+
 void ContainerWriter::finish() {
   if (fd_ < 0) return;
   const std::vector<std::byte> index = serialize_index(index_.index(), header_.attributes.size());

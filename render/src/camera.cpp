@@ -1,5 +1,6 @@
 // Camera interactions and its text form (see camera.h).
 #include "sluice/render/camera.h"
+#include "sluice/render/options.h"
 
 #include <algorithm>
 #include <cmath>
@@ -19,8 +20,9 @@ Vec3 rotate(Vec3 v, Vec3 k, float a) {
   return v * c + cross(k, v) * s + k * (dot(k, v) * (1 - c));
 }
 
-Vec3 parse_vec3(const std::string& key, const std::string& value) {
-  Vec3 v;
+// `count` comma-separated numbers.
+std::vector<float> parse_floats(const std::string& key, const std::string& value, size_t count) {
+  const std::string want = count == 3 ? "three numbers x,y,z" : "two numbers x,y";
   std::vector<float> parts;
   std::stringstream ss(value);
   std::string item;
@@ -30,11 +32,16 @@ Vec3 parse_vec3(const std::string& key, const std::string& value) {
       parts.push_back(std::stof(item, &used));
       if (used != item.size()) throw std::invalid_argument(item);
     } catch (const std::exception&) {
-      throw std::invalid_argument("camera: '" + key + "' needs three numbers x,y,z, got '" + value + "'");
+      throw std::invalid_argument("camera: '" + key + "' needs " + want + ", got '" + value + "'");
     }
   }
-  if (parts.size() != 3) throw std::invalid_argument("camera: '" + key + "' needs three numbers x,y,z, got '" + value + "'");
-  return {parts[0], parts[1], parts[2]};
+  if (parts.size() != count) throw std::invalid_argument("camera: '" + key + "' needs " + want + ", got '" + value + "'");
+  return parts;
+}
+
+Vec3 parse_vec3(const std::string& key, const std::string& value) {
+  const std::vector<float> p = parse_floats(key, value, 3);
+  return {p[0], p[1], p[2]};
 }
 
 float parse_float(const std::string& key, const std::string& value) {
@@ -86,10 +93,12 @@ void Camera::zoom(float factor) {
   eye = target + (eye - target) * factor;
 }
 
-void Camera::fit(const Bounds& box, float aspect) {
+void Camera::fit(const Bounds& box, float aspect) { fit_within(box, std::tan(fov_deg * kPi / 360.0f), aspect); }
+
+void Camera::fit_within(const Bounds& box, float tan_half_v, float aspect) {
   const float radius = std::max(box.diagonal() * 0.5f, 1e-6f);
-  const float half_v = fov_deg * kPi / 360.0f;
-  const float half_h = std::atan(std::tan(half_v) * aspect);
+  const float half_v = std::atan(tan_half_v);
+  const float half_h = std::atan(tan_half_v * aspect);
   const float half = std::min(half_v, half_h);
   const float dist = radius / std::sin(half);
   Vec3 dir = forward();
@@ -98,21 +107,23 @@ void Camera::fit(const Bounds& box, float aspect) {
   eye = target - dir * dist;
 }
 
-Camera Camera::framing(const Bounds& box, int up_axis, float aspect, float fov_deg) {
+Camera Camera::framing(const Bounds& box, Vec3 up_direction, float aspect, float fov_deg, ScreenRect free) {
   Camera c;
   c.fov_deg = fov_deg;
-  Vec3 up{};
-  up[std::clamp(up_axis, 0, 2)] = 1;
+  const Vec3 up = length(up_direction) > 0 ? normalize(up_direction) : Vec3{0, 0, 1};
   c.up = up;
   // From the front-left, a little above: the view a ParaView user starts with.
-  const int a = (std::clamp(up_axis, 0, 2) + 1) % 3, b = (std::clamp(up_axis, 0, 2) + 2) % 3;
-  Vec3 dir{};
-  dir[a] = 0.55f;
-  dir[b] = 0.8f;
-  dir = normalize(dir - up * 0.45f);
+  Vec3 a, b;
+  frame_across(up, a, b);
+  const Vec3 dir = normalize(a * 0.55f + b * 0.8f - up * 0.45f);
   c.target = box.center();
   c.eye = c.target - dir;
-  c.fit(box, aspect);
+  // Fit into the free part: its share of the image's height narrows the
+  // field of view, its shape sets the aspect; the shift moves it there.
+  const float w = std::clamp(free.x1 - free.x0, 0.05f, 1.0f), h = std::clamp(free.y1 - free.y0, 0.05f, 1.0f);
+  c.fit_within(box, std::tan(fov_deg * kPi / 360.0f) * h, aspect * w / h);
+  c.shift_x = free.x0 + free.x1 - 1.0f;
+  c.shift_y = free.y0 + free.y1 - 1.0f;
   // The bounding sphere is loose for flat data: come in a little.
   c.zoom(0.8f);
   return c;
@@ -124,7 +135,11 @@ float Camera::near_plane() const {
 }
 
 Mat4 Camera::projection(float aspect) const {
-  return perspective_reverse_z(fov_deg * kPi / 180.0f, aspect, near_plane());
+  Mat4 m = perspective_reverse_z(fov_deg * kPi / 180.0f, aspect, near_plane());
+  // Shifting clip x (y) by shift * w moves the image centre; w = -z here.
+  m.at(0, 2) -= shift_x;
+  m.at(1, 2) -= shift_y;
+  return m;
 }
 
 std::string Camera::to_string() const {
@@ -135,6 +150,11 @@ std::string Camera::to_string() const {
     char n[32];
     std::snprintf(n, sizeof n, "%.9g", double(near));
     s += ";near=" + std::string(n);
+  }
+  if (shift_x != 0 || shift_y != 0) {
+    char n[64];
+    std::snprintf(n, sizeof n, "%.9g,%.9g", double(shift_x), double(shift_y));
+    s += ";shift=" + std::string(n);
   }
   return s;
 }
@@ -153,7 +173,11 @@ void Camera::apply(const std::string& text) {
     else if (key == "up") next.up = parse_vec3(key, value);
     else if (key == "fov") next.fov_deg = parse_float(key, value);
     else if (key == "near") next.near = parse_float(key, value);
-    else throw std::invalid_argument("camera: unknown key '" + key + "' (eye, target, up, fov, near)");
+    else if (key == "shift") {
+      const std::vector<float> xy = parse_floats(key, value, 2);
+      next.shift_x = xy[0];
+      next.shift_y = xy[1];
+    } else throw std::invalid_argument("camera: unknown key '" + key + "' (eye, target, up, fov, near, shift)");
   }
   if (!(next.fov_deg > 0 && next.fov_deg < 179)) throw std::invalid_argument("camera: fov must be in (0, 179) degrees");
   if (length(next.eye - next.target) <= 0) throw std::invalid_argument("camera: eye and target coincide");

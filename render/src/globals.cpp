@@ -130,14 +130,20 @@ Globals make_globals(const SceneInfo& scene, const View& view_in, const FluidOpt
   g.display[2] = v.write_aux ? 1u : 0u;
   g.display[3] = depth_filtered(o) ? 1u : 0u;
 
-  const int axis = std::clamp(o.up_axis, 0, 2);
-  Vec3 up{};
-  up[axis] = 1;
-  const float ground = scene.bounds.min[axis] - radius;
-  set4(g.up, up.x, up.y, up.z, ground);
-  // The light is given with z up; turn it to the scene's up axis.
+  const Vec3 up = length(o.up) > 0 ? normalize(o.up) : Vec3{0, 0, 1};
+  // The ground touches the bounds' lowest corner along up, a radius below.
+  float lowest = dot(scene.bounds.min, up);
+  for (int corner = 1; corner < 8; ++corner) {
+    const Vec3 p{(corner & 1) ? scene.bounds.max.x : scene.bounds.min.x, (corner & 2) ? scene.bounds.max.y : scene.bounds.min.y,
+                 (corner & 4) ? scene.bounds.max.z : scene.bounds.min.z};
+    lowest = std::min(lowest, dot(p, up));
+  }
+  set4(g.up, up.x, up.y, up.z, lowest - radius);
+  // The light is given with z up; turn it to the scene's up.
   const Vec3 li = o.light_direction;
-  const Vec3 l = normalize(axis == 2 ? li : axis == 1 ? Vec3{li.x, li.z, li.y} : Vec3{li.z, li.x, li.y});
+  Vec3 across_a, across_b;
+  frame_across(up, across_a, across_b);
+  const Vec3 l = normalize(across_a * li.x + across_b * li.y + up * li.z);
   set4(g.light, l.x, l.y, l.z, 0);
   const Vec3 c = scene.bounds.center();
   set4(g.scene, c.x, c.y, c.z, std::max(scene.bounds.diagonal(), 1e-6f));

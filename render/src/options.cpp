@@ -1,6 +1,8 @@
 // Option names (see options.h).
 #include "sluice/render/options.h"
 
+#include "sluice/io/up_axis.h"
+
 #include <array>
 #include <cctype>
 #include <stdexcept>
@@ -97,12 +99,18 @@ Splatting parse_splatting(const std::string& s) {
   throw std::invalid_argument("unknown splatting '" + s + "' (auto, compute, raster)");
 }
 
-int parse_axis(const std::string& s) {
-  const std::string l = lower(s);
-  if (l == "x" || l == "+x") return 0;
-  if (l == "y" || l == "+y") return 1;
-  if (l == "z" || l == "+z") return 2;
-  throw std::invalid_argument("unknown axis '" + s + "' (x, y, z)");
+Vec3 parse_up(const std::string& s) {
+  const std::optional<io::UpAxis> up = io::parse_up_axis(s);
+  if (!up) throw std::invalid_argument("unknown axis '" + s + "' (x, y, z, -x, -y, -z)");
+  const std::array<float, 3> v = io::up_vector(*up);
+  return {v[0], v[1], v[2]};
+}
+
+void frame_across(Vec3 up, Vec3& a, Vec3& b) {
+  const Vec3 u = normalize(up);
+  const Vec3 seed = std::abs(u.x) < 0.9f ? Vec3{1, 0, 0} : Vec3{0, 1, 0};
+  a = normalize(seed - u * dot(u, seed));
+  b = cross(u, a);
 }
 
 }  // namespace sluice::render

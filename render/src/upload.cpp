@@ -42,6 +42,8 @@ SceneInfo scene_info(const io::ContainerReader& reader) {
   s.bounds = {{index.bounds.min[0], index.bounds.min[1], index.bounds.min[2]},
               {index.bounds.max[0], index.bounds.max[1], index.bounds.max[2]}};
   if (index.bounds.empty()) s.bounds = {{0, 0, 0}, {1, 1, 1}};
+  const std::array<float, 3> up = io::up_vector(h.up);
+  s.up = {up[0], up[1], up[2]};
   s.particle_spacing = h.particle_spacing;
   s.particle_radius = h.particle_radius;
   s.coding = h.position_coding;

@@ -50,7 +50,7 @@ TEST(Camera, OrbitKeepsDistanceAndPan) {
 
 TEST(Camera, FitContainsBounds) {
   const Bounds box{{-1, -2, 0}, {3, 2, 1}};
-  Camera c = Camera::framing(box, 2, 16.0f / 9.0f);
+  Camera c = Camera::framing(box, Vec3{0, 0, 1}, 16.0f / 9.0f);
   c.fit(box, 16.0f / 9.0f);  // framing() then comes in a little; fit() alone must contain it
   const Mat4 vp = c.projection(16.0f / 9.0f) * c.view();
   for (int i = 0; i < 8; ++i) {

@@ -192,7 +192,7 @@ TEST(Embedding, AsymmetricFrustumMatchesTheCropOfAWiderView) {
   const SyntheticFluid f = synthetic_fluid(30000);
   Renderer renderer(context, f.scene);
   upload_synthetic(renderer, f);
-  const Camera cam = Camera::framing(f.scene.bounds, 2, 2.0f * kW / kH);
+  const Camera cam = Camera::framing(f.scene.bounds, Vec3{0, 0, 1}, 2.0f * kW / kH);
   FluidOptions o;
   OffscreenTarget wide(context, 2 * kW, kH), half(context, kW, kH);
   wide.render(renderer, cam, o, {});
@@ -215,7 +215,7 @@ TEST(Embedding, TwoViewsInOneTargetEachMatchASingleView) {
   const SyntheticFluid f = synthetic_fluid(30000);
   Renderer renderer(context, f.scene);
   upload_synthetic(renderer, f);
-  const Camera a = Camera::framing(f.scene.bounds, 2, float(kW) / kH);
+  const Camera a = Camera::framing(f.scene.bounds, Vec3{0, 0, 1}, float(kW) / kH);
   Camera b = a;
   b.orbit(0.5f, 0.1f);
   const FluidOptions o;
@@ -326,7 +326,7 @@ TEST(Embedding, PresentPassAndDirectShadingAgree) {
     const SyntheticFluid f = synthetic_fluid(20000);
     Renderer renderer(context, f.scene);
     upload_synthetic(renderer, f);
-    const Camera cam = Camera::framing(f.scene.bounds, 2, float(kW) / kH);
+    const Camera cam = Camera::framing(f.scene.bounds, Vec3{0, 0, 1}, float(kW) / kH);
     OffscreenTarget unorm(context, kW, kH);
     unorm.render(renderer, cam, FluidOptions{}, {});
     const std::vector<uint8_t> expect = unorm.read_rgba8();

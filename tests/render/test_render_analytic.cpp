@@ -330,7 +330,7 @@ TEST(RenderAnalytic, SyntheticFluidCountsAndChunks) {
   EXPECT_NEAR(double(f.particles), 1e5, 3e3);
   testing::OffscreenRenderer r(context(), f.scene, kW, kH);
   upload_synthetic(r, f);
-  Camera cam = Camera::framing(f.scene.bounds, 2, float(kW) / kH);
+  Camera cam = Camera::framing(f.scene.bounds, Vec3{0, 0, 1}, float(kW) / kH);
   cam.fit(f.scene.bounds, float(kW) / kH);  // the whole tank in view
   FluidOptions o;
   o.ground = true;

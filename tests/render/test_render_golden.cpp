@@ -45,7 +45,7 @@ const fs::path& sample() {
     header.lod_id_array = source->info().id_array;
     header.lod_source = header.lod_id_array.empty() ? io::LodSource::ParticleOrder : io::LodSource::IdHash;
     io::ContainerWriter writer(out, header);
-    io::convert_frames(*source, std::move(first), writer, io::EncodeOptions{}, 2);
+    io::convert_frames(*source, std::move(first), writer, io::ConvertSettings{io::EncodeOptions{}, 2});
     writer.finish();
     g_converted = true;
     return out;
@@ -85,7 +85,7 @@ TEST_P(GoldenImage, MatchesReference) {
   o.scalar_visibility = g.color_by_rho;
   o.colormap = Colormap::Turbo;
   r.load_frame(reader, g.frame, g.color_by_rho ? 0 : -1);
-  Camera cam = Camera::framing(scene.bounds, 2, 320.0f / 240.0f);
+  Camera cam = Camera::framing(scene.bounds, Vec3{0, 0, 1}, 320.0f / 240.0f);
   if (*g.camera) cam.apply(g.camera);
   const FrameStats stats = r.render(cam, o, {});
   EXPECT_EQ(stats.particles, 9360u);

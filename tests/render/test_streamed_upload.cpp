@@ -71,7 +71,7 @@ Rendered draw(testing::OffscreenRenderer& r, const SceneInfo& scene) {
   FluidOptions o;
   o.scalar_visibility = true;
   o.color_attribute = 0;
-  const Camera cam = Camera::framing(scene.bounds, 2, 160.0f / 120.0f);
+  const Camera cam = Camera::framing(scene.bounds, Vec3{0, 0, 1}, 160.0f / 120.0f);
   const FrameStats stats = r.render(cam, o, {});
   return {r.read_rgba8(), r.read_raw_depth(), stats.particles};
 }

@@ -56,7 +56,7 @@ TEST_F(WindowTest, PresentsTheRenderersImageAndTheHud) {
   const SyntheticFluid fluid = synthetic_fluid(20000);
   Renderer renderer(*context_, fluid.scene);
   upload_synthetic(renderer, fluid);
-  const Camera cam = Camera::framing(fluid.scene.bounds, 2, float(window.width()) / float(window.height()));
+  const Camera cam = Camera::framing(fluid.scene.bounds, Vec3{0, 0, 1}, float(window.width()) / float(window.height()));
   const FluidOptions options;
   OffscreenTarget target(*context_, window.width(), window.height());
   const FrameStats stats = target.render(renderer, cam, options, {});

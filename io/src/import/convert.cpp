@@ -14,6 +14,8 @@ struct Work {
   uint64_t frame = 0;
   uint64_t input_bytes = 0;
   std::vector<std::string> repairs;
+  std::optional<FrameShape> shape;
+  bool time_given = false;
   EncodedFrame encoded;
 };
 
@@ -24,9 +26,13 @@ uint64_t source_file_bytes(const FrameSource& source, uint64_t frame) {
 }
 
 Work encode_one(const FrameSource& source, ParticleFrame frame, uint64_t index, const FileHeader& header,
-                const EncodeOptions& options) {
+                const ConvertSettings& settings) {
   Work w;
   w.frame = index;
+  w.time_given = frame.time_given;
+  const uint64_t last = source.frame_count() - 1;
+  if (settings.shape_frames > 0 && (index < settings.shape_frames || index == last)) w.shape = measure_shape(frame.positions, &settings.shape_grid);
+  if (!frame.time_given && settings.time_step > 0) frame.time = double(index) * settings.time_step;
   w.input_bytes = source_file_bytes(source, index);
   w.repairs = std::move(frame.repairs);
   const std::vector<uint16_t> lod = lod_values(frame.ids, frame.count());
@@ -36,7 +42,7 @@ Work encode_one(const FrameSource& source, ParticleFrame frame, uint64_t index, 
   for (const auto& a : frame.attributes) in.attributes.emplace_back(a);
   in.time = frame.time;
   try {
-    w.encoded = encode_frame(in, header, options);
+    w.encoded = encode_frame(in, header, settings.encode);
   } catch (const Error& e) {
     throw Error({source.frame_name(index), index}, e.message());
   }
@@ -46,13 +52,13 @@ Work encode_one(const FrameSource& source, ParticleFrame frame, uint64_t index, 
 }  // namespace
 
 ConvertResult convert_frames(const FrameSource& source, std::optional<ParticleFrame> first, ContainerWriter& writer,
-                             const EncodeOptions& options, size_t max_in_flight,
+                             const ConvertSettings& settings,
                              const std::function<void(const ConvertProgress&)>& on_frame) {
   const uint64_t frames = source.frame_count();
   ConvertResult result;
   uint64_t next = 0;
   tbb::parallel_pipeline(
-      std::max<size_t>(2, max_in_flight),
+      std::max<size_t>(2, settings.max_in_flight),
       tbb::make_filter<void, uint64_t>(tbb::filter_mode::serial_in_order,
                                        [&](tbb::flow_control& fc) -> uint64_t {
                                          if (next == frames) fc.stop();
@@ -61,7 +67,7 @@ ConvertResult convert_frames(const FrameSource& source, std::optional<ParticleFr
           tbb::make_filter<uint64_t, Work>(tbb::filter_mode::parallel,
                                            [&](uint64_t f) {
                                              ParticleFrame frame = (f == 0 && first) ? std::move(*first) : source.read(f);
-                                             return encode_one(source, std::move(frame), f, writer.header(), options);
+                                             return encode_one(source, std::move(frame), f, writer.header(), settings);
                                            }) &
           tbb::make_filter<Work, void>(tbb::filter_mode::serial_in_order, [&](Work w) {
             result.frames++;
@@ -69,7 +75,7 @@ ConvertResult convert_frames(const FrameSource& source, std::optional<ParticleFr
             result.raw_bytes += w.encoded.raw_bytes;
             result.input_bytes += w.input_bytes;
             writer.append(std::move(w.encoded));
-            if (on_frame) on_frame({w.frame, w.input_bytes, w.repairs});
+            if (on_frame) on_frame({w.frame, w.input_bytes, w.repairs, w.shape, w.time_given});
           }));
   return result;
 }

@@ -268,6 +268,7 @@ class SeriesSource final : public FrameSource {
     }
     note_duplicate_ids(out);
     out.time = ff.time ? *ff.time : file_time ? *file_time : static_cast<double>(i);
+    out.time_given = ff.time || file_time;
     return out;
   }
 

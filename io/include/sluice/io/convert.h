@@ -11,6 +11,7 @@
 
 #include "sluice/io/codec.h"
 #include "sluice/io/import.h"
+#include "sluice/io/up_axis.h"
 #include "sluice/io/writer.h"
 
 namespace sluice::io {
@@ -19,6 +20,20 @@ struct ConvertProgress {
   uint64_t frame;                            // just written
   uint64_t input_bytes;                      // size of its source file (0 if unknown)
   const std::vector<std::string>& repairs;   // what the importer repaired in it
+  const std::optional<FrameShape>& shape;    // measured for the first `shape_frames` frames and the last
+  bool time_given;                           // the input stated this frame's time
+};
+
+struct ConvertSettings {
+  EncodeOptions encode;
+  size_t max_in_flight = 2;  // frames in memory at once
+  // Seconds between frames, for frames whose input states no time: frame i
+  // gets i * time_step. 0: they keep the frame number as their time.
+  double time_step = 0;
+  // Frames (from the first) whose FrameShape is measured for up-axis
+  // detection; the last frame's is measured too when this is non-zero.
+  uint64_t shape_frames = 16;
+  ShapeGrid shape_grid;  // the grid of FrameShape's columns; an empty box: no columns
 };
 
 struct ConvertResult {
@@ -33,7 +48,7 @@ struct ConvertResult {
 // runs on one thread at a time, in frame order. Errors name the source file
 // and frame. Does not call writer.finish().
 ConvertResult convert_frames(const FrameSource& source, std::optional<ParticleFrame> first, ContainerWriter& writer,
-                             const EncodeOptions& options, size_t max_in_flight,
+                             const ConvertSettings& settings,
                              const std::function<void(const ConvertProgress&)>& on_frame = {});
 
 }  // namespace sluice::io

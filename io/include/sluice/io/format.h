@@ -11,11 +11,12 @@
 #include <vector>
 
 #include "sluice/io/types.h"
+#include "sluice/io/up_axis.h"
 
 namespace sluice::io {
 
 inline constexpr uint16_t kFormatMajor = 1;  // readers reject other majors
-inline constexpr uint16_t kFormatMinor = 1;  // readers accept any minor of their major
+inline constexpr uint16_t kFormatMinor = 2;  // readers accept any minor of their major
 
 // Hard limits. A header that claims more is rejected before any allocation.
 inline constexpr uint32_t kMaxHeaderBytes = 1u << 20;
@@ -54,6 +55,15 @@ enum class ChunkCodec : uint8_t {
   Packed = 2,  // planes, each stored, zstd or bit-packed (format 1.1)
 };
 
+// Where a file's frame times come from (format 1.2).
+enum class TimeSource : uint8_t {
+  Unstated = 0,     // a file older than 1.2: times as its converter found them
+  Input = 1,        // the input's own times (.pvd, a time field in each file)
+  Step = 2,         // frame number x a time step given at conversion (--fps, --dt)
+  FrameNumber = 3,  // none known: the time field holds the frame number
+};
+const char* time_source_name(TimeSource t);
+
 struct FileHeader {
   uint16_t version_major = kFormatMajor;
   uint16_t version_minor = kFormatMinor;
@@ -62,6 +72,10 @@ struct FileHeader {
   float particle_spacing = 0.f;  // rest spacing in world units; 0 if unknown
   float particle_radius = 0.f;   // render radius in world units; 0 if unknown
   float frame_rate = 0.f;        // nominal frames per second of playback; 0 if unknown
+  // Format 1.2, in the flags word (a 1.1 reader ignores it and sees +z up):
+  UpAxis up = UpAxis::Unstated;                  // which world direction points up
+  UpEvidence up_evidence = UpEvidence::Unstated;  // how that was found
+  TimeSource time_source = TimeSource::Unstated;  // what the frames' time fields hold
   std::vector<AttributeInfo> attributes;
   std::string lod_id_array;      // the id array hashed for LOD values, if any
   std::string source;            // free text: what the file was converted from

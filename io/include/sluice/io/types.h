@@ -30,6 +30,7 @@ struct ParticleFrame {
   std::vector<uint64_t> ids;                  // stable particle ids; empty if the source has none
   std::vector<std::vector<float>> attributes; // one array per requested attribute, same order as requested
   double time = 0.0;                          // simulation time in seconds (or the frame number if unknown)
+  bool time_given = false;                    // the input stated `time` (.pvd, a time field); else it is the frame number
   std::vector<std::string> repairs;           // human-readable notes of what the importer repaired
 
   uint64_t count() const { return positions.size() / 3; }

@@ -26,6 +26,10 @@ class ContainerWriter {
 
   // Appends a frame; frames are numbered in the order they are appended.
   void append(EncodedFrame frame);
+  // Rewrites the file header in place with what was learnt from the frames
+  // (the up axis, ...). Only fields of fixed size may change: the header's
+  // size, attributes and position coding must stay. Throws io::Error.
+  void update_header(const FileHeader& header);
   // Writes the frame index and the footer, flushes and closes the file.
   void finish();
 

@@ -12,6 +12,11 @@
 
 namespace sluice::render {
 
+// A part of an image in fractions of its size: x right, y down, 0..1.
+struct ScreenRect {
+  float x0 = 0, y0 = 0, x1 = 1, y1 = 1;
+};
+
 struct Bounds {
   Vec3 min, max;
   Vec3 center() const { return (min + max) * 0.5f; }
@@ -25,6 +30,10 @@ class Camera {
   Vec3 up{0, 0, 1};
   float fov_deg = 40.0f;  // vertical field of view
   float near = 0.0f;      // near plane distance; 0: automatic (distance to target / 1000)
+  // Where the view's centre lies on the image, in normalized device
+  // coordinates (x right, y down, -1..1; 0,0: the image centre): a lens
+  // shift, so a view can be framed beside a panel that covers the rest.
+  float shift_x = 0.0f, shift_y = 0.0f;
 
   // Rotates the eye about the target: yaw about `up`, pitch about the
   // camera's right axis (radians). Pitch stops short of the poles.
@@ -37,20 +46,27 @@ class Camera {
   // Keeps the viewing direction, moves the target to the box's centre and the
   // eye back until the box's bounding sphere fits the narrower fov.
   void fit(const Bounds& box, float aspect);
-  // A default three-quarter view of `box` looking along -up·0.35 + side,
-  // then fit(). `up_axis` is 0 (x), 1 (y) or 2 (z).
-  static Camera framing(const Bounds& box, int up_axis, float aspect, float fov_deg = 40.0f);
+  // A default three-quarter view of `box` from a little above, `up` pointing
+  // up on screen (any direction; a file's is SceneInfo::up), then fit().
+  // `free`: the part of the image to frame the data in (the rest may be
+  // covered, by a HUD for one); the lens shift centres the view there.
+  static Camera framing(const Bounds& box, Vec3 up, float aspect, float fov_deg = 40.0f, ScreenRect free = {});
 
   float near_plane() const;
   Vec3 forward() const { return normalize(target - eye); }
   Mat4 view() const { return look_at(eye, target, up); }
   Mat4 projection(float aspect) const;
 
-  // "eye=..;target=..;up=..;fov=.." with 9 significant digits.
+  // "eye=..;target=..;up=..;fov=.." with 9 significant digits (and
+  // ";near=..", ";shift=x,y" when they are not 0).
   std::string to_string() const;
   // Parses the form above; keys may come in any order and be omitted (they
   // keep this camera's values). Throws std::invalid_argument naming the bad key.
   void apply(const std::string& text);
+
+ private:
+  // fit() for a field of view given by tan(half the vertical angle).
+  void fit_within(const Bounds& box, float tan_half_v, float aspect);
 };
 
 }  // namespace sluice::render

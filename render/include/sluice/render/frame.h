@@ -27,6 +27,7 @@ namespace sluice::render {
 // Constant over a sequence.
 struct SceneInfo {
   Bounds bounds;                 // of every frame
+  Vec3 up{0, 0, 1};              // world direction that points up (the file's, format 1.2; +z before)
   float particle_spacing = 0;    // rest spacing (0 if unknown)
   float particle_radius = 0;     // stored radius (0 if unknown)
   io::PositionCoding coding = io::PositionCoding::Quantized16;

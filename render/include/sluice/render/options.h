@@ -85,9 +85,9 @@ struct FluidOptions {
   Colormap colormap = Colormap::Viridis;
 
   // Scene around the fluid.
-  int up_axis = 2;                  // 0 x, 1 y, 2 z: which world axis points up
-  bool ground = true;               // a checkered plane under the fluid's bounds
-  Vec3 light_direction{0.4f, -0.3f, 1.0f};  // towards the sun; given with z up, turned to up_axis
+  Vec3 up{0, 0, 1};                 // world direction that points up (normalized here; a file's: SceneInfo::up)
+  bool ground = true;               // a checkered plane under the fluid's bounds, across `up`
+  Vec3 light_direction{0.4f, -0.3f, 1.0f};  // towards the sun; given with z up, turned to `up`
 };
 
 enum class LodMode : uint32_t {
@@ -138,6 +138,10 @@ SurfaceFilterMethod parse_filter_method(const std::string& s);  // "narrow-range
 LodMode parse_lod_mode(const std::string& s);                   // "off" | "clod" | "density"
 Colormap parse_colormap(const std::string& s);
 std::vector<std::string> display_mode_names();  // short names, in enum order
-int parse_axis(const std::string& s);  // "x" | "y" | "z" -> 0..2
+// "x" | "y" | "z" | "-x" | "-y" | "-z" (and "+x" ...) -> that unit vector.
+Vec3 parse_up(const std::string& s);
+// Two unit vectors across `up` completing a right-handed frame (a, b, up):
+// for +z they are x and y.
+void frame_across(Vec3 up, Vec3& a, Vec3& b);
 
 }  // namespace sluice::render

@@ -1,0 +1,194 @@
+// The conversion behind `sluice convert` and the play/render cache.
+#include "conversion.h"
+
+#include <tbb/global_control.h>
+#include <tbb/info.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <optional>
+
+#include "progress.h"
+#include "sluice/io/convert.h"
+#include "sluice/io/import.h"
+#include "sluice/io/spacing.h"
+#include "sluice/io/up_axis.h"
+#include "sluice/io/writer.h"
+
+namespace sluice::app {
+namespace {
+
+void note(const ConversionOptions& o, const std::string& line) {
+  if (!o.quiet) std::fprintf(stderr, "%s\n", line.c_str());
+}
+
+std::vector<std::string> carried_attributes(const ConversionOptions& o, const io::FrameSource& source) {
+  if (!o.all_attributes) return o.attributes;
+  std::vector<std::string> out;
+  for (const std::string& a : source.info().arrays) {
+    if (a != source.info().id_array && out.size() < io::kMaxAttributes) out.push_back(a);
+  }
+  return out;
+}
+
+// Times: the input's own, or a step the user gave, or frame numbers (said so).
+void choose_times(const ConversionOptions& o, const io::ParticleFrame& first, io::FileHeader& h, double& step) {
+  h.frame_rate = float(o.fps > 0 ? o.fps : kDefaultFrameRate);
+  step = 0;
+  if (first.time_given) {
+    h.time_source = io::TimeSource::Input;
+    if (o.dt > 0) note(o, "note: the input states its own times; --dt is not used");
+    return;
+  }
+  if (o.dt > 0 || o.fps > 0) {
+    step = o.dt > 0 ? o.dt : 1.0 / o.fps;
+    h.time_source = io::TimeSource::Step;
+    return;
+  }
+  h.time_source = io::TimeSource::FrameNumber;
+  note(o, "note: the input states no simulation times: frames are numbered and play at " +
+              std::to_string(int(kDefaultFrameRate)) +
+              "/s. Pass --dt SECONDS (time between frames) or --fps N to give them times.");
+}
+
+// Motion over the first frames, then pressure at the end, then the shape at
+// the end, then +z (see io/up_axis.h).
+io::UpFinding find_up(const ConversionOptions& o, const std::vector<io::FrameShape>& first_frames,
+                      const io::FrameShape& last, const io::FrameSource& source, float spacing) {
+  if (auto f = io::up_from_motion(first_frames, spacing)) return *f;
+  const std::string pressure = io::pick_pressure_array(source.info().arrays);
+  if (!pressure.empty()) {
+    io::ImportOptions import;
+    import.attributes = {pressure};
+    import.id_array = o.id_array;
+    import.no_ids = true;
+    const auto again = io::open_source(o.input, import);
+    const io::ParticleFrame frame = again->read(again->frame_count() - 1);
+    if (auto f = io::up_from_pressure(frame.positions, frame.attributes.at(0), pressure)) return *f;
+  }
+  if (auto f = io::up_from_shape(last)) return *f;
+  io::UpFinding f;
+  f.reason = "nothing in the data shows it (no fall over the first frames, no pressure or density array that "
+             "grows with depth, no flat layer): assumed";
+  return f;
+}
+
+}  // namespace
+
+ConversionSummary convert_input(const ConversionOptions& o, const std::string& output) {
+  std::optional<tbb::global_control> limit;
+  if (o.jobs > 0) limit.emplace(tbb::global_control::max_allowed_parallelism, size_t(o.jobs));
+  const int jobs = o.jobs > 0 ? o.jobs : tbb::info::default_concurrency();
+  std::optional<io::UpAxis> given_up;
+  if (!o.up.empty()) {
+    given_up = io::parse_up_axis(o.up);
+    if (!given_up) throw std::runtime_error("--up: expected x, y, z, -x, -y or -z, got '" + o.up + "'");
+  }
+
+  io::ImportOptions import;
+  import.id_array = o.id_array;
+  import.no_ids = o.no_ids;
+  std::unique_ptr<io::FrameSource> source = io::open_source(o.input, import);
+  if (o.all_attributes) {
+    import.attributes = carried_attributes(o, *source);
+    if (!import.attributes.empty()) source = io::open_source(o.input, import);
+  } else {
+    import.attributes = o.attributes;
+    if (!import.attributes.empty()) source = io::open_source(o.input, import);
+  }
+  const uint64_t frames = source->frame_count();
+  if (frames == 0) throw std::runtime_error(o.input + ": no frames to convert");
+
+  // Frame 0 is read up front: the header needs its spacing, and it is kept
+  // for the pipeline rather than read twice.
+  std::optional<io::ParticleFrame> first = source->read(0);
+  io::FileHeader header;
+  header.position_coding = o.lossless ? io::PositionCoding::Float32 : io::PositionCoding::Quantized16;
+  header.particle_spacing = o.spacing > 0 ? o.spacing : io::estimate_spacing(first->positions);
+  header.particle_radius = o.radius > 0 ? o.radius : header.particle_spacing * 0.5f;
+  for (const std::string& a : import.attributes) header.attributes.push_back({a});
+  header.lod_id_array = source->info().id_array;
+  header.lod_source = header.lod_id_array.empty() ? io::LodSource::ParticleOrder : io::LodSource::IdHash;
+  header.source = source->info().description;
+  io::ConvertSettings settings;
+  choose_times(o, *first, header, settings.time_step);
+  // Until the frames have shown which way is up, the header says what the
+  // first frame's shape says (what a recovered, cut-off file keeps).
+  for (size_t i = 0; i + 2 < first->positions.size(); i += 3) {
+    settings.shape_grid.box.extend(first->positions[i], first->positions[i + 1], first->positions[i + 2]);
+  }
+  settings.shape_grid.cell = 2 * header.particle_spacing;
+  const io::FrameShape first_shape = io::measure_shape(first->positions, &settings.shape_grid);
+  const std::optional<io::UpFinding> provisional = io::up_from_shape(first_shape);
+  header.up = given_up ? *given_up : provisional ? provisional->up : io::UpAxis::PosZ;
+  header.up_evidence = given_up ? io::UpEvidence::Given : provisional ? provisional->evidence : io::UpEvidence::Default;
+  settings.shape_frames = given_up ? 0 : 16;
+
+  if (!o.quiet) {
+    std::fprintf(stderr, "converting %s\n  %llu frames, spacing %g (%s), radius %g, %s positions, LOD from %s\n",
+                 source->info().description.c_str(), (unsigned long long)frames, header.particle_spacing,
+                 o.spacing > 0 ? "given" : "estimated", header.particle_radius,
+                 o.lossless ? "float32 (lossless)" : "16-bit quantized",
+                 header.lod_id_array.empty() ? "particle order" : ("id array '" + header.lod_id_array + "'").c_str());
+  }
+  if (header.lod_id_array.empty()) {
+    note(o, "warning: no particle id array found (looked for id, Idp, gid, particle_id, ...): LOD values follow\n"
+            "         the particle order, stable only if the solver writes particles in the same order each\n"
+            "         frame. Pass --id-array NAME if the ids have another name.");
+  }
+
+  const std::string partial = output + ".partial";
+  io::ContainerWriter writer(partial, header);
+  settings.encode.chunk_particles = o.chunk;
+  settings.encode.zstd_level = o.level;
+  settings.encode.pack_planes = !o.smallest;
+  settings.max_in_flight = size_t(jobs) + 1;
+  ProgressBar bar("frames", frames, o.quiet);
+  size_t warnings = 0, suppressed = 0;
+  uint64_t bytes_in = 0, untimed = 0;
+  std::vector<io::FrameShape> first_frames;
+  io::FrameShape last_shape;
+  const io::ConvertResult result =
+      io::convert_frames(*source, std::move(first), writer, settings, [&](const io::ConvertProgress& p) {
+        for (const std::string& r : p.repairs) {
+          if (warnings++ < o.max_warnings) bar.warn(source->frame_name(p.frame) + ": " + r);
+          else ++suppressed;
+        }
+        if (p.shape && p.frame < settings.shape_frames) first_frames.push_back(*p.shape);
+        if (p.shape && p.frame + 1 == frames) last_shape = *p.shape;
+        if (header.time_source == io::TimeSource::Input && !p.time_given) ++untimed;
+        bytes_in += p.input_bytes;
+        bar.update(p.frame + 1, bytes_in, writer.bytes_written());
+      });
+  bar.finish();
+  if (suppressed) std::fprintf(stderr, "warning: %zu more repairs not shown\n", suppressed);
+  if (untimed) {
+    note(o, "warning: " + std::to_string(untimed) + " frames state no time while the others do: their time is "
+                "their frame number");
+  }
+
+  if (given_up) {
+    note(o, "up: " + io::up_axis_name(header.up) + " (given)");
+  } else {
+    if (frames == 1) last_shape = first_shape;
+    const io::UpFinding up = find_up(o, first_frames, last_shape, *source, header.particle_spacing);
+    header.up = up.up;
+    header.up_evidence = up.evidence;
+    writer.update_header(header);
+    note(o, "up: " + io::up_axis_name(up.up) + " (" + io::up_evidence_name(up.evidence) + "): " + up.reason +
+                ". Pass --up to choose.");
+  }
+  writer.finish();
+  std::filesystem::rename(partial, output);
+
+  ConversionSummary s;
+  s.frames = frames;
+  s.particles = result.particles;
+  s.input_bytes = result.input_bytes;
+  s.seconds = bar.elapsed();
+  s.header = header;
+  return s;
+}
+
+}  // namespace sluice::app

@@ -1,0 +1,47 @@
+// Simulation output -> .sluice, as `sluice convert` does it and as `play` and
+// `render` do it for their cache: header from the first frame, times, the up
+// axis found from the frames (or given), progress and notes on stderr.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "sluice/io/format.h"
+
+namespace sluice::app {
+
+struct ConversionOptions {
+  std::string input;  // file, glob, .pvd or directory
+  std::vector<std::string> attributes;
+  bool all_attributes = false;  // carry every point array of the first frame (the cache does)
+  std::string id_array;
+  bool no_ids = false;
+  bool lossless = false;
+  float spacing = 0, radius = 0;
+  double fps = 0;  // playback frames/s; also the time step 1/fps for inputs without times (0: unset)
+  double dt = 0;   // seconds between frames for inputs without times (0: unset)
+  std::string up;  // "", or x|y|z|-x|-y|-z: overrides detection
+  uint32_t chunk = 65536;
+  int level = 3;
+  bool smallest = false;
+  int jobs = 0;
+  bool quiet = false;
+  size_t max_warnings = 20;
+};
+
+struct ConversionSummary {
+  uint64_t frames = 0, particles = 0, input_bytes = 0;
+  double seconds = 0;
+  io::FileHeader header;  // as finally written
+};
+
+// Converts `o.input` into `output` through `output + ".partial"` (renamed
+// when complete, so a cut-off run never leaves a file that looks whole).
+// Throws io::Error / std::runtime_error naming the input on bad input.
+ConversionSummary convert_input(const ConversionOptions& o, const std::string& output);
+
+// Playback frame rate when neither the input nor the user gives one.
+inline constexpr double kDefaultFrameRate = 30.0;
+
+}  // namespace sluice::app
