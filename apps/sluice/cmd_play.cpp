@@ -192,6 +192,7 @@ void add_play(CLI::App& app) {
   cmd->callback([o, w] {
     const PlayableFile input = open_playable(o->file, {o->no_cache, o->quiet});
     PlayOptions p = *o;
+    p.source = o->file;
     p.file = input.path();
     if (p.headless && w->gpu) run_play_gpu(p, *w);
     else if (p.headless) run_play_headless(p);
@@ -205,6 +206,7 @@ void add_play(CLI::App& app) {
     }
     const PlayableFile input = open_playable(o->file, {o->no_cache, o->quiet});
     PlayOptions p = *o;
+    p.source = o->file;
     p.file = input.path();
     run_play_headless(p);
   });

@@ -65,6 +65,8 @@ struct Player {
   render::LodOptions lod;
   uint64_t frames = 0, frame = 0;
   bool has_frame = false, hud = true, screenshot = false;
+  bool times_known = true;        // the file has simulation times (not frame numbers)
+  ImVec2 hud_min{0, 0}, hud_max{0, 0};  // where the HUD panel was drawn, pixels
   bool orbiting = false, panning = false;
   double mouse_x = 0, mouse_y = 0;
   render::FrameStats stats;
@@ -180,13 +182,20 @@ bool combo(const char* label, Enum& value, const std::vector<std::string>& names
   return true;
 }
 
+// The panel opens compact (playback and the timeline); performance, view
+// settings and keys unfold under their headers.
 void draw_hud(Player& p, const std::string& file) {
   ImGui::SetNextWindowPos(ImVec2(10, 10), ImGuiCond_FirstUseEver);
   ImGui::SetNextWindowBgAlpha(0.8f);
   ImGui::Begin("sluice", nullptr, ImGuiWindowFlags_AlwaysAutoResize);
   ImGui::TextUnformatted(std::filesystem::path(file).filename().c_str());
-  ImGui::Text("frame %llu / %llu   t = %.4g s   %s", (unsigned long long)p.frame + 1, (unsigned long long)p.frames,
-              p.reader->index().frames[p.frame].time, runtime::state_name(p.playback->state()));
+  if (p.times_known) {
+    ImGui::Text("frame %llu / %llu   t = %.4g s   %s", (unsigned long long)p.frame + 1, (unsigned long long)p.frames,
+                p.reader->index().frames[p.frame].time, runtime::state_name(p.playback->state()));
+  } else {
+    ImGui::Text("frame %llu / %llu (no simulation times)   %s", (unsigned long long)p.frame + 1,
+                (unsigned long long)p.frames, runtime::state_name(p.playback->state()));
+  }
   if (ImGui::Button(p.playing() ? "Pause" : "Play")) p.toggle_play();
   ImGui::SameLine();
   if (ImGui::Button("<")) p.step(-1);
@@ -195,51 +204,67 @@ void draw_hud(Player& p, const std::string& file) {
   ImGui::SameLine();
   if (ImGui::Button(runtime::end_mode_name(p.playback->end_mode()))) p.next_end_mode();
   ImGui::SameLine();
-  ImGui::Text("x%.3g", p.playback->rate());
+  ImGui::Text("x%.3g   %.0f fps", p.playback->rate(), p.shown_fps);
   int f = int(p.frame);
   ImGui::SetNextItemWidth(320);
   if (ImGui::SliderInt("##timeline", &f, 0, int(p.frames) - 1, "frame %d")) p.go_to(uint64_t(f));
-  ImGui::Separator();
-  ImGui::Text("%.1f fps   frame %.1f ms   GPU %.2f ms", p.shown_fps, p.frame_ms, p.stats.gpu_ms);
-  if (ImGui::BeginTable("passes", 2, ImGuiTableFlags_SizingFixedFit)) {
-    for (const render::PassTime& t : p.stats.passes) {
-      ImGui::TableNextRow();
-      ImGui::TableNextColumn();
-      ImGui::TextUnformatted(t.name.c_str());
-      ImGui::TableNextColumn();
-      ImGui::Text("%7.3f ms", t.ms);
-    }
-    ImGui::EndTable();
-  }
-  ImGui::Text("particles %llu drawn of %llu, %llu chunks visible", (unsigned long long)p.stats.drawn,
-              (unsigned long long)p.stats.particles, (unsigned long long)p.stats.visible_chunks);
-  const runtime::PlaybackStats& st = p.stream;
-  ImGui::Text("stream: read %s/s, decode %s/s, %zu workers (%s)", human_bytes(p.rates.read_mbps * 1e6).c_str(),
-              human_bytes(p.rates.decode_mbps * 1e6).c_str(), p.rates.worker_decode_mbps.size(), p.io_mode.c_str());
-  ImGui::Text("window %u/%u frames, %u ready, %s held", st.pipeline.active_frames, st.pipeline.window_frames,
-              st.pipeline.frames_ready, human_bytes(double(st.pipeline.held_bytes)).c_str());
-  ImGui::Text("stalls %llu  drops %llu  errors %llu   upload %.2f ms GPU, %.2f ms wall", (unsigned long long)st.stalls,
-              (unsigned long long)st.drops, (unsigned long long)st.errors, p.stats.upload_ms, p.upload_wall_ms);
-  ImGui::Separator();
-  combo("LOD", p.lod.mode, {"off", "clod", "density"});
-  ImGui::SliderFloat("LOD level", &p.lod.level, 0.0f, 1.0f, "%.2f");
-  combo("filter", p.fluid.surface_filter_method, {"bilateral", "narrow-range"});
-  ImGui::SliderInt("iterations", &p.fluid.surface_filter_iterations, 0, 3);
-  ImGui::SliderInt("filter radius", &p.fluid.surface_filter_radius, 1, 40);
-  combo("display", p.fluid.display_mode, render::display_mode_names());
-  combo("splatting", p.fluid.splatting, {"compute", "raster", "auto"});
-  ImGui::Checkbox("ground", &p.fluid.ground);
-  if (ImGui::Button("Reset view")) p.camera = p.home;
-  ImGui::SameLine();
-  if (ImGui::Button("Copy camera")) p.print_camera();
-  ImGui::SameLine();
-  if (ImGui::Button("Screenshot")) p.screenshot = true;
   if (!p.message.empty()) ImGui::TextUnformatted(p.message.c_str());
+  if (ImGui::CollapsingHeader("Performance")) {
+    ImGui::Text("%.1f fps   frame %.1f ms   GPU %.2f ms", p.shown_fps, p.frame_ms, p.stats.gpu_ms);
+    if (ImGui::BeginTable("passes", 2, ImGuiTableFlags_SizingFixedFit)) {
+      for (const render::PassTime& t : p.stats.passes) {
+        ImGui::TableNextRow();
+        ImGui::TableNextColumn();
+        ImGui::TextUnformatted(t.name.c_str());
+        ImGui::TableNextColumn();
+        ImGui::Text("%7.3f ms", t.ms);
+      }
+      ImGui::EndTable();
+    }
+    ImGui::Text("particles %llu drawn of %llu, %llu chunks visible", (unsigned long long)p.stats.drawn,
+                (unsigned long long)p.stats.particles, (unsigned long long)p.stats.visible_chunks);
+    const runtime::PlaybackStats& st = p.stream;
+    ImGui::Text("stream: read %s/s, decode %s/s, %zu workers (%s)", human_bytes(p.rates.read_mbps * 1e6).c_str(),
+                human_bytes(p.rates.decode_mbps * 1e6).c_str(), p.rates.worker_decode_mbps.size(), p.io_mode.c_str());
+    ImGui::Text("window %u/%u frames, %u ready, %s held", st.pipeline.active_frames, st.pipeline.window_frames,
+                st.pipeline.frames_ready, human_bytes(double(st.pipeline.held_bytes)).c_str());
+    ImGui::Text("stalls %llu  drops %llu  errors %llu   upload %.2f ms GPU, %.2f ms wall", (unsigned long long)st.stalls,
+                (unsigned long long)st.drops, (unsigned long long)st.errors, p.stats.upload_ms, p.upload_wall_ms);
+    ImGui::TextDisabled("%s", p.device.c_str());
+  }
+  if (ImGui::CollapsingHeader("View")) {
+    combo("LOD", p.lod.mode, {"off", "clod", "density"});
+    ImGui::SliderFloat("LOD level", &p.lod.level, 0.0f, 1.0f, "%.2f");
+    combo("filter", p.fluid.surface_filter_method, {"bilateral", "narrow-range"});
+    ImGui::SliderInt("iterations", &p.fluid.surface_filter_iterations, 0, 3);
+    ImGui::SliderInt("filter radius", &p.fluid.surface_filter_radius, 1, 40);
+    combo("display", p.fluid.display_mode, render::display_mode_names());
+    combo("splatting", p.fluid.splatting, {"compute", "raster", "auto"});
+    ImGui::Checkbox("ground", &p.fluid.ground);
+    if (ImGui::Button("Reset view")) p.camera = p.home;
+    ImGui::SameLine();
+    if (ImGui::Button("Copy camera")) p.print_camera();
+    ImGui::SameLine();
+    if (ImGui::Button("Screenshot")) p.screenshot = true;
+  }
   if (ImGui::CollapsingHeader("Keys")) {
     for (const Shortcut& s : kShortcuts) ImGui::BulletText("%s: %s", s.keys, s.what);
   }
-  ImGui::TextDisabled("%s", p.device.c_str());
+  p.hud_min = ImGui::GetWindowPos();
+  p.hud_max = ImVec2(p.hud_min.x + ImGui::GetWindowSize().x, p.hud_min.y + ImGui::GetWindowSize().y);
   ImGui::End();
+}
+
+// The part of a width x height window beside a panel at the top left
+// (right of it or below it, whichever frames the data larger), as fractions.
+render::ScreenRect free_beside(ImVec2 panel_min, ImVec2 panel_max, uint32_t width, uint32_t height) {
+  const float w = float(std::max(width, 1u)), h = float(std::max(height, 1u)), margin = 8;
+  const float right = std::clamp(panel_max.x + margin, 0.0f, w - 1), below = std::clamp(panel_max.y + margin, 0.0f, h - 1);
+  // A framed box fills about the smaller side of its rectangle.
+  const float right_size = std::min(w - right, h), below_size = std::min(w, h - below);
+  if (panel_max.x <= panel_min.x) return {};
+  if (right_size >= below_size) return {right / w, 0, 1, 1};
+  return {0, below / h, 1, 1};
 }
 
 double display_refresh_hz() {
@@ -273,12 +298,15 @@ void run_play_window(const PlayOptions& o, const WindowPlayOptions& wo) {
   desktop::WindowOptions options;
   options.width = w;
   options.height = h;
-  options.title = "sluice - " + std::filesystem::path(o.file).filename().string();
+  const std::string shown = o.source.empty() ? o.file : o.source;
+  options.title = "sluice - " + std::filesystem::path(shown).filename().string();
   options.vsync = !wo.no_vsync;
   desktop::Window window(context, options, {on_key, on_mouse_button, on_cursor, on_scroll, &p});
   render::Renderer renderer(context, scene);
   v.apply_environment(renderer);
-  p.camera = p.home = v.camera(scene, float(std::max(window.width(), 1u)) / float(std::max(window.height(), 1u)));
+  p.times_known = reader.header().time_source != io::TimeSource::FrameNumber;
+  const auto aspect = [&] { return float(std::max(window.width(), 1u)) / float(std::max(window.height(), 1u)); };
+  p.camera = p.home = v.camera(scene, aspect());
 
   // The streaming runtime decodes the colour attribute only (if any), into
   // staging memory the GPU copies from.
@@ -337,7 +365,12 @@ void run_play_window(const PlayOptions& o, const WindowPlayOptions& wo) {
 
     p.stats = renderer.last_stats();
     window.new_ui_frame();
-    if (p.hud) draw_hud(p, o.file);
+    if (p.hud) draw_hud(p, shown);
+    // The default view frames the data beside the HUD; it follows the
+    // window's size and the panel's until the user moves the camera.
+    const render::ScreenRect free = p.hud ? free_beside(p.hud_min, p.hud_max, window.width(), window.height())
+                                          : render::ScreenRect{};
+    if (p.camera.to_string() == p.home.to_string()) p.camera = p.home = v.camera(scene, aspect(), free);
     // --exit-after counts frames that show data (the first may take a moment to decode).
     const bool last_for_exit = wo.exit_after > 0 && p.has_frame && presented + 1 >= wo.exit_after;
     const bool capture = p.screenshot || (last_for_exit && !wo.screenshot.empty());
@@ -366,6 +399,7 @@ void run_play_window(const PlayOptions& o, const WindowPlayOptions& wo) {
                 (unsigned long long)s.drops, (unsigned long long)s.errors,
                 human_bytes(double(staging.peak_held_bytes())).c_str(),
                 staging.fallback_allocations() ? " (some frames in host memory: the driver refused more staging)" : "");
+    std::printf("  last view: --camera \"%s\"\n", p.camera.to_string().c_str());
   }
   if (context.validation_active() && context.validation_errors() > 0) {
     std::fprintf(stderr, "sluice: %llu Vulkan validation errors\n", (unsigned long long)context.validation_errors());

@@ -16,7 +16,8 @@
 namespace sluice::app {
 
 struct PlayOptions {
-  std::string file;
+  std::string file;    // the .sluice file played
+  std::string source;  // what the user named (shown in the title and the HUD); the file if empty
   bool headless = false, stats = false, loop = false, bounce = false, once = false, reverse = false, direct = false,
        quiet = false, paused = false, no_cache = false;
   double fps = 0, rate = 1, seconds = 0, display_hz = 0, stats_every = 1;

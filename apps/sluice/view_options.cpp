@@ -61,9 +61,11 @@ render::LodOptions ViewSettings::lod_options() const {
   return l;
 }
 
-render::Camera ViewSettings::camera(const render::SceneInfo& scene, float aspect) const {
-  render::Camera c = render::Camera::framing(scene.bounds, up_direction(scene), aspect, fov);
+render::Camera ViewSettings::camera(const render::SceneInfo& scene, float aspect, render::ScreenRect free) const {
+  render::Camera c = render::Camera::framing(scene.bounds, up_direction(scene), aspect, fov, free);
   if (!camera_text.empty()) {
+    // A given view is shown as given: centred, unless it says otherwise.
+    c.shift_x = c.shift_y = 0;
     try {
       c.apply(camera_text);
     } catch (const std::invalid_argument& e) {

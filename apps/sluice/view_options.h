@@ -33,7 +33,9 @@ struct ViewSettings {
   // Throws std::runtime_error on a bad name (display, filter, attribute, ...).
   render::FluidOptions fluid_options(const render::SceneInfo& scene) const;
   render::LodOptions lod_options() const;
-  render::Camera camera(const render::SceneInfo& scene, float aspect) const;
+  // The default framing (in `free`, the part of the image left uncovered)
+  // or --camera.
+  render::Camera camera(const render::SceneInfo& scene, float aspect, render::ScreenRect free = {}) const;
   // --up, else the file's.
   render::Vec3 up_direction(const render::SceneInfo& scene) const;
   // Loads --environment into the renderer, if given. Throws with the file named.

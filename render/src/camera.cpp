@@ -93,12 +93,30 @@ void Camera::zoom(float factor) {
   eye = target + (eye - target) * factor;
 }
 
-void Camera::fit(const Bounds& box, float aspect) { fit_within(box, std::tan(fov_deg * kPi / 360.0f), aspect); }
 
-void Camera::fit_within(const Bounds& box, float tan_half_v, float aspect) {
+void Camera::fit_corners(const Bounds& box, float tan_half_v, float aspect) {
+  // Every corner of the box inside 90% of the view: for a corner at
+  // (x, y) across the view and z along it from the target, the eye must
+  // be at least |x| / tan_h - z (and |y| / tan_v - z) behind the target.
+  const float margin = 0.9f;
+  const float tan_v = tan_half_v * margin, tan_h = tan_half_v * aspect * margin;
+  const Vec3 f = forward(), right = normalize(cross(f, up)), u = cross(right, f);
+  target = box.center();
+  float dist = 1e-6f;
+  for (int corner = 0; corner < 8; ++corner) {
+    const Vec3 p{(corner & 1) ? box.max.x : box.min.x, (corner & 2) ? box.max.y : box.min.y,
+                 (corner & 4) ? box.max.z : box.min.z};
+    const Vec3 d = p - target;
+    const float z = dot(d, f);
+    dist = std::max({dist, std::abs(dot(d, right)) / tan_h - z, std::abs(dot(d, u)) / tan_v - z});
+  }
+  eye = target - f * dist;
+}
+
+void Camera::fit(const Bounds& box, float aspect) {
   const float radius = std::max(box.diagonal() * 0.5f, 1e-6f);
-  const float half_v = std::atan(tan_half_v);
-  const float half_h = std::atan(tan_half_v * aspect);
+  const float half_v = fov_deg * kPi / 360.0f;
+  const float half_h = std::atan(std::tan(half_v) * aspect);
   const float half = std::min(half_v, half_h);
   const float dist = radius / std::sin(half);
   Vec3 dir = forward();
@@ -121,11 +139,9 @@ Camera Camera::framing(const Bounds& box, Vec3 up_direction, float aspect, float
   // Fit into the free part: its share of the image's height narrows the
   // field of view, its shape sets the aspect; the shift moves it there.
   const float w = std::clamp(free.x1 - free.x0, 0.05f, 1.0f), h = std::clamp(free.y1 - free.y0, 0.05f, 1.0f);
-  c.fit_within(box, std::tan(fov_deg * kPi / 360.0f) * h, aspect * w / h);
+  c.fit_corners(box, std::tan(fov_deg * kPi / 360.0f) * h, aspect * w / h);
   c.shift_x = free.x0 + free.x1 - 1.0f;
   c.shift_y = free.y0 + free.y1 - 1.0f;
-  // The bounding sphere is loose for flat data: come in a little.
-  c.zoom(0.8f);
   return c;
 }
 

@@ -47,7 +47,8 @@ class Camera {
   // eye back until the box's bounding sphere fits the narrower fov.
   void fit(const Bounds& box, float aspect);
   // A default three-quarter view of `box` from a little above, `up` pointing
-  // up on screen (any direction; a file's is SceneInfo::up), then fit().
+  // up on screen (any direction; a file's is SceneInfo::up), as near as
+  // keeps every corner of the box in view.
   // `free`: the part of the image to frame the data in (the rest may be
   // covered, by a HUD for one); the lens shift centres the view there.
   static Camera framing(const Bounds& box, Vec3 up, float aspect, float fov_deg = 40.0f, ScreenRect free = {});
@@ -65,8 +66,9 @@ class Camera {
   void apply(const std::string& text);
 
  private:
-  // fit() for a field of view given by tan(half the vertical angle).
-  void fit_within(const Bounds& box, float tan_half_v, float aspect);
+  // The nearest eye, along the current view direction, that sees every
+  // corner of `box` (with a 10% margin).
+  void fit_corners(const Bounds& box, float tan_half_v, float aspect);
 };
 
 }  // namespace sluice::render
