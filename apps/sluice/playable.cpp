@@ -9,6 +9,7 @@
 #include <fstream>
 #include <functional>
 #include <sstream>
+#include <string_view>
 
 #include "conversion.h"
 #include "sluice/io/format.h"
@@ -26,8 +27,14 @@ std::string cache_name(const fs::path& input) {
   const std::string text = input.string();
   if (fs::is_directory(input)) return fs::absolute(input).lexically_normal().filename().string();
   if (text.find_first_of("*?[") == std::string::npos) return input.stem().string();
+  // The pattern without its wildcards: 'out/fluid_*.vtu' -> out_fluid.
+  std::string stem;
+  for (char c : input.stem().string()) {
+    if (std::string_view("*?[]").find(c) == std::string_view::npos) stem += c;
+  }
+  while (!stem.empty() && std::string_view("_-. ").find(stem.back()) != std::string_view::npos) stem.pop_back();
   const fs::path dir = fs::absolute(input).parent_path().lexically_normal();
-  return dir.filename().string() + "_" + input.stem().string();
+  return dir.filename().string() + (stem.empty() ? "" : "_" + stem);
 }
 
 // The folder the input lies in (for a glob: the folder of the pattern).
@@ -46,7 +53,7 @@ fs::path user_cache_folder() {
 
 // Input files, sizes and modification times, and the settings: equal keys
 // mean the cached conversion is still what a new one would write.
-std::string cache_key(const std::string& input, const PlayableOptions& o) {
+std::string cache_key(const std::string& input) {
   io::ImportOptions import;
   const auto source = io::open_source(input, import);
   std::ostringstream key;
@@ -142,7 +149,7 @@ PlayableFile open_playable(const std::string& input, const PlayableOptions& o) {
     convert_input(conversion_for(input, o), tmp.string());
     return PlayableFile(tmp.string(), true);
   }
-  const std::string key = cache_key(input, o);
+  const std::string key = cache_key(input);
   const fs::path folder = input_folder(input);
   const std::string name = cache_name(input);
   fs::path dir = folder / ".sluice-cache";

@@ -52,7 +52,7 @@ std::string write_container(const std::string& path, const io::FrameSource& sour
   io::ContainerWriter writer(path, header);
   io::EncodeOptions encode;
   encode.pack_planes = pack_planes;
-  io::convert_frames(source, std::nullopt, writer, io::ConvertSettings{encode, size_t(core_count()) + 1});
+  io::convert_frames(source, std::nullopt, writer, io::ConvertSettings{.encode = encode, .max_in_flight = size_t(core_count()) + 1});
   writer.finish();
   return path;
 }

@@ -30,7 +30,7 @@ std::filesystem::path convert_sample(const std::filesystem::path& out, PositionC
   ContainerWriter w(out, h);
   EncodeOptions encode;
   encode.pack_planes = pack_planes;
-  convert_frames(*source, std::nullopt, w, ConvertSettings{encode, 3});
+  convert_frames(*source, std::nullopt, w, ConvertSettings{.encode = encode, .max_in_flight = 3});
   w.finish();
   return out;
 }

@@ -45,7 +45,7 @@ const fs::path& sample() {
     header.lod_id_array = source->info().id_array;
     header.lod_source = header.lod_id_array.empty() ? io::LodSource::ParticleOrder : io::LodSource::IdHash;
     io::ContainerWriter writer(out, header);
-    io::convert_frames(*source, std::move(first), writer, io::ConvertSettings{io::EncodeOptions{}, 2});
+    io::convert_frames(*source, std::move(first), writer, io::ConvertSettings{.encode = io::EncodeOptions{}, .max_in_flight = 2});
     writer.finish();
     g_converted = true;
     return out;

@@ -33,7 +33,7 @@ struct ConvertSettings {
   // Frames (from the first) whose FrameShape is measured for up-axis
   // detection; the last frame's is measured too when this is non-zero.
   uint64_t shape_frames = 16;
-  ShapeGrid shape_grid;  // the grid of FrameShape's columns; an empty box: no columns
+  ShapeGrid shape_grid{};  // the grid of FrameShape's columns; an empty box: no columns
 };
 
 struct ConvertResult {
