@@ -224,3 +224,47 @@ TEST(RoundTrip, UncompressedChunksDecodeToTheSameParticles) {
 
 }  // namespace
 }  // namespace sluice::io
+
+// Format 1.2: the up axis, how it was found and the time source live in the
+// header's flags; the converter rewrites them in place once it knows.
+TEST(RoundTrip, UpAxisAndTimeSourceSurviveAndCanBeRewrittenInPlace) {
+  test::TempDir dir;
+  io::FileHeader h = test::test_header(io::PositionCoding::Quantized16);
+  h.up = io::UpAxis::PosZ;
+  h.up_evidence = io::UpEvidence::Shape;
+  h.time_source = io::TimeSource::Step;
+  const auto path = dir.path / "up.sluice";
+  {
+    io::ContainerWriter w(path, h);
+    w.append(test::encode(test::lattice_frame(500, 0.0), h));
+    h.up = io::UpAxis::NegY;
+    h.up_evidence = io::UpEvidence::Motion;
+    w.update_header(h);
+    w.append(test::encode(test::lattice_frame(500, 0.1), h));
+    io::FileHeader longer = h;
+    longer.source += " and more";
+    EXPECT_THROW(w.update_header(longer), io::Error);  // the size may not change
+    w.finish();
+  }
+  const io::ContainerReader r(path);
+  EXPECT_EQ(r.header().version_minor, 2);
+  EXPECT_EQ(r.header().up, io::UpAxis::NegY);
+  EXPECT_EQ(r.header().up_evidence, io::UpEvidence::Motion);
+  EXPECT_EQ(r.header().time_source, io::TimeSource::Step);
+  EXPECT_EQ(r.frame_count(), 2u);
+  const std::array<float, 3> up = io::up_vector(r.header().up);
+  EXPECT_EQ(up[1], -1.0f);
+}
+
+TEST(RoundTrip, UpAxisNamesParseBothWays) {
+  for (int code = 1; code <= 6; ++code) {
+    const auto up = static_cast<io::UpAxis>(code);
+    EXPECT_EQ(io::parse_up_axis(io::up_axis_name(up)), up);
+  }
+  EXPECT_EQ(io::parse_up_axis("y"), io::UpAxis::PosY);
+  EXPECT_EQ(io::parse_up_axis("-Z"), io::UpAxis::NegZ);
+  EXPECT_FALSE(io::parse_up_axis("w"));
+  EXPECT_FALSE(io::parse_up_axis("--x"));
+  EXPECT_FALSE(io::parse_up_axis(""));
+  EXPECT_EQ(io::up_axis_name(io::UpAxis::Unstated), "+z");  // files before 1.2
+}

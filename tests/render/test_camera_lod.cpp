@@ -61,6 +61,38 @@ TEST(Camera, FitContainsBounds) {
   }
 }
 
+// The default framing puts every corner of the box inside the free part of
+// the image (a HUD covers the rest), for any up direction, and the text form
+// keeps the lens shift.
+TEST(Camera, FramingKeepsEveryCornerInTheFreePart) {
+  const Bounds box{{0.04f, -0.46f, 0.03f}, {1.61f, 0.46f, 0.52f}};  // the bundled dam break's bounds
+  const float aspect = 1280.0f / 720.0f;
+  const ScreenRect free{0.28f, 0.0f, 1.0f, 1.0f};  // right of a panel 28% wide
+  for (const Vec3 up : {Vec3{0, 0, 1}, Vec3{0, 1, 0}, Vec3{0, -1, 0}, Vec3{1, 0, 0}}) {
+    const Camera c = Camera::framing(box, up, aspect, 40.0f, free);
+    EXPECT_NEAR(dot(c.up, up), 1.0f, 1e-6f);
+    const Mat4 vp = c.projection(aspect) * c.view();
+    float left = 1, right = 0, top = 1, bottom = 0;
+    for (int i = 0; i < 8; ++i) {
+      const Vec4 p = vp * Vec4{i & 1 ? box.max.x : box.min.x, i & 2 ? box.max.y : box.min.y, i & 4 ? box.max.z : box.min.z, 1};
+      ASSERT_GT(p.w, 0);
+      const float x = (p.x / p.w + 1) / 2, y = (p.y / p.w + 1) / 2;  // fractions of the image, y down
+      EXPECT_GE(x, free.x0);
+      EXPECT_LE(x, free.x1);
+      EXPECT_GE(y, free.y0);
+      EXPECT_LE(y, free.y1);
+      left = std::min(left, x), right = std::max(right, x), top = std::min(top, y), bottom = std::max(bottom, y);
+    }
+    // Framed tightly, not just somewhere inside: one way it spans most of the free part.
+    EXPECT_TRUE(right - left > 0.7f * (free.x1 - free.x0) || bottom - top > 0.7f * (free.y1 - free.y0))
+        << left << ".." << right << " x " << top << ".." << bottom;
+    Camera back;
+    back.apply(c.to_string());
+    EXPECT_NEAR(back.shift_x, c.shift_x, 1e-6f);
+    EXPECT_NEAR(back.shift_y, c.shift_y, 1e-6f);
+  }
+}
+
 TEST(Math, ProjectionIsReversedInfinite) {
   const Mat4 p = perspective_reverse_z(1.0f, 1.0f, 0.1f);
   const Vec4 nearp = p * Vec4{0, 0, -0.1f, 1};
