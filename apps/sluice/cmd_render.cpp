@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "commands.h"
+#include "frame_range.h"
 #include "human.h"
 #include "playable.h"
 #include "view_options.h"
@@ -31,34 +32,6 @@ struct RenderCommand {
   bool quiet = false, stats = false, no_cache = false;
 };
 
-std::pair<uint64_t, uint64_t> parse_frames(const std::string& s, uint64_t count) {
-  if (count == 0) throw std::runtime_error("the file has no frames");
-  if (s.empty()) return {0, count - 1};
-  const auto number = [&](const std::string& t, uint64_t fallback) -> uint64_t {
-    if (t.empty()) return fallback;
-    size_t used = 0;
-    const unsigned long long v = std::stoull(t, &used);
-    if (used != t.size()) throw std::invalid_argument(t);
-    return v;
-  };
-  uint64_t a = 0, b = 0;
-  try {
-    const size_t colon = s.find(':');
-    if (colon == std::string::npos) {
-      a = b = number(s, 0);
-    } else {
-      a = number(s.substr(0, colon), 0);
-      b = number(s.substr(colon + 1), count - 1);
-    }
-  } catch (const std::exception&) {
-    throw std::runtime_error("--frames: expected A:B (inclusive), A, A: or :B, got '" + s + "'");
-  }
-  if (a > b || b >= count) {
-    throw std::runtime_error("--frames " + s + ": the file has frames 0.." + std::to_string(count - 1));
-  }
-  return {a, b};
-}
-
 std::string frame_path(const std::string& out, uint64_t frame, bool single) {
   namespace fs = std::filesystem;
   char name[64];
@@ -81,7 +54,7 @@ void run_render(const RenderCommand& o, const ViewSettings& v) {
   namespace fs = std::filesystem;
   const PlayableFile input = open_playable(o.input, {o.no_cache, o.quiet});
   const io::ContainerReader reader(input.path());
-  const auto [first, last] = parse_frames(o.frames, reader.frame_count());
+  const auto [first, last] = parse_frame_range(o.frames, reader.frame_count());
   const auto [width, height] = parse_size(o.size);
   const bool video = fs::path(o.out).extension() == ".mp4";
   const bool single = first == last;
