@@ -40,7 +40,8 @@ std::array<float, 3> up_vector(UpAxis up) {
 }
 
 std::string up_axis_name(UpAxis up) {
-  return std::string(up_axis_negative(up) ? "-" : "+") + kAxisNames[up_axis_index(up)];
+  const char name[3] = {up_axis_negative(up) ? '-' : '+', kAxisNames[up_axis_index(up)], '\0'};
+  return name;
 }
 
 const char* up_evidence_name(UpEvidence e) {
@@ -144,26 +145,34 @@ std::optional<UpFinding> up_from_motion(std::span<const FrameShape> frames, floa
   const double unit = spacing > 0 ? spacing : 0.01 * extent;
   if (!(unit > 0)) return std::nullopt;
   // For direction d (axis, sign), a column's trailing end is its lowest
-  // coordinate along d: how far it moved along d, averaged over the columns
-  // filled in both frames; the most over the later frames.
-  std::array<double, 6> moved{};
+  // coordinate along d and its leading end its highest: how far each moved
+  // along d, averaged over the columns filled in both frames; the frame
+  // where the trailing ends moved most.
+  std::array<double, 6> moved{}, leading{};
   for (int d = 0; d < 6; ++d) {
     const int axis = d % 3;
     const bool negative = d >= 3;
-    const std::vector<float>& start = negative ? first.column_high[axis] : first.column_low[axis];
-    double most = -std::numeric_limits<double>::infinity();
+    const std::vector<float>& trail0 = negative ? first.column_high[axis] : first.column_low[axis];
+    const std::vector<float>& lead0 = negative ? first.column_low[axis] : first.column_high[axis];
+    const double sign = negative ? -1.0 : 1.0;
+    moved[d] = -std::numeric_limits<double>::infinity();
     for (size_t f = 1; f < used.size(); ++f) {
-      const std::vector<float>& now = negative ? used[f]->column_high[axis] : used[f]->column_low[axis];
-      double sum = 0;
+      const std::vector<float>& trail = negative ? used[f]->column_high[axis] : used[f]->column_low[axis];
+      const std::vector<float>& lead = negative ? used[f]->column_low[axis] : used[f]->column_high[axis];
+      double trail_sum = 0, lead_sum = 0;
       size_t count = 0;
-      for (size_t c = 0; c < start.size(); ++c) {
-        if (std::isnan(start[c]) || std::isnan(now[c])) continue;
-        sum += negative ? double(start[c]) - now[c] : double(now[c]) - start[c];
+      for (size_t c = 0; c < trail0.size(); ++c) {
+        if (std::isnan(trail0[c]) || std::isnan(trail[c])) continue;
+        trail_sum += sign * (double(trail[c]) - trail0[c]);
+        lead_sum += sign * (double(lead[c]) - lead0[c]);
         ++count;
       }
-      if (count > 0) most = std::max(most, sum / double(count));
+      if (count > 0 && trail_sum / double(count) > moved[d]) {
+        moved[d] = trail_sum / double(count);
+        leading[d] = lead_sum / double(count);
+      }
     }
-    moved[d] = std::isfinite(most) ? most : 0.0;
+    if (!std::isfinite(moved[d])) moved[d] = 0;
   }
   const int best = int(std::max_element(moved.begin(), moved.end()) - moved.begin());
   double second = 0;
@@ -171,14 +180,18 @@ std::optional<UpFinding> up_from_motion(std::span<const FrameShape> frames, floa
     if (d != best) second = std::max(second, moved[d]);
   }
   if (moved[best] < 0.5 * unit || moved[best] < 3 * second) return std::nullopt;
+  // A fall lands on a floor that stays; a fluid that moves as a whole (a
+  // sway, a drift, a free fall) moves both ends alike and is not evidence.
+  if (std::abs(leading[best]) > moved[best] / 3) return std::nullopt;
   // The fall is along direction `best`; up is the other way.
   UpFinding f;
   f.up = up_axis_from(best % 3, best < 3);
   f.evidence = UpEvidence::Motion;
-  const std::string fall = std::string(best < 3 ? "+" : "-") + kAxisNames[best % 3];
+  const std::string fall = up_axis_name(up_axis_from(best % 3, best >= 3));
   f.reason = "the fluid's top falls toward " + fall + " over the first " + std::to_string(used.size()) +
              " frames (by " + figure(moved[best]) + " on average over its columns, " + figure(moved[best] / unit) +
-             " spacings; no other direction more than " + figure(std::max(second, 0.0)) + ")";
+             " spacings, while its floor moved " + figure(leading[best]) + "; no other direction more than " +
+             figure(std::max(second, 0.0)) + ")";
   return f;
 }
 
@@ -232,9 +245,10 @@ std::optional<UpFinding> up_from_pressure(std::span<const float> xyz, std::span<
   UpFinding f;
   f.up = up_axis_from(axis, g[axis] > 0);  // it grows with depth: up is against the gradient
   f.evidence = UpEvidence::Pressure;
-  f.reason = "'" + std::string(array_name) + "' grows toward " + (g[axis] > 0 ? "+" : "-") + kAxisNames[axis] +
-             " as with depth in a resting fluid (a linear fit explains " + figure(100 * explained) +
-             "% of its variance)";
+  f.reason = std::string(array_name);
+  f.reason.insert(0, 1, '\'');
+  f.reason += "' grows toward " + up_axis_name(up_axis_from(axis, g[axis] < 0)) +
+              " as with depth in a resting fluid (a linear fit explains " + figure(100 * explained) + "% of its variance)";
   return f;
 }
 
@@ -249,7 +263,7 @@ std::optional<UpFinding> up_from_shape(const FrameShape& s) {
   UpFinding f;
   f.up = up_axis_from(thin, false);
   f.evidence = UpEvidence::Shape;
-  f.reason = std::string("the fluid lies flat, thinnest along ") + kAxisNames[thin] + " (" + figure(e[thin]) +
+  f.reason = "the fluid lies flat, thinnest along " + std::string(1, kAxisNames[thin]) + " (" + figure(e[thin]) +
              " against " + figure(e[(thin + 1) % 3]) + " and " + figure(e[(thin + 2) % 3]) +
              "); which way along it is assumed";
   return f;

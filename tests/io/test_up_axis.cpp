@@ -2,6 +2,7 @@
 // frames where there is none to find (io/include/sluice/io/up_axis.h).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <random>
 #include <vector>
 
@@ -71,11 +72,22 @@ TEST(UpAxis, ACollapsingColumnFallsAlongMinusZ) {
   EXPECT_EQ(found->evidence, UpEvidence::Motion);
 }
 
-TEST(UpAxis, AFreeFallIsAFall) {
-  const auto shapes = frames(block(8, 8, 8), 5, [](float&, float& y, float&, int f) { y -= 0.01f * float(f * f); });
+TEST(UpAxis, ASplashOntoAFloorIsAFall) {
+  // Particles fall along -y onto a floor at y = 0 and pile up there.
+  const auto shapes = frames(block(8, 8, 8), 5, [](float&, float& y, float&, int f) {
+    y = std::max(0.5f * kSpacing + 0.002f * y, y - 0.02f * float(f * f));
+  });
   const auto found = up_from_motion(shapes, kSpacing);
   ASSERT_TRUE(found);
   EXPECT_EQ(found->up, UpAxis::PosY);
+}
+
+TEST(UpAxis, MovingAsAWholeIsNoFall) {
+  // A drift or a sway moves both ends of every column: no floor, no evidence.
+  EXPECT_FALSE(up_from_motion(frames(block(8, 8, 8), 5, [](float&, float& y, float&, int f) { y -= 0.01f * float(f * f); }),
+                              kSpacing));
+  EXPECT_FALSE(up_from_motion(
+      frames(block(16, 8, 8), 5, [](float& x, float&, float& z, int f) { x -= z * 0.2f * float(f); }), kSpacing));
 }
 
 TEST(UpAxis, StillOrSideways_NoFall) {

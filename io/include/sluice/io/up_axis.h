@@ -75,7 +75,9 @@ struct UpFinding {
 // columns' trailing ends (the top, for a fall along -z) moved along it, on
 // average over the columns filled in frame 0 and the later frame; the fall
 // must reach half a spacing (`spacing`, world units) and three times any
-// other direction's. nullopt: no clear fall.
+// other direction's, and the columns' leading ends (the floor) must move
+// less than a third of it: a fluid moving as a whole (sway, drift, free fall)
+// is not evidence. nullopt: no clear fall.
 std::optional<UpFinding> up_from_motion(std::span<const FrameShape> first_frames, float spacing);
 
 // From a pressure-like array (pressure or density: both grow with depth at
