@@ -19,6 +19,13 @@ std::string figure(double v) {
   return buf;
 }
 
+// The median, reordering `values` (not empty).
+double median(std::vector<double>& values) {
+  const auto mid = values.begin() + values.size() / 2;
+  std::nth_element(values.begin(), mid, values.end());
+  return *mid;
+}
+
 }  // namespace
 
 int up_axis_index(UpAxis up) {
@@ -146,9 +153,12 @@ std::optional<UpFinding> up_from_motion(std::span<const FrameShape> frames, floa
   if (!(unit > 0)) return std::nullopt;
   // For direction d (axis, sign), a column's trailing end is its lowest
   // coordinate along d and its leading end its highest: how far each moved
-  // along d, averaged over the columns filled in both frames; the frame
+  // along d, the median over the columns filled in both frames (a median,
+  // because a fluid that rises on one side and falls on the other empties
+  // the top rows of the columns across, whose ends then jump), in the frame
   // where the trailing ends moved most.
   std::array<double, 6> moved{}, leading{};
+  std::vector<double> trail_moves, lead_moves;
   for (int d = 0; d < 6; ++d) {
     const int axis = d % 3;
     const bool negative = d >= 3;
@@ -159,17 +169,20 @@ std::optional<UpFinding> up_from_motion(std::span<const FrameShape> frames, floa
     for (size_t f = 1; f < used.size(); ++f) {
       const std::vector<float>& trail = negative ? used[f]->column_high[axis] : used[f]->column_low[axis];
       const std::vector<float>& lead = negative ? used[f]->column_low[axis] : used[f]->column_high[axis];
-      double trail_sum = 0, lead_sum = 0;
-      size_t count = 0;
+      std::vector<double>& tr = trail_moves;
+      std::vector<double>& ld = lead_moves;
+      tr.clear();
+      ld.clear();
       for (size_t c = 0; c < trail0.size(); ++c) {
         if (std::isnan(trail0[c]) || std::isnan(trail[c])) continue;
-        trail_sum += sign * (double(trail[c]) - trail0[c]);
-        lead_sum += sign * (double(lead[c]) - lead0[c]);
-        ++count;
+        tr.push_back(sign * (double(trail[c]) - trail0[c]));
+        ld.push_back(sign * (double(lead[c]) - lead0[c]));
       }
-      if (count > 0 && trail_sum / double(count) > moved[d]) {
-        moved[d] = trail_sum / double(count);
-        leading[d] = lead_sum / double(count);
+      if (tr.empty()) continue;
+      const double trail_median = median(tr), lead_median = median(ld);
+      if (trail_median > moved[d]) {
+        moved[d] = trail_median;
+        leading[d] = lead_median;
       }
     }
     if (!std::isfinite(moved[d])) moved[d] = 0;
@@ -189,7 +202,7 @@ std::optional<UpFinding> up_from_motion(std::span<const FrameShape> frames, floa
   f.evidence = UpEvidence::Motion;
   const std::string fall = up_axis_name(up_axis_from(best % 3, best >= 3));
   f.reason = "the fluid's top falls toward " + fall + " over the first " + std::to_string(used.size()) +
-             " frames (by " + figure(moved[best]) + " on average over its columns, " + figure(moved[best] / unit) +
+             " frames (by " + figure(moved[best]) + " in the median column, " + figure(moved[best] / unit) +
              " spacings, while its floor moved " + figure(leading[best]) + "; no other direction more than " +
              figure(std::max(second, 0.0)) + ")";
   return f;

@@ -72,8 +72,8 @@ struct UpFinding {
 
 // From the shapes of the first frames, frame 0 first (at least two with
 // particles and columns). For each of the six directions, how far the
-// columns' trailing ends (the top, for a fall along -z) moved along it, on
-// average over the columns filled in frame 0 and the later frame; the fall
+// columns' trailing ends (the top, for a fall along -z) moved along it, the
+// median over the columns filled in frame 0 and the later frame; the fall
 // must reach half a spacing (`spacing`, world units) and three times any
 // other direction's, and the columns' leading ends (the floor) must move
 // less than a third of it: a fluid moving as a whole (sway, drift, free fall)
