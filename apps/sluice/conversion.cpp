@@ -119,7 +119,8 @@ ConversionSummary convert_input(const ConversionOptions& o, const std::string& o
     settings.shape_grid.box.extend(first->positions[i], first->positions[i + 1], first->positions[i + 2]);
   }
   settings.shape_grid.cell = 2 * header.particle_spacing;
-  const io::FrameShape first_shape = io::measure_shape(first->positions, &settings.shape_grid);
+  // Extent only (sampled): the columns of frame 0 are measured in the pipeline.
+  const io::FrameShape first_shape = io::measure_shape(first->positions);
   const std::optional<io::UpFinding> provisional = io::up_from_shape(first_shape);
   header.up = given_up ? *given_up : provisional ? provisional->up : io::UpAxis::PosZ;
   header.up_evidence = given_up ? io::UpEvidence::Given : provisional ? provisional->evidence : io::UpEvidence::Default;

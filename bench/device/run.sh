@@ -54,23 +54,26 @@ for stage in $stages; do
       ;;
     firsthour)  # convert's up-axis detection and the play/render cache, on real and synthetic solver output
       secs() { local t0=$EPOCHREALTIME; "$@" >/dev/null 2>&1; awk -v a="$t0" -v b="$EPOCHREALTIME" 'BEGIN { printf "%.3f\n", b - a }'; }
-      timed() { local label=$1; shift; local all=(); for i in 1 2 3 4 5; do all+=("$(secs "$@")"); done
-        printf '%s: %s s (median of 5: %s)\n' "$label" "$(printf '%s\n' "${all[@]}" | sort -n | sed -n 3p)" "${all[*]}" | tee -a "$OUT/summary.txt"; }
-      log "convert with and without up-axis detection (5 runs each, alternating order not needed: page cache warm after run 1)"
-      if [[ -d /tmp/s/big ]]; then
-        run $S convert '/tmp/s/big/*.vtu' -o /tmp/big_a.sluice -f
-        timed "big PySPH, detection" $S convert '/tmp/s/big/*.vtu' -o /tmp/big_a.sluice -f -q
-        timed "big PySPH, --up z" $S convert '/tmp/s/big/*.vtu' -o /tmp/big_b.sluice -f -q --up z
-      fi
+      # Two commands alternated 7 times (after a warm-up of each): medians side by side.
+      paired() { local la=$1 lb=$2 ca=$3 cb=$4 a=() b=(); eval "$ca" >/dev/null 2>&1; eval "$cb" >/dev/null 2>&1
+        for i in 1 2 3 4 5 6 7; do a+=("$(secs bash -c "$ca")"); b+=("$(secs bash -c "$cb")"); done
+        local ma mb; ma=$(printf '%s\n' "${a[@]}" | sort -n | sed -n 4p); mb=$(printf '%s\n' "${b[@]}" | sort -n | sed -n 4p)
+        printf '%s: median %s s (%s)\n%s: median %s s (%s)\nratio %s\n' "$la" "$ma" "${a[*]}" "$lb" "$mb" "${b[*]}" \
+          "$(awk -v a="$ma" -v b="$mb" 'BEGIN { printf "%.3f", a / b }')" | tee -a "$OUT/summary.txt"; }
       run $S synth -n 4M --frames 20 -o /tmp/fh.sluice --force -q
       run $S export /tmp/fh.sluice -o /tmp/fh/fluid.vtp -q -f
-      timed "synth 4M x 20 .vtp, detection" $S convert /tmp/fh/fluid.pvd -o /tmp/fh_a.sluice -f -q
-      timed "synth 4M x 20 .vtp, --up y" $S convert /tmp/fh/fluid.pvd -o /tmp/fh_b.sluice -f -q --up y
+      run $S convert /tmp/fh/fluid.pvd -o /tmp/fh_a.sluice -f
+      log "convert 4M x 20 .vtp with up-axis detection against --up y"
+      paired "detection" "--up y" "$S convert /tmp/fh/fluid.pvd -o /tmp/fh_a.sluice -f -q" \
+        "$S convert /tmp/fh/fluid.pvd -o /tmp/fh_b.sluice -f -q --up y"
+      log "the bundled PySPH dam break (13 frames of 9,360) with detection against --up z"
+      paired "detection" "--up z" "$S convert data/dam_break_3d/dam_break_3d.pvd -o /tmp/d_a.sluice -f -q" \
+        "$S convert data/dam_break_3d/dam_break_3d.pvd -o /tmp/d_b.sluice -f -q --up z"
       log "play straight from the .pvd: first run converts into the cache, later runs reuse it"
       rm -rf /tmp/fh/.sluice-cache
       run $S play --headless --once --fps 1000 /tmp/fh/fluid.pvd
-      timed "play from .pvd, cache hit" $S play --headless --once --fps 1000 /tmp/fh/fluid.pvd
-      timed "play the .sluice itself" $S play --headless --once --fps 1000 /tmp/fh/.sluice-cache/fluid.sluice
+      paired "play from .pvd, cache hit" "play the .sluice itself" "$S play --headless --once --fps 1000 /tmp/fh/fluid.pvd" \
+        "$S play --headless --once --fps 1000 /tmp/fh/.sluice-cache/fluid.sluice"
       ;;
     live)  # frames pushed from memory (render::LiveSource), not recorded and recorded
       run $S bench live --sizes 1M,10M --frames 6
