@@ -72,19 +72,53 @@ CgroupMembership read_membership(const std::string& path) {
   return m;
 }
 
-// Headroom (limit - usage) at `dir` and each of its parents up to `root`;
-// the smallest one wins, as the kernel enforces every level.
-void tightest_headroom(const fs::path& root, const std::string& cgroup, const char* limit_name, const char* usage_name,
-                       HostMemory& out) {
+// The values of `keys` in a memory.stat file ("key value" lines); 0 for a
+// key that is missing.
+std::vector<uint64_t> read_stat_values(const fs::path& path, const std::vector<std::string>& keys) {
+  std::vector<uint64_t> values(keys.size(), 0);
+  std::ifstream in(path);
+  std::string key;
+  uint64_t value = 0;
+  while (in >> key >> value) {
+    for (size_t k = 0; k < keys.size(); ++k) {
+      if (key == keys[k]) values[k] = value;
+    }
+  }
+  return values;
+}
+
+// Page cache the kernel would reclaim before refusing an allocation in this
+// cgroup: file pages on both LRU lists, less those still to be written.
+// v2 names them per cgroup (hierarchical already); v1's total_* are the
+// hierarchical counts that usage_in_bytes includes.
+uint64_t reclaimable_file_cache(const fs::path& dir, bool v2) {
+  const std::vector<uint64_t> v =
+      v2 ? read_stat_values(dir / "memory.stat", {"inactive_file", "active_file", "file_dirty", "file_writeback"})
+         : read_stat_values(dir / "memory.stat",
+                            {"total_inactive_file", "total_active_file", "total_dirty", "total_writeback"});
+  const uint64_t file = v[0] + v[1], pending = v[2] + v[3];
+  return file > pending ? file - pending : 0;
+}
+
+// Headroom (limit - usage + reclaimable page cache) at `dir` and each of its
+// parents up to `root`; the smallest one wins, as the kernel enforces every
+// level. The page cache counts as available: a player streaming a file
+// larger than the limit fills the cgroup with cache the kernel takes back.
+void tightest_headroom(const fs::path& root, const std::string& cgroup, bool v2, HostMemory& out) {
+  const char* limit_name = v2 ? "memory.max" : "memory.limit_in_bytes";
+  const char* usage_name = v2 ? "memory.current" : "memory.usage_in_bytes";
   fs::path rel = fs::path(cgroup).relative_path();
   while (true) {
     const fs::path dir = root / rel;
     const auto limit = read_number_file(dir / limit_name);
     const auto usage = read_number_file(dir / usage_name);
     if (limit && usage && *limit < kNoLimit) {
-      const uint64_t headroom = *limit > *usage ? *limit - *usage : 0;
+      const uint64_t cache = std::min(reclaimable_file_cache(dir, v2), *usage);
+      const uint64_t used = *usage - cache;
+      const uint64_t headroom = *limit > used ? *limit - used : 0;
       if (!out.cgroup_headroom || headroom < *out.cgroup_headroom) {
         out.cgroup_headroom = headroom;
+        out.cgroup_file_cache = cache;
         out.cgroup_source = (dir / limit_name).string();
       }
     }
@@ -110,12 +144,12 @@ HostMemory read_host_memory(const HostMemoryPaths& paths) {
     for (const fs::path& v2_root : {root, root / "unified"}) {
       std::error_code ec;
       if (fs::exists(v2_root / "cgroup.controllers", ec)) {
-        tightest_headroom(v2_root, *m.v2, "memory.max", "memory.current", out);
+        tightest_headroom(v2_root, *m.v2, true, out);
         break;
       }
     }
   }
-  if (m.v1_memory) tightest_headroom(root / "memory", *m.v1_memory, "memory.limit_in_bytes", "memory.usage_in_bytes", out);
+  if (m.v1_memory) tightest_headroom(root / "memory", *m.v1_memory, false, out);
   return out;
 }
 

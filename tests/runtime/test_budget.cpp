@@ -1,6 +1,11 @@
 // Memory budgets: /proc/meminfo and cgroup files (fake trees), user sizes,
 // and the window planned from them.
 #include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
 
 #include "runtime_test_util.h"
 #include "sluice/runtime/budget.h"
@@ -85,6 +90,119 @@ TEST(HostMemory, CgroupV1MemoryControllerAndHybridLayout) {
   ASSERT_TRUE(m.cgroup_headroom);
   EXPECT_EQ(*m.cgroup_headroom, 2 * kGiB);
   EXPECT_EQ(m.available(), 2 * kGiB);
+}
+
+// memory.stat as this machine's cgroup v1 wrote it (the test machine, while
+// building): page cache counts as available, less the dirty pages.
+constexpr const char* kRealV1Stat =
+    "cache 706551808\nrss 728047616\nrss_huge 0\nshmem 0\nmapped_file 26726400\ndirty 5275648\nwriteback 0\n"
+    "workingset_refault_anon 0\nworkingset_refault_file 225513\nswap 0\nswapcached 0\npgpgin 41945456\n"
+    "pgpgout 41638512\npgfault 43948877\npgmajfault 2454\ninactive_anon 727916544\nactive_anon 81920\n"
+    "inactive_file 192098304\nactive_file 514453504\nunevictable 0\nhierarchical_memory_limit 9223372036854771712\n"
+    "hierarchical_memsw_limit 9223372036854771712\ntotal_cache 706551808\ntotal_rss 728047616\ntotal_rss_huge 0\n"
+    "total_shmem 0\ntotal_mapped_file 26726400\ntotal_dirty 5275648\ntotal_writeback 0\n"
+    "total_workingset_refault_anon 0\ntotal_workingset_refault_file 225513\ntotal_swap 0\ntotal_swapcached 0\n"
+    "total_pgpgin 41945456\ntotal_pgpgout 41638512\ntotal_pgfault 43948877\ntotal_pgmajfault 2454\n"
+    "total_inactive_anon 727916544\ntotal_active_anon 81920\ntotal_inactive_file 192098304\n"
+    "total_active_file 514453504\ntotal_unevictable 0\n";
+
+// The key set cgroup v2 writes (Linux 6.1), with a player's page cache.
+constexpr const char* kV2Stat =
+    "anon 1073741824\nfile 2684354560\nkernel 52428800\nkernel_stack 1048576\npagetables 4194304\n"
+    "sec_pagetables 0\npercpu 0\nsock 0\nvmalloc 0\nshmem 0\nzswap 0\nzswapped 0\nfile_mapped 8388608\n"
+    "file_dirty 104857600\nfile_writeback 0\nswapcached 0\nanon_thp 0\nfile_thp 0\nshmem_thp 0\n"
+    "inactive_anon 1073741824\nactive_anon 0\ninactive_file 1610612736\nactive_file 1073741824\nunevictable 0\n"
+    "slab_reclaimable 20971520\nslab_unreclaimable 10485760\nslab 31457280\nworkingset_refault_anon 0\n"
+    "workingset_refault_file 1000\npgfault 123456\npgmajfault 12\n";
+
+TEST(HostMemory, CgroupPageCacheCountsAsAvailableV1) {
+  FakeHost h;
+  h.meminfo(8000000);
+  h.membership("4:memory:/player\n");
+  const uint64_t usage = 706551808ull + 728047616ull;  // cache + rss, as usage_in_bytes counts them
+  h.file("memory/player/memory.limit_in_bytes", std::to_string(2 * kGiB) + "\n");
+  h.file("memory/player/memory.usage_in_bytes", std::to_string(usage) + "\n");
+  h.file("memory/player/memory.stat", kRealV1Stat);
+  const HostMemory m = read_host_memory(h.paths);
+  ASSERT_TRUE(m.cgroup_headroom);
+  const uint64_t cache = 192098304ull + 514453504ull - 5275648ull;  // file LRU pages less dirty
+  EXPECT_EQ(m.cgroup_file_cache, cache);
+  EXPECT_EQ(*m.cgroup_headroom, 2 * kGiB - (usage - cache));
+}
+
+TEST(HostMemory, CgroupPageCacheCountsAsAvailableV2) {
+  FakeHost h;
+  h.meminfo(16000000);
+  h.membership("0::/player\n");
+  h.file("cgroup.controllers", "memory\n");
+  h.file("player/memory.max", std::to_string(4 * kGiB) + "\n");
+  h.file("player/memory.current", std::to_string(3 * kGiB + kGiB / 2) + "\n");  // mostly page cache
+  h.file("player/memory.stat", kV2Stat);
+  const HostMemory m = read_host_memory(h.paths);
+  ASSERT_TRUE(m.cgroup_headroom);
+  EXPECT_EQ(m.cgroup_file_cache, 1610612736ull + 1073741824ull - 104857600ull);
+  EXPECT_EQ(*m.cgroup_headroom, 4 * kGiB - (3 * kGiB + kGiB / 2 - m.cgroup_file_cache));
+  // Without memory.stat (or with a cache larger than the usage) nothing is invented.
+  h.file("player/memory.stat", "inactive_file 99999999999\n");
+  EXPECT_EQ(*read_host_memory(h.paths).cgroup_headroom, 4 * kGiB);
+}
+
+// Writes a cgroup control file in place (cgroupfs has no renames).
+bool write_control(const std::filesystem::path& path, const std::string& text) {
+  std::ofstream out(path);
+  out << text;
+  out.flush();
+  return bool(out);
+}
+
+// In a real memory cgroup, where the machine lets the test make one (root,
+// cgroup v1 or v2 with the memory controller): a child writes a file inside
+// it, the page cache is charged to the cgroup, and the headroom still counts
+// it as available.
+TEST(HostMemory, RealCgroupPageCacheCountsAsAvailable) {
+  std::ifstream self("/proc/self/cgroup");
+  std::string line, v1_path, v2_path;
+  while (std::getline(self, line)) {
+    const size_t a = line.find(':'), b = line.find(':', a + 1);
+    if (b == std::string::npos) continue;
+    const std::string controllers = line.substr(a + 1, b - a - 1), where = line.substr(b + 1);
+    if (controllers.find("memory") != std::string::npos) v1_path = where;
+    if (line.compare(0, 2, "0:") == 0 && controllers.empty()) v2_path = where;
+  }
+  namespace fs = std::filesystem;
+  const std::string name = "sluice-budget-test-" + std::to_string(::getpid());
+  fs::path dir;
+  std::string membership;
+  std::error_code ec;
+  if (!v1_path.empty() && fs::create_directory(fs::path("/sys/fs/cgroup/memory") / fs::path(v1_path).relative_path() / name, ec)) {
+    dir = fs::path("/sys/fs/cgroup/memory") / fs::path(v1_path).relative_path() / name;
+    membership = "4:memory:" + (fs::path(v1_path) / name).string() + "\n";
+    write_control(dir / "memory.limit_in_bytes", std::to_string(512 * kMiB));
+  } else if (!v2_path.empty() && fs::create_directory(fs::path("/sys/fs/cgroup") / fs::path(v2_path).relative_path() / name, ec)) {
+    dir = fs::path("/sys/fs/cgroup") / fs::path(v2_path).relative_path() / name;
+    membership = "0::" + (fs::path(v2_path) / name).string() + "\n";
+    write_control(dir / "memory.max", std::to_string(512 * kMiB));
+  }
+  if (dir.empty() || !(fs::exists(dir / "memory.limit_in_bytes") || fs::exists(dir / "memory.max"))) {
+    if (!dir.empty()) fs::remove(dir, ec);
+    GTEST_SKIP() << "cannot create a memory cgroup here";
+  }
+  test::TempDir tmp;
+  const fs::path data = tmp / "cache.bin";
+  const std::string command = "sh -c 'echo $$ > " + (dir / "cgroup.procs").string() + " && dd if=/dev/zero of=" +
+                              data.string() + " bs=1M count=128 conv=fsync 2>/dev/null'";
+  const int status = std::system(command.c_str());
+  HostMemoryPaths paths;
+  paths.self_cgroup = (tmp / "self_cgroup").string();
+  test::write_text_file(paths.self_cgroup, membership);
+  const HostMemory m = read_host_memory(paths);
+  fs::remove(data, ec);
+  if (fs::exists(dir / "memory.force_empty")) write_control(dir / "memory.force_empty", "0");
+  fs::remove(dir, ec);
+  ASSERT_EQ(status, 0) << command;
+  ASSERT_TRUE(m.cgroup_headroom);
+  EXPECT_GE(m.cgroup_file_cache, 100 * kMiB) << "the 128 MiB written should be cached and charged to the cgroup";
+  EXPECT_GE(*m.cgroup_headroom, 512 * kMiB - 28 * kMiB) << "the page cache counts as available";
 }
 
 TEST(HostMemory, MissingFilesMeanNoInformation) {

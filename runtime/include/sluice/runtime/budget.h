@@ -3,7 +3,8 @@
 // Host memory comes from the kernel (/proc/meminfo MemAvailable) and from the
 // memory cgroup the process runs in (v2: memory.max - memory.current, v1:
 // memory.limit_in_bytes - memory.usage_in_bytes, at every level up to the
-// root). Device memory comes from whoever owns the GPU, through
+// root), with the cgroup's reclaimable page cache (memory.stat: active and
+// inactive file pages, less dirty and writeback) counted as available. Device memory comes from whoever owns the GPU, through
 // DeviceMemoryBudget (the renderer reads VK_EXT_memory_budget).
 //
 // Units: bytes everywhere.
@@ -26,7 +27,8 @@ struct HostMemoryPaths {
 // One reading of the host's memory.
 struct HostMemory {
   uint64_t mem_available = 0;               // MemAvailable; 0 if it could not be read
-  std::optional<uint64_t> cgroup_headroom;  // limit - usage of the tightest cgroup level; none if unlimited
+  std::optional<uint64_t> cgroup_headroom;  // limit - (usage - file cache) of the tightest cgroup level; none if unlimited
+  uint64_t cgroup_file_cache = 0;           // the reclaimable page cache counted at that level
   std::string cgroup_source;                // the limit file that set the headroom, for messages
 
   // What the process may still allocate: the smaller of the two. 0 when
