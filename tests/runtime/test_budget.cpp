@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -201,6 +202,8 @@ TEST(HostMemory, RealCgroupPageCacheCountsAsAvailable) {
   fs::remove(dir, ec);
   ASSERT_EQ(status, 0) << command;
   ASSERT_TRUE(m.cgroup_headroom);
+  std::printf("real cgroup, 512 MiB limit: headroom %.1f MiB, reclaimable page cache %.1f MiB\n",
+              double(*m.cgroup_headroom) / double(kMiB), double(m.cgroup_file_cache) / double(kMiB));
   EXPECT_GE(m.cgroup_file_cache, 100 * kMiB) << "the 128 MiB written should be cached and charged to the cgroup";
   EXPECT_GE(*m.cgroup_headroom, 512 * kMiB - 28 * kMiB) << "the page cache counts as available";
 }
