@@ -46,6 +46,8 @@ StagingAllocator::~StagingAllocator() = default;
 
 const runtime::DeviceMemoryBudget* StagingAllocator::device_budget() const { return budget_.get(); }
 
+uint64_t StagingAllocator::kept_bytes() const { return pool_->kept_bytes(); }
+void StagingAllocator::trim(uint64_t keep) { pool_->trim(keep); }
 uint64_t StagingAllocator::held_bytes() const { return pool_->held_bytes(); }
 uint64_t StagingAllocator::peak_held_bytes() const { return pool_->peak_held_bytes(); }
 

@@ -61,6 +61,8 @@ void HostFrameAllocator::release(FrameBuffers& buffers) {
   buffers = {};
 }
 
+uint64_t HostFrameAllocator::kept_bytes() const { return pool_->kept_bytes(); }
+void HostFrameAllocator::trim(uint64_t keep) { pool_->trim(keep); }
 uint64_t HostFrameAllocator::held_bytes() const { return pool_->held_bytes(); }
 uint64_t HostFrameAllocator::peak_held_bytes() const { return pool_->peak_held_bytes(); }
 uint64_t HostFrameAllocator::in_use_buffers() const { return pool_->in_use_blocks(); }

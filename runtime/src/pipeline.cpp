@@ -77,7 +77,7 @@ PipelineCore::PipelineCore(const io::ContainerReader& reader, FrameAllocator& al
   arena_.initialize(decode_threads_, 0);  // no slot reserved: only workers decode
   read_crew_.start(read_threads_ - 1);
 
-  initial_plan_ = plan_now(0);
+  initial_plan_ = plan_now(allocator_.kept_bytes());  // blocks a previous pipeline left for reuse count as ours
   counters_.window_frames.store(initial_plan_.frames, kRelaxed);
   counters_.active_frames.store(initial_active(initial_plan_), kRelaxed);
   counters_.record_buffers.store(initial_plan_.record_buffers, kRelaxed);

@@ -98,6 +98,8 @@ class PipelineCore {
   void reevaluate(ReaderState& rs);
   WindowPlan plan_now(uint64_t held) const;
   void shrink_to_window(ReaderState& rs);
+  // What the pipeline holds: decoded buffers in use and kept, records.
+  uint64_t held_now(const ReaderState& rs) const;
   bool evict_oldest(ReaderState& rs);
   void free_slot(ReaderState& rs, uint32_t s);
   Start start_entry(ReaderState& rs, uint64_t k, uint64_t frame);

@@ -132,7 +132,7 @@ void PipelineCore::free_slot(ReaderState& rs, uint32_t s) {
     rs.decoded_held -= allocator_.bytes_for(slot.layout);
     allocator_.release(slot.buffers);
     slot.has_buffers = false;
-    counters_.held_bytes.store(rs.decoded_held + rs.record_held, kRelaxed);
+    counters_.held_bytes.store(held_now(rs), kRelaxed);
   }
   slot.state.store(SlotState::Free, kRelaxed);
   rs.free_slots.push_back(s);
@@ -149,6 +149,17 @@ bool PipelineCore::evict_oldest(ReaderState& rs) {
 void PipelineCore::shrink_to_window(ReaderState& rs) {
   while (occupied(rs) > rs.active && evict_oldest(rs)) {
   }
+  // Memory held follows the window: kept buffers beyond the free slots'
+  // worth go back (steady playback never has more, so nothing is freed).
+  const uint64_t free_slots = rs.active > occupied(rs) ? rs.active - occupied(rs) : 0;
+  if (allocator_.kept_bytes() > free_slots * footprint_.decoded_bytes) {
+    allocator_.trim(free_slots * footprint_.decoded_bytes);
+    counters_.held_bytes.store(held_now(rs), kRelaxed);
+  }
+}
+
+uint64_t PipelineCore::held_now(const ReaderState& rs) const {
+  return rs.decoded_held + allocator_.kept_bytes() + rs.record_held;
 }
 
 void PipelineCore::collect_records(ReaderState& rs) {
@@ -163,7 +174,7 @@ void PipelineCore::collect_records(ReaderState& rs) {
     records_[f].release();
     --allocated;
   }
-  counters_.held_bytes.store(rs.decoded_held + rs.record_held, kRelaxed);
+  counters_.held_bytes.store(held_now(rs), kRelaxed);
 }
 
 WindowPlan PipelineCore::plan_now(uint64_t held) const {
@@ -186,7 +197,7 @@ WindowPlan PipelineCore::plan_now(uint64_t held) const {
 
 void PipelineCore::reevaluate(ReaderState& rs) {
   rs.next_evaluation = rs.frames_started + std::max<uint32_t>(1, options_.reevaluate_every);
-  const WindowPlan plan = plan_now(rs.decoded_held + rs.record_held);
+  const WindowPlan plan = plan_now(held_now(rs));
   if (!worth_changing(rs.plan.frames, plan.frames)) return;
   const uint32_t previous = rs.plan.frames;
   rs.plan = plan;
@@ -290,7 +301,7 @@ bool PipelineCore::read_record(ReaderState& rs, Slot& slot, uint32_t record) {
   buffer.reserve(std::max<uint64_t>(footprint_.record_bytes, span));
   if (buffer.capacity() != before) {
     rs.record_held += buffer.capacity() - before;
-    counters_.held_bytes.store(rs.decoded_held + rs.record_held, kRelaxed);
+    counters_.held_bytes.store(held_now(rs), kRelaxed);
     if (rs.record_held > counters_.peak_record_bytes.load(kRelaxed)) counters_.peak_record_bytes.store(rs.record_held, kRelaxed);
   }
   const std::span<std::byte> dst = buffer.span().first(span);
@@ -311,7 +322,7 @@ void PipelineCore::prepare_decode(ReaderState& rs, Slot& slot) {
   slot.buffers = allocator_.allocate(slot.layout);
   slot.has_buffers = true;
   rs.decoded_held += allocator_.bytes_for(slot.layout);
-  counters_.held_bytes.store(rs.decoded_held + rs.record_held, kRelaxed);
+  counters_.held_bytes.store(held_now(rs), kRelaxed);
 
   bool fits = slot.buffers.particles.size() >= slot.layout.particle_bytes() &&
               slot.buffers.attributes.size() >= attribute_streams_;

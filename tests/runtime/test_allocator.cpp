@@ -69,3 +69,26 @@ TEST(HostFrameAllocator, HoldsNoMoreThanTheMostInUseAtOnce) {
   EXPECT_LE(a.peak_held_bytes(), 6 * largest);
   for (auto& b : live) a.release(b);
 }
+
+// trim() gives kept buffers back (largest first) down to what it is told to
+// keep, never a buffer in use; emptied blocks are reused as shells.
+TEST(HostFrameAllocator, TrimGivesKeptBuffersBack) {
+  HostFrameAllocator a;
+  std::vector<FrameBuffers> live;
+  for (uint64_t i = 0; i < 8; ++i) live.push_back(a.allocate(layout(1000 * (i + 1))));
+  const uint64_t one = a.bytes_for(layout(1000)), all = a.held_bytes();
+  for (size_t i = 1; i < live.size(); ++i) a.release(live[i]);  // live[0] stays in use
+  EXPECT_EQ(a.kept_bytes(), all - one);
+  a.trim(3 * a.bytes_for(layout(3000)));
+  EXPECT_LE(a.kept_bytes(), 3 * a.bytes_for(layout(3000)));
+  EXPECT_EQ(a.held_bytes(), one + a.kept_bytes()) << "the buffer in use is untouched";
+  EXPECT_NE(live[0].particles.data(), nullptr);
+  a.trim(0);
+  EXPECT_EQ(a.kept_bytes(), 0u);
+  EXPECT_EQ(a.held_bytes(), one);
+  // The window grows again: new buffers, in the blocks' old shells.
+  for (size_t i = 1; i < live.size(); ++i) live[i] = a.allocate(layout(2000));
+  EXPECT_EQ(a.held_bytes(), one + 7 * a.bytes_for(layout(2000)));
+  EXPECT_EQ(a.in_use_buffers(), 8u);
+  for (auto& b : live) a.release(b);
+}

@@ -301,6 +301,53 @@ TEST_F(PipelineTest, WindowFollowsAvailableMemoryWhilePlaying) {
   take_all(p, 100);  // and it still plays
 }
 
+// The buffers the allocator keeps follow the window both ways: a smaller
+// window gives its memory back, a larger one takes it again, and blocks the
+// allocator keeps count as the pipeline's own when it plans.
+TEST_F(PipelineTest, HeldMemoryFollowsTheWindowDownAndUp) {
+  const io::ContainerReader reader(*path_);
+  HostFrameAllocator allocator;
+  test::TempDir fake;
+  PipelineOptions o = options();
+  o.budget.memory_cap = 0;
+  o.budget.max_frames = 0;
+  o.budget.ring_capacity = 64;
+  o.budget.host_paths = {(fake / "meminfo").string(), (fake / "none").string(), (fake / "none").string()};
+  o.reevaluate_every = 1;
+  o.slow_start = false;  // the whole window at once: held memory is the window
+  const FrameFootprint f = largest_frame(reader, 1, &allocator);
+  const uint64_t plenty = 2 * (40 * f.decoded_bytes + 3 * f.record_bytes);  // ~40 frames
+  const auto set_available = [&](uint64_t bytes) {
+    test::write_text_file(fake / "meminfo", "MemAvailable: " + std::to_string(bytes / 1024) + " kB\n");
+  };
+  // Plays until `done()` or a bound, taking frames (the window re-plans every frame).
+  const auto play_until = [&](Pipeline& p, auto done) {
+    for (int i = 0; i < 3000 && !done(); ++i) take_all(p, 1);
+  };
+  // A window as large as the file (one slot per frame), less one in flight.
+  const uint64_t many = (std::min<uint64_t>(reader.frame_count(), 40) - 1) * f.decoded_bytes;
+  ASSERT_GE(reader.frame_count(), 12u);
+  set_available(plenty);
+  Pipeline p(reader, allocator, o);
+  p.restart({reader.frame_count(), 0, 1, 1, EndMode::Loop});
+  play_until(p, [&] { return allocator.held_bytes() >= many; });
+  ASSERT_GE(allocator.held_bytes(), many) << "a large window holds many frames; window " << p.window() << ", frames " << reader.frame_count() << ", in use " << allocator.in_use_buffers();
+
+  // A tenth of the memory: the window shrinks and the memory held with it.
+  set_available(plenty / 10);
+  play_until(p, [&] { return p.window() <= 6 && allocator.held_bytes() <= (p.window() + 1) * f.decoded_bytes; });
+  EXPECT_LE(p.window(), 6u);
+  EXPECT_LE(allocator.held_bytes(), (p.window() + 1) * f.decoded_bytes)
+      << "held " << allocator.held_bytes() << " bytes for a window of " << p.window() << " frames of "
+      << f.decoded_bytes;
+
+  // Plenty again: the window grows back and takes memory again.
+  set_available(plenty);
+  play_until(p, [&] { return allocator.held_bytes() >= many; });
+  EXPECT_GE(allocator.held_bytes(), many);
+  take_all(p, 50);  // and it still plays
+}
+
 TEST_F(PipelineTest, RejectsSchedulesOutsideTheFile) {
   const io::ContainerReader reader(*path_);
   HostFrameAllocator allocator;

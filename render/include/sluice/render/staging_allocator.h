@@ -36,6 +36,8 @@ class StagingAllocator final : public runtime::FrameAllocator {
   runtime::FrameBuffers allocate(const runtime::FrameLayout& layout) override;
   void release(runtime::FrameBuffers& buffers) override;
   uint64_t bytes_for(const runtime::FrameLayout& layout) const override;
+  uint64_t kept_bytes() const override;
+  void trim(uint64_t keep) override;
 
   // The budget to give the pipeline for device memory: the free part of the
   // heap staging memory comes from (VK_EXT_memory_budget), plus what this

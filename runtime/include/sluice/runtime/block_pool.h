@@ -5,12 +5,14 @@
 // a page fault per 4 KiB (a Vulkan allocation more). A request takes the
 // smallest kept block that fits; when none fits, one kept block is freed
 // first, so the number of blocks never exceeds the most that were in use at
-// once and held_bytes() is what the window really costs.
+// once and held_bytes() is what the window really costs. trim() gives kept
+// blocks back when the window shrinks.
 //
 // Threads: acquire() and release() from one thread at a time (the
 // FrameAllocator rule); the counters from any thread.
 #pragma once
 
+#include <algorithm>
 #include <atomic>
 #include <cstddef>
 #include <cstdint>
@@ -45,10 +47,12 @@ class BlockPool {
     if (fits != kept_.end()) {
       block = *fits;
       kept_.erase(fits);
+      kept_bytes_.fetch_sub(block->capacity, std::memory_order_relaxed);
     } else {
       if (!kept_.empty()) {  // give one kept block back first: the count does not grow
         block = kept_.back();
         kept_.pop_back();
+        kept_bytes_.fetch_sub(block->capacity, std::memory_order_relaxed);
         account(-static_cast<int64_t>(block->capacity));
         block->memory = Memory{};
         block->capacity = 0;
@@ -77,9 +81,27 @@ class BlockPool {
     block.in_use = false;
     in_use_.fetch_sub(1, std::memory_order_relaxed);
     kept_.push_back(&block);
+    kept_bytes_.fetch_add(block.capacity, std::memory_order_relaxed);
+  }
+
+  // Frees kept blocks, largest first, until at most `keep` bytes are kept;
+  // blocks in use are never touched. Emptied blocks stay as reusable shells.
+  void trim(uint64_t keep) {
+    if (kept_bytes() <= keep) return;
+    std::sort(kept_.begin(), kept_.end(), [](const Block* a, const Block* b) { return a->capacity > b->capacity; });
+    for (Block* block : kept_) {
+      if (kept_bytes() <= keep || block->capacity == 0) break;
+      kept_bytes_.fetch_sub(block->capacity, std::memory_order_relaxed);
+      account(-static_cast<int64_t>(block->capacity));
+      block->memory = Memory{};
+      block->capacity = 0;
+    }
+    // Shells last: acquire() takes the back one when no kept block fits.
+    std::stable_partition(kept_.begin(), kept_.end(), [](const Block* b) { return b->capacity > 0; });
   }
 
   uint64_t held_bytes() const { return held_.load(std::memory_order_relaxed); }  // in use + kept
+  uint64_t kept_bytes() const { return kept_bytes_.load(std::memory_order_relaxed); }  // released, kept for reuse
   uint64_t peak_held_bytes() const { return peak_.load(std::memory_order_relaxed); }
   uint64_t in_use_blocks() const { return in_use_.load(std::memory_order_relaxed); }
   uint64_t allocations() const { return allocations_.load(std::memory_order_relaxed); }  // fresh, not reused
@@ -94,7 +116,7 @@ class BlockPool {
 
   std::vector<std::unique_ptr<Block>> blocks_;  // every block (addresses stay put)
   std::vector<Block*> kept_;                    // released, ready for reuse
-  std::atomic<uint64_t> held_{0}, peak_{0}, in_use_{0}, allocations_{0};
+  std::atomic<uint64_t> held_{0}, peak_{0}, in_use_{0}, allocations_{0}, kept_bytes_{0};
 };
 
 // A frame's buffers in one block: the particles, then each attribute stream,

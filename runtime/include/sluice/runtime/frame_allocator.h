@@ -54,6 +54,13 @@ class FrameAllocator {
   // Bytes an allocation of `layout` really takes (alignment, padding): the
   // window is sized with it. Any thread.
   virtual uint64_t bytes_for(const FrameLayout& layout) const { return layout.total_bytes(); }
+  // Bytes of released buffers kept for reuse (not in use): the pipeline
+  // counts them as its own when it plans the window. Any thread.
+  virtual uint64_t kept_bytes() const { return 0; }
+  // Frees kept buffers until at most `keep` bytes are kept: the pipeline
+  // calls it when the window shrinks, so memory held follows the window.
+  // Same thread rule as allocate() and release().
+  virtual void trim(uint64_t keep) { (void)keep; }
 };
 
 // Host memory with byte accounting, for headless playback, benchmarks and
@@ -71,6 +78,8 @@ class HostFrameAllocator final : public FrameAllocator {
   FrameBuffers allocate(const FrameLayout& layout) override;
   void release(FrameBuffers& buffers) override;
   uint64_t bytes_for(const FrameLayout& layout) const override;
+  uint64_t kept_bytes() const override;
+  void trim(uint64_t keep) override;
 
   // Readable from any thread.
   uint64_t held_bytes() const;       // in use + kept
