@@ -15,13 +15,20 @@ constexpr auto kStagingProps = vk::MemoryPropertyFlagBits::eHostVisible | vk::Me
 
 }  // namespace
 
-// Free bytes of the staging heap, plus what the allocator holds there.
+// What the frame slots may use of the staging heap. With
+// VK_EXT_memory_budget: the heap's free bytes plus the staging blocks this
+// allocator holds there (host fallbacks live elsewhere and do not count).
+// Without it nothing is known about other users: the heap's size, which
+// already includes what this allocator holds (adding it again made the plan
+// grow with the window).
 class StagingAllocator::HeapBudget final : public runtime::DeviceMemoryBudget {
  public:
   HeapBudget(const Context& context, const StagingAllocator& owner, uint32_t heap)
       : context_(context), owner_(owner), heap_(heap) {}
   uint64_t available_bytes() const override {
-    return context_.heap_available_bytes(heap_) + owner_.held_bytes();
+    if (!context_impl(context_).memory_budget) return context_.heap_available_bytes(heap_);
+    const uint64_t in_heap = owner_.pool_->held_where([](const Memory& m) { return !m.host; });
+    return context_.heap_available_bytes(heap_) + in_heap;
   }
 
  private:

@@ -100,6 +100,17 @@ class BlockPool {
     std::stable_partition(kept_.begin(), kept_.end(), [](const Block* b) { return b->capacity > 0; });
   }
 
+  // Bytes of the blocks, in use or kept, whose memory satisfies `pred` (for
+  // an allocator with memory of several kinds). Same thread as acquire().
+  template <class Pred>
+  uint64_t held_where(Pred pred) const {
+    uint64_t bytes = 0;
+    for (const auto& block : blocks_) {
+      if (block->capacity > 0 && pred(block->memory)) bytes += block->capacity;
+    }
+    return bytes;
+  }
+
   uint64_t held_bytes() const { return held_.load(std::memory_order_relaxed); }  // in use + kept
   uint64_t kept_bytes() const { return kept_bytes_.load(std::memory_order_relaxed); }  // released, kept for reuse
   uint64_t peak_held_bytes() const { return peak_.load(std::memory_order_relaxed); }
