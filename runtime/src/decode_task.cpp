@@ -9,7 +9,6 @@
 
 #include "pipeline_core.h"
 #include "sluice/io/codec.h"
-#include "tsan_handoff.h"
 
 namespace sluice::runtime::detail {
 namespace {
@@ -23,9 +22,7 @@ bool PipelineCore::stale(const Slot& slot) const {
 }
 
 void PipelineCore::decode_frame(Slot& slot, uint32_t s) {
-  handoff_acquire(&slot);  // from the reader thread, through TBB
   const size_t chunks = slot.header.chunks.size();
-  handoff_release(&slot);  // what this thread read happens before the chunks' completion
   tbb::parallel_for(tbb::blocked_range<size_t>(0, chunks, 1), [&](const tbb::blocked_range<size_t>& range) {
     for (size_t c = range.begin(); c != range.end(); ++c) {
       decode_chunk(slot, c);
@@ -33,12 +30,10 @@ void PipelineCore::decode_frame(Slot& slot, uint32_t s) {
       // after that (every chunk is done, so the loop is over).
       if (slot.chunks_left.fetch_sub(1, std::memory_order_acq_rel) == 1) finish_decode(s);
     }
-    handoff_release(this);  // for the destructor, after it waited for the decode tasks
   });
 }
 
 void PipelineCore::decode_chunk(Slot& slot, size_t c) {
-  handoff_acquire(&slot);  // from the reader thread, through TBB
   if (stale(slot)) {  // a newer schedule, or the consumer dropped it: skip, do not wait
     slot.skipped.store(true, kRelaxed);
     return;

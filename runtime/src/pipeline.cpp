@@ -7,7 +7,6 @@
 #include <utility>
 
 #include "pipeline_core.h"
-#include "tsan_handoff.h"
 
 namespace sluice::runtime {
 
@@ -93,7 +92,6 @@ PipelineCore::~PipelineCore() {
   // Decode tasks still running see stopping_ and skip their remaining chunks.
   // Waited for from outside the arena: the workers finish them.
   decode_group_.wait();
-  handoff_acquire(this);
   for (uint32_t s = 0; s < slot_count_; ++s) {
     if (slots_[s].has_buffers) allocator_.release(slots_[s].buffers);
   }

@@ -7,7 +7,6 @@
 #include <exception>
 
 #include "pipeline_core.h"
-#include "tsan_handoff.h"
 
 namespace sluice::runtime::detail {
 namespace {
@@ -285,7 +284,6 @@ PipelineCore::Start PipelineCore::start_entry(ReaderState& rs, uint64_t k, uint6
   frames_decoding_.fetch_add(1, kRelaxed);
   slot.state.store(SlotState::Decoding, std::memory_order_release);
   publish(rs, s, k);
-  handoff_release(&slot);  // what the workers read was written above (TBB's enqueue is invisible to TSan)
   arena_.enqueue(decode_group_.defer([this, &slot, s] { decode_frame(slot, s); }));
   return Start::Pushed;
 }
