@@ -23,12 +23,12 @@ void ByteWriter::text(const std::string& s) {
 
 void ByteReader::need(size_t n) const {
   if (n > remaining()) {
-    throw Error(where_, "truncated " + what_ + " (needs " + std::to_string(pos_ + n) + " bytes, has " +
+    throw Error(where_, std::string("truncated ") + what_ + " (needs " + std::to_string(pos_ + n) + " bytes, has " +
                             std::to_string(data_.size()) + ")");
   }
 }
 
-void ByteReader::fail(const std::string& message) const { throw Error(where_, what_ + ": " + message); }
+void ByteReader::fail(const std::string& message) const { throw Error(where_, std::string(what_) + ": " + message); }
 
 std::string ByteReader::name() {
   const size_t n = u8();

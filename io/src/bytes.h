@@ -40,11 +40,12 @@ class ByteWriter {
 };
 
 // Reads fields in order; any read past the end throws io::Error at `where`
-// with "truncated <what>".
+// with "truncated <what>". Borrows `where` and `what` (they must outlive it):
+// a frame's record is parsed without building its location.
 class ByteReader {
  public:
-  ByteReader(std::span<const std::byte> data, ErrorLocation where, std::string what)
-      : data_(data), where_(std::move(where)), what_(std::move(what)) {}
+  ByteReader(std::span<const std::byte> data, const ErrorLocation& where, const char* what)
+      : data_(data), where_(where), what_(what) {}
   uint8_t u8() { return get<uint8_t>(); }
   uint16_t u16() { return get<uint16_t>(); }
   uint32_t u32() { return get<uint32_t>(); }
@@ -70,8 +71,8 @@ class ByteReader {
   }
   std::span<const std::byte> data_;
   size_t pos_ = 0;
-  ErrorLocation where_;
-  std::string what_;
+  const ErrorLocation& where_;
+  const char* what_;
 };
 
 uint64_t checksum(std::span<const std::byte> data);

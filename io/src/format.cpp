@@ -192,6 +192,13 @@ FramePrefix parse_frame_prefix(std::span<const std::byte> fixed, const ErrorLoca
 
 FrameHeader parse_frame_table(std::span<const std::byte> record, size_t attribute_count,
                               const ErrorLocation& where) {
+  FrameHeader f;
+  parse_frame_table(record, attribute_count, where, f);
+  return f;
+}
+
+void parse_frame_table(std::span<const std::byte> record, size_t attribute_count, const ErrorLocation& where,
+                       FrameHeader& f) {
   const FramePrefix prefix = parse_frame_prefix(record, where);
   const uint64_t table = frame_table_bytes(prefix.chunk_count, attribute_count);
   ByteReader r(record, where, "frame header");
@@ -200,7 +207,6 @@ FrameHeader parse_frame_table(std::span<const std::byte> record, size_t attribut
   std::memcpy(&stored, record.data() + table - 8, 8);
   if (stored != checksum(record.first(table - 8))) r.fail("frame header checksum mismatch (corrupt header)");
 
-  FrameHeader f;
   r.u32();
   f.frame_number = r.u32();
   f.frame_bytes = r.u64();
@@ -243,7 +249,6 @@ FrameHeader parse_frame_table(std::span<const std::byte> record, size_t attribut
     particles += c.particle_count;
   }
   if (particles != f.particle_count) r.fail("chunk particle counts do not add up to the frame's");
-  return f;
 }
 
 std::vector<std::byte> serialize_index(const FrameIndex& index, size_t attribute_count) {

@@ -69,13 +69,19 @@ std::vector<std::byte> ContainerReader::read_record(uint64_t frame) const {
 }
 
 FrameHeader ContainerReader::parse_record(uint64_t frame, std::span<const std::byte> record) const {
-  FrameHeader h = parse_frame_table(record, header_.attributes.size(), location(frame));
+  FrameHeader h;
+  parse_record(frame, record, h, location(frame));
+  return h;
+}
+
+void ContainerReader::parse_record(uint64_t frame, std::span<const std::byte> record, FrameHeader& h,
+                                   const ErrorLocation& where) const {
+  parse_frame_table(record, header_.attributes.size(), where, h);
   const FrameIndexEntry& e = index_.frames.at(frame);
   if (h.frame_number != frame || h.frame_bytes != e.bytes || h.particle_count != e.particle_count ||
       h.chunks.size() != e.chunk_count) {
-    throw Error(location(frame), "frame header disagrees with the frame index");
+    throw Error(where, "frame header disagrees with the frame index");
   }
-  return h;
 }
 
 DecodedFrame decode_frame(const ContainerReader& reader, uint64_t frame) {

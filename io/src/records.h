@@ -31,6 +31,10 @@ struct FramePrefix {
 FramePrefix parse_frame_prefix(std::span<const std::byte> fixed, const ErrorLocation& where);
 // Parses and validates header + chunk table; `record` holds the whole frame record.
 FrameHeader parse_frame_table(std::span<const std::byte> record, size_t attribute_count, const ErrorLocation& where);
+// The same into `into`, reusing its chunk table's memory (no allocation once
+// it has held as many chunks).
+void parse_frame_table(std::span<const std::byte> record, size_t attribute_count, const ErrorLocation& where,
+                       FrameHeader& into);
 
 std::vector<std::byte> serialize_index(const FrameIndex& index, size_t attribute_count);
 FrameIndex parse_index(std::span<const std::byte> bytes, size_t attribute_count, uint64_t file_size,

@@ -21,19 +21,27 @@ bool PipelineCore::stale(const Slot& slot) const {
   return stopping_.load(kRelaxed) || slot.abandoned.load(kRelaxed) || generation_.load(kRelaxed) != slot.generation;
 }
 
-void PipelineCore::decode_frame(Slot& slot, uint32_t s) {
+void PipelineCore::decode_frame(Slot& slot, uint32_t s) noexcept {
   const size_t chunks = slot.header.chunks.size();
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, chunks, 1), [&](const tbb::blocked_range<size_t>& range) {
-    for (size_t c = range.begin(); c != range.end(); ++c) {
-      decode_chunk(slot, c);
-      // The last chunk publishes the frame; nothing here touches the slot
-      // after that (every chunk is done, so the loop is over).
-      if (slot.chunks_left.fetch_sub(1, std::memory_order_acq_rel) == 1) finish_decode(s);
-    }
-  });
+  try {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, chunks, 1), [&](const tbb::blocked_range<size_t>& range) {
+      for (size_t c = range.begin(); c != range.end(); ++c) {
+        decode_chunk(slot, c);
+        // The last chunk publishes the frame; nothing here touches the slot
+        // after that (every chunk is done, so the loop is over).
+        if (slot.chunks_left.fetch_sub(1, std::memory_order_acq_rel) == 1) finish_decode(s);
+      }
+    });
+  } catch (...) {
+    // TBB could not run the chunks (no memory for its tasks); it waited for
+    // those that ran. The frame fails, and is finished here unless its last
+    // chunk finished it.
+    claim_error(slot, [&] { return FrameError{reader_.location(slot.frame), "no memory to decode the frame"}; });
+    if (slot.chunks_left.exchange(0, std::memory_order_acq_rel) > 0) finish_decode(s);
+  }
 }
 
-void PipelineCore::decode_chunk(Slot& slot, size_t c) {
+void PipelineCore::decode_chunk(Slot& slot, size_t c) noexcept {
   if (stale(slot)) {  // a newer schedule, or the consumer dropped it: skip, do not wait
     slot.skipped.store(true, kRelaxed);
     return;
@@ -51,14 +59,24 @@ void PipelineCore::decode_chunk(Slot& slot, size_t c) {
       std::span<uint16_t* const>(targets.data(), slot.attribute_targets.size())};
 
   const auto t0 = std::chrono::steady_clock::now();
+  // The location is only read on an error; kept per worker so that naming
+  // the file costs no allocation per chunk.
+  thread_local io::ErrorLocation where;
   try {
+    if (options_.before_decode_chunk) options_.before_decode_chunk(slot.frame, c);
+    if (where.file != reader_.path()) where.file = reader_.path();
+    where.frame = slot.frame;
+    where.chunk = c;
     thread_local io::DecodeScratch scratch;
-    io::decode_chunk(slot.record_bytes, chunk, reader_.header(), destination, scratch, reader_.location(slot.frame, c));
+    io::decode_chunk(slot.record_bytes, chunk, reader_.header(), destination, scratch, where);
   } catch (const io::Error& e) {
-    if (!slot.error_claimed.exchange(true, std::memory_order_acq_rel)) slot.error = FrameError::from(e);
+    claim_error(slot, [&] { return FrameError::from(e); });
     return;
   } catch (const std::exception& e) {
-    if (!slot.error_claimed.exchange(true, std::memory_order_acq_rel)) slot.error = {reader_.location(slot.frame, c), e.what()};
+    claim_error(slot, [&] { return FrameError{reader_.location(slot.frame, c), e.what()}; });
+    return;
+  } catch (...) {
+    claim_error(slot, [&] { return FrameError{reader_.location(slot.frame, c), "unknown exception while decoding"}; });
     return;
   }
   const auto ns = std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - t0).count();

@@ -57,10 +57,20 @@ PipelineCore::PipelineCore(const io::ContainerReader& reader, FrameAllocator& al
       records_(size_t(decode_threads_) + 1) {
   stream_of_attribute_ = stream_map(reader_, options_.attributes, attribute_streams_);
   footprint_ = largest_frame(reader_, attribute_streams_, &allocator_);
+  record_where_.file = reader_.path();
   source_ = options_.source ? options_.source
                             : std::make_shared<FileRecordSource>(reader_.path(), reader_.descriptor(), options_.direct_io);
   slot_count_ = std::max<uint32_t>(2, options_.budget.ring_capacity);
   slots_ = std::make_unique<Slot[]>(slot_count_);
+  // Room for the largest frame's chunk table in every slot up front: parsing
+  // a record into a slot then never allocates.
+  uint32_t most_chunks = 0;
+  for (const io::FrameIndexEntry& e : reader_.index().frames) most_chunks = std::max(most_chunks, e.chunk_count);
+  for (uint32_t s = 0; s < slot_count_; ++s) {
+    slots_[s].header.chunks.reserve(most_chunks);
+    slots_[s].chunk_first.reserve(most_chunks);
+    slots_[s].attribute_targets.reserve(reader_.header().attributes.size());
+  }
   workers_ = std::make_unique<WorkerCounters[]>(worker_slots());
 
   // Readers come out of the cores by default; with a worker count given they
@@ -91,7 +101,11 @@ PipelineCore::~PipelineCore() {
   if (reader_thread_.joinable()) reader_thread_.join();
   // Decode tasks still running see stopping_ and skip their remaining chunks.
   // Waited for from outside the arena: the workers finish them.
-  decode_group_.wait();
+  try {
+    decode_group_.wait();
+  } catch (...) {
+    // Decode tasks catch everything themselves; nothing may leave a destructor.
+  }
   for (uint32_t s = 0; s < slot_count_; ++s) {
     if (slots_[s].has_buffers) allocator_.release(slots_[s].buffers);
   }
@@ -203,6 +217,7 @@ FrameHandle PipelineCore::take() {
   h.sequence_ = entry.sequence;
   if (state == SlotState::Failed) {
     h.error_ = std::make_unique<FrameError>(slots_[entry.slot].error);
+    if (h.error_->message.empty()) h.error_->message = "failed, and there was no memory left to say why";
     give_back(entry.slot);
   } else {
     slots_[entry.slot].state.store(SlotState::Shown, kRelaxed);

@@ -49,7 +49,7 @@ struct ReaderState {
   uint64_t next_k = 0;                  // next entry of the schedule to fetch
   uint32_t out = 0;                     // entries pushed and not yet returned
   std::vector<uint32_t> free_slots;
-  std::deque<uint32_t> cached;          // decoded frames behind the playhead, oldest first
+  std::vector<uint32_t> cached;         // decoded frames behind the playhead, oldest first (a slot count at most)
   std::vector<uint32_t> draining;       // returned while still decoding
   std::vector<uint32_t> free_records;   // record buffers not in use
   WindowPlan plan;
@@ -117,8 +117,13 @@ class PipelineCore {
   uint32_t occupied(const ReaderState& rs) const;
 
   // decode workers (decode_task.cpp)
-  void decode_frame(Slot& slot, uint32_t s);
-  void decode_chunk(Slot& slot, size_t c);
+  void decode_frame(Slot& slot, uint32_t s) noexcept;
+  void decode_chunk(Slot& slot, size_t c) noexcept;
+  // Claims the frame's error (the first one wins) and records what
+  // `describe()` returns; never throws: without memory to describe it the
+  // message stays empty and the consumer says so.
+  template <class Describe>
+  void claim_error(Slot& slot, Describe describe) noexcept;
   void finish_decode(uint32_t s);
   bool stale(const Slot& slot) const;
 
@@ -133,6 +138,7 @@ class PipelineCore {
   std::vector<uint32_t> stream_of_attribute_;  // header attribute -> decoded stream, or ~0u
   uint32_t attribute_streams_ = 0;
   FrameFootprint footprint_;
+  io::ErrorLocation record_where_;  // the reader thread's: the file, and the frame it parses
   WindowPlan initial_plan_;  // the reader starts from it
   int decode_threads_ = 1;
   int read_threads_ = 1;
@@ -179,5 +185,19 @@ class PipelineCore {
 
   std::thread reader_thread_;  // last: started once everything above exists
 };
+
+template <class Describe>
+void PipelineCore::claim_error(Slot& slot, Describe describe) noexcept {
+  if (slot.error_claimed.exchange(true, std::memory_order_acq_rel)) return;
+  try {
+    slot.error = describe();
+  } catch (...) {
+    // No memory to say why: name the frame (no allocation) and leave the
+    // message empty; the consumer reports that.
+    slot.error.where.frame = slot.frame;
+    slot.error.where.chunk.reset();
+    slot.error.message.clear();
+  }
+}
 
 }  // namespace sluice::runtime::detail

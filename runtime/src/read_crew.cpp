@@ -36,7 +36,7 @@ void ReadCrew::helper_main() {
   }
 }
 
-void ReadCrew::run(uint64_t count, const std::function<void(uint64_t)>& body) {
+void ReadCrew::run(uint64_t count, PieceBody body) {
   count_ = count;
   body_ = &body;
   next_.store(0, std::memory_order_relaxed);

@@ -17,6 +17,21 @@
 
 namespace sluice::runtime::detail {
 
+// A borrowed `void(uint64_t)` callable: unlike std::function it never
+// allocates (the reader runs a crew round per record). Valid while the
+// callable it was made from lives.
+class PieceBody {
+ public:
+  template <class F>
+  PieceBody(const F& f)  // NOLINT: implicit, like a function reference
+      : object_(&f), call_([](const void* o, uint64_t p) { (*static_cast<const F*>(o))(p); }) {}
+  void operator()(uint64_t p) const { call_(object_, p); }
+
+ private:
+  const void* object_;
+  void (*call_)(const void*, uint64_t);
+};
+
 class ReadCrew {
  public:
   ReadCrew() = default;
@@ -31,7 +46,7 @@ class ReadCrew {
   // pieces not yet started are skipped and the first exception is rethrown
   // here. One caller at a time (the reader thread). Waiting is on futex words
   // (std::atomic::wait): no mutex.
-  void run(uint64_t count, const std::function<void(uint64_t)>& body);
+  void run(uint64_t count, PieceBody body);
 
   int helpers() const { return static_cast<int>(threads_.size()); }
 
@@ -47,7 +62,7 @@ class ReadCrew {
   std::atomic<bool> failed_{false};
   // Written by run() before round_ is bumped (release), read by helpers after.
   uint64_t count_ = 0;
-  const std::function<void(uint64_t)>* body_ = nullptr;
+  const PieceBody* body_ = nullptr;
   std::exception_ptr error_;  // written by whoever sets failed_ first
 };
 

@@ -29,6 +29,11 @@ void PipelineCore::reader_main() {
   rs.plan = initial_plan_;
   rs.active = initial_active(rs.plan);  // as the constructor reported it
   rs.next_evaluation = options_.reevaluate_every;
+  // Every list a slot count long at most: reserved once, so the frame path
+  // never allocates.
+  rs.free_slots.reserve(slot_count_);
+  rs.cached.reserve(slot_count_);
+  rs.draining.reserve(slot_count_);
   for (uint32_t s = slot_count_; s-- > 0;) rs.free_slots.push_back(s);
   for (auto r = static_cast<uint32_t>(records_.size()); r-- > 0;) rs.free_records.push_back(r);
   try {
@@ -140,7 +145,7 @@ void PipelineCore::free_slot(ReaderState& rs, uint32_t s) {
 bool PipelineCore::evict_oldest(ReaderState& rs) {
   if (rs.cached.empty()) return false;
   const uint32_t s = rs.cached.front();
-  rs.cached.pop_front();
+  rs.cached.erase(rs.cached.begin());
   free_slot(rs, s);
   return true;
 }
@@ -259,7 +264,8 @@ PipelineCore::Start PipelineCore::start_entry(ReaderState& rs, uint64_t k, uint6
       rs.free_slots.push_back(s);
       return Start::Cancelled;
     }
-    slot.header = reader_.parse_record(frame, slot.record_bytes);
+    record_where_.frame = frame;
+    reader_.parse_record(frame, slot.record_bytes, slot.header, record_where_);  // no allocation per frame
     prepare_decode(rs, slot);
   } catch (const io::Error& e) {
     FrameError error = FrameError::from(e);
@@ -284,7 +290,16 @@ PipelineCore::Start PipelineCore::start_entry(ReaderState& rs, uint64_t k, uint6
   frames_decoding_.fetch_add(1, kRelaxed);
   slot.state.store(SlotState::Decoding, std::memory_order_release);
   publish(rs, s, k);
-  arena_.enqueue(decode_group_.defer([this, &slot, s] { decode_frame(slot, s); }));
+  try {
+    if (options_.before_decode_handoff) options_.before_decode_handoff(frame);
+    arena_.enqueue(decode_group_.defer([this, &slot, s] { decode_frame(slot, s); }));
+  } catch (...) {
+    // The frame could not be handed to the workers (no memory for the
+    // task): it fails, in its place, as a decode would have failed it.
+    claim_error(slot, [&] { return FrameError{reader_.location(frame), "no memory to hand the frame to the decoders"}; });
+    slot.chunks_left.store(0, kRelaxed);
+    finish_decode(s);
+  }
   return Start::Pushed;
 }
 

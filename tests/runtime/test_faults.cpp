@@ -3,9 +3,16 @@
 // and frame (and chunk), and playback carries on or stops cleanly by policy.
 #include <gtest/gtest.h>
 
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
 #include <fstream>
+#include <map>
+#include <mutex>
+#include <thread>
 #include <new>
 
+#include "failing_allocation.h"
 #include "runtime_test_util.h"
 #include "sluice/runtime/player.h"
 
@@ -247,4 +254,201 @@ TEST_F(FaultTest, NoMemoryForAFrameIsAnErrorOfThatFrame) {
   const auto error = player.pop_error();
   ASSERT_TRUE(error);
   EXPECT_EQ(error->where.frame, kBad);
+}
+
+// ------------------------------------------------ failures inside the decoders
+namespace {
+
+// What a decode worker throws when a test says so; its message needs no
+// allocation, so the allocation that fails is the pipeline's own.
+struct InjectedFailure : std::exception {
+  const char* what() const noexcept override { return "injected decode failure"; }
+};
+
+// Plays every frame once through the pipeline; returns each frame's outcome
+// ("" for a good frame, else its error text).
+std::map<uint64_t, std::string> play_once(Pipeline& p, uint64_t frames) {
+  std::map<uint64_t, std::string> out;
+  p.restart({frames, 0, 1, 1, EndMode::Stop});
+  while (true) {
+    const NextEntry next = p.wait_next();
+    if (next.end) break;
+    FrameHandle h = p.take();
+    out[h.frame()] = h.failed() ? h.error()->text() : "";
+  }
+  return out;
+}
+
+PipelineOptions decode_options() {
+  PipelineOptions o;
+  o.decode_threads = 2;
+  o.budget.max_frames = 8;
+  return o;
+}
+
+}  // namespace
+
+// The error a decode worker reports needs memory (the file name, the
+// message); when even that fails, the frame still arrives, failed, in its
+// place, and everything after it plays.
+TEST_F(FaultTest, NoMemoryToDescribeADecodeErrorIsStillAnErrorFrame) {
+  const io::ContainerReader reader(*path_);
+  HostFrameAllocator allocator;
+  PipelineOptions o = decode_options();
+  o.before_decode_chunk = [](uint64_t frame, size_t chunk) {
+    if (frame != kBad || chunk != 0) return;
+    test::fail_next_allocations(1);  // the copy of the file name in the error
+    throw InjectedFailure{};
+  };
+  std::map<uint64_t, std::string> outcome;
+  {
+    Pipeline p(reader, allocator, o);
+    outcome = play_once(p, reader.frame_count());
+  }  // and it is destroyed cleanly
+  ASSERT_EQ(outcome.size(), reader.frame_count());
+  for (const auto& [frame, error] : outcome) {
+    if (frame == kBad) {
+      EXPECT_NE(error.find("frame 12"), std::string::npos) << error;
+      EXPECT_NE(error.find("no memory left to say why"), std::string::npos) << error;
+    } else {
+      EXPECT_EQ(error, "") << "frame " << frame;
+    }
+  }
+}
+
+TEST_F(FaultTest, DecodeErrorsOfEveryKindAreErrorFrames) {
+  const io::ContainerReader reader(*path_);
+  HostFrameAllocator allocator;
+  PipelineOptions o = decode_options();
+  o.before_decode_chunk = [](uint64_t frame, size_t chunk) {
+    if (frame == kBad && chunk == 1) throw std::bad_alloc();
+    if (frame == kBad + 1 && chunk == 0) throw 42;  // not even an exception
+  };
+  Pipeline p(reader, allocator, o);
+  const auto outcome = play_once(p, reader.frame_count());
+  EXPECT_NE(outcome.at(kBad).find("frame 12, chunk 1"), std::string::npos) << outcome.at(kBad);
+  EXPECT_NE(outcome.at(kBad + 1).find("unknown exception"), std::string::npos) << outcome.at(kBad + 1);
+  EXPECT_EQ(outcome.at(kBad + 2), "");
+}
+
+// Handing a frame to the decode workers allocates a task; when that fails
+// the frame fails in its place instead of staying "decoding" forever.
+TEST_F(FaultTest, NoMemoryToHandAFrameToTheDecodersIsAnErrorFrame) {
+  const io::ContainerReader reader(*path_);
+  HostFrameAllocator allocator;
+  PipelineOptions o = decode_options();
+  o.before_decode_handoff = [](uint64_t frame) {
+    if (frame == kBad) throw std::bad_alloc();
+  };
+  std::map<uint64_t, std::string> outcome;
+  {
+    Pipeline p(reader, allocator, o);
+    outcome = play_once(p, reader.frame_count());
+  }
+  ASSERT_EQ(outcome.size(), reader.frame_count());
+  EXPECT_NE(outcome.at(kBad).find("no memory to hand the frame to the decoders"), std::string::npos) << outcome.at(kBad);
+  for (const auto& [frame, error] : outcome) {
+    if (frame != kBad) {
+      EXPECT_EQ(error, "") << "frame " << frame;
+    }
+  }
+}
+
+// A gate on the decoder: frame kBad's first chunk waits until the test opens
+// it, so a seek, a restart and the pipeline's destruction happen while that
+// frame is decoding, on purpose.
+class DecodeGate {
+ public:
+  void wait_here(uint64_t frame, size_t chunk) {
+    if (frame != kBad || chunk != 0) return;
+    std::unique_lock lock(mutex_);
+    held_ = true;
+    changed_.notify_all();
+    changed_.wait(lock, [&] { return open_; });
+  }
+  void wait_until_held() {
+    std::unique_lock lock(mutex_);
+    changed_.wait(lock, [&] { return held_; });
+  }
+  void open() {
+    const std::lock_guard lock(mutex_);
+    open_ = true;
+    changed_.notify_all();
+  }
+
+ private:
+  std::mutex mutex_;
+  std::condition_variable changed_;
+  bool held_ = false, open_ = false;
+};
+
+TEST_F(FaultTest, SeekWhileAFrameIsDecodingDeliversTheNewScheduleOnly) {
+  const io::ContainerReader reader(*path_);
+  HostFrameAllocator allocator;
+  auto gate = std::make_shared<DecodeGate>();
+  PipelineOptions o = decode_options();
+  o.before_decode_chunk = [gate](uint64_t frame, size_t chunk) { gate->wait_here(frame, chunk); };
+  Pipeline p(reader, allocator, o);
+  p.restart({reader.frame_count(), int64_t(kBad), 1, 1, EndMode::Stop});
+  gate->wait_until_held();
+  p.restart({reader.frame_count(), 2, 1, 1, EndMode::Stop});  // seek back while kBad decodes
+  std::thread opener([gate] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    gate->open();
+  });
+  std::vector<uint64_t> shown;
+  for (int i = 0; i < 5; ++i) {
+    ASSERT_FALSE(p.wait_next().end);
+    FrameHandle h = p.take();
+    EXPECT_FALSE(h.failed());
+    EXPECT_TRUE(test::holds_frame(h, h.frame(), spec_));
+    shown.push_back(h.frame());
+  }
+  opener.join();
+  EXPECT_EQ(shown, (std::vector<uint64_t>{2, 3, 4, 5, 6}));
+}
+
+TEST_F(FaultTest, DestroyingWhileAFrameIsDecodingWaitsForItAndEnds) {
+  const io::ContainerReader reader(*path_);
+  HostFrameAllocator allocator;
+  auto gate = std::make_shared<DecodeGate>();
+  PipelineOptions o = decode_options();
+  o.before_decode_chunk = [gate](uint64_t frame, size_t chunk) { gate->wait_here(frame, chunk); };
+  std::thread opener;
+  {
+    Pipeline p(reader, allocator, o);
+    p.restart({reader.frame_count(), int64_t(kBad), 1, 1, EndMode::Stop});
+    gate->wait_until_held();
+    opener = std::thread([gate] {
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+      gate->open();  // the destructor below is waiting for this decode by now
+    });
+  }
+  opener.join();
+  EXPECT_EQ(allocator.in_use_buffers(), 0u) << "every buffer went back";
+}
+
+// Once the window is warm, delivering a frame allocates nothing: not the
+// reader (record, chunk table, locations), not the decode workers, not the
+// hand-off to the consumer.
+TEST_F(FaultTest, SteadyPlaybackAllocatesNothingPerFrame) {
+  const io::ContainerReader reader(*path_);
+  HostFrameAllocator allocator;
+  PipelineOptions o = decode_options();
+  o.reevaluate_every = 1u << 30;  // re-reading /proc for the budget allocates; not per frame
+  o.slow_start = false;           // the window stands: no new buffer blocks while it grows
+  Pipeline p(reader, allocator, o);
+  p.restart({reader.frame_count(), 0, 1, 1, EndMode::Loop});
+  const auto take = [&](uint64_t n) {
+    for (uint64_t i = 0; i < n; ++i) {
+      ASSERT_FALSE(p.wait_next().end);
+      FrameHandle h = p.take();
+      ASSERT_FALSE(h.failed());
+    }
+  };
+  take(3 * reader.frame_count());  // warm: every slot, record buffer and worker scratch has been used
+  const unsigned long long before = test::allocations_so_far();
+  take(2 * reader.frame_count());
+  EXPECT_EQ(test::allocations_so_far() - before, 0u) << "allocations while delivering " << 2 * reader.frame_count()
+                                                     << " frames";
 }

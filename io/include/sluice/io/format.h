@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "sluice/io/inline_vector.h"
 #include "sluice/io/types.h"
 #include "sluice/io/up_axis.h"
 
@@ -89,8 +90,9 @@ struct ChunkDesc {
   ChunkCodec codec = ChunkCodec::Zstd;
   Aabb bounds;                   // every particle of the chunk lies inside (inclusive)
   uint64_t checksum = 0;         // XXH3-64 of the compressed bytes
-  // Per attribute: the range its 16-bit values are quantized against.
-  std::vector<std::array<float, 2>> attribute_ranges;
+  // Per attribute: the range its 16-bit values are quantized against (held
+  // inline: re-parsing a chunk table into the same vector allocates nothing).
+  InlineVector<std::array<float, 2>, kMaxAttributes> attribute_ranges;
 };
 
 struct FrameHeader {

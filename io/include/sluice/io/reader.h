@@ -42,6 +42,11 @@ class ContainerReader {
   // Validates a record's header and chunk table (checksum, sizes) and that it
   // matches the index entry of `frame`.
   FrameHeader parse_record(uint64_t frame, std::span<const std::byte> record) const;
+  // The same into `into`, reusing its memory, with errors at `where` (the
+  // caller's, naming the file and `frame`): parsing allocates nothing once
+  // `into` has held as many chunks. For the streaming pipeline's reader.
+  void parse_record(uint64_t frame, std::span<const std::byte> record, FrameHeader& into,
+                    const ErrorLocation& where) const;
 
   ErrorLocation location(uint64_t frame) const { return {path_, frame, {}}; }
   ErrorLocation location(uint64_t frame, uint64_t chunk) const { return {path_, frame, chunk}; }

@@ -15,6 +15,8 @@
 #include <span>
 #include <vector>
 
+#include "sluice/io/inline_vector.h"
+
 namespace sluice::runtime {
 
 template <class Memory>
@@ -35,7 +37,9 @@ struct FrameLayout {
 // The buffers of one frame. Memory is owned by the allocator.
 struct FrameBuffers {
   std::span<std::byte> particles;               // >= layout.particle_bytes(), 16-byte aligned
-  std::vector<std::span<uint16_t>> attributes;  // layout.attribute_streams spans of >= particles values
+  // layout.attribute_streams spans of >= particles values (held inline:
+  // handing out buffers allocates nothing).
+  io::InlineVector<std::span<uint16_t>, 32> attributes;
   uint64_t tag = 0;                             // the allocator's own (a staging offset, an index, ...)
 };
 

@@ -71,6 +71,13 @@ struct PipelineOptions {
   // Where records come from; null: the file, through FileRecordSource.
   std::shared_ptr<RecordSource> source;
   uint64_t read_piece_bytes = 8 << 20;  // reads are split (a seek cancels a big read early; pieces go in parallel)
+  // Fault injection, for tests; empty otherwise. Called on a decode worker
+  // before each chunk (it may block, holding that decode mid-way, or throw:
+  // the frame then fails) and on the reader thread just before a frame is
+  // handed to the decode workers (it may throw, as that hand-off's own
+  // allocation can: the frame then fails).
+  std::function<void(uint64_t frame, size_t chunk)> before_decode_chunk;
+  std::function<void(uint64_t frame)> before_decode_handoff;
 };
 
 // How the pipeline shares `cores` by default: one read thread per 4 cores
