@@ -15,6 +15,12 @@ namespace {
 
 constexpr auto kRelaxed = std::memory_order_relaxed;
 
+// Scratch for a thread outside the arena's slots (made on its first use only).
+io::DecodeScratch& outside_scratch() {
+  thread_local io::DecodeScratch scratch;
+  return scratch;
+}
+
 }  // namespace
 
 bool PipelineCore::stale(const Slot& slot) const {
@@ -59,18 +65,21 @@ void PipelineCore::decode_chunk(Slot& slot, size_t c) noexcept {
       std::span<uint16_t* const>(targets.data(), slot.attribute_targets.size())};
 
   const auto t0 = std::chrono::steady_clock::now();
-  // The location is only read on an error; kept per worker so that naming
-  // the file costs no allocation per chunk.
-  thread_local io::ErrorLocation where;
   try {
     if (options_.before_decode_chunk) options_.before_decode_chunk(slot.frame, c);
-    if (where.file != reader_.path()) where.file = reader_.path();
-    where.frame = slot.frame;
-    where.chunk = c;
-    thread_local io::DecodeScratch scratch;
-    io::decode_chunk(slot.record_bytes, chunk, reader_.header(), destination, scratch, where);
+    // Each arena slot has its scratch (a thread outside the arena, which TBB
+    // does not let decode here, would get one of its own).
+    const int worker = tbb::this_task_arena::current_thread_index();
+    io::DecodeScratch& scratch = worker >= 0 && uint32_t(worker) < worker_slots() ? scratch_[uint32_t(worker)] : outside_scratch();
+    // The slot's location names the file and frame without an allocation per
+    // chunk; the chunk is added to the error below.
+    io::decode_chunk(slot.record_bytes, chunk, reader_.header(), destination, scratch, slot.where);
   } catch (const io::Error& e) {
-    claim_error(slot, [&] { return FrameError::from(e); });
+    claim_error(slot, [&] {
+      FrameError error = FrameError::from(e);
+      if (!error.where.chunk) error.where.chunk = c;
+      return error;
+    });
     return;
   } catch (const std::exception& e) {
     claim_error(slot, [&] { return FrameError{reader_.location(slot.frame, c), e.what()}; });

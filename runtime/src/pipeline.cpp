@@ -62,16 +62,9 @@ PipelineCore::PipelineCore(const io::ContainerReader& reader, FrameAllocator& al
                             : std::make_shared<FileRecordSource>(reader_.path(), reader_.descriptor(), options_.direct_io);
   slot_count_ = std::max<uint32_t>(2, options_.budget.ring_capacity);
   slots_ = std::make_unique<Slot[]>(slot_count_);
-  // Room for the largest frame's chunk table in every slot up front: parsing
-  // a record into a slot then never allocates.
-  uint32_t most_chunks = 0;
-  for (const io::FrameIndexEntry& e : reader_.index().frames) most_chunks = std::max(most_chunks, e.chunk_count);
-  for (uint32_t s = 0; s < slot_count_; ++s) {
-    slots_[s].header.chunks.reserve(most_chunks);
-    slots_[s].chunk_first.reserve(most_chunks);
-    slots_[s].attribute_targets.reserve(reader_.header().attributes.size());
-  }
+  for (const io::FrameIndexEntry& e : reader_.index().frames) most_chunks_ = std::max(most_chunks_, e.chunk_count);
   workers_ = std::make_unique<WorkerCounters[]>(worker_slots());
+  scratch_ = std::make_unique<io::DecodeScratch[]>(worker_slots());  // made here, not on a worker's first chunk
 
   // Readers come out of the cores by default; with a worker count given they
   // come on top of it: a quarter as many (1 to 4).
@@ -87,6 +80,16 @@ PipelineCore::PipelineCore(const io::ContainerReader& reader, FrameAllocator& al
   read_crew_.start(read_threads_ - 1);
 
   initial_plan_ = plan_now(allocator_.kept_bytes());  // blocks a previous pipeline left for reuse count as ours
+  // Chunk tables sized for the file's largest frame in the slots a window of
+  // this plan cycles through (the reader takes free slots last-in first-out);
+  // others get theirs at first use. Parsing a record then never allocates.
+  const uint32_t warm_slots = std::min<uint32_t>(slot_count_, 2 * initial_plan_.frames + 8);
+  for (uint32_t s = 0; s < warm_slots; ++s) {
+    slots_[s].header.chunks.reserve(most_chunks_);
+    slots_[s].chunk_first.reserve(most_chunks_);
+    slots_[s].attribute_targets.reserve(reader_.header().attributes.size());
+    slots_[s].where.file = reader_.path();
+  }
   counters_.window_frames.store(initial_plan_.frames, kRelaxed);
   counters_.active_frames.store(initial_active(initial_plan_), kRelaxed);
   counters_.record_buffers.store(initial_plan_.record_buffers, kRelaxed);

@@ -139,6 +139,7 @@ class PipelineCore {
   uint32_t attribute_streams_ = 0;
   FrameFootprint footprint_;
   io::ErrorLocation record_where_;  // the reader thread's: the file, and the frame it parses
+  uint32_t most_chunks_ = 0;        // of any frame in the file: a slot's chunk table is sized for it once
   WindowPlan initial_plan_;  // the reader starts from it
   int decode_threads_ = 1;
   int read_threads_ = 1;
@@ -170,6 +171,7 @@ class PipelineCore {
 
   // Stats.
   Counters counters_;
+  std::unique_ptr<io::DecodeScratch[]> scratch_;  // one per arena slot (a worker's index)
   std::unique_ptr<WorkerCounters[]> workers_;
 
   // Decode: our own arena, sized to decode_threads_. The global_control lets

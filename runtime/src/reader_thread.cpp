@@ -265,7 +265,14 @@ PipelineCore::Start PipelineCore::start_entry(ReaderState& rs, uint64_t k, uint6
       return Start::Cancelled;
     }
     record_where_.frame = frame;
+    if (slot.header.chunks.capacity() < most_chunks_) {  // a slot's first use: room for any frame of the file
+      slot.header.chunks.reserve(most_chunks_);
+      slot.chunk_first.reserve(most_chunks_);
+      slot.attribute_targets.reserve(reader_.header().attributes.size());
+      slot.where.file = reader_.path();
+    }
     reader_.parse_record(frame, slot.record_bytes, slot.header, record_where_);  // no allocation per frame
+    slot.where.frame = frame;  // its file was set with its chunk table
     prepare_decode(rs, slot);
   } catch (const io::Error& e) {
     FrameError error = FrameError::from(e);

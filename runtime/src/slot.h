@@ -49,6 +49,7 @@ struct Slot {
   uint64_t frame = 0;
   uint64_t generation = 0;
   io::FrameHeader header;
+  io::ErrorLocation where;                       // the file and this frame (no chunk): what decode errors name
   std::vector<uint64_t> chunk_first;             // first particle of each chunk
   FrameLayout layout;
   FrameBuffers buffers;

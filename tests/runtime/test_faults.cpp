@@ -437,6 +437,10 @@ TEST_F(FaultTest, SteadyPlaybackAllocatesNothingPerFrame) {
   PipelineOptions o = decode_options();
   o.reevaluate_every = 1u << 30;  // re-reading /proc for the budget allocates; not per frame
   o.slow_start = false;           // the window stands: no new buffer blocks while it grows
+  // One decode worker: a worker's scratch grows to the largest chunk it has
+  // decoded (once), and with several, which worker meets which chunk first is
+  // TBB's choice; with one, the warm-up has shown it every chunk.
+  o.decode_threads = 1;
   Pipeline p(reader, allocator, o);
   p.restart({reader.frame_count(), 0, 1, 1, EndMode::Loop});
   const auto take = [&](uint64_t n) {
