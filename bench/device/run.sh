@@ -75,6 +75,15 @@ for stage in $stages; do
       paired "play from .pvd, cache hit" "play the .sluice itself" "$S play --headless --once --fps 1000 /tmp/fh/fluid.pvd" \
         "$S play --headless --once --fps 1000 /tmp/fh/.sluice-cache/fluid.sluice"
       ;;
+    streamcmp)  # the streaming pipeline of this binary against BASE's (pack.sh BASE=...), alternated, page cache
+      run $S synth -n 10M --frames 60 -o /tmp/s10.sluice --force -q
+      for i in 1 2 3; do
+        log "round $i: base"; ./.gpu/sluice_base bench stream /tmp/s10.sluice --memory 16G --no-storage --min-time 2 2>&1 |
+          grep -E "page cache  |decode only" | tee -a "$OUT/summary.txt"
+        log "round $i: this"; $S bench stream /tmp/s10.sluice --memory 16G --no-storage --min-time 2 2>&1 |
+          grep -E "page cache  |decode only" | tee -a "$OUT/summary.txt"
+      done
+      ;;
     live)  # frames pushed from memory (render::LiveSource), not recorded and recorded
       run $S bench live --sizes 1M,10M --frames 6
       run $S bench live --sizes 1M,10M --frames 6 --record /tmp/live.sluice
