@@ -370,7 +370,7 @@ void run_play_window(const PlayOptions& o, const WindowPlayOptions& wo) {
     // window's size and the panel's until the user moves the camera.
     const render::ScreenRect free = p.hud ? free_beside(p.hud_min, p.hud_max, window.width(), window.height())
                                           : render::ScreenRect{};
-    if (p.camera.to_string() == p.home.to_string()) p.camera = p.home = v.camera(scene, aspect(), free);
+    if (p.camera == p.home) p.camera = p.home = v.camera(scene, aspect(), free);
     // --exit-after counts frames that show data (the first may take a moment to decode).
     const bool last_for_exit = wo.exit_after > 0 && p.has_frame && presented + 1 >= wo.exit_after;
     const bool capture = p.screenshot || (last_for_exit && !wo.screenshot.empty());

@@ -89,12 +89,10 @@ ConversionSummary convert_input(const ConversionOptions& o, const std::string& o
   io::ImportOptions import;
   import.id_array = o.id_array;
   import.no_ids = o.no_ids;
+  import.attributes = o.attributes;
   std::unique_ptr<io::FrameSource> source = io::open_source(o.input, import);
-  if (o.all_attributes) {
+  if (o.all_attributes) {  // the arrays are known once the source is open: open it again with them
     import.attributes = carried_attributes(o, *source);
-    if (!import.attributes.empty()) source = io::open_source(o.input, import);
-  } else {
-    import.attributes = o.attributes;
     if (!import.attributes.empty()) source = io::open_source(o.input, import);
   }
   const uint64_t frames = source->frame_count();

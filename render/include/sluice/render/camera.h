@@ -65,6 +65,8 @@ class Camera {
   // keep this camera's values). Throws std::invalid_argument naming the bad key.
   void apply(const std::string& text);
 
+  bool operator==(const Camera&) const = default;
+
  private:
   // The nearest eye, along the current view direction, that sees every
   // corner of `box` (with a 10% margin).
