@@ -97,7 +97,7 @@ class BlockPool {
       block->capacity = 0;
     }
     // Shells last: acquire() takes the back one when no kept block fits.
-    std::stable_partition(kept_.begin(), kept_.end(), [](const Block* b) { return b->capacity > 0; });
+    std::partition(kept_.begin(), kept_.end(), [](const Block* b) { return b->capacity > 0; });
   }
 
   // Bytes of the blocks, in use or kept, whose memory satisfies `pred` (for
