@@ -32,6 +32,17 @@ class PipelineTest : public ::testing::Test {
     o.budget.memory_cap = 64u << 20;
     return o;
   }
+  // Options whose window is planned from `fake`/meminfo alone (no cap, no
+  // cgroup), re-read before every frame.
+  static PipelineOptions budget_from_fake_meminfo(const test::TempDir& fake) {
+    PipelineOptions o = options();
+    o.budget.memory_cap = 0;
+    o.budget.max_frames = 0;
+    o.budget.ring_capacity = 64;
+    o.budget.host_paths = {(fake / "meminfo").string(), (fake / "none").string(), (fake / "none").string()};
+    o.reevaluate_every = 1;
+    return o;
+  }
   // Takes `count` entries (or until the schedule ends) checking each one.
   static std::vector<uint64_t> take_all(Pipeline& p, uint64_t count) {
     std::vector<uint64_t> frames;
@@ -276,12 +287,7 @@ TEST_F(PipelineTest, WindowFollowsAvailableMemoryWhilePlaying) {
   const io::ContainerReader reader(*path_);
   HostFrameAllocator allocator;
   test::TempDir fake;
-  PipelineOptions o = options();
-  o.budget.memory_cap = 0;
-  o.budget.max_frames = 0;
-  o.budget.ring_capacity = 64;
-  o.budget.host_paths = {(fake / "meminfo").string(), (fake / "none").string(), (fake / "none").string()};
-  o.reevaluate_every = 1;
+  PipelineOptions o = budget_from_fake_meminfo(fake);
   const FrameFootprint f = largest_frame(reader, 1, &allocator);
   const uint64_t plenty = 2 * (40 * f.decoded_bytes + 3 * f.record_bytes);  // host fraction 0.5 -> ~40 frames
   test::write_text_file(fake / "meminfo", "MemAvailable: " + std::to_string(plenty / 1024) + " kB\n");
@@ -308,12 +314,7 @@ TEST_F(PipelineTest, HeldMemoryFollowsTheWindowDownAndUp) {
   const io::ContainerReader reader(*path_);
   HostFrameAllocator allocator;
   test::TempDir fake;
-  PipelineOptions o = options();
-  o.budget.memory_cap = 0;
-  o.budget.max_frames = 0;
-  o.budget.ring_capacity = 64;
-  o.budget.host_paths = {(fake / "meminfo").string(), (fake / "none").string(), (fake / "none").string()};
-  o.reevaluate_every = 1;
+  PipelineOptions o = budget_from_fake_meminfo(fake);
   o.slow_start = false;  // the whole window at once: held memory is the window
   const FrameFootprint f = largest_frame(reader, 1, &allocator);
   const uint64_t plenty = 2 * (40 * f.decoded_bytes + 3 * f.record_bytes);  // ~40 frames
