@@ -13,6 +13,7 @@
 #include <sstream>
 #include <string_view>
 
+#include "import/legacy_vtk.h"
 #include "import/text_reader.h"
 #include "sluice/io/error.h"
 #include "sluice/io/import.h"
@@ -48,7 +49,7 @@ std::optional<Format> format_of(const std::string& path) {
   return it->second;
 }
 
-[[maybe_unused]] bool needs_vtk(Format f) { return f != Format::kCsv && f != Format::kXyz; }
+[[maybe_unused]] bool needs_vtk(Format f) { return f != Format::kCsv && f != Format::kXyz && f != Format::kLegacy; }
 
 const char* format_name(Format f) {
   switch (f) {
@@ -93,6 +94,36 @@ struct FileFrame {
   std::optional<double> time;  // stored in the file, if it has one
 };
 
+// Legacy VTK is read by sluice itself, every count checked first; VTK's
+// reader (which trusts the file) only takes the constructs sluice does not
+// decode (string arrays).
+FileFrame read_legacy(const std::string& path, const std::vector<std::string>& attributes,
+                      const std::string& id_array) {
+  try {
+    detail::LegacyRead r = detail::read_legacy_vtk(path, attributes, id_array);
+    return {std::move(r.frame), r.time};
+  } catch (const detail::LegacyUnsupported&) {
+#ifdef SLUICE_WITH_VTK
+    detail::VtkRead r = detail::read_vtk(path, attributes, id_array);
+    return {std::move(r.frame), r.time};
+#else
+    throw;
+#endif
+  }
+}
+
+std::vector<std::string> legacy_arrays(const std::string& path) {
+  try {
+    return detail::legacy_vtk_arrays(path);
+  } catch (const detail::LegacyUnsupported&) {
+#ifdef SLUICE_WITH_VTK
+    return detail::vtk_arrays(path);
+#else
+    throw;
+#endif
+  }
+}
+
 FileFrame read_file(const std::string& path, const std::vector<std::string>& attributes, const std::string& id_array) {
   std::error_code ec;
   if (!fs::is_regular_file(path, ec)) throw Error({path}, "file not found");
@@ -100,6 +131,7 @@ FileFrame read_file(const std::string& path, const std::vector<std::string>& att
     case Format::kCsv: return {detail::read_csv(path, attributes, id_array), std::nullopt};
     case Format::kXyz: return {detail::read_xyz(path, attributes, id_array), std::nullopt};
     case Format::kPvd: throw Error({path}, "a .pvd collection cannot be a frame of another source");
+    case Format::kLegacy: return read_legacy(path, attributes, id_array);
     default: break;
   }
 #ifdef SLUICE_WITH_VTK
@@ -116,6 +148,7 @@ std::vector<std::string> file_arrays(const std::string& path) {
   switch (require_readable(path)) {
     case Format::kCsv: return detail::csv_arrays(path);
     case Format::kXyz: return detail::xyz_arrays(path);
+    case Format::kLegacy: return legacy_arrays(path);
     default: break;
   }
 #ifdef SLUICE_WITH_VTK

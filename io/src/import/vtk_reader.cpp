@@ -28,6 +28,7 @@
 #include <mutex>
 #include <type_traits>
 
+#include "import/values.h"
 #include "sluice/io/error.h"
 
 namespace sluice::io::detail {
@@ -253,23 +254,6 @@ std::string join(const std::vector<std::string>& names) {
   return out;
 }
 
-template <class T>
-void convert_values(const T* in, size_t count, float* out) {
-  for (size_t k = 0; k < count; ++k) out[k] = static_cast<float>(in[k]);
-}
-
-template <class T>
-void magnitudes(const T* in, size_t tuples, size_t comps, float* out) {
-  for (size_t t = 0; t < tuples; ++t) {
-    double sum = 0.0;
-    for (size_t c = 0; c < comps; ++c) {
-      const auto v = static_cast<double>(in[t * comps + c]);
-      sum += v * v;
-    }
-    out[t] = static_cast<float>(std::sqrt(sum));
-  }
-}
-
 // All values of `a` as float, tuple-major. Typed access on contiguous
 // arrays (every array a reader makes); GetComponent only as a fallback.
 void copy_as_float(vtkDataArray* a, float* out) {
@@ -310,22 +294,6 @@ void copy_scalar(vtkDataArray* a, float* out) {
     for (double v : tuple) sum += v * v;
     out[t] = static_cast<float>(std::sqrt(sum));
   }
-}
-
-// Converts ids; returns the index of the first id that is negative,
-// fractional or out of range, or `count` when all are valid.
-template <class T>
-size_t convert_ids(const T* in, size_t count, uint64_t* out) {
-  for (size_t k = 0; k < count; ++k) {
-    const T v = in[k];
-    if constexpr (std::is_floating_point_v<T>) {
-      if (!(v >= 0) || std::floor(v) != v || static_cast<double>(v) >= 18446744073709551616.0) return k;
-    } else if constexpr (std::is_signed_v<T>) {
-      if (v < 0) return k;
-    }
-    out[k] = static_cast<uint64_t>(v);
-  }
-  return count;
 }
 
 size_t copy_ids(vtkDataArray* a, uint64_t* out) {
