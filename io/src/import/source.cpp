@@ -15,6 +15,8 @@
 
 #include "import/legacy_vtk.h"
 #include "import/text_reader.h"
+#include "import/xml_check.h"
+#include "import/xml_tags.h"
 #include "sluice/io/error.h"
 #include "sluice/io/import.h"
 #ifdef SLUICE_WITH_VTK
@@ -94,6 +96,14 @@ struct FileFrame {
   std::optional<double> time;  // stored in the file, if it has one
 };
 
+// VTK's XML readers allocate what a header declares: sizes are checked
+// against the file first.
+[[maybe_unused]] void check_xml(const std::string& path) {
+  const Format f = require_readable(path);
+  if (f == Format::kPvtu || f == Format::kPvtp) detail::check_parallel_xml(path);
+  else detail::check_vtk_xml(path);
+}
+
 // Legacy VTK is read by sluice itself, every count checked first; VTK's
 // reader (which trusts the file) only takes the constructs sluice does not
 // decode (string arrays).
@@ -135,6 +145,7 @@ FileFrame read_file(const std::string& path, const std::vector<std::string>& att
     default: break;
   }
 #ifdef SLUICE_WITH_VTK
+  check_xml(path);
   detail::VtkRead r = detail::read_vtk(path, attributes, id_array);
   return {std::move(r.frame), r.time};
 #else
@@ -152,6 +163,7 @@ std::vector<std::string> file_arrays(const std::string& path) {
     default: break;
   }
 #ifdef SLUICE_WITH_VTK
+  check_xml(path);
   return detail::vtk_arrays(path);
 #else
   return {};
@@ -395,149 +407,6 @@ Plan plan_glob(const std::string& pattern) {
 
 // ---------------------------------------------------------- .pvd parsing
 
-// A start (or empty-element) tag of an XML document.
-struct XmlTag {
-  std::string name;
-  std::map<std::string, std::string> attributes;
-  uint64_t line = 0;
-};
-
-// Decodes the five predefined entities and numeric character references.
-std::string decode_entities(std::string_view s) {
-  std::string out;
-  out.reserve(s.size());
-  for (size_t i = 0; i < s.size(); ++i) {
-    const size_t semi = s[i] == '&' ? s.find(';', i) : std::string_view::npos;
-    if (semi == std::string_view::npos || semi - i > 10) {
-      out += s[i];
-      continue;
-    }
-    const std::string_view ent = s.substr(i + 1, semi - i - 1);
-    uint32_t code = 0;
-    if (ent == "amp") code = '&';
-    else if (ent == "lt") code = '<';
-    else if (ent == "gt") code = '>';
-    else if (ent == "quot") code = '"';
-    else if (ent == "apos") code = '\'';
-    else if (ent.size() > 1 && ent[0] == '#') {
-      const bool hex = ent[1] == 'x' || ent[1] == 'X';
-      const std::string_view digits = ent.substr(hex ? 2 : 1);
-      std::from_chars(digits.data(), digits.data() + digits.size(), code, hex ? 16 : 10);
-    }
-    if (code == 0 || code > 0x10FFFF) {
-      out += s[i];
-      continue;
-    }
-    if (code < 0x80) {
-      out += static_cast<char>(code);
-    } else if (code < 0x800) {
-      out += static_cast<char>(0xC0 | (code >> 6));
-      out += static_cast<char>(0x80 | (code & 0x3F));
-    } else if (code < 0x10000) {
-      out += static_cast<char>(0xE0 | (code >> 12));
-      out += static_cast<char>(0x80 | ((code >> 6) & 0x3F));
-      out += static_cast<char>(0x80 | (code & 0x3F));
-    } else {
-      out += static_cast<char>(0xF0 | (code >> 18));
-      out += static_cast<char>(0x80 | ((code >> 12) & 0x3F));
-      out += static_cast<char>(0x80 | ((code >> 6) & 0x3F));
-      out += static_cast<char>(0x80 | (code & 0x3F));
-    }
-    i = semi;
-  }
-  return out;
-}
-
-// Just enough XML for a .pvd: yields start tags with their attributes,
-// skips comments, declarations, end tags and text; throws on broken markup.
-class TagScanner {
- public:
-  TagScanner(std::string_view text, std::string path) : text_(text), path_(std::move(path)) {}
-
-  bool next(XmlTag& tag) {
-    while (true) {
-      const size_t lt = text_.find('<', pos_);
-      if (lt == std::string_view::npos) return false;
-      advance_to(lt);
-      if (skip_special()) continue;
-      if (text_.substr(pos_, 2) == "</") {
-        skip_past(">", "end tag");
-        continue;
-      }
-      parse_tag(tag);
-      return true;
-    }
-  }
-
- private:
-  [[noreturn]] void fail(const std::string& msg) const {
-    throw Error({path_}, "line " + std::to_string(line_) + ": " + msg + " (not a valid .pvd file)");
-  }
-  void advance_to(size_t p) {
-    line_ += static_cast<uint64_t>(std::count(text_.begin() + static_cast<std::ptrdiff_t>(pos_),
-                                              text_.begin() + static_cast<std::ptrdiff_t>(p), '\n'));
-    pos_ = p;
-  }
-  void skip_past(std::string_view end, const char* what) {
-    const size_t e = text_.find(end, pos_);
-    if (e == std::string_view::npos) fail(std::string("unterminated ") + what);
-    advance_to(e + end.size());
-  }
-  // Comments, <?xml ...?>, <!DOCTYPE ...>.
-  bool skip_special() {
-    if (text_.substr(pos_, 4) == "<!--") {
-      skip_past("-->", "comment");
-    } else if (text_.substr(pos_, 2) == "<?") {
-      skip_past("?>", "declaration");
-    } else if (text_.substr(pos_, 2) == "<!") {
-      skip_past(">", "declaration");
-    } else {
-      return false;
-    }
-    return true;
-  }
-  static bool name_char(char c) {
-    return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == ':' || c == '-' || c == '.';
-  }
-  void skip_space() {
-    while (pos_ < text_.size() && std::isspace(static_cast<unsigned char>(text_[pos_]))) advance_to(pos_ + 1);
-  }
-  std::string read_name(const char* what) {
-    const size_t start = pos_;
-    while (pos_ < text_.size() && name_char(text_[pos_])) ++pos_;
-    if (pos_ == start) fail(std::string("expected ") + what);
-    return std::string(text_.substr(start, pos_ - start));
-  }
-  void parse_tag(XmlTag& tag) {
-    tag = XmlTag{};
-    tag.line = line_;
-    ++pos_;  // '<'
-    tag.name = read_name("an element name after '<'");
-    while (true) {
-      skip_space();
-      if (pos_ >= text_.size()) fail("unterminated <" + tag.name + "> tag");
-      if (text_[pos_] == '>') return void(++pos_);
-      if (text_.substr(pos_, 2) == "/>") return void(pos_ += 2);
-      const std::string key = read_name("an attribute name");
-      skip_space();
-      if (pos_ >= text_.size() || text_[pos_] != '=') fail("expected '=' after attribute " + key);
-      ++pos_;
-      skip_space();
-      const char quote = pos_ < text_.size() ? text_[pos_] : '\0';
-      if (quote != '"' && quote != '\'') fail("attribute " + key + " has no quoted value");
-      const size_t close = text_.find(quote, pos_ + 1);
-      if (close == std::string_view::npos) fail("unterminated value of attribute " + key);
-      tag.attributes[key] = decode_entities(text_.substr(pos_ + 1, close - pos_ - 1));
-      advance_to(close + 1);
-    }
-  }
-
-  std::string_view text_;
-  std::string path_;
-  size_t pos_ = 0;
-  uint64_t line_ = 1;
-};
-
 struct PvdEntry {
   double time = 0;
   double part = 0;
@@ -565,7 +434,7 @@ bool parse_number(const std::string& s, double& out) {
   return ec == std::errc() && end == last && std::isfinite(out);
 }
 
-PvdEntry pvd_entry(const std::string& path, const XmlTag& tag) {
+PvdEntry pvd_entry(const std::string& path, const detail::XmlTag& tag) {
   const auto attr = [&](const char* key) -> const std::string* {
     const auto it = tag.attributes.find(key);
     return it == tag.attributes.end() ? nullptr : &it->second;
@@ -587,8 +456,8 @@ PvdEntry pvd_entry(const std::string& path, const XmlTag& tag) {
 
 std::vector<PvdEntry> parse_pvd(const std::string& path) {
   const std::string text = read_text_file(path);
-  TagScanner scanner(text, path);
-  XmlTag tag;
+  detail::TagScanner scanner(text, path, "not a valid .pvd file");
+  detail::XmlTag tag;
   if (!scanner.next(tag)) throw Error({path}, "empty file (not a valid .pvd file)");
   const auto type = tag.attributes.find("type");
   if (tag.name != "VTKFile" || type == tag.attributes.end() || type->second != "Collection") {

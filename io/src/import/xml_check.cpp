@@ -1,0 +1,477 @@
+// VTK XML size checks: markup up to <AppendedData>, then a few header bytes
+// per appended block, read with pread wherever the block lies.
+#include "import/xml_check.h"
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <charconv>
+#include <cstring>
+#include <filesystem>
+#include <limits>
+#include <optional>
+#include <string_view>
+
+#include "import/xml_tags.h"
+#include "sluice/io/error.h"
+
+namespace sluice::io::detail {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr const char* kKind = "not a valid VTK XML file";
+
+// ------------------------------------------------------------ the file
+
+class File {
+ public:
+  explicit File(const std::string& path) : path_(path) {
+    fd_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+    if (fd_ < 0) throw Error({path}, std::string("cannot open: ") + std::strerror(errno));
+    struct stat st {};
+    if (::fstat(fd_, &st) != 0) {
+      ::close(fd_);
+      throw Error({path}, "cannot read its size");
+    }
+    size_ = static_cast<uint64_t>(st.st_size);
+  }
+  ~File() { ::close(fd_); }
+  File(const File&) = delete;
+  File& operator=(const File&) = delete;
+
+  uint64_t size() const { return size_; }
+
+  // Up to `n` bytes at `offset` (fewer at the end of the file).
+  std::string read(uint64_t offset, uint64_t n) const {
+    std::string out(static_cast<size_t>(std::min(n, offset < size_ ? size_ - offset : 0)), '\0');
+    size_t done = 0;
+    while (done < out.size()) {
+      const ssize_t got = ::pread(fd_, out.data() + done, out.size() - done, static_cast<off_t>(offset + done));
+      if (got < 0 && errno == EINTR) continue;
+      if (got <= 0) break;
+      done += static_cast<size_t>(got);
+    }
+    out.resize(done);
+    return out;
+  }
+
+  // The markup: everything before the appended data (the whole file when
+  // there is none), read in steps so a large appended block is not read.
+  std::string markup(uint64_t& appended_at) const {
+    std::string text;
+    constexpr uint64_t kStep = 1 << 20;
+    appended_at = std::numeric_limits<uint64_t>::max();
+    while (text.size() < size_) {
+      const size_t from = text.size() > 16 ? text.size() - 16 : 0;
+      text += read(text.size(), kStep);
+      const size_t tag = text.find("<AppendedData", from);
+      if (tag == std::string::npos) continue;
+      // The data starts after the '_' that follows the tag.
+      const size_t close = text.find('>', tag);
+      if (close == std::string::npos) {
+        text += read(text.size(), kStep);
+        continue;
+      }
+      const size_t underscore = text.find('_', close);
+      if (underscore == std::string::npos && text.size() < size_) {
+        text += read(text.size(), kStep);
+        continue;
+      }
+      if (underscore != std::string::npos) appended_at = underscore + 1;
+      text.resize(close + 1);
+      return text;
+    }
+    return text;
+  }
+
+ private:
+  std::string path_;
+  int fd_ = -1;
+  uint64_t size_ = 0;
+};
+
+// ------------------------------------------------------------- numbers
+
+std::optional<uint64_t> parse_count(const std::string* s) {
+  if (!s) return std::nullopt;
+  const std::string_view v = *s;
+  const size_t b = v.find_first_not_of(" \t\r\n");
+  const size_t e = v.find_last_not_of(" \t\r\n");
+  if (b == std::string_view::npos) return std::nullopt;
+  uint64_t out = 0;
+  const auto [end, ec] = std::from_chars(v.data() + b, v.data() + e + 1, out);
+  if (ec != std::errc() || end != v.data() + e + 1) return std::nullopt;
+  return out;
+}
+
+uint64_t type_size(const std::string& type) {
+  if (type == "Int8" || type == "UInt8" || type == "Char") return 1;
+  if (type == "Int16" || type == "UInt16") return 2;
+  if (type == "Int32" || type == "UInt32" || type == "Float32") return 4;
+  if (type == "Int64" || type == "UInt64" || type == "Float64") return 8;
+  return 0;  // String, Bit, unknown: not checked
+}
+
+int base64_value(char c) {
+  if (c >= 'A' && c <= 'Z') return c - 'A';
+  if (c >= 'a' && c <= 'z') return c - 'a' + 26;
+  if (c >= '0' && c <= '9') return c - '0' + 52;
+  if (c == '+') return 62;
+  if (c == '/') return 63;
+  return -1;
+}
+
+// Decodes whole quads of `text` (whitespace skipped) until `bytes` bytes or
+// the end of a padded run or any other character; returns what was decoded.
+std::string base64_decode(std::string_view text, size_t bytes) {
+  std::string out;
+  uint32_t acc = 0;
+  int have = 0;
+  size_t k = 0;
+  for (; k < text.size() && out.size() < bytes; ++k) {
+    const char c = text[k];
+    if (c == ' ' || c == '\n' || c == '\r' || c == '\t') continue;
+    const int v = base64_value(c);
+    if (v < 0) {
+      // '=' pads the last quad of a run: its first bytes are complete.
+      if (c == '=' && have >= 2) {
+        acc <<= 6 * (4 - have);
+        out += static_cast<char>((acc >> 16) & 0xFF);
+        if (have == 3) out += static_cast<char>((acc >> 8) & 0xFF);
+      }
+      break;
+    }
+    acc = (acc << 6) | static_cast<uint32_t>(v);
+    if (++have == 4) {
+      out += static_cast<char>((acc >> 16) & 0xFF);
+      out += static_cast<char>((acc >> 8) & 0xFF);
+      out += static_cast<char>(acc & 0xFF);
+      acc = 0;
+      have = 0;
+    }
+  }
+  if (out.size() > bytes) out.resize(bytes);
+  return out;
+}
+
+// Base64 characters in `text` (whitespace excluded, padding included).
+uint64_t base64_chars(std::string_view text) {
+  uint64_t n = 0;
+  for (char c : text) n += base64_value(c) >= 0 || c == '=';
+  return n;
+}
+
+uint64_t encoded_size(uint64_t bytes) { return (bytes + 2) / 3 * 4; }
+
+// ------------------------------------------------------------- the checks
+
+struct Layout {
+  bool big_endian = false;
+  uint64_t header_bytes = 4;  // UInt32 or UInt64 block headers
+  bool compressed = false;
+  bool base64_appended = false;
+  uint64_t appended_at = std::numeric_limits<uint64_t>::max();
+};
+
+class Checker {
+ public:
+  explicit Checker(const std::string& path) : path_(path), file_(path) {}
+
+  void run() {
+    uint64_t appended_at = 0;
+    const std::string text = file_.markup(appended_at);
+    layout_.appended_at = appended_at;
+    XmlTag tag;
+    // The arrays come before <AppendedData>, but their checks need its encoding.
+    if (const size_t at = text.rfind("<AppendedData"); at != std::string::npos) {
+      TagScanner appended_scanner(std::string_view(text).substr(at), path_, kKind);
+      if (appended_scanner.next(tag)) appended(tag);
+    }
+    TagScanner scanner(text, path_, kKind);
+    if (!scanner.next(tag) || tag.name != "VTKFile") fail("the file does not start with a <VTKFile> element");
+    file_header(tag);
+    while (scanner.next(tag)) {
+      if (tag.name == "Piece") piece(tag);
+      else if (tag.name == "PointData" || tag.name == "Points") section_ = {tag.name, points_};
+      else if (tag.name == "CellData") section_ = {tag.name, cells_};
+      else if (tag.name == "FieldData" || tag.name == "Cells" || tag.name == "Verts" || tag.name == "Lines" ||
+               tag.name == "Strips" || tag.name == "Polys" || tag.name == "Coordinates") section_ = {tag.name, std::nullopt};
+      else if (tag.name == "DataArray") data_array(tag, scanner.text_after(tag));
+    }
+  }
+
+ private:
+  struct Section {
+    std::string name;
+    std::optional<uint64_t> tuples;  // declared by the piece, when known
+  };
+
+  [[noreturn]] void fail(const std::string& msg) const { throw Error({path_}, msg); }
+
+  uint64_t header_int(const std::string& bytes, size_t k) const {
+    uint64_t v = 0;
+    for (uint64_t b = 0; b < layout_.header_bytes; ++b) {
+      const auto byte = static_cast<unsigned char>(bytes[k * layout_.header_bytes + b]);
+      const uint64_t shift = layout_.big_endian ? 8 * (layout_.header_bytes - 1 - b) : 8 * b;
+      v |= static_cast<uint64_t>(byte) << shift;
+    }
+    return v;
+  }
+
+  void file_header(const XmlTag& tag) {
+    const std::string* order = tag.attribute("byte_order");
+    layout_.big_endian = order && *order == "BigEndian";
+    const std::string* header = tag.attribute("header_type");
+    if (header && *header == "UInt64") layout_.header_bytes = 8;
+    else if (header && *header != "UInt32") fail("header_type '" + *header + "' (expected UInt32 or UInt64)");
+    const std::string* compressor = tag.attribute("compressor");
+    layout_.compressed = compressor && !compressor->empty();
+  }
+
+  std::optional<uint64_t> count_attribute(const XmlTag& tag, const char* key) const {
+    const std::string* s = tag.attribute(key);
+    if (!s) return std::nullopt;
+    const std::optional<uint64_t> v = parse_count(s);
+    if (!v) fail("line " + std::to_string(tag.line) + ": Piece " + key + "=\"" + s->substr(0, 40) + "\" is not a count");
+    return v;
+  }
+
+  void piece(const XmlTag& tag) {
+    points_ = count_attribute(tag, "NumberOfPoints");
+    cells_ = count_attribute(tag, "NumberOfCells");
+    if (!cells_) {  // polydata: all kinds of cells together
+      uint64_t sum = 0;
+      bool any = false;
+      for (const char* key : {"NumberOfVerts", "NumberOfLines", "NumberOfStrips", "NumberOfPolys"}) {
+        if (const auto v = count_attribute(tag, key)) {
+          sum += *v;
+          any = true;
+        }
+      }
+      if (any) cells_ = sum;
+    }
+    section_ = {"Piece", std::nullopt};
+  }
+
+  void appended(const XmlTag& tag) {
+    const std::string* encoding = tag.attribute("encoding");
+    layout_.base64_appended = encoding && *encoding == "base64";
+    if (encoding && *encoding != "base64" && *encoding != "raw") {
+      fail("line " + std::to_string(tag.line) + ": AppendedData encoding '" + *encoding + "' (expected raw or base64)");
+    }
+  }
+
+  // ------------------------------------------------------ one array
+  void data_array(const XmlTag& tag, std::string_view text) {
+    const std::string name = tag.attribute("Name") ? *tag.attribute("Name") : "(unnamed)";
+    const std::string what = section_.name + " array '" + name + "'";
+    const std::string type = tag.attribute("type") ? *tag.attribute("type") : "";
+    uint64_t comps = 1;
+    if (const std::string* c = tag.attribute("NumberOfComponents")) {
+      const auto v = parse_count(c);
+      if (!v || *v == 0 || *v > 4096) fail(what + ": NumberOfComponents=\"" + c->substr(0, 40) + "\" is not 1 to 4096");
+      comps = *v;
+    }
+    std::optional<uint64_t> tuples = section_.tuples;
+    if (tag.attribute("NumberOfTuples")) {
+      tuples = parse_count(tag.attribute("NumberOfTuples"));
+      if (!tuples) fail(what + ": NumberOfTuples is not a count");
+    }
+    const uint64_t size = type_size(type);
+    std::optional<uint64_t> expected;
+    std::string declared;
+    if (tuples && size > 0) {
+      if (*tuples > std::numeric_limits<uint64_t>::max() / comps / size) {
+        fail(what + ": " + std::to_string(*tuples) + " tuples of " + std::to_string(comps) + " cannot be stored");
+      }
+      expected = *tuples * comps * size;
+      declared = std::to_string(*tuples) + " tuples x " + std::to_string(comps) + " components of " + type + " = " +
+                 std::to_string(*expected) + " bytes";
+    }
+    const std::string format = tag.attribute("format") ? *tag.attribute("format") : "ascii";
+    if (format == "appended") {
+      const auto offset = parse_count(tag.attribute("offset"));
+      if (!offset) fail(what + ": appended data without a valid offset");
+      appended_block(what, *offset, expected, declared);
+    } else if (format == "binary") {
+      inline_block(what, text, expected, declared);
+    } else if (format == "ascii") {
+      if (expected) ascii_values(what, text, *tuples * comps, declared);
+    } else {
+      fail(what + ": format '" + format + "' (expected ascii, binary or appended)");
+    }
+  }
+
+  // A block's decoded header: the bytes it says it holds (uncompressed),
+  // and the bytes that follow the header in the file (compressed sizes).
+  struct Block {
+    uint64_t header = 0;   // header bytes
+    uint64_t content = 0;  // uncompressed bytes
+    uint64_t stored = 0;   // bytes after the header
+  };
+
+  // `head` holds at least the first header word(s) of a block.
+  Block parse_header(const std::string& what, const std::string& head, const std::string& more_for_blocks) const {
+    Block b;
+    if (!layout_.compressed) {
+      if (head.size() < layout_.header_bytes) fail(what + ": its data block ends inside its size header");
+      b.header = layout_.header_bytes;
+      b.content = b.stored = header_int(head, 0);
+      return b;
+    }
+    if (head.size() < 3 * layout_.header_bytes) fail(what + ": its data block ends inside its compression header");
+    const uint64_t blocks = header_int(head, 0);
+    const uint64_t block_size = header_int(head, 1);
+    const uint64_t last = header_int(head, 2);
+    b.header = (3 + blocks) * layout_.header_bytes;
+    if (blocks > file_.size() / layout_.header_bytes) {
+      fail(what + ": its compression header lists " + std::to_string(blocks) + " blocks, more than the file can hold");
+    }
+    const std::string& all = more_for_blocks;
+    if (all.size() < b.header) fail(what + ": its data block ends inside its compression header");
+    b.content = blocks == 0 ? 0 : (blocks - 1) * block_size + (last == 0 ? block_size : last);
+    for (uint64_t k = 0; k < blocks; ++k) b.stored += header_int(all, 3 + k);
+    return b;
+  }
+
+  void check_content(const std::string& what, const Block& b, const std::optional<uint64_t>& expected,
+                     const std::string& declared) const {
+    if (expected && b.content != *expected) {
+      fail(what + ": declares " + declared + ", but its data block holds " + std::to_string(b.content) + " bytes");
+    }
+  }
+
+  void appended_block(const std::string& what, uint64_t offset, const std::optional<uint64_t>& expected,
+                      const std::string& declared) const {
+    if (layout_.appended_at == std::numeric_limits<uint64_t>::max()) fail(what + ": appended data, but the file has no <AppendedData> section");
+    const uint64_t at = layout_.appended_at + offset;
+    if (offset > file_.size() || at > file_.size()) {
+      fail(what + ": its block starts at byte " + std::to_string(at) + ", past the end of the file (" +
+           std::to_string(file_.size()) + " bytes): cut short, or the offset is wrong");
+    }
+    const uint64_t left = file_.size() - at;
+    const uint64_t word = layout_.header_bytes;
+    if (!layout_.base64_appended) {
+      const std::string head = file_.read(at, 3 * word);
+      std::string all = head;
+      if (layout_.compressed && head.size() == 3 * word) {
+        const uint64_t blocks = header_int(head, 0);
+        if (blocks <= file_.size() / word) all = file_.read(at, (3 + blocks) * word);
+      }
+      const Block b = parse_header(what, head, all);
+      check_content(what, b, expected, declared);
+      if (b.header + b.stored > left) {
+        fail(what + ": its block needs " + std::to_string(b.header + b.stored) + " bytes from byte " +
+             std::to_string(at) + ", but the file has " + std::to_string(left) + " (cut short)");
+      }
+      return;
+    }
+    // base64: the header is decoded from the first characters.
+    const std::string chars = file_.read(at, encoded_size(3 * word) + 64);
+    const std::string head = base64_decode(chars, 3 * word);
+    std::string all = head;
+    uint64_t header_chars = 0;
+    if (layout_.compressed && head.size() == 3 * word) {
+      const uint64_t blocks = header_int(head, 0);
+      if (blocks <= file_.size() / word) {
+        header_chars = encoded_size((3 + blocks) * word);
+        all = base64_decode(file_.read(at, header_chars + 64), (3 + blocks) * word);
+      }
+    }
+    const Block b = parse_header(what, head, all);
+    check_content(what, b, expected, declared);
+    // Uncompressed: header and data are one base64 run; compressed: two.
+    const uint64_t needed = layout_.compressed ? header_chars + encoded_size(b.stored) : encoded_size(b.header + b.stored);
+    if (needed > left) {
+      fail(what + ": its block needs " + std::to_string(needed) + " base64 characters from byte " + std::to_string(at) +
+           ", but the file has " + std::to_string(left) + " (cut short)");
+    }
+  }
+
+  void inline_block(const std::string& what, std::string_view text, const std::optional<uint64_t>& expected,
+                    const std::string& declared) const {
+    const uint64_t word = layout_.header_bytes;
+    const std::string head = base64_decode(text, 3 * word);
+    std::string all = head;
+    uint64_t header_chars = 0;
+    if (layout_.compressed && head.size() == 3 * word) {
+      const uint64_t blocks = header_int(head, 0);
+      if (blocks <= file_.size() / word) {
+        all = base64_decode(text, (3 + blocks) * word);
+        header_chars = encoded_size((3 + blocks) * word);
+      }
+    }
+    const Block b = parse_header(what, head, all);
+    check_content(what, b, expected, declared);
+    const uint64_t have = base64_chars(text);
+    const uint64_t needed = layout_.compressed ? header_chars + encoded_size(b.stored) : encoded_size(b.header + b.stored);
+    if (needed > have) {
+      fail(what + ": its inline data needs " + std::to_string(needed) + " base64 characters, but has " +
+           std::to_string(have) + " (cut short)");
+    }
+  }
+
+  void ascii_values(const std::string& what, std::string_view text, uint64_t values, const std::string& declared) const {
+    uint64_t words = 0;
+    bool in_word = false;
+    for (char c : text) {
+      const bool space = c == ' ' || c == '\n' || c == '\r' || c == '\t';
+      words += !space && !in_word;
+      in_word = !space;
+    }
+    if (words < values) {
+      fail(what + ": declares " + declared + " (" + std::to_string(values) + " values), but holds " +
+           std::to_string(words) + " (cut short, or the count is wrong)");
+    }
+  }
+
+  std::string path_;
+  File file_;
+  Layout layout_;
+  Section section_;
+  std::optional<uint64_t> points_;
+  std::optional<uint64_t> cells_;
+};
+
+}  // namespace
+
+void check_vtk_xml(const std::string& path) { Checker(path).run(); }
+
+std::vector<std::string> check_parallel_xml(const std::string& path) {
+  const File file(path);
+  uint64_t appended_at = 0;
+  const std::string text = file.markup(appended_at);
+  TagScanner scanner(text, path, kKind);
+  XmlTag tag;
+  const fs::path folder = fs::path(path).parent_path();
+  std::vector<std::string> pieces;
+  while (scanner.next(tag)) {
+    if (tag.name != "Piece") continue;
+    const std::string* source = tag.attribute("Source");
+    const std::string where = "line " + std::to_string(tag.line) + ": piece ";
+    if (!source || source->empty()) throw Error({path}, where + "without a Source attribute");
+    const fs::path rel(*source);
+    const fs::path normal = rel.lexically_normal();
+    if (rel.is_absolute() || (!normal.empty() && *normal.begin() == "..")) {
+      throw Error({path}, where + "'" + *source + "' lies outside the folder of this file; pieces must be beside it or below it");
+    }
+    std::string ext = normal.extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    if (ext != ".vtu" && ext != ".vtp") {
+      throw Error({path}, where + "'" + *source + "' is not a .vtu or .vtp file (a parallel file cannot hold another)");
+    }
+    const std::string piece = (folder / normal).string();
+    std::error_code ec;
+    if (!fs::is_regular_file(piece, ec)) throw Error({path}, where + "'" + *source + "' does not exist");
+    check_vtk_xml(piece);
+    pieces.push_back(piece);
+  }
+  if (pieces.empty()) throw Error({path}, "the file lists no pieces");
+  return pieces;
+}
+
+}  // namespace sluice::io::detail
