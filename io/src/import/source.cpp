@@ -449,8 +449,19 @@ PvdEntry pvd_entry(const std::string& path, const detail::XmlTag& tag) {
   if (!parse_number(*timestep, e.time)) throw Error({path}, where() + "timestep '" + *timestep + "' is not a number");
   if (const std::string* part = attr("part"); part && !parse_number(*part, e.part)) e.part = 0;
   if (const std::string* group = attr("group")) e.group = *group;
+  // Files beside the collection or below it: a path out of its folder is
+  // what a damaged or hostile collection looks like.
   const fs::path f(*file);
-  e.file = f.is_absolute() ? f.string() : (fs::path(path).parent_path() / f).string();
+  const fs::path normal = f.lexically_normal();
+  if (f.is_absolute() || (!normal.empty() && *normal.begin() == "..")) {
+    throw Error({path}, where() + "the listed file '" + *file +
+                            "' lies outside the collection's folder; keep the .pvd beside its files, or pass the "
+                            "files as a quoted glob");
+  }
+  if (format_of(normal.string()) == Format::kPvd) {
+    throw Error({path}, where() + "the listed file '" + *file + "' is itself a .pvd collection (collections do not nest)");
+  }
+  e.file = (fs::path(path).parent_path() / normal).string();
   return e;
 }
 
