@@ -88,6 +88,16 @@ struct Array {
   Values values;  // filled only when the array was wanted
 };
 
+// A word of the file as a message quotes it: at most 40 characters, bytes
+// that are not printable shown as '?'.
+std::string shown(std::string_view w) {
+  std::string out(w.substr(0, 40));
+  for (char& c : out) {
+    if (static_cast<unsigned char>(c) < 32 || static_cast<unsigned char>(c) > 126) c = '?';
+  }
+  return out;
+}
+
 // Names in legacy files encode special characters as %XX.
 std::string decode_name(std::string_view s) {
   std::string out;
@@ -217,12 +227,8 @@ class Parser {
   void header() {
     const std::string first(in_.line());
     if (lower(first).rfind("# vtk datafile", 0) != 0) {
-      std::string shown = first.substr(0, 60);
-      for (char& c : shown) {
-        if (static_cast<unsigned char>(c) < 32 || static_cast<unsigned char>(c) > 126) c = '?';
-      }
       throw Error({in_.path()}, "not a legacy VTK file: the first line must be '# vtk DataFile Version x.y', found '" +
-                                    shown + "'");
+                                    shown(first) + "'");
     }
     const size_t version = lower(first).find("version");
     if (version != std::string::npos) {
@@ -264,7 +270,7 @@ class Parser {
       else if (key == "field") field(section_ == Section::kDataset ? "FIELD" : section_name() + " FIELD");
       else if (key == "metadata") metadata();
       else if (section_ != Section::kDataset && attribute(key)) continue;
-      else fail(here(), "unexpected '" + std::string(word.substr(0, 40)) + "' (not a legacy VTK keyword here)");
+      else fail(here(), "unexpected '" + shown(word) + "' (not a legacy VTK keyword here)");
     }
   }
 
@@ -275,7 +281,7 @@ class Parser {
     const auto [end, ec] = std::from_chars(w.data(), w.data() + w.size(), v);
     if (w.empty() || ec != std::errc() || end != w.data() + w.size()) {
       fail(section, std::string("expected ") + what + " (a non-negative integer), found '" +
-                        std::string(w.substr(0, 40)) + "'" + (w.empty() ? " (end of file)" : ""));
+                        shown(w) + "'" + (w.empty() ? " (end of file)" : ""));
     }
     return v;
   }
@@ -294,7 +300,7 @@ class Parser {
     if (w == "string" || w == "utf8_string" || w == "variant") {
       throw LegacyUnsupported({in_.path()}, section + ": " + w + " arrays are not read by sluice's legacy reader");
     }
-    fail(section, "unknown data type '" + w.substr(0, 40) + "'");
+    fail(section, "unknown data type '" + shown(w) + "'");
   }
 
   // Reads `count` values of `type` (host order into `into`), or skips them
@@ -347,7 +353,7 @@ class Parser {
         T v{};
         if (!parse_text<T>(w, type, v)) {
           fail(section, "value " + std::to_string(k + 1) + " of " + std::to_string(count) + " is '" +
-                            std::string(w.substr(0, 40)) + "', not " + (std::is_floating_point_v<T> ? "a number" : "an integer of type " + type_word(type)) +
+                            shown(w) + "', not " + (std::is_floating_point_v<T> ? "a number" : "an integer of type " + type_word(type)) +
                             " (" + here() + ")");
         }
         if (out) out[k] = v;
@@ -378,7 +384,7 @@ class Parser {
     for (double& v : out) {
       const std::string_view w = in_.word();
       if (!parse_text<double>(w, Scalar::kF64, v) || !std::isfinite(v)) {
-        fail(section, "expected 3 numbers, found '" + std::string(w.substr(0, 40)) + "'");
+        fail(section, "expected 3 numbers, found '" + shown(w) + "'");
       }
     }
   }
@@ -500,7 +506,7 @@ class Parser {
       if (b != std::string_view::npos) {
         const auto [end, ec] = std::from_chars(rest.data() + b, rest.data() + rest.size(), comps);
         if (ec != std::errc() || comps == 0 || comps > 4) {
-          fail(section, "'" + name + "': expected a component count of 1 to 4, found '" + std::string(rest.substr(b, 40)) + "'");
+          fail(section, "'" + name + "': expected a component count of 1 to 4, found '" + shown(rest.substr(b)) + "'");
         }
       }
       if (lower(in_.word()) != "lookup_table") fail(section, "'" + name + "': expected LOOKUP_TABLE after SCALARS");

@@ -417,11 +417,21 @@ class Checker {
 
   void ascii_values(const std::string& what, std::string_view text, uint64_t values, const std::string& declared) const {
     uint64_t words = 0;
-    bool in_word = false;
-    for (char c : text) {
-      const bool space = c == ' ' || c == '\n' || c == '\r' || c == '\t';
-      words += !space && !in_word;
-      in_word = !space;
+    size_t k = 0;
+    while (k < text.size()) {
+      const size_t b = text.find_first_not_of(" \n\r\t", k);
+      if (b == std::string_view::npos) break;
+      size_t e = text.find_first_of(" \n\r\t", b);
+      if (e == std::string_view::npos) e = text.size();
+      double v = 0;
+      const char* first = text.data() + b + (text[b] == '+' ? 1 : 0);
+      const auto [end, ec] = std::from_chars(first, text.data() + e, v);
+      if (end != text.data() + e || (ec != std::errc() && ec != std::errc::result_out_of_range)) {
+        fail(what + ": value " + std::to_string(words + 1) + " is '" + std::string(text.substr(b, std::min<size_t>(e - b, 40))) +
+             "', not a number");
+      }
+      ++words;
+      k = e;
     }
     if (words < values) {
       fail(what + ": declares " + declared + " (" + std::to_string(values) + " values), but holds " +
