@@ -48,17 +48,29 @@ fi
 step "libFuzzer targets"
 CC=clang CXX=clang++ cmake -S "$root" -B "$root/build-fuzz" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSLUICE_FUZZ=ON \
   -DSLUICE_SANITIZE=address,undefined -DSLUICE_TESTS=ON >/dev/null
-cmake --build "$root/build-fuzz" -j "$jobs" --target fuzz_container fuzz_chunk fuzz_text_import make_chunk_seeds
+cmake --build "$root/build-fuzz" -j "$jobs" --target fuzz_container fuzz_chunk fuzz_text_import fuzz_vtk_import make_chunk_seeds
 corpus="$root/build-fuzz/corpus"
-rm -rf "$corpus" && mkdir -p "$corpus/container" "$corpus/chunk" "$corpus/text"
+rm -rf "$corpus" && mkdir -p "$corpus/container" "$corpus/chunk" "$corpus/text" "$corpus/vtk"
 "$root/build-fuzz/tests/fuzz/make_chunk_seeds" "$corpus/chunk"
 # Seeds: real containers (small chunks so there are several) and text files.
 "$root/build/apps/sluice/sluice" convert "$root/data/dam_break_3d/dam_break_3d_fluid_00000.vtu" \
   -o "$corpus/container/q.sluice" --chunk 300 -a rho -q -f
 "$root/build/apps/sluice/sluice" convert "$root/tests/data/import/ug_ascii.vtu" -o "$corpus/container/f.sluice" --lossless -q -f
 cp "$root"/tests/data/fuzz/text/* "$corpus/text/" 2>/dev/null || true
+# VTK seeds: the first byte picks the extension (fuzz_vtk_import.cpp): real
+# files of every flavour, the bundled sample's .pvd, and every past finding.
+for f in "$root"/tests/data/import/*.vtk "$root"/tests/data/import/*.vtu "$root"/tests/data/import/*.vtp \
+         "$root"/data/dam_break_3d/dam_break_3d.pvd "$root"/tests/data/fuzz/vtk/*; do
+  case "$f" in
+    *.vtk) pick='\000' ;; *.vtu) pick='\001' ;; *.vtp) pick='\002' ;; *.pvd) pick='\003' ;; *) continue ;;
+  esac
+  { printf "$pick"; cat "$f"; } > "$corpus/vtk/$(basename "$f")"
+done
 secs=${FUZZ_SECONDS:-60}
 "$root/build-fuzz/tests/fuzz/fuzz_container" -max_total_time="$secs" -rss_limit_mb=2048 -timeout=10 "$corpus/container"
 "$root/build-fuzz/tests/fuzz/fuzz_chunk" -max_total_time="$secs" -rss_limit_mb=2048 -timeout=10 "$corpus/chunk"
 "$root/build-fuzz/tests/fuzz/fuzz_text_import" -max_total_time="$secs" -rss_limit_mb=2048 -timeout=10 "$corpus/text"
+# VTK's XML readers leak on some error paths (tests/lsan.supp says which).
+LSAN_OPTIONS=suppressions=$root/tests/lsan.supp \
+  "$root/build-fuzz/tests/fuzz/fuzz_vtk_import" -max_total_time="$secs" -rss_limit_mb=2048 -timeout=10 "$corpus/vtk"
 step "all tests passed"

@@ -60,7 +60,10 @@ void add_convert(CLI::App& app) {
       "and stored in the file; --up overrides it.\n\n"
       "Examples:\n"
       "  sluice convert 'dam/dam_break_3d_fluid_*.vtu' -o dam.sluice --attribute rho\n"
-      "  sluice convert run.pvd --lossless --jobs 8\n");
+      "  sluice convert run.pvd --lossless --jobs 8\n\n"
+      "Damaged input: every count in a file is checked against its bytes before anything is read. VTK's XML\n"
+      "readers run in worker processes, so a crash or hang on a damaged file is an error naming that file.\n"
+      "A bad frame stops the conversion (the output keeps the frames before it) unless --skip-bad.\n");
   cmd->add_option("input", o->input, "File, quoted glob, .pvd or directory")->required();
   cmd->add_option("-o,--output", c->output, "Output file (default: named after the input)");
   cmd->add_option("-a,--attribute", o->attributes, "Point-data array to keep for colouring (repeat, or a,b)")
@@ -84,6 +87,16 @@ void add_convert(CLI::App& app) {
                 "zstd on every plane it shrinks most: files 1-3% smaller, decoding up to 1.4x slower "
                 "(default: small-valued planes are bit-packed)");
   cmd->add_option("-j,--jobs", o->jobs, "Worker threads (default: all cores)");
+  cmd->add_flag("--skip-bad", o->skip_bad,
+                "Leave out frames that cannot be read (damaged, cut short) and list them; without it the\n"
+                "conversion stops at the first one, and the output keeps the frames before it");
+  cmd->add_option("--read-timeout", o->read_timeout,
+                  "Seconds VTK's reader may take for one frame before the frame counts as bad")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 86400));
+  cmd->add_flag("--in-process", o->in_process,
+                "Read VTK XML files in this process rather than in worker processes (a reader crash on a\n"
+                "damaged file then ends sluice; see docs/import.md)");
   cmd->add_flag("-f,--force", c->force, "Overwrite the output if it exists");
   cmd->add_flag("-q,--quiet", o->quiet, "No progress bar or notes");
   cmd->callback([c] { run_convert(*c); });

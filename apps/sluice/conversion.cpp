@@ -5,10 +5,12 @@
 #include <tbb/info.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <optional>
 
+#include "isolated_source.h"
 #include "progress.h"
 #include "sluice/io/convert.h"
 #include "sluice/io/import.h"
@@ -30,6 +32,37 @@ std::vector<std::string> carried_attributes(const ConversionOptions& o, const io
     if (a != source.info().id_array && out.size() < io::kMaxAttributes) out.push_back(a);
   }
   return out;
+}
+
+// The input, read in worker processes when a third-party reader reads it.
+std::unique_ptr<io::FrameSource> open_input(const ConversionOptions& o, const io::ImportOptions& import) {
+  std::unique_ptr<io::FrameSource> source = io::open_source(o.input, import);
+  if (o.in_process || !source->info().third_party_reader) return source;
+  return isolate(std::move(source), o.input, import, std::chrono::seconds(o.read_timeout));
+}
+
+// The first frame that reads: frame 0, or with skip_bad the first good one.
+uint64_t read_first(const ConversionOptions& o, const io::FrameSource& source, std::optional<io::ParticleFrame>& first,
+                    std::vector<io::SkippedFrame>& skipped) {
+  for (uint64_t f = 0;; ++f) {
+    try {
+      first = source.read(f);
+      return f;
+    } catch (const io::Error& e) {
+      if (!o.skip_bad) throw;
+      skipped.push_back({f, source.frame_name(f), e.what()});
+      if (f + 1 == source.frame_count()) {
+        throw std::runtime_error(o.input + ": no frame could be read (" + std::to_string(skipped.size()) +
+                                 " skipped); the last error: " + e.what());
+      }
+    }
+  }
+}
+
+void report_skipped(const std::vector<io::SkippedFrame>& skipped) {
+  if (skipped.empty()) return;
+  std::fprintf(stderr, "skipped %zu frame%s that could not be read:\n", skipped.size(), skipped.size() == 1 ? "" : "s");
+  for (const auto& s : skipped) std::fprintf(stderr, "  %s\n", s.error.c_str());
 }
 
 // Times: the input's own, or a step the user gave, or frame numbers (said so).
@@ -63,7 +96,7 @@ io::UpFinding find_up(const ConversionOptions& o, const std::vector<io::FrameSha
     import.attributes = {pressure};
     import.id_array = o.id_array;
     import.no_ids = true;
-    const auto again = io::open_source(o.input, import);
+    const auto again = open_input(o, import);
     const io::ParticleFrame frame = again->read(again->frame_count() - 1);
     if (auto f = io::up_from_pressure(frame.positions, frame.attributes.at(0), pressure)) return *f;
   }
@@ -90,17 +123,19 @@ ConversionSummary convert_input(const ConversionOptions& o, const std::string& o
   import.id_array = o.id_array;
   import.no_ids = o.no_ids;
   import.attributes = o.attributes;
-  std::unique_ptr<io::FrameSource> source = io::open_source(o.input, import);
+  std::unique_ptr<io::FrameSource> source = open_input(o, import);
   if (o.all_attributes) {  // the arrays are known once the source is open: open it again with them
     import.attributes = carried_attributes(o, *source);
-    if (!import.attributes.empty()) source = io::open_source(o.input, import);
+    if (!import.attributes.empty()) source = open_input(o, import);
   }
   const uint64_t frames = source->frame_count();
   if (frames == 0) throw std::runtime_error(o.input + ": no frames to convert");
 
   // Frame 0 is read up front: the header needs its spacing, and it is kept
   // for the pipeline rather than read twice.
-  std::optional<io::ParticleFrame> first = source->read(0);
+  std::optional<io::ParticleFrame> first;
+  std::vector<io::SkippedFrame> skipped;
+  const uint64_t from = read_first(o, *source, first, skipped);
   io::FileHeader header;
   header.position_coding = o.lossless ? io::PositionCoding::Float32 : io::PositionCoding::Quantized16;
   header.particle_spacing = o.spacing > 0 ? o.spacing : io::estimate_spacing(first->positions);
@@ -148,19 +183,35 @@ ConversionSummary convert_input(const ConversionOptions& o, const std::string& o
   uint64_t bytes_in = 0, untimed = 0;
   std::vector<io::FrameShape> first_frames;
   io::FrameShape last_shape;
-  const io::ConvertResult result =
-      io::convert_frames(*source, std::move(first), writer, settings, [&](const io::ConvertProgress& p) {
-        for (const std::string& r : p.repairs) {
-          if (warnings++ < o.max_warnings) bar.warn(source->frame_name(p.frame) + ": " + r);
-          else ++suppressed;
-        }
-        if (p.shape && p.frame < settings.shape_frames) first_frames.push_back(*p.shape);
-        if (p.shape && p.frame + 1 == frames) last_shape = *p.shape;
-        if (header.time_source == io::TimeSource::Input && !p.time_given) ++untimed;
-        bytes_in += p.input_bytes;
-        bar.update(p.frame + 1, bytes_in, writer.bytes_written());
-      });
+  settings.skip_bad = o.skip_bad;
+  const auto on_frame = [&](const io::ConvertProgress& p) {
+    for (const std::string& r : p.repairs) {
+      if (warnings++ < o.max_warnings) bar.warn(source->frame_name(p.frame) + ": " + r);
+      else ++suppressed;
+    }
+    if (p.shape && p.frame < settings.shape_frames) first_frames.push_back(*p.shape);
+    if (p.shape && p.frame + 1 == frames) last_shape = *p.shape;
+    if (header.time_source == io::TimeSource::Input && !p.time_given) ++untimed;
+    bytes_in += p.input_bytes;
+    bar.update(p.frame + 1, bytes_in, writer.bytes_written());
+  };
+  io::ConvertResult result;
+  try {
+    result = io::convert_frames(*source, std::move(first), writer, settings, on_frame, from);
+  } catch (const io::Error& e) {
+    // Stop cleanly: the output keeps every frame before the bad one.
+    bar.finish();
+    report_skipped(skipped);
+    const uint64_t kept = writer.frames_written();
+    writer.finish();
+    std::filesystem::rename(partial, output);
+    throw std::runtime_error(std::string(e.what()) + "\n  " + output + " holds the " + std::to_string(kept) +
+                             " frame" + (kept == 1 ? "" : "s") +
+                             " before it; pass --skip-bad to leave bad frames out and convert the rest");
+  }
+  skipped.insert(skipped.end(), result.skipped.begin(), result.skipped.end());
   bar.finish();
+  report_skipped(skipped);
   if (suppressed) std::fprintf(stderr, "warning: %zu more repairs not shown\n", suppressed);
   if (untimed) {
     note(o, "warning: " + std::to_string(untimed) + " frames state no time while the others do: their time is "
@@ -182,7 +233,8 @@ ConversionSummary convert_input(const ConversionOptions& o, const std::string& o
   std::filesystem::rename(partial, output);
 
   ConversionSummary s;
-  s.frames = frames;
+  s.frames = result.frames;
+  s.skipped = std::move(skipped);
   s.particles = result.particles;
   s.input_bytes = result.input_bytes;
   s.seconds = bar.elapsed();

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "sluice/io/convert.h"
 #include "sluice/io/format.h"
 
 namespace sluice::app {
@@ -28,17 +29,27 @@ struct ConversionOptions {
   int jobs = 0;
   bool quiet = false;
   size_t max_warnings = 20;
+  // A frame that cannot be read is left out and listed (otherwise the
+  // conversion stops there, keeping the frames before it).
+  bool skip_bad = false;
+  // Read VTK XML files in this process instead of in worker processes
+  // (faster to start; a reader crash on a damaged file then ends sluice).
+  bool in_process = false;
+  int read_timeout = 120;  // seconds a worker may take for one frame
 };
 
 struct ConversionSummary {
-  uint64_t frames = 0, particles = 0, input_bytes = 0;
+  uint64_t frames = 0, particles = 0, input_bytes = 0;  // frames written
+  std::vector<io::SkippedFrame> skipped;              // with skip_bad
   double seconds = 0;
   io::FileHeader header;  // as finally written
 };
 
 // Converts `o.input` into `output` through `output + ".partial"` (renamed
 // when complete, so a cut-off run never leaves a file that looks whole).
-// Throws io::Error / std::runtime_error naming the input on bad input.
+// Throws io::Error / std::runtime_error naming the input on bad input. A
+// frame that cannot be read stops the conversion with its error after
+// `output` has been finished with the frames before it (unless skip_bad).
 ConversionSummary convert_input(const ConversionOptions& o, const std::string& output);
 
 // Playback frame rate when neither the input nor the user gives one.

@@ -264,3 +264,23 @@ TEST(DamagedLegacy, CutUnstructuredGridNeverReadsZeros) {
 }
 
 }  // namespace
+
+namespace {
+
+// Every input the fuzzer (fuzz_vtk_import) found a fault with is kept in
+// tests/data/fuzz/vtk and must give an error naming it, or read.
+TEST(FuzzFindings, EachGivesAnErrorOrReads) {
+  const fs::path dir = fs::path(__FILE__).parent_path().parent_path() / "data" / "fuzz" / "vtk";
+  int files = 0;
+  for (const auto& entry : fs::directory_iterator(dir)) {
+    ++files;
+    try {
+      (void)read(entry.path());
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(entry.path().filename().string()), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_GT(files, 0);
+}
+
+}  // namespace

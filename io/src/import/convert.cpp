@@ -3,6 +3,7 @@
 #include <tbb/parallel_pipeline.h>
 
 #include <algorithm>
+#include <atomic>
 #include <filesystem>
 
 #include "sluice/io/lod.h"
@@ -17,6 +18,7 @@ struct Work {
   std::optional<FrameShape> shape;
   bool time_given = false;
   EncodedFrame encoded;
+  std::optional<Error> error;  // the frame could not be read or encoded
 };
 
 uint64_t source_file_bytes(const FrameSource& source, uint64_t frame) {
@@ -53,23 +55,45 @@ Work encode_one(const FrameSource& source, ParticleFrame frame, uint64_t index, 
 
 ConvertResult convert_frames(const FrameSource& source, std::optional<ParticleFrame> first, ContainerWriter& writer,
                              const ConvertSettings& settings,
-                             const std::function<void(const ConvertProgress&)>& on_frame) {
+                             const std::function<void(const ConvertProgress&)>& on_frame, uint64_t from) {
   const uint64_t frames = source.frame_count();
   ConvertResult result;
-  uint64_t next = 0;
+  uint64_t next = from;
+  // Errors travel as values to the in-order stage, so every frame before a
+  // bad one is written before the conversion stops.
+  std::atomic<bool> stop{false};
+  std::optional<Error> stopped;
   tbb::parallel_pipeline(
       std::max<size_t>(2, settings.max_in_flight),
       tbb::make_filter<void, uint64_t>(tbb::filter_mode::serial_in_order,
                                        [&](tbb::flow_control& fc) -> uint64_t {
-                                         if (next == frames) fc.stop();
+                                         if (next == frames || stop.load()) fc.stop();
                                          return next++;
                                        }) &
           tbb::make_filter<uint64_t, Work>(tbb::filter_mode::parallel,
                                            [&](uint64_t f) {
-                                             ParticleFrame frame = (f == 0 && first) ? std::move(*first) : source.read(f);
-                                             return encode_one(source, std::move(frame), f, writer.header(), settings);
+                                             try {
+                                               ParticleFrame frame =
+                                                   (f == from && first) ? std::move(*first) : source.read(f);
+                                               return encode_one(source, std::move(frame), f, writer.header(), settings);
+                                             } catch (const Error& e) {
+                                               Work w;
+                                               w.frame = f;
+                                               w.error = e;
+                                               return w;
+                                             }
                                            }) &
           tbb::make_filter<Work, void>(tbb::filter_mode::serial_in_order, [&](Work w) {
+            if (stopped) return;
+            if (w.error) {
+              if (settings.skip_bad) {
+                result.skipped.push_back({w.frame, source.frame_name(w.frame), w.error->what()});
+                return;
+              }
+              stopped = std::move(w.error);
+              stop = true;
+              return;
+            }
             result.frames++;
             result.particles += w.encoded.header.particle_count;
             result.raw_bytes += w.encoded.raw_bytes;
@@ -77,6 +101,7 @@ ConvertResult convert_frames(const FrameSource& source, std::optional<ParticleFr
             writer.append(std::move(w.encoded));
             if (on_frame) on_frame({w.frame, w.input_bytes, w.repairs, w.shape, w.time_given});
           }));
+  if (stopped) throw *stopped;
   return result;
 }
 

@@ -223,6 +223,14 @@ class Parser {
     return binary_ ? "byte " + std::to_string(in_.offset()) : "line " + std::to_string(in_.line_number());
   }
 
+  // The next word, which must be there: the end of the file here means it
+  // was cut short.
+  std::string_view need(const std::string& section) {
+    const std::string_view w = in_.word();
+    if (w.empty()) fail(section, "the file ends at byte " + std::to_string(in_.offset()) + " (cut short)");
+    return w;
+  }
+
   // ------------------------------------------------------------ header
   void header() {
     const std::string first(in_.line());
@@ -237,11 +245,11 @@ class Parser {
       std::from_chars(p, first.data() + first.size(), major_);
     }
     (void)in_.line();  // the title
-    const std::string mode = lower(in_.word());
+    const std::string mode = lower(need("header"));
     if (mode != "ascii" && mode != "binary") fail("header", "line 3 must say ASCII or BINARY, found '" + mode + "'");
     binary_ = mode == "binary";
-    if (lower(in_.word()) != "dataset") fail("header", "expected 'DATASET type' after " + mode);
-    dataset_ = lower(in_.word());
+    if (lower(need("header")) != "dataset") fail("header", "expected 'DATASET type' after " + mode);
+    dataset_ = lower(need("header"));
     static const std::set<std::string> kDatasets = {"polydata", "unstructured_grid", "structured_grid",
                                                     "structured_points", "rectilinear_grid"};
     if (!kDatasets.count(dataset_)) {
@@ -276,7 +284,7 @@ class Parser {
 
   // A count written as text: a non-negative integer.
   uint64_t count(const std::string& section, const char* what) {
-    const std::string_view w = in_.word();
+    const std::string_view w = need(section);
     uint64_t v = 0;
     const auto [end, ec] = std::from_chars(w.data(), w.data() + w.size(), v);
     if (w.empty() || ec != std::errc() || end != w.data() + w.size()) {
@@ -287,7 +295,7 @@ class Parser {
   }
 
   Scalar scalar(const std::string& section) {
-    const std::string w = lower(in_.word());
+    const std::string w = lower(need(section));
     static const std::pair<const char*, Scalar> kTypes[] = {
         {"bit", Scalar::kBit},          {"char", Scalar::kI8},           {"signed_char", Scalar::kI8},
         {"unsigned_char", Scalar::kU8}, {"short", Scalar::kI16},         {"unsigned_short", Scalar::kU16},
@@ -298,7 +306,8 @@ class Parser {
       if (w == name) return s;
     }
     if (w == "string" || w == "utf8_string" || w == "variant") {
-      throw LegacyUnsupported({in_.path()}, section + ": " + w + " arrays are not read by sluice's legacy reader");
+      fail(section, w + " arrays are not read from legacy files; save the file as .vtu (ParaView: File > Save Data) "
+                    "and import that");
     }
     fail(section, "unknown data type '" + shown(w) + "'");
   }
@@ -348,7 +357,7 @@ class Parser {
       for (uint64_t k = 0; k < count; ++k) {
         const std::string_view w = in_.word();
         if (w.empty()) {
-          fail(section, "the file ends after " + std::to_string(k) + " of " + std::to_string(count) + " values");
+          fail(section, "the file ends after " + std::to_string(k) + " of " + std::to_string(count) + " values (cut short)");
         }
         T v{};
         if (!parse_text<T>(w, type, v)) {
@@ -382,7 +391,7 @@ class Parser {
   // Three numbers written as text (ORIGIN, SPACING).
   void text_numbers(const std::string& section, std::array<double, 3>& out) {
     for (double& v : out) {
-      const std::string_view w = in_.word();
+      const std::string_view w = need(section);
       if (!parse_text<double>(w, Scalar::kF64, v) || !std::isfinite(v)) {
         fail(section, "expected 3 numbers, found '" + shown(w) + "'");
       }
@@ -436,10 +445,10 @@ class Parser {
     const uint64_t b = count(section, "the size of the cell list");
     uint64_t cells = a;
     if (major_ >= 5) {
-      if (lower(in_.word()) != "offsets") fail(section, "expected OFFSETS (file version 5 cell list)");
+      if (lower(need(section)) != "offsets") fail(section, "expected OFFSETS (file version 5 cell list)");
       const Scalar offsets_type = scalar(section + " OFFSETS");
       values(section + " OFFSETS", offsets_type, a, nullptr);
-      if (lower(in_.word()) != "connectivity") fail(section, "expected CONNECTIVITY after the offsets");
+      if (lower(need(section)) != "connectivity") fail(section, "expected CONNECTIVITY after the offsets");
       const Scalar connectivity_type = scalar(section + " CONNECTIVITY");
       values(section + " CONNECTIVITY", connectivity_type, b, nullptr);
       cells = a > 0 ? a - 1 : 0;
@@ -484,20 +493,20 @@ class Parser {
   bool attribute(const std::string& key) {
     const std::string section = section_name() + " " + upper(key);
     if (key == "lookup_table") {
-      (void)in_.word();
+      (void)need(section);
       const uint64_t size = count(section, "the table size");
       check_product(section, size, 4);
       values(section, binary_ ? Scalar::kU8 : Scalar::kF32, 4 * size, nullptr);
       return true;
     }
     if (key == "color_scalars") {
-      const std::string name = decode_name(in_.word());
+      const std::string name = decode_name(need(section));
       const uint64_t comps = count(section, "the number of components");
       array(section, name, binary_ ? Scalar::kU8 : Scalar::kF32, comps, tuples_);
       return true;
     }
     if (key == "scalars") {
-      const std::string name = decode_name(in_.word());
+      const std::string name = decode_name(need(section));
       const Scalar type = scalar(section);
       // An optional component count ends the line.
       const std::string_view rest = in_.line();
@@ -509,8 +518,8 @@ class Parser {
           fail(section, "'" + name + "': expected a component count of 1 to 4, found '" + shown(rest.substr(b)) + "'");
         }
       }
-      if (lower(in_.word()) != "lookup_table") fail(section, "'" + name + "': expected LOOKUP_TABLE after SCALARS");
-      (void)in_.word();
+      if (lower(need(section)) != "lookup_table") fail(section, "'" + name + "': expected LOOKUP_TABLE after SCALARS");
+      (void)need(section);
       array(section, name, type, comps, tuples_);
       return true;
     }
@@ -520,12 +529,12 @@ class Parser {
                                                                {"edge_flags", 1}};
     for (const auto& [word, comps] : kFixed) {
       if (key != word) continue;
-      const std::string name = decode_name(in_.word());
+      const std::string name = decode_name(need(section));
       array(section, name, scalar(section + " '" + name + "'"), comps, tuples_);
       return true;
     }
     if (key == "texture_coordinates") {
-      const std::string name = decode_name(in_.word());
+      const std::string name = decode_name(need(section));
       const uint64_t comps = count(section, "the number of dimensions");
       if (comps == 0 || comps > 3) fail(section, "'" + name + "': " + std::to_string(comps) + " dimensions (1 to 3 allowed)");
       array(section, name, scalar(section + " '" + name + "'"), comps, tuples_);
@@ -562,7 +571,7 @@ class Parser {
 
   // FIELD name count, then per array: name components tuples type, data.
   void field(const std::string& section) {
-    (void)in_.word();  // the field's name
+    (void)need(section);  // the field's name
     const uint64_t arrays = count(section, "the number of arrays");
     for (uint64_t k = 0; k < arrays; ++k) {
       std::string_view word = in_.word();
@@ -570,7 +579,9 @@ class Parser {
         metadata();
         word = in_.word();
       }
-      if (word.empty()) fail(section, "the file ends after " + std::to_string(k) + " of " + std::to_string(arrays) + " arrays");
+      if (word.empty()) {
+        fail(section, "the file ends after " + std::to_string(k) + " of " + std::to_string(arrays) + " arrays (cut short)");
+      }
       const std::string name = decode_name(word);
       if (lower(name) == "null_array") continue;
       const uint64_t comps = count(section + " '" + name + "'", "the number of components");

@@ -11,8 +11,8 @@
 // array and what was expected against what was found. Binary sections that
 // are not wanted are skipped without reading them.
 //
-// String and variant arrays (rare in particle output) are not read: such a
-// file throws LegacyUnsupported, which the caller may hand to VTK's reader.
+// String and variant arrays (rare in particle output) are not decoded: such
+// a file gives an error that says how to convert it.
 #pragma once
 
 #include <optional>
@@ -27,12 +27,6 @@ namespace sluice::io::detail {
 struct LegacyRead {
   ParticleFrame frame;         // raw values: non-finite numbers are kept for the caller
   std::optional<double> time;  // from a TimeValue/TIME field-data array, if any
-};
-
-// A construct this reader does not decode (the file may still be valid).
-class LegacyUnsupported : public Error {
- public:
-  using Error::Error;
 };
 
 // The point-data arrays of the file, in file order. Reads the whole

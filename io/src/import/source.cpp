@@ -104,34 +104,12 @@ struct FileFrame {
   else detail::check_vtk_xml(path);
 }
 
-// Legacy VTK is read by sluice itself, every count checked first; VTK's
-// reader (which trusts the file) only takes the constructs sluice does not
-// decode (string arrays).
+// Legacy VTK is read by sluice itself, every count checked first (VTK's
+// legacy reader trusts the file).
 FileFrame read_legacy(const std::string& path, const std::vector<std::string>& attributes,
                       const std::string& id_array) {
-  try {
-    detail::LegacyRead r = detail::read_legacy_vtk(path, attributes, id_array);
-    return {std::move(r.frame), r.time};
-  } catch (const detail::LegacyUnsupported&) {
-#ifdef SLUICE_WITH_VTK
-    detail::VtkRead r = detail::read_vtk(path, attributes, id_array);
-    return {std::move(r.frame), r.time};
-#else
-    throw;
-#endif
-  }
-}
-
-std::vector<std::string> legacy_arrays(const std::string& path) {
-  try {
-    return detail::legacy_vtk_arrays(path);
-  } catch (const detail::LegacyUnsupported&) {
-#ifdef SLUICE_WITH_VTK
-    return detail::vtk_arrays(path);
-#else
-    throw;
-#endif
-  }
+  detail::LegacyRead r = detail::read_legacy_vtk(path, attributes, id_array);
+  return {std::move(r.frame), r.time};
 }
 
 FileFrame read_file(const std::string& path, const std::vector<std::string>& attributes, const std::string& id_array) {
@@ -159,7 +137,7 @@ std::vector<std::string> file_arrays(const std::string& path) {
   switch (require_readable(path)) {
     case Format::kCsv: return detail::csv_arrays(path);
     case Format::kXyz: return detail::xyz_arrays(path);
-    case Format::kLegacy: return legacy_arrays(path);
+    case Format::kLegacy: return detail::legacy_vtk_arrays(path);
     default: break;
   }
 #ifdef SLUICE_WITH_VTK
@@ -573,6 +551,9 @@ std::unique_ptr<FrameSource> open_source(const std::string& spec, const ImportOp
   Plan plan = plan_frames(spec);
   SourceInfo info;
   info.description = plan.description + " " + formats_of(plan.frames);  // also checks every format
+  for (const auto& frame : plan.frames) {
+    for (const auto& file : frame.files) info.third_party_reader = info.third_party_reader || needs_vtk(require_readable(file));
+  }
   const std::string& first = plan.frames.front().files.front();
   info.arrays = file_arrays(first);
   info.id_array = resolve_id_array(options, info.arrays, first);

@@ -6,7 +6,6 @@
 #include <vtkDataArray.h>
 #include <vtkDataArraySelection.h>
 #include <vtkDataSet.h>
-#include <vtkDataSetReader.h>
 #include <vtkFieldData.h>
 #include <vtkLogger.h>
 #include <vtkNew.h>
@@ -138,7 +137,7 @@ class ErrorCapture {
 
 // ----------------------------------------------------------- opening files
 
-enum class Kind { kLegacy, kVtu, kVtp, kPvtu, kPvtp };
+enum class Kind { kVtu, kVtp, kPvtu, kPvtp };
 
 Kind kind_of(const std::string& path) {
   const size_t dot = path.rfind('.');
@@ -148,7 +147,7 @@ Kind kind_of(const std::string& path) {
   if (ext == "vtp") return Kind::kVtp;
   if (ext == "pvtu") return Kind::kPvtu;
   if (ext == "pvtp") return Kind::kPvtp;
-  return Kind::kLegacy;
+  return Kind::kVtu;
 }
 
 vtkSmartPointer<vtkXMLReader> make_xml_reader(Kind kind) {
@@ -157,7 +156,6 @@ vtkSmartPointer<vtkXMLReader> make_xml_reader(Kind kind) {
     case Kind::kVtp: return vtkSmartPointer<vtkXMLPolyDataReader>::New();
     case Kind::kPvtu: return vtkSmartPointer<vtkXMLPUnstructuredGridReader>::New();
     case Kind::kPvtp: return vtkSmartPointer<vtkXMLPPolyDataReader>::New();
-    case Kind::kLegacy: break;
   }
   return nullptr;
 }
@@ -172,16 +170,6 @@ struct Loaded {
 std::vector<std::string> selection_names(vtkDataArraySelection* sel) {
   std::vector<std::string> names;
   for (int k = 0; k < sel->GetNumberOfArrays(); ++k) names.emplace_back(sel->GetArrayName(k));
-  return names;
-}
-
-std::vector<std::string> point_array_names(vtkDataSet* ds) {
-  std::vector<std::string> names;
-  vtkPointData* pd = ds->GetPointData();
-  for (int k = 0; k < pd->GetNumberOfArrays(); ++k) {
-    const char* name = pd->GetArrayName(k);
-    if (name) names.emplace_back(name);
-  }
   return names;
 }
 
@@ -217,32 +205,8 @@ Loaded load_xml(const std::string& path, Kind kind, const std::vector<std::strin
   return out;
 }
 
-// Legacy files have no cheap header: always read whole, every array.
-Loaded load_legacy(const std::string& path) {
-  ErrorCapture capture;
-  Loaded out;
-  vtkNew<vtkDataSetReader> reader;
-  out.reader = reader.Get();
-  reader->SetFileName(path.c_str());
-  reader->ReadAllScalarsOn();
-  reader->ReadAllVectorsOn();
-  reader->ReadAllNormalsOn();
-  reader->ReadAllTensorsOn();
-  reader->ReadAllColorScalarsOn();
-  reader->ReadAllTCoordsOn();
-  reader->ReadAllFieldsOn();
-  reader->Update();
-  capture.throw_if_any(path);
-  out.data = reader->GetOutput();
-  if (!out.data) throw Error({path}, "VTK could not read the file (not a legacy VTK dataset)");
-  out.arrays = point_array_names(out.data);
-  return out;
-}
-
 Loaded load(const std::string& path, const std::vector<std::string>* wanted) {
-  const Kind kind = kind_of(path);
-  if (kind == Kind::kLegacy) return load_legacy(path);
-  return load_xml(path, kind, wanted);
+  return load_xml(path, kind_of(path), wanted);
 }
 
 // ------------------------------------------------------- array conversion

@@ -1,9 +1,8 @@
 // Private: reading one VTK file with VTK's own readers (compiled only when
 // sluice is built with VTK).
 //
-// Handles legacy .vtk (any dataset type; points of structured data are
-// generated), XML .vtu/.vtp, and the multi-piece .pvtu/.pvtp (all pieces
-// concatenated). Errors that VTK reports through its output window are
+// Handles XML .vtu/.vtp and the multi-piece .pvtu/.pvtp (all pieces
+// concatenated); legacy .vtk files are sluice's own (legacy_vtk.h). Errors that VTK reports through its output window are
 // captured per thread and thrown as io::Error carrying VTK's message.
 #pragma once
 
@@ -15,8 +14,7 @@
 
 namespace sluice::io::detail {
 
-// The point-data arrays a file offers. Cheap for XML files (only the header
-// is parsed); a legacy file is read whole.
+// The point-data arrays a file offers (only the header is parsed).
 std::vector<std::string> vtk_arrays(const std::string& path);
 
 struct VtkRead {

@@ -34,6 +34,15 @@ struct ConvertSettings {
   // detection; the last frame's is measured too when this is non-zero.
   uint64_t shape_frames = 16;
   ShapeGrid shape_grid{};  // the grid of FrameShape's columns; an empty box: no columns
+  // A frame that cannot be read (io::Error) is left out and listed in
+  // ConvertResult::skipped instead of stopping the conversion.
+  bool skip_bad = false;
+};
+
+struct SkippedFrame {
+  uint64_t frame = 0;  // in the source
+  std::string name;    // the source's name of the frame (its files)
+  std::string error;   // the io::Error's full text
 };
 
 struct ConvertResult {
@@ -41,14 +50,19 @@ struct ConvertResult {
   uint64_t particles = 0;
   uint64_t input_bytes = 0;
   uint64_t raw_bytes = 0;  // filtered payload before zstd
+  std::vector<SkippedFrame> skipped;  // with skip_bad, in frame order
 };
 
-// Reads every frame of `source`, encodes it for `writer`'s header and appends
-// it. `first`, if given, is frame 0 already read (it is consumed). `on_frame`
-// runs on one thread at a time, in frame order. Errors name the source file
-// and frame. Does not call writer.finish().
+// Reads every frame of `source` from `from` on, encodes it for `writer`'s
+// header and appends it. `first`, if given, is frame `from` already read (it
+// is consumed). `on_frame` runs on one thread at a time, in frame order.
+// A frame that fails to read or encode throws its io::Error (naming the
+// source file and frame) after every frame before it has been appended, so
+// the writer holds exactly the frames before the bad one; with
+// `settings.skip_bad` it is listed in the result instead. Does not call
+// writer.finish().
 ConvertResult convert_frames(const FrameSource& source, std::optional<ParticleFrame> first, ContainerWriter& writer,
                              const ConvertSettings& settings,
-                             const std::function<void(const ConvertProgress&)>& on_frame = {});
+                             const std::function<void(const ConvertProgress&)>& on_frame = {}, uint64_t from = 0);
 
 }  // namespace sluice::io

@@ -34,6 +34,12 @@ struct SourceInfo {
   std::string description;          // e.g. "24 files matching out/fluid_*.vtu (VTK XML unstructured grid)"
   std::string id_array;             // the id array in use, empty if none
   std::vector<std::string> arrays;  // point-data arrays present in the first frame
+  // Frames are read by a third-party reader (VTK's XML readers), which trusts
+  // the file beyond what sluice checks first: a damaged file may still crash
+  // or hang it. Callers that must survive that read such frames in a child
+  // process (as `sluice convert` does). Legacy VTK, CSV and XYZ are read by
+  // sluice's own checked readers.
+  bool third_party_reader = false;
 };
 
 class FrameSource {
