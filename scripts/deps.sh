@@ -5,7 +5,7 @@ set -euo pipefail
 
 packages=(
   build-essential cmake pkg-config ccache git
-  libzstd-dev libtbb-dev libxxhash-dev libcli11-dev libvtk9-dev
+  libzstd-dev libtbb-dev libxxhash-dev libcli11-dev libvtk9-dev zlib1g-dev
   libgtest-dev libbenchmark-dev
   clang libclang-rt-14-dev
 )

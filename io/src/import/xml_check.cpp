@@ -15,6 +15,8 @@
 #include <optional>
 #include <string_view>
 
+#include <zlib.h>
+
 #include "import/xml_tags.h"
 #include "sluice/io/error.h"
 
@@ -174,6 +176,7 @@ struct Layout {
   uint64_t header_bytes = 4;  // UInt32 or UInt64 block headers
   bool compressed = false;
   bool base64_appended = false;
+  bool zlib = false;
   uint64_t appended_at = std::numeric_limits<uint64_t>::max();
 };
 
@@ -196,10 +199,11 @@ class Checker {
     file_header(tag);
     while (scanner.next(tag)) {
       if (tag.name == "Piece") piece(tag);
-      else if (tag.name == "PointData" || tag.name == "Points") section_ = {tag.name, points_};
-      else if (tag.name == "CellData") section_ = {tag.name, cells_};
-      else if (tag.name == "FieldData" || tag.name == "Cells" || tag.name == "Verts" || tag.name == "Lines" ||
-               tag.name == "Strips" || tag.name == "Polys" || tag.name == "Coordinates") section_ = {tag.name, std::nullopt};
+      else if (tag.name == "PointData" || tag.name == "Points") section(tag.name, points_, false);
+      else if (tag.name == "CellData") section(tag.name, cells_, false);
+      else if (tag.name == "FieldData" || tag.name == "Coordinates") section(tag.name, std::nullopt, false);
+      else if (tag.name == "Cells" || tag.name == "Verts" || tag.name == "Lines" || tag.name == "Strips" ||
+               tag.name == "Polys") section(tag.name, std::nullopt, true);
       else if (tag.name == "DataArray") data_array(tag, scanner.text_after(tag));
     }
   }
@@ -208,9 +212,15 @@ class Checker {
   struct Section {
     std::string name;
     std::optional<uint64_t> tuples;  // declared by the piece, when known
+    bool cells = false;              // a cell list (connectivity + offsets)
   };
 
   [[noreturn]] void fail(const std::string& msg) const { throw Error({path_}, msg); }
+
+  void section(const std::string& name, std::optional<uint64_t> tuples, bool cells) {
+    section_ = {name, tuples, cells};
+    connectivity_.reset();
+  }
 
   uint64_t header_int(const std::string& bytes, size_t k) const {
     uint64_t v = 0;
@@ -230,6 +240,7 @@ class Checker {
     else if (header && *header != "UInt32") fail("header_type '" + *header + "' (expected UInt32 or UInt64)");
     const std::string* compressor = tag.attribute("compressor");
     layout_.compressed = compressor && !compressor->empty();
+    layout_.zlib = compressor && *compressor == "vtkZLibDataCompressor";
   }
 
   std::optional<uint64_t> count_attribute(const XmlTag& tag, const char* key) const {
@@ -254,7 +265,7 @@ class Checker {
       }
       if (any) cells_ = sum;
     }
-    section_ = {"Piece", std::nullopt};
+    section("Piece", std::nullopt, false);
   }
 
   void appended(const XmlTag& tag) {
@@ -266,6 +277,24 @@ class Checker {
   }
 
   // ------------------------------------------------------ one array
+  // Where an array's bytes are, once its header has been read.
+  struct Where {
+    bool base64 = false;
+    bool appended = false;
+    uint64_t at = 0;   // appended: file offset of the block
+    std::string text;  // inline: the base64 text without whitespace
+  };
+
+  // A block's decoded header: the bytes it says it holds (uncompressed),
+  // the bytes after the header (compressed sizes), and for compressed
+  // blocks where the last sub-block lies.
+  struct Block {
+    uint64_t header = 0;   // header bytes
+    uint64_t content = 0;  // uncompressed bytes
+    uint64_t stored = 0;   // bytes after the header
+    uint64_t before_last = 0, last_stored = 0, last_content = 0;  // compressed only
+  };
+
   void data_array(const XmlTag& tag, std::string_view text) {
     const std::string name = tag.attribute("Name") ? *tag.attribute("Name") : "(unnamed)";
     const std::string what = section_.name + " array '" + name + "'";
@@ -293,28 +322,41 @@ class Checker {
                  std::to_string(*expected) + " bytes";
     }
     const std::string format = tag.attribute("format") ? *tag.attribute("format") : "ascii";
+    // Cell lists: VTK sizes the connectivity by the last offset, so that
+    // value is read too (a few bytes; the last sub-block when compressed).
+    const bool cell_list = section_.cells && (name == "connectivity" || name == "offsets") && size > 0;
+    std::optional<int64_t> last;
+    uint64_t values = 0;
     if (format == "appended") {
       const auto offset = parse_count(tag.attribute("offset"));
       if (!offset) fail(what + ": appended data without a valid offset");
-      appended_block(what, *offset, expected, declared);
+      Where w;
+      const Block b = appended_block(what, *offset, expected, declared, w);
+      values = size ? b.content / size : 0;
+      if (cell_list && name == "offsets") last = last_value(w, b, type);
     } else if (format == "binary") {
-      inline_block(what, text, expected, declared);
+      Where w;
+      const Block b = inline_block(what, text, expected, declared, w);
+      values = size ? b.content / size : 0;
+      if (cell_list && name == "offsets") last = last_value(w, b, type);
     } else if (format == "ascii") {
-      if (expected) ascii_values(what, text, *tuples * comps, declared);
+      std::string_view last_word;
+      values = ascii_values(what, text, expected ? *tuples * comps : 0, declared, last_word);
+      int64_t v = 0;
+      if (cell_list && name == "offsets" &&
+          std::from_chars(last_word.data(), last_word.data() + last_word.size(), v).ec == std::errc()) {
+        last = v;
+      }
     } else {
       fail(what + ": format '" + format + "' (expected ascii, binary or appended)");
     }
+    if (cell_list && name == "connectivity") connectivity_ = values;
+    if (last && connectivity_ && (*last < 0 || static_cast<uint64_t>(*last) != *connectivity_)) {
+      fail(section_.name + ": the cell offsets end at " + std::to_string(*last) + ", but the connectivity holds " +
+           std::to_string(*connectivity_) + " values");
+    }
   }
 
-  // A block's decoded header: the bytes it says it holds (uncompressed),
-  // and the bytes that follow the header in the file (compressed sizes).
-  struct Block {
-    uint64_t header = 0;   // header bytes
-    uint64_t content = 0;  // uncompressed bytes
-    uint64_t stored = 0;   // bytes after the header
-  };
-
-  // `head` holds at least the first header word(s) of a block.
   Block parse_header(const std::string& what, const std::string& head, const std::string& more_for_blocks) const {
     Block b;
     if (!layout_.compressed) {
@@ -333,8 +375,18 @@ class Checker {
     }
     const std::string& all = more_for_blocks;
     if (all.size() < b.header) fail(what + ": its data block ends inside its compression header");
+    if (blocks > 0 && block_size > std::numeric_limits<uint64_t>::max() / blocks) {
+      fail(what + ": its compression header declares " + std::to_string(blocks) + " blocks of " +
+           std::to_string(block_size) + " bytes");
+    }
     b.content = blocks == 0 ? 0 : (blocks - 1) * block_size + (last == 0 ? block_size : last);
-    for (uint64_t k = 0; k < blocks; ++k) b.stored += header_int(all, 3 + k);
+    for (uint64_t k = 0; k < blocks; ++k) {
+      const uint64_t stored = header_int(all, 3 + k);
+      if (stored > file_.size()) fail(what + ": a compressed block of " + std::to_string(stored) + " bytes, more than the file holds");
+      if (k + 1 == blocks) b.before_last = b.stored, b.last_stored = stored;
+      b.stored += stored;
+    }
+    b.last_content = blocks == 0 ? 0 : (last == 0 ? block_size : last);
     return b;
   }
 
@@ -345,14 +397,19 @@ class Checker {
     }
   }
 
-  void appended_block(const std::string& what, uint64_t offset, const std::optional<uint64_t>& expected,
-                      const std::string& declared) const {
-    if (layout_.appended_at == std::numeric_limits<uint64_t>::max()) fail(what + ": appended data, but the file has no <AppendedData> section");
+  Block appended_block(const std::string& what, uint64_t offset, const std::optional<uint64_t>& expected,
+                       const std::string& declared, Where& where) const {
+    if (layout_.appended_at == std::numeric_limits<uint64_t>::max()) {
+      fail(what + ": appended data, but the file has no <AppendedData> section");
+    }
     const uint64_t at = layout_.appended_at + offset;
     if (offset > file_.size() || at > file_.size()) {
       fail(what + ": its block starts at byte " + std::to_string(at) + ", past the end of the file (" +
            std::to_string(file_.size()) + " bytes): cut short, or the offset is wrong");
     }
+    where.appended = true;
+    where.base64 = layout_.base64_appended;
+    where.at = at;
     const uint64_t left = file_.size() - at;
     const uint64_t word = layout_.header_bytes;
     if (!layout_.base64_appended) {
@@ -368,54 +425,104 @@ class Checker {
         fail(what + ": its block needs " + std::to_string(b.header + b.stored) + " bytes from byte " +
              std::to_string(at) + ", but the file has " + std::to_string(left) + " (cut short)");
       }
-      return;
+      return b;
     }
     // base64: the header is decoded from the first characters.
     const std::string chars = file_.read(at, encoded_size(3 * word) + 64);
     const std::string head = base64_decode(chars, 3 * word);
     std::string all = head;
-    uint64_t header_chars = 0;
     if (layout_.compressed && head.size() == 3 * word) {
       const uint64_t blocks = header_int(head, 0);
-      if (blocks <= file_.size() / word) {
-        header_chars = encoded_size((3 + blocks) * word);
-        all = base64_decode(file_.read(at, header_chars + 64), (3 + blocks) * word);
-      }
+      if (blocks <= file_.size() / word) all = base64_decode(file_.read(at, encoded_size((3 + blocks) * word) + 64), (3 + blocks) * word);
     }
     const Block b = parse_header(what, head, all);
     check_content(what, b, expected, declared);
-    // Uncompressed: header and data are one base64 run; compressed: two.
-    const uint64_t needed = layout_.compressed ? header_chars + encoded_size(b.stored) : encoded_size(b.header + b.stored);
+    const uint64_t needed = stream_chars(b);
     if (needed > left) {
       fail(what + ": its block needs " + std::to_string(needed) + " base64 characters from byte " + std::to_string(at) +
            ", but the file has " + std::to_string(left) + " (cut short)");
     }
+    return b;
   }
 
-  void inline_block(const std::string& what, std::string_view text, const std::optional<uint64_t>& expected,
-                    const std::string& declared) const {
+  // Base64 characters of a block: uncompressed, header and data are one
+  // run; compressed, the header is a run of its own.
+  uint64_t stream_chars(const Block& b) const {
+    return layout_.compressed ? encoded_size(b.header) + encoded_size(b.stored) : encoded_size(b.header + b.stored);
+  }
+
+  Block inline_block(const std::string& what, std::string_view text, const std::optional<uint64_t>& expected,
+                     const std::string& declared, Where& where) const {
+    where.base64 = true;
+    where.text.reserve(text.size());
+    for (char c : text) {
+      if (c != ' ' && c != '\n' && c != '\r' && c != '\t') where.text += c;
+    }
     const uint64_t word = layout_.header_bytes;
-    const std::string head = base64_decode(text, 3 * word);
+    const std::string head = base64_decode(where.text, 3 * word);
     std::string all = head;
-    uint64_t header_chars = 0;
     if (layout_.compressed && head.size() == 3 * word) {
       const uint64_t blocks = header_int(head, 0);
-      if (blocks <= file_.size() / word) {
-        all = base64_decode(text, (3 + blocks) * word);
-        header_chars = encoded_size((3 + blocks) * word);
-      }
+      if (blocks <= file_.size() / word) all = base64_decode(where.text, (3 + blocks) * word);
     }
     const Block b = parse_header(what, head, all);
     check_content(what, b, expected, declared);
-    const uint64_t have = base64_chars(text);
-    const uint64_t needed = layout_.compressed ? header_chars + encoded_size(b.stored) : encoded_size(b.header + b.stored);
+    const uint64_t have = base64_chars(where.text);
+    const uint64_t needed = stream_chars(b);
     if (needed > have) {
       fail(what + ": its inline data needs " + std::to_string(needed) + " base64 characters, but has " +
            std::to_string(have) + " (cut short)");
     }
+    return b;
   }
 
-  void ascii_values(const std::string& what, std::string_view text, uint64_t values, const std::string& declared) const {
+  // `n` bytes of a block from byte `from` of its data run (the header is
+  // the start of that run when uncompressed, a run of its own otherwise).
+  std::string block_bytes(const Where& w, const Block& b, uint64_t from, uint64_t n) const {
+    if (!w.base64) return file_.read(w.at + (layout_.compressed ? b.header : 0) + from, n);
+    const uint64_t run = layout_.compressed ? encoded_size(b.header) : 0;
+    const uint64_t first_char = run + from / 3 * 4;
+    const uint64_t chars = encoded_size(n + from % 3) + 4;
+    const std::string enc = w.appended ? file_.read(w.at + first_char, chars)
+                                       : std::string(std::string_view(w.text).substr(std::min<size_t>(first_char, w.text.size()), chars));
+    const std::string dec = base64_decode(enc, n + from % 3);
+    return dec.size() > from % 3 ? dec.substr(from % 3) : std::string();
+  }
+
+  // The last value of an integer array (the end of a cell list), or none
+  // when it cannot be had cheaply (another compressor, a damaged block:
+  // VTK then reports the block itself).
+  std::optional<int64_t> last_value(const Where& w, const Block& b, const std::string& type) const {
+    const uint64_t size = type_size(type);
+    if (size == 0 || b.content < size || type.rfind("Float", 0) == 0) return std::nullopt;
+    std::string bytes;
+    if (!layout_.compressed) {
+      bytes = block_bytes(w, b, b.header + b.content - size, size);
+    } else {
+      if (!layout_.zlib || b.last_content < size || b.last_content > (uint64_t(1) << 26)) return std::nullopt;
+      const std::string packed = block_bytes(w, b, b.before_last, b.last_stored);
+      std::string plain(b.last_content, '\0');
+      uLongf got = static_cast<uLongf>(plain.size());
+      if (::uncompress(reinterpret_cast<Bytef*>(plain.data()), &got, reinterpret_cast<const Bytef*>(packed.data()),
+                       static_cast<uLong>(packed.size())) != Z_OK || got != plain.size()) {
+        return std::nullopt;
+      }
+      bytes = plain.substr(plain.size() - size);
+    }
+    if (bytes.size() != size) return std::nullopt;
+    uint64_t v = 0;
+    for (uint64_t k = 0; k < size; ++k) {
+      const auto byte = static_cast<unsigned char>(bytes[k]);
+      v |= static_cast<uint64_t>(byte) << (layout_.big_endian ? 8 * (size - 1 - k) : 8 * k);
+    }
+    if (type.rfind("Int", 0) == 0 && size < 8 && (v >> (8 * size - 1)) != 0) return -1;  // negative
+    return static_cast<int64_t>(v);
+  }
+
+  // Checks every value is a number and that there are at least `values`
+  // (0: unknown); returns how many there are and the last one.
+  uint64_t ascii_values(const std::string& what, std::string_view text, uint64_t values, const std::string& declared,
+                        std::string_view& last) const {
     uint64_t words = 0;
     size_t k = 0;
     while (k < text.size()) {
@@ -430,6 +537,7 @@ class Checker {
         fail(what + ": value " + std::to_string(words + 1) + " is '" + std::string(text.substr(b, std::min<size_t>(e - b, 40))) +
              "', not a number");
       }
+      last = text.substr(b, e - b);
       ++words;
       k = e;
     }
@@ -437,6 +545,7 @@ class Checker {
       fail(what + ": declares " + declared + " (" + std::to_string(values) + " values), but holds " +
            std::to_string(words) + " (cut short, or the count is wrong)");
     }
+    return words;
   }
 
   std::string path_;
@@ -445,6 +554,7 @@ class Checker {
   Section section_;
   std::optional<uint64_t> points_;
   std::optional<uint64_t> cells_;
+  std::optional<uint64_t> connectivity_;  // values in the current cell list's connectivity
 };
 
 }  // namespace

@@ -9,9 +9,11 @@
 //     its block header states (raw or base64, plain or compressed), and
 //   - the block's extent against the bytes present (appended data and
 //     inline base64), or the values present (inline ascii).
-// A mismatch throws io::Error naming the file, the section and the array
-// with both figures. Compressed contents are not inflated: zlib reports a
-// damaged stream itself, through VTK.
+// and, for cell lists (which VTK sizes by their last offset), that the last
+// offset equals the connectivity's length (for zlib blocks only the last
+// sub-block is inflated). A mismatch throws io::Error naming the file, the
+// section and the array with both figures. Other compressed contents are not
+// inflated: zlib reports a damaged stream itself, through VTK.
 #pragma once
 
 #include <string>
