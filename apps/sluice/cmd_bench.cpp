@@ -16,6 +16,10 @@ void add_bench(CLI::App& app) {
   cmd->add_option("-t,--threads", io->max_threads, "Most threads (default: all cores)");
   cmd->add_option("--min-time", io->min_seconds, "Seconds each timing repeats for")->capture_default_str();
   cmd->add_option("--work-dir", io->work_dir, "Keep the converted files here (default: a temp dir)");
+  cmd->add_option("--tile", io->tile,
+                  "VTK copies of the frames (legacy, .vtu raw, .vtu zlib) hold each frame N times side by side")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 1000));
   cmd->callback([io] { bench::run_io_bench(*io); });
 
   auto stream = std::make_shared<bench::StreamBenchOptions>();

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Runs on the GPU machine (see bench/device/README.md): every benchmark the
 # issues ask GPU-machine figures for, in one call. Results go to $OUT.
-#   bash bench/device/run.sh [io] [render] [stream] [split] [codec] [huge] [embed] [compare] [live]   (default: io render stream)
+#   bash bench/device/run.sh [io] [import] [render] [stream] [split] [codec] [huge] [embed] [compare] [live] [firsthour] [streamcmp]   (default: io render stream)
 set -uo pipefail
 OUT=${OUT:-/tmp/out}
 mkdir -p "$OUT" /tmp/s
@@ -13,6 +13,14 @@ ldconfig
 S=./.gpu/sluice
 log() { printf '\n##### %s\n' "$*" | tee -a "$OUT/summary.txt"; }
 run() { log "$*"; "$@" 2>&1 | tee -a "$OUT/summary.txt"; }
+
+secs() { local t0=$EPOCHREALTIME; "$@" >/dev/null 2>&1; awk -v a="$t0" -v b="$EPOCHREALTIME" 'BEGIN { printf "%.3f\n", b - a }'; }
+# Two commands alternated 7 times (after a warm-up of each): medians side by side.
+paired() { local la=$1 lb=$2 ca=$3 cb=$4 a=() b=(); eval "$ca" >/dev/null 2>&1; eval "$cb" >/dev/null 2>&1
+  for i in 1 2 3 4 5 6 7; do a+=("$(secs bash -c "$ca")"); b+=("$(secs bash -c "$cb")"); done
+  local ma mb; ma=$(printf '%s\n' "${a[@]}" | sort -n | sed -n 4p); mb=$(printf '%s\n' "${b[@]}" | sort -n | sed -n 4p)
+  printf '%s: median %s s (%s)\n%s: median %s s (%s)\nratio %s\n' "$la" "$ma" "${a[*]}" "$lb" "$mb" "${b[*]}" \
+    "$(awk -v a="$ma" -v b="$mb" 'BEGIN { printf "%.3f", a / b }')" | tee -a "$OUT/summary.txt"; }
 
 log "machine"
 { nproc; grep -m1 "model name" /proc/cpuinfo; nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv,noheader; free -g | head -2; df -h /tmp | tail -1; } 2>&1 | tee -a "$OUT/summary.txt"
@@ -52,14 +60,19 @@ for stage in $stages; do
       run $S bench render --repeats 7 --sizes 10M,100M --size 2064x2208 --with-depth
       run $S bench render --repeats 7 --sizes 10M --size 1920x1080 --with-depth
       ;;
+    import)  # the importer against VTK's reader (same files and arrays), and what crash isolation costs
+      # Solver-sized frames: the bundled PySPH sample tiled 6x (56,160 particles per file, 4 arrays).
+      run $S bench io data/dam_break_3d/dam_break_3d.pvd --min-time 1 --tile 6 -t 1 --work-dir /tmp/imp
+      log "convert of the .vtu copies: VTK's reader in worker processes (default) against --in-process"
+      paired "workers" "--in-process" "$S convert '/tmp/imp/zlib_*.vtu' -o /tmp/iso_a.sluice -f -q" \
+        "$S convert '/tmp/imp/zlib_*.vtu' -o /tmp/iso_b.sluice -f -q --in-process"
+      paired "workers, raw" "--in-process, raw" "$S convert '/tmp/imp/raw_*.vtu' -o /tmp/iso_a.sluice -f -q" \
+        "$S convert '/tmp/imp/raw_*.vtu' -o /tmp/iso_b.sluice -f -q --in-process"
+      log "the same on 1 thread"
+      paired "workers -j1" "--in-process -j1" "$S convert '/tmp/imp/raw_*.vtu' -o /tmp/iso_a.sluice -f -q -j 1" \
+        "$S convert '/tmp/imp/raw_*.vtu' -o /tmp/iso_b.sluice -f -q --in-process -j 1"
+      ;;
     firsthour)  # convert's up-axis detection and the play/render cache, on real and synthetic solver output
-      secs() { local t0=$EPOCHREALTIME; "$@" >/dev/null 2>&1; awk -v a="$t0" -v b="$EPOCHREALTIME" 'BEGIN { printf "%.3f\n", b - a }'; }
-      # Two commands alternated 7 times (after a warm-up of each): medians side by side.
-      paired() { local la=$1 lb=$2 ca=$3 cb=$4 a=() b=(); eval "$ca" >/dev/null 2>&1; eval "$cb" >/dev/null 2>&1
-        for i in 1 2 3 4 5 6 7; do a+=("$(secs bash -c "$ca")"); b+=("$(secs bash -c "$cb")"); done
-        local ma mb; ma=$(printf '%s\n' "${a[@]}" | sort -n | sed -n 4p); mb=$(printf '%s\n' "${b[@]}" | sort -n | sed -n 4p)
-        printf '%s: median %s s (%s)\n%s: median %s s (%s)\nratio %s\n' "$la" "$ma" "${a[*]}" "$lb" "$mb" "${b[*]}" \
-          "$(awk -v a="$ma" -v b="$mb" 'BEGIN { printf "%.3f", a / b }')" | tee -a "$OUT/summary.txt"; }
       run $S synth -n 4M --frames 20 -o /tmp/fh.sluice --force -q
       run $S export /tmp/fh.sluice -o /tmp/fh/fluid.vtp -q -f
       run $S convert /tmp/fh/fluid.pvd -o /tmp/fh_a.sluice -f

@@ -14,13 +14,14 @@
 namespace sluice::io::detail {
 namespace {
 
-constexpr size_t kBufferBytes = size_t(1) << 18;
+constexpr size_t kBufferBytes = size_t(1) << 16;
 
 bool is_space(char c) { return c == ' ' || c == '\n' || c == '\r' || c == '\t' || c == '\v' || c == '\f'; }
 
 }  // namespace
 
-ByteStream::ByteStream(const std::string& path) : path_(path), buffer_(kBufferBytes) {
+ByteStream::ByteStream(const std::string& path)
+    : path_(path), buffer_(new char[kBufferBytes]), capacity_(kBufferBytes) {
   fd_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
   if (fd_ < 0) throw Error({path}, std::string("cannot open: ") + std::strerror(errno));
   struct stat st {};
@@ -39,12 +40,12 @@ ByteStream::~ByteStream() {
 size_t ByteStream::available(size_t want) {
   if (end_ - pos_ >= want) return end_ - pos_;
   // Keep the unread tail, refill behind it.
-  std::memmove(buffer_.data(), buffer_.data() + pos_, end_ - pos_);
+  std::memmove(buffer_.get(), buffer_.get() + pos_, end_ - pos_);
   base_ += pos_;
   end_ -= pos_;
   pos_ = 0;
-  while (end_ < buffer_.size() && base_ + end_ < size_) {
-    const ssize_t got = ::pread(fd_, buffer_.data() + end_, buffer_.size() - end_, static_cast<off_t>(base_ + end_));
+  while (end_ < capacity_ && base_ + end_ < size_) {
+    const ssize_t got = ::pread(fd_, buffer_.get() + end_, capacity_ - end_, static_cast<off_t>(base_ + end_));
     if (got < 0 && errno == EINTR) continue;
     if (got < 0) throw Error({path_}, std::string("read error: ") + std::strerror(errno));
     if (got == 0) {
@@ -74,7 +75,7 @@ std::string_view ByteStream::word() {
                                std::to_string(offset()) + ": not a text section");
     }
   }
-  const std::string_view out(buffer_.data() + pos_, n);
+  const std::string_view out(buffer_.get() + pos_, n);
   pos_ += n;
   return out;
 }
@@ -89,7 +90,7 @@ std::string_view ByteStream::line() {
                                std::to_string(offset()) + ": not a text line");
     }
   }
-  std::string_view out(buffer_.data() + pos_, n);
+  std::string_view out(buffer_.get() + pos_, n);
   pos_ += n;
   if (pos_ < end_) {  // the newline
     ++pos_;
@@ -106,7 +107,7 @@ void ByteStream::read(void* into, uint64_t n) {
   }
   auto* out = static_cast<char*>(into);
   const size_t buffered = std::min<uint64_t>(n, end_ - pos_);
-  std::memcpy(out, buffer_.data() + pos_, buffered);
+  std::memcpy(out, buffer_.get() + pos_, buffered);
   pos_ += buffered;
   uint64_t done = buffered;
   if (done == n) return;

@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <string>
 #include <string_view>
+#include <memory>
 #include <vector>
 
 namespace sluice::io::detail {
@@ -47,7 +48,8 @@ class ByteStream {
   std::string path_;
   int fd_ = -1;
   uint64_t size_ = 0;
-  std::vector<char> buffer_;
+  std::unique_ptr<char[]> buffer_;  // kBufferBytes, not zeroed
+  size_t capacity_ = 0;
   uint64_t base_ = 0;  // file offset of buffer_[0]
   size_t pos_ = 0;
   size_t end_ = 0;

@@ -14,6 +14,7 @@
 #include <limits>
 #include <set>
 #include <string_view>
+#include <type_traits>
 
 #include "import/byte_stream.h"
 #include "import/values.h"
@@ -68,15 +69,30 @@ decltype(auto) visit(Scalar s, F&& f) {
   return f(uint8_t{});
 }
 
-// A typed, host-endian run of values, and what it is for messages.
+// A typed, host-endian run of values. float32 values (points and most
+// arrays) are read straight into `floats`, which the frame then takes over;
+// other types into `bytes`.
 struct Values {
   Scalar type = Scalar::kF32;
   uint64_t count = 0;
-  std::vector<unsigned char> bytes;  // count values of `type`'s C++ type
+  std::vector<float> floats;         // type kF32
+  std::vector<unsigned char> bytes;  // other types: count values of the type's C++ type
 
   template <class T>
   const T* as() const {
+    if constexpr (std::is_same_v<T, float>) {
+      if (type == Scalar::kF32) return floats.data();
+    }
     return reinterpret_cast<const T*>(bytes.data());
+  }
+  unsigned char* storage() {
+    return type == Scalar::kF32 ? reinterpret_cast<unsigned char*>(floats.data()) : bytes.data();
+  }
+  void allocate(Scalar t, uint64_t n) {
+    type = t;
+    count = n;
+    if (t == Scalar::kF32) floats.resize(n);
+    else bytes.resize(n * value_bytes(t));
   }
 };
 
@@ -197,8 +213,12 @@ class Parser {
   std::set<int64_t> ignored_cell_types;
   std::vector<std::string> ignored_sections;  // POLYDATA sections other than VERTICES
 
-  // Positions, as float xyz.
-  std::vector<float> positions() const {
+  // Positions, as float xyz (float32 points are handed over, not copied).
+  std::vector<float> take_positions() {
+    if (points_.type == Scalar::kF32 && points_.count == point_count * 3 && dataset_ != "structured_points" &&
+        dataset_ != "rectilinear_grid") {
+      return std::move(points_.floats);
+    }
     std::vector<float> out(point_count * 3);
     if (point_count == 0) return out;
     if (dataset_ == "structured_points") {
@@ -327,18 +347,15 @@ class Parser {
                           std::to_string(in_.offset()) + " (cut short, or the count is wrong)");
       }
       if (!into) return in_.skip(bytes);
-      into->type = type;
-      into->count = count;
+      into->allocate(type, count);
       if (type == Scalar::kBit) {
         std::vector<unsigned char> packed(bytes);
         in_.read(packed.data(), bytes);
-        into->bytes.resize(count);
         for (uint64_t k = 0; k < count; ++k) into->bytes[k] = (packed[k / 8] >> (7 - k % 8)) & 1;
         return;
       }
-      into->bytes.resize(bytes);
-      in_.read(into->bytes.data(), bytes);
-      visit(type, [&](auto t) { to_host<decltype(t)>(into->bytes.data(), count); });
+      in_.read(into->storage(), bytes);
+      visit(type, [&](auto t) { to_host<decltype(t)>(into->storage(), count); });
       return;
     }
     // Text: every value takes at least two bytes but the last.
@@ -346,14 +363,10 @@ class Parser {
       fail(section, std::to_string(count) + " values declared, but only " + std::to_string(in_.remaining()) +
                         " bytes remain after " + here() + " (cut short, or the count is wrong)");
     }
-    if (into) {
-      into->type = type;
-      into->count = count;
-      into->bytes.resize(count * value_bytes(type));
-    }
+    if (into) into->allocate(type, count);
     visit(type, [&](auto t) {
       using T = decltype(t);
-      T* out = into ? reinterpret_cast<T*>(into->bytes.data()) : nullptr;
+      T* out = into ? reinterpret_cast<T*>(into->storage()) : nullptr;
       for (uint64_t k = 0; k < count; ++k) {
         const std::string_view w = in_.word();
         if (w.empty()) {
@@ -691,8 +704,8 @@ class Parser {
 
 // ------------------------------------------------------- arrays -> frame
 
-const Array& point_array(const Parser& p, const std::string& name, const char* what) {
-  for (const Array& a : p.kept) {
+Array& point_array(Parser& p, const std::string& name, const char* what) {
+  for (Array& a : p.kept) {
     if (a.name != name) continue;
     if (a.tuples != p.point_count) {
       throw Error({p.path()}, "array '" + name + "' has " + std::to_string(a.tuples) + " values but the file has " +
@@ -717,7 +730,11 @@ void copy_ids(const Parser& p, const Array& a, std::vector<uint64_t>& out) {
                               ": ids must be non-negative integers");
 }
 
-void copy_scalar(const Array& a, std::vector<float>& out) {
+void copy_scalar(Array& a, std::vector<float>& out) {
+  if (a.components == 1 && a.values.type == Scalar::kF32) {
+    out = std::move(a.values.floats);
+    return;
+  }
   out.resize(a.tuples);
   visit(a.values.type, [&](auto t) {
     const auto* in = a.values.as<decltype(t)>();
@@ -746,7 +763,7 @@ LegacyRead read_legacy_vtk(const std::string& path, const std::vector<std::strin
   ParticleFrame& f = out.frame;
   f.attributes.resize(attributes.size());
   if (p.point_count == 0) return out;
-  f.positions = p.positions();
+  f.positions = p.take_positions();
   if (!id_array.empty()) copy_ids(p, point_array(p, id_array, "id array"), f.ids);
   for (size_t k = 0; k < attributes.size(); ++k) copy_scalar(point_array(p, attributes[k], "attribute"), f.attributes[k]);
   std::vector<std::string> ignored = p.ignored_sections;

@@ -204,17 +204,30 @@ void repair_values(ParticleFrame& f, const std::vector<std::string>& attribute_n
 // worse), but the user should know.
 void note_duplicate_ids(ParticleFrame& f) {
   const std::vector<uint64_t>& ids = f.ids;
-  // Most simulations write ids in increasing order: no sort needed then.
+  // Most simulations write ids in increasing order: nothing to look for then.
   if (std::adjacent_find(ids.begin(), ids.end(), std::greater_equal<>()) == ids.end()) return;
-  std::vector<uint64_t> sorted = ids;
-  std::sort(sorted.begin(), sorted.end());
   size_t extra = 0;
   size_t distinct = 0;
   uint64_t example = 0;
-  for (size_t i = 1; i < sorted.size(); ++i) {
-    if (sorted[i] != sorted[i - 1]) continue;
-    if (extra++ == 0) example = sorted[i];
-    if (i == 1 || sorted[i - 2] != sorted[i]) ++distinct;
+  const auto count = [&](bool again_seen_once, uint64_t id) {
+    example = extra++ == 0 ? id : std::min(example, id);  // the smallest, whatever the order
+    if (again_seen_once) ++distinct;
+  };
+  const uint64_t most = *std::max_element(ids.begin(), ids.end());
+  if (most < 8 * ids.size() + 64) {
+    // Dense ids (the usual case: 0..n-1 in another order): a count per id.
+    std::vector<uint8_t> seen(most + 1, 0);
+    for (uint64_t id : ids) {
+      if (seen[id] < 2) ++seen[id];
+      else seen[id] = 3;
+      if (seen[id] >= 2) count(seen[id] == 2, id);
+    }
+  } else {
+    std::vector<uint64_t> sorted = ids;
+    std::sort(sorted.begin(), sorted.end());
+    for (size_t i = 1; i < sorted.size(); ++i) {
+      if (sorted[i] == sorted[i - 1]) count(i == 1 || sorted[i - 2] != sorted[i], sorted[i]);
+    }
   }
   if (extra == 0) return;
   f.repairs.push_back(std::to_string(distinct) + " particle id" + (distinct == 1 ? "" : "s") +
@@ -559,6 +572,17 @@ std::unique_ptr<FrameSource> open_source(const std::string& spec, const ImportOp
   info.id_array = resolve_id_array(options, info.arrays, first);
   require_attributes(options, info.arrays, first);
   return std::make_unique<SeriesSource>(std::move(plan.frames), std::move(info), options);
+}
+
+void check_vtk_file(const std::string& path) {
+  switch (require_readable(path)) {
+    case Format::kLegacy: (void)detail::legacy_vtk_arrays(path); return;
+    case Format::kVtu:
+    case Format::kVtp:
+    case Format::kPvtu:
+    case Format::kPvtp: check_xml(path); return;
+    default: throw Error({path}, "not a VTK dataset file (.vtk, .vtu, .vtp, .pvtu, .pvtp)");
+  }
 }
 
 std::string detect_id_array(const std::vector<std::string>& arrays) {

@@ -15,6 +15,17 @@
 #include <vtkSmartPointer.h>
 #include <vtkGenericDataObjectReader.h>
 #include <vtkXMLGenericDataObjectReader.h>
+#include <vtkCellArray.h>
+#include <vtkDataArraySelection.h>
+#include <vtkPointData.h>
+#include <vtkPolyData.h>
+#include <vtkPolyDataWriter.h>
+#include <vtkUnsignedIntArray.h>
+#include <vtkXMLPolyDataReader.h>
+#include <vtkXMLReader.h>
+#include <vtkXMLUnstructuredGridReader.h>
+
+#include <type_traits>
 #endif
 
 namespace sluice::io {
@@ -23,7 +34,12 @@ namespace sluice::io {
 
 bool has_vtk_support() { return true; }
 
-void write_vtu(const std::string& path, const ParticleFrame& frame, bool compress) {
+namespace {
+
+// The frame as a VTK dataset of type T (unstructured grid or polydata), one
+// vertex per particle, with its id and attribute arrays.
+template <class T>
+vtkSmartPointer<T> peer_dataset(const ParticleFrame& frame, const PeerArrays& arrays) {
   const auto n = static_cast<vtkIdType>(frame.count());
   vtkNew<vtkFloatArray> coords;
   coords->SetNumberOfComponents(3);
@@ -31,13 +47,38 @@ void write_vtu(const std::string& path, const ParticleFrame& frame, bool compres
   std::copy(frame.positions.begin(), frame.positions.end(), coords->GetPointer(0));
   vtkNew<vtkPoints> points;
   points->SetData(coords);
-  vtkNew<vtkUnstructuredGrid> grid;
-  grid->SetPoints(points);
-  grid->Allocate(n);
-  for (vtkIdType i = 0; i < n; ++i) grid->InsertNextCell(VTK_VERTEX, 1, &i);
+  auto data = vtkSmartPointer<T>::New();
+  data->SetPoints(points);
+  vtkNew<vtkCellArray> cells;
+  for (vtkIdType i = 0; i < n; ++i) cells->InsertNextCell(1, &i);
+  if constexpr (std::is_same_v<T, vtkPolyData>) {
+    data->SetVerts(cells);
+  } else {
+    data->SetCells(VTK_VERTEX, cells);
+  }
+  if (!arrays.id_name.empty() && frame.ids.size() == frame.count()) {
+    vtkNew<vtkUnsignedIntArray> ids;
+    ids->SetName(arrays.id_name.c_str());
+    ids->SetNumberOfTuples(n);
+    for (vtkIdType i = 0; i < n; ++i) ids->SetValue(i, static_cast<unsigned>(frame.ids[static_cast<size_t>(i)]));
+    data->GetPointData()->AddArray(ids);
+  }
+  for (size_t k = 0; k < frame.attributes.size() && k < arrays.attribute_names.size(); ++k) {
+    vtkNew<vtkFloatArray> a;
+    a->SetName(arrays.attribute_names[k].c_str());
+    a->SetNumberOfTuples(n);
+    std::copy(frame.attributes[k].begin(), frame.attributes[k].end(), a->GetPointer(0));
+    data->GetPointData()->AddArray(a);
+  }
+  return data;
+}
+
+}  // namespace
+
+void write_vtu(const std::string& path, const ParticleFrame& frame, bool compress, const PeerArrays& arrays) {
   vtkNew<vtkXMLUnstructuredGridWriter> writer;
   writer->SetFileName(path.c_str());
-  writer->SetInputData(grid);
+  writer->SetInputData(peer_dataset<vtkUnstructuredGrid>(frame, arrays));
   writer->SetDataModeToAppended();
   writer->EncodeAppendedDataOff();
   if (compress) writer->SetCompressorTypeToZLib();
@@ -45,7 +86,16 @@ void write_vtu(const std::string& path, const ParticleFrame& frame, bool compres
   if (writer->Write() != 1) throw Error({path}, "VTK could not write the file");
 }
 
-uint64_t read_with_vtk(const std::string& path) {
+void write_legacy_vtk(const std::string& path, const ParticleFrame& frame, const PeerArrays& arrays) {
+  vtkNew<vtkPolyDataWriter> writer;
+  writer->SetFileName(path.c_str());
+  writer->SetInputData(peer_dataset<vtkPolyData>(frame, arrays));
+  writer->SetFileTypeToBinary();
+  writer->SetFileVersion(42);
+  if (writer->Write() != 1) throw Error({path}, "VTK could not write the file");
+}
+
+uint64_t read_with_vtk(const std::string& path, const std::vector<std::string>* only) {
   const bool legacy = path.size() > 4 && path.compare(path.size() - 4, 4, ".vtk") == 0;
   vtkSmartPointer<vtkDataObject> output;
   if (legacy) {
@@ -56,6 +106,19 @@ uint64_t read_with_vtk(const std::string& path) {
     reader->ReadAllFieldsOn();
     reader->Update();
     output = reader->GetOutput();
+  } else if (only) {
+    // The reader for the dataset type: its array selection is the file's.
+    const bool poly = path.size() > 4 && path.compare(path.size() - 4, 4, ".vtp") == 0;
+    vtkSmartPointer<vtkXMLReader> reader;
+    if (poly) reader = vtkSmartPointer<vtkXMLPolyDataReader>::New();
+    else reader = vtkSmartPointer<vtkXMLUnstructuredGridReader>::New();
+    reader->SetFileName(path.c_str());
+    reader->UpdateInformation();
+    reader->GetPointDataArraySelection()->DisableAllArrays();
+    for (const auto& name : *only) reader->GetPointDataArraySelection()->EnableArray(name.c_str());
+    reader->GetCellDataArraySelection()->DisableAllArrays();
+    reader->Update();
+    output = reader->GetOutputDataObject(0);
   } else {
     vtkNew<vtkXMLGenericDataObjectReader> reader;
     reader->SetFileName(path.c_str());
@@ -71,12 +134,16 @@ uint64_t read_with_vtk(const std::string& path) {
 
 bool has_vtk_support() { return false; }
 
-uint64_t read_with_vtk(const std::string& path) {
+uint64_t read_with_vtk(const std::string& path, const std::vector<std::string>*) {
   throw Error({path}, "this sluice was built without VTK: install libvtk9-dev and rebuild");
 }
 
-void write_vtu(const std::string& path, const ParticleFrame&, bool) {
+void write_vtu(const std::string& path, const ParticleFrame&, bool, const PeerArrays&) {
   throw Error({path}, "this sluice was built without VTK: install libvtk9-dev and rebuild to write .vtu files");
+}
+
+void write_legacy_vtk(const std::string& path, const ParticleFrame&, const PeerArrays&) {
+  throw Error({path}, "this sluice was built without VTK: install libvtk9-dev and rebuild to write .vtk files");
 }
 
 #endif

@@ -19,8 +19,12 @@
 #include <vtkXMLPUnstructuredGridReader.h>
 #include <vtkXMLPolyDataReader.h>
 #include <vtkXMLUnstructuredGridReader.h>
+#include <vtkPolyData.h>
+#include <vtkUnsignedCharArray.h>
+#include <vtkUnstructuredGrid.h>
 
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <cmath>
 #include <cstdio>
@@ -343,17 +347,45 @@ std::string cell_type_name(int type) {
   return out;
 }
 
-// A note when the file has cells other than vertices (a mesh): its points
-// still become particles.
-std::optional<std::string> ignored_cells_note(vtkDataSet* ds) {
-  if (ds->GetNumberOfCells() == 0) return std::nullopt;
+// The kinds of cells other than vertices: from the types array of an
+// unstructured grid (one pass; vtkDataSet::GetCellTypes builds a tree of
+// every cell's type, which costs more than reading the file), from the cell
+// lists of polydata, from VTK for the rest.
+std::vector<std::string> non_vertex_cells(vtkDataSet* ds) {
+  std::vector<std::string> names;
+  if (auto* grid = vtkUnstructuredGrid::SafeDownCast(ds)) {
+    vtkUnsignedCharArray* types = grid->GetCellTypesArray();
+    if (!types) return names;
+    std::array<bool, 256> seen{};
+    const unsigned char* t = types->GetPointer(0);
+    for (vtkIdType k = 0, n = types->GetNumberOfValues(); k < n; ++k) seen[t[k]] = true;
+    for (int type = 0; type < 256; ++type) {
+      if (seen[type] && type != VTK_VERTEX && type != VTK_POLY_VERTEX && type != VTK_EMPTY_CELL) {
+        names.push_back(cell_type_name(type));
+      }
+    }
+    return names;
+  }
+  if (auto* poly = vtkPolyData::SafeDownCast(ds)) {
+    if (poly->GetNumberOfLines() > 0) names.emplace_back("LINES");
+    if (poly->GetNumberOfPolys() > 0) names.emplace_back("POLYGONS");
+    if (poly->GetNumberOfStrips() > 0) names.emplace_back("TRIANGLE_STRIPS");
+    return names;
+  }
   vtkNew<vtkCellTypes> types;
   ds->GetCellTypes(types);
-  std::vector<std::string> names;
   for (vtkIdType k = 0; k < types->GetNumberOfTypes(); ++k) {
     const int t = types->GetCellType(k);
     if (t != VTK_VERTEX && t != VTK_POLY_VERTEX && t != VTK_EMPTY_CELL) names.push_back(cell_type_name(t));
   }
+  return names;
+}
+
+// A note when the file has cells other than vertices (a mesh): its points
+// still become particles.
+std::optional<std::string> ignored_cells_note(vtkDataSet* ds) {
+  if (ds->GetNumberOfCells() == 0) return std::nullopt;
+  const std::vector<std::string> names = non_vertex_cells(ds);
   if (names.empty()) return std::nullopt;
   return "cells of type " + join(names) + " ignored: using the " + std::to_string(ds->GetNumberOfPoints()) +
          " points as particles";

@@ -49,42 +49,44 @@ class File {
 
   // Up to `n` bytes at `offset` (fewer at the end of the file).
   std::string read(uint64_t offset, uint64_t n) const {
-    std::string out(static_cast<size_t>(std::min(n, offset < size_ ? size_ - offset : 0)), '\0');
-    size_t done = 0;
+    std::string out;
+    append(out, offset, n);
+    return out;
+  }
+
+  // Appends up to `n` bytes at `offset` to `out`.
+  void append(std::string& out, uint64_t offset, uint64_t n) const {
+    const size_t start = out.size();
+    out.resize(start + static_cast<size_t>(std::min(n, offset < size_ ? size_ - offset : 0)));
+    size_t done = start;
     while (done < out.size()) {
-      const ssize_t got = ::pread(fd_, out.data() + done, out.size() - done, static_cast<off_t>(offset + done));
+      const ssize_t got = ::pread(fd_, out.data() + done, out.size() - done, static_cast<off_t>(offset + done - start));
       if (got < 0 && errno == EINTR) continue;
       if (got <= 0) break;
       done += static_cast<size_t>(got);
     }
     out.resize(done);
-    return out;
   }
 
   // The markup: everything before the appended data (the whole file when
   // there is none), read in steps so a large appended block is not read.
   std::string markup(uint64_t& appended_at) const {
     std::string text;
-    constexpr uint64_t kStep = 1 << 20;
+    constexpr uint64_t kStep = 1 << 16;  // markup is a few kB; the data after it is not read
     appended_at = std::numeric_limits<uint64_t>::max();
     while (text.size() < size_) {
       const size_t from = text.size() > 16 ? text.size() - 16 : 0;
-      text += read(text.size(), kStep);
+      const size_t before = text.size();
+      append(text, text.size(), kStep);
+      if (text.size() == before) break;  // the file shrank
       const size_t tag = text.find("<AppendedData", from);
       if (tag == std::string::npos) continue;
       // The data starts after the '_' that follows the tag.
       const size_t close = text.find('>', tag);
-      if (close == std::string::npos) {
-        text += read(text.size(), kStep);
-        continue;
-      }
-      const size_t underscore = text.find('_', close);
-      if (underscore == std::string::npos && text.size() < size_) {
-        text += read(text.size(), kStep);
-        continue;
-      }
+      const size_t underscore = close == std::string::npos ? close : text.find('_', close);
+      if (underscore == std::string::npos && text.size() < size_) continue;
       if (underscore != std::string::npos) appended_at = underscore + 1;
-      text.resize(close + 1);
+      text.resize(close == std::string::npos ? text.size() : close + 1);
       return text;
     }
     return text;
