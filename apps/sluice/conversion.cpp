@@ -13,6 +13,7 @@
 #include "isolated_source.h"
 #include "progress.h"
 #include "sluice/io/convert.h"
+#include "sluice/io/freed_memory.h"
 #include "sluice/io/import.h"
 #include "sluice/io/spacing.h"
 #include "sluice/io/up_axis.h"
@@ -110,6 +111,7 @@ io::UpFinding find_up(const ConversionOptions& o, const std::vector<io::FrameSha
 }  // namespace
 
 ConversionSummary convert_input(const ConversionOptions& o, const std::string& output) {
+  const io::KeepFreedMemory keep;  // VTK and the importer allocate per frame (freed_memory.h)
   std::optional<tbb::global_control> limit;
   if (o.jobs > 0) limit.emplace(tbb::global_control::max_allowed_parallelism, size_t(o.jobs));
   const int jobs = o.jobs > 0 ? o.jobs : tbb::info::default_concurrency();

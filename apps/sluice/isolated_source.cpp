@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "sluice/io/error.h"
+#include "sluice/io/freed_memory.h"
 
 extern char** environ;
 
@@ -105,6 +106,7 @@ bool send_error(int fd, const io::Error& e) {
 }
 
 int serve(int fd, const std::string& spec, const io::ImportOptions& options) {
+  const io::KeepFreedMemory keep;  // VTK allocates per frame (freed_memory.h)
   std::unique_ptr<io::FrameSource> source;
   std::optional<io::Error> open_error;
   try {

@@ -19,6 +19,8 @@
 #include <vtkXMLUnstructuredGridReader.h>
 #include <vtkXMLUnstructuredGridWriter.h>
 #include <vtkCellArray.h>
+#include <vtkCellType.h>
+#include <vtkPoints.h>
 
 #include <filesystem>
 #include <fstream>
@@ -293,6 +295,62 @@ TEST(FuzzFindings, EachGivesAnErrorOrReads) {
     }
   }
   EXPECT_GT(files, 0);
+}
+
+}  // namespace
+
+namespace {
+
+// Cells are not read by VTK's reader (only points and point arrays): the
+// kinds of cells a mesh file holds come from sluice's checks, in every
+// encoding, and are named in the repair note.
+TEST(XmlCells, MeshCellsAreNamedInEveryEncoding) {
+  vtkNew<vtkPoints> points;
+  for (int i = 0; i < 5; ++i) points->InsertNextPoint(i, i % 2, i % 3);
+  vtkNew<vtkUnstructuredGrid> grid;
+  grid->SetPoints(points);
+  const vtkIdType tetra[4] = {0, 1, 2, 3};
+  grid->InsertNextCell(VTK_TETRA, 4, tetra);
+  const vtkIdType vertex = 4;
+  grid->InsertNextCell(VTK_VERTEX, 1, &vertex);
+  const fs::path dir = Corpus::get().dir;
+  struct Mode {
+    const char* name;
+    const char* mode;
+    bool zlib;
+    bool encode;
+  };
+  for (const Mode& m : {Mode{"mesh_raw.vtu", "appended", false, false}, Mode{"mesh_zlib.vtu", "appended", true, true},
+                        Mode{"mesh_inline.vtu", "binary", true, true}, Mode{"mesh_ascii.vtu", "ascii", false, false}}) {
+    vtkNew<vtkXMLUnstructuredGridWriter> w;
+    w->SetInputData(grid);
+    w->SetFileName((dir / m.name).c_str());
+    if (std::string(m.mode) == "appended") w->SetDataModeToAppended();
+    else if (std::string(m.mode) == "binary") w->SetDataModeToBinary();
+    else w->SetDataModeToAscii();
+    if (m.zlib) w->SetCompressorTypeToZLib();
+    else w->SetCompressorTypeToNone();
+    w->SetEncodeAppendedData(m.encode);
+    ASSERT_EQ(w->Write(), 1);
+    const ParticleFrame f = sluice::io::open_source((dir / m.name).string(), {})->read(0);
+    EXPECT_EQ(f.count(), 5u) << m.name;
+    ASSERT_EQ(f.repairs.size(), 1u) << m.name;
+    EXPECT_EQ(f.repairs[0], "cells of type TETRA ignored: using the 5 points as particles") << m.name;
+  }
+  // Polydata: the cell lists other than vertices.
+  vtkNew<vtkPolyData> poly;
+  poly->SetPoints(points);
+  vtkNew<vtkCellArray> lines;
+  const vtkIdType line[2] = {0, 1};
+  lines->InsertNextCell(2, line);
+  poly->SetLines(lines);
+  vtkNew<vtkXMLPolyDataWriter> w;
+  w->SetInputData(poly);
+  w->SetFileName((dir / "lines.vtp").c_str());
+  ASSERT_EQ(w->Write(), 1);
+  const ParticleFrame f = sluice::io::open_source((dir / "lines.vtp").string(), {})->read(0);
+  ASSERT_EQ(f.repairs.size(), 1u);
+  EXPECT_EQ(f.repairs[0], "cells of type LINES ignored: using the 5 points as particles");
 }
 
 }  // namespace

@@ -17,6 +17,7 @@
 #include <type_traits>
 
 #include "import/byte_stream.h"
+#include "import/cell_types.h"
 #include "import/values.h"
 
 namespace sluice::io::detail {
@@ -149,21 +150,6 @@ void to_host(unsigned char* bytes, uint64_t count) {
     T* v = reinterpret_cast<T*>(bytes);
     for (uint64_t k = 0; k < count; ++k) v[k] = byteswap(v[k]);
   }
-}
-
-// VTK's cell type names for the note on ignored cells.
-std::string cell_type_name(int64_t type) {
-  static const std::pair<int, const char*> kNames[] = {
-      {3, "LINE"},           {4, "POLY_LINE"},        {5, "TRIANGLE"},         {6, "TRIANGLE_STRIP"},
-      {7, "POLYGON"},        {8, "PIXEL"},            {9, "QUAD"},             {10, "TETRA"},
-      {11, "VOXEL"},         {12, "HEXAHEDRON"},      {13, "WEDGE"},           {14, "PYRAMID"},
-      {15, "PENTAGONAL_PRISM"}, {16, "HEXAGONAL_PRISM"}, {21, "QUADRATIC_EDGE"}, {22, "QUADRATIC_TRIANGLE"},
-      {23, "QUADRATIC_QUAD"}, {24, "QUADRATIC_TETRA"}, {25, "QUADRATIC_HEXAHEDRON"}, {26, "QUADRATIC_WEDGE"},
-      {27, "QUADRATIC_PYRAMID"}, {42, "POLYHEDRON"}};
-  for (const auto& [id, name] : kNames) {
-    if (id == type) return name;
-  }
-  return "type " + std::to_string(type);
 }
 
 std::string join(const std::vector<std::string>& names) {
@@ -767,11 +753,8 @@ LegacyRead read_legacy_vtk(const std::string& path, const std::vector<std::strin
   if (!id_array.empty()) copy_ids(p, point_array(p, id_array, "id array"), f.ids);
   for (size_t k = 0; k < attributes.size(); ++k) copy_scalar(point_array(p, attributes[k], "attribute"), f.attributes[k]);
   std::vector<std::string> ignored = p.ignored_sections;
-  for (int64_t t : p.ignored_cell_types) ignored.push_back(cell_type_name(t));
-  if (!ignored.empty()) {
-    f.repairs.push_back("cells of type " + join(ignored) + " ignored: using the " + std::to_string(p.point_count) +
-                        " points as particles");
-  }
+  for (const std::string& name : non_vertex_names(p.ignored_cell_types)) ignored.push_back(name);
+  if (!ignored.empty()) f.repairs.push_back(ignored_cells_note(ignored, p.point_count));
   return out;
 }
 

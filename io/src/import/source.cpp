@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -98,10 +99,12 @@ struct FileFrame {
 
 // VTK's XML readers allocate what a header declares: sizes are checked
 // against the file first.
-[[maybe_unused]] void check_xml(const std::string& path) {
+[[maybe_unused]] detail::XmlFacts check_xml(const std::string& path) {
   const Format f = require_readable(path);
-  if (f == Format::kPvtu || f == Format::kPvtp) detail::check_parallel_xml(path);
-  else detail::check_vtk_xml(path);
+  if (f != Format::kPvtu && f != Format::kPvtp) return detail::check_vtk_xml(path);
+  detail::XmlFacts facts;
+  detail::check_parallel_xml(path, facts);
+  return facts;
 }
 
 // Legacy VTK is read by sluice itself, every count checked first (VTK's
@@ -123,8 +126,8 @@ FileFrame read_file(const std::string& path, const std::vector<std::string>& att
     default: break;
   }
 #ifdef SLUICE_WITH_VTK
-  check_xml(path);
-  detail::VtkRead r = detail::read_vtk(path, attributes, id_array);
+  const detail::XmlFacts facts = check_xml(path);
+  detail::VtkRead r = detail::read_vtk(path, attributes, id_array, facts.non_vertex_cells());
   return {std::move(r.frame), r.time};
 #else
   throw Error({path}, "no VTK support in this build");  // require_readable already threw
@@ -141,7 +144,7 @@ std::vector<std::string> file_arrays(const std::string& path) {
     default: break;
   }
 #ifdef SLUICE_WITH_VTK
-  check_xml(path);
+  (void)check_xml(path);
   return detail::vtk_arrays(path);
 #else
   return {};
@@ -153,7 +156,24 @@ std::vector<std::string> file_arrays(const std::string& path) {
 // Drops particles with a non-finite coordinate (with their ids and
 // attributes) and zeroes non-finite attribute values of the particles kept.
 // Indices in the notes are positions in the file.
+// True when every value is finite: one vectorizable pass over the bits (an
+// exponent of all ones is an infinity or a NaN).
+bool all_finite(const std::vector<float>& values) {
+  uint32_t bad = 0;
+  for (const float v : values) {
+    uint32_t bits;
+    std::memcpy(&bits, &v, sizeof bits);
+    bad |= static_cast<uint32_t>((bits & 0x7f800000u) == 0x7f800000u);
+  }
+  return bad == 0;
+}
+
 void repair_values(ParticleFrame& f, const std::vector<std::string>& attribute_names) {
+  // The common case, checked at memory speed: nothing to repair.
+  if (all_finite(f.positions) &&
+      std::all_of(f.attributes.begin(), f.attributes.end(), [](const auto& a) { return all_finite(a); })) {
+    return;
+  }
   const size_t n = f.count();
   std::vector<uint8_t> drop;  // stays empty in the common case of no bad position
   size_t dropped = 0;
@@ -580,7 +600,7 @@ void check_vtk_file(const std::string& path) {
     case Format::kVtu:
     case Format::kVtp:
     case Format::kPvtu:
-    case Format::kPvtp: check_xml(path); return;
+    case Format::kPvtp: (void)check_xml(path); return;
     default: throw Error({path}, "not a VTK dataset file (.vtk, .vtu, .vtp, .pvtu, .pvtp)");
   }
 }

@@ -16,6 +16,8 @@
 #include <vtkPoints.h>
 #include <vtkSmartPointer.h>
 #include <vtkXMLPPolyDataReader.h>
+#include <vtkXMLPUnstructuredDataReader.h>
+#include <vtkXMLUnstructuredDataReader.h>
 #include <vtkXMLPUnstructuredGridReader.h>
 #include <vtkXMLPolyDataReader.h>
 #include <vtkXMLUnstructuredGridReader.h>
@@ -31,6 +33,7 @@
 #include <mutex>
 #include <type_traits>
 
+#include "import/cell_types.h"
 #include "import/values.h"
 #include "sluice/io/error.h"
 
@@ -154,12 +157,61 @@ Kind kind_of(const std::string& path) {
   return Kind::kVtu;
 }
 
+// VTK's XML readers without the cells: sluice takes points and point
+// arrays only, and the cells (connectivity, offsets, types: more bytes than
+// the points for one vertex per particle) would be read, allocated and
+// sized by their own offsets for nothing. Each reader reads its piece as
+// its base class does, minus the cell lists; the parallel readers make such
+// piece readers and do not copy cells. The kinds of cells, for the note,
+// come from the checks (xml_check.h).
+class GridPointsReader : public vtkXMLUnstructuredGridReader {
+ public:
+  static GridPointsReader* New();
+  vtkTypeMacro(GridPointsReader, vtkXMLUnstructuredGridReader)
+
+ protected:
+  int ReadPieceData() override { return vtkXMLUnstructuredDataReader::ReadPieceData(); }
+};
+vtkStandardNewMacro(GridPointsReader);
+
+class PolyPointsReader : public vtkXMLPolyDataReader {
+ public:
+  static PolyPointsReader* New();
+  vtkTypeMacro(PolyPointsReader, vtkXMLPolyDataReader)
+
+ protected:
+  int ReadPieceData() override { return vtkXMLUnstructuredDataReader::ReadPieceData(); }
+};
+vtkStandardNewMacro(PolyPointsReader);
+
+class ParallelGridPointsReader : public vtkXMLPUnstructuredGridReader {
+ public:
+  static ParallelGridPointsReader* New();
+  vtkTypeMacro(ParallelGridPointsReader, vtkXMLPUnstructuredGridReader)
+
+ protected:
+  int ReadPieceData() override { return vtkXMLPUnstructuredDataReader::ReadPieceData(); }
+  vtkXMLDataReader* CreatePieceReader() override { return GridPointsReader::New(); }
+};
+vtkStandardNewMacro(ParallelGridPointsReader);
+
+class ParallelPolyPointsReader : public vtkXMLPPolyDataReader {
+ public:
+  static ParallelPolyPointsReader* New();
+  vtkTypeMacro(ParallelPolyPointsReader, vtkXMLPPolyDataReader)
+
+ protected:
+  int ReadPieceData() override { return vtkXMLPUnstructuredDataReader::ReadPieceData(); }
+  vtkXMLDataReader* CreatePieceReader() override { return PolyPointsReader::New(); }
+};
+vtkStandardNewMacro(ParallelPolyPointsReader);
+
 vtkSmartPointer<vtkXMLReader> make_xml_reader(Kind kind) {
   switch (kind) {
-    case Kind::kVtu: return vtkSmartPointer<vtkXMLUnstructuredGridReader>::New();
-    case Kind::kVtp: return vtkSmartPointer<vtkXMLPolyDataReader>::New();
-    case Kind::kPvtu: return vtkSmartPointer<vtkXMLPUnstructuredGridReader>::New();
-    case Kind::kPvtp: return vtkSmartPointer<vtkXMLPPolyDataReader>::New();
+    case Kind::kVtu: return vtkSmartPointer<GridPointsReader>::New();
+    case Kind::kVtp: return vtkSmartPointer<PolyPointsReader>::New();
+    case Kind::kPvtu: return vtkSmartPointer<ParallelGridPointsReader>::New();
+    case Kind::kPvtp: return vtkSmartPointer<ParallelPolyPointsReader>::New();
   }
   return nullptr;
 }
@@ -334,63 +386,6 @@ void copy_id_array(const std::string& path, vtkDataArray* a, const std::string& 
   }
 }
 
-// "vtkQuadraticTetra" -> "QUADRATIC_TETRA", as VTK's enum spells it.
-std::string cell_type_name(int type) {
-  std::string cls = vtkCellTypes::GetClassNameFromTypeId(type);
-  if (cls.rfind("vtk", 0) != 0) return "type " + std::to_string(type);
-  std::string out;
-  for (size_t k = 3; k < cls.size(); ++k) {
-    const char c = cls[k];
-    if (std::isupper(static_cast<unsigned char>(c)) && k > 3) out += '_';
-    out += static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
-  }
-  return out;
-}
-
-// The kinds of cells other than vertices: from the types array of an
-// unstructured grid (one pass; vtkDataSet::GetCellTypes builds a tree of
-// every cell's type, which costs more than reading the file), from the cell
-// lists of polydata, from VTK for the rest.
-std::vector<std::string> non_vertex_cells(vtkDataSet* ds) {
-  std::vector<std::string> names;
-  if (auto* grid = vtkUnstructuredGrid::SafeDownCast(ds)) {
-    vtkUnsignedCharArray* types = grid->GetCellTypesArray();
-    if (!types) return names;
-    std::array<bool, 256> seen{};
-    const unsigned char* t = types->GetPointer(0);
-    for (vtkIdType k = 0, n = types->GetNumberOfValues(); k < n; ++k) seen[t[k]] = true;
-    for (int type = 0; type < 256; ++type) {
-      if (seen[type] && type != VTK_VERTEX && type != VTK_POLY_VERTEX && type != VTK_EMPTY_CELL) {
-        names.push_back(cell_type_name(type));
-      }
-    }
-    return names;
-  }
-  if (auto* poly = vtkPolyData::SafeDownCast(ds)) {
-    if (poly->GetNumberOfLines() > 0) names.emplace_back("LINES");
-    if (poly->GetNumberOfPolys() > 0) names.emplace_back("POLYGONS");
-    if (poly->GetNumberOfStrips() > 0) names.emplace_back("TRIANGLE_STRIPS");
-    return names;
-  }
-  vtkNew<vtkCellTypes> types;
-  ds->GetCellTypes(types);
-  for (vtkIdType k = 0; k < types->GetNumberOfTypes(); ++k) {
-    const int t = types->GetCellType(k);
-    if (t != VTK_VERTEX && t != VTK_POLY_VERTEX && t != VTK_EMPTY_CELL) names.push_back(cell_type_name(t));
-  }
-  return names;
-}
-
-// A note when the file has cells other than vertices (a mesh): its points
-// still become particles.
-std::optional<std::string> ignored_cells_note(vtkDataSet* ds) {
-  if (ds->GetNumberOfCells() == 0) return std::nullopt;
-  const std::vector<std::string> names = non_vertex_cells(ds);
-  if (names.empty()) return std::nullopt;
-  return "cells of type " + join(names) + " ignored: using the " + std::to_string(ds->GetNumberOfPoints()) +
-         " points as particles";
-}
-
 // Simulation time, when a writer stored it (VTK's TimeValue convention, or TIME).
 std::optional<double> field_time(vtkDataSet* ds) {
   vtkFieldData* fd = ds->GetFieldData();
@@ -411,7 +406,8 @@ std::optional<double> field_time(vtkDataSet* ds) {
 
 std::vector<std::string> vtk_arrays(const std::string& path) { return load(path, nullptr).arrays; }
 
-VtkRead read_vtk(const std::string& path, const std::vector<std::string>& attributes, const std::string& id_array) {
+VtkRead read_vtk(const std::string& path, const std::vector<std::string>& attributes, const std::string& id_array,
+                 const std::vector<std::string>& non_vertex_cells) {
   std::vector<std::string> wanted = attributes;
   if (!id_array.empty()) wanted.push_back(id_array);
   const Loaded loaded = load(path, &wanted);
@@ -434,7 +430,7 @@ VtkRead read_vtk(const std::string& path, const std::vector<std::string>& attrib
     f.attributes[k].resize(n);
     copy_scalar(a, f.attributes[k].data());
   }
-  if (auto note = ignored_cells_note(ds)) f.repairs.push_back(std::move(*note));
+  if (!non_vertex_cells.empty()) f.repairs.push_back(ignored_cells_note(non_vertex_cells, n));
   return out;
 }
 

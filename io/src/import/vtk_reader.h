@@ -23,9 +23,10 @@ struct VtkRead {
 };
 
 // Reads positions (as float), ids from `id_array` (if not empty) and the
-// `attributes` (vectors as magnitudes). Cells other than vertices are
-// ignored with a note in frame.repairs. Throws io::Error naming the file.
-VtkRead read_vtk(const std::string& path, const std::vector<std::string>& attributes,
-                 const std::string& id_array);
+// `attributes` (vectors as magnitudes). Cells are not read: those the
+// checks found (`non_vertex_cells`, XmlFacts) are named in a note in
+// frame.repairs. Throws io::Error naming the file.
+VtkRead read_vtk(const std::string& path, const std::vector<std::string>& attributes, const std::string& id_array,
+                 const std::vector<std::string>& non_vertex_cells);
 
 }  // namespace sluice::io::detail

@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <cerrno>
 #include <charconv>
 #include <cstring>
@@ -17,6 +18,7 @@
 
 #include <zlib.h>
 
+#include "import/cell_types.h"
 #include "import/xml_tags.h"
 #include "sluice/io/error.h"
 
@@ -186,7 +188,7 @@ class Checker {
  public:
   explicit Checker(const std::string& path) : path_(path), file_(path) {}
 
-  void run() {
+  XmlFacts run() {
     uint64_t appended_at = 0;
     const std::string text = file_.markup(appended_at);
     layout_.appended_at = appended_at;
@@ -208,6 +210,7 @@ class Checker {
                tag.name == "Polys") section(tag.name, std::nullopt, true);
       else if (tag.name == "DataArray") data_array(tag, scanner.text_after(tag));
     }
+    return std::move(facts_);
   }
 
  private:
@@ -263,6 +266,12 @@ class Checker {
         if (const auto v = count_attribute(tag, key)) {
           sum += *v;
           any = true;
+          const std::string k = key;
+          const char* list = k == "NumberOfLines" ? "LINES" : k == "NumberOfStrips" ? "TRIANGLE_STRIPS"
+                             : k == "NumberOfPolys" ? "POLYGONS" : nullptr;
+          if (list && *v > 0 && std::find(facts_.cell_lists.begin(), facts_.cell_lists.end(), list) == facts_.cell_lists.end()) {
+            facts_.cell_lists.push_back(list);
+          }
         }
       }
       if (any) cells_ = sum;
@@ -295,6 +304,8 @@ class Checker {
     uint64_t content = 0;  // uncompressed bytes
     uint64_t stored = 0;   // bytes after the header
     uint64_t before_last = 0, last_stored = 0, last_content = 0;  // compressed only
+    uint64_t block_size = 0;                                       // compressed: bytes per sub-block
+    std::vector<uint64_t> sizes;                                   // compressed: stored bytes per sub-block
   };
 
   void data_array(const XmlTag& tag, std::string_view text) {
@@ -332,15 +343,15 @@ class Checker {
     if (format == "appended") {
       const auto offset = parse_count(tag.attribute("offset"));
       if (!offset) fail(what + ": appended data without a valid offset");
-      Where w;
-      const Block b = appended_block(what, *offset, expected, declared, w);
-      values = size ? b.content / size : 0;
-      if (cell_list && name == "offsets") last = last_value(w, b, type);
+      where_ = Where{};
+      block_ = appended_block(what, *offset, expected, declared, where_);
+      values = size ? block_.content / size : 0;
+      if (cell_list && name == "offsets") last = last_value(where_, block_, type);
     } else if (format == "binary") {
-      Where w;
-      const Block b = inline_block(what, text, expected, declared, w);
-      values = size ? b.content / size : 0;
-      if (cell_list && name == "offsets") last = last_value(w, b, type);
+      where_ = Where{};
+      block_ = inline_block(what, text, expected, declared, where_);
+      values = size ? block_.content / size : 0;
+      if (cell_list && name == "offsets") last = last_value(where_, block_, type);
     } else if (format == "ascii") {
       std::string_view last_word;
       values = ascii_values(what, text, expected ? *tuples * comps : 0, declared, last_word);
@@ -353,6 +364,7 @@ class Checker {
       fail(what + ": format '" + format + "' (expected ascii, binary or appended)");
     }
     if (cell_list && name == "connectivity") connectivity_ = values;
+    if (section_.name == "Cells" && name == "types") cell_types(where_, block_, format, text, type);
     if (last && connectivity_ && (*last < 0 || static_cast<uint64_t>(*last) != *connectivity_)) {
       fail(section_.name + ": the cell offsets end at " + std::to_string(*last) + ", but the connectivity holds " +
            std::to_string(*connectivity_) + " values");
@@ -387,8 +399,10 @@ class Checker {
       if (stored > file_.size()) fail(what + ": a compressed block of " + std::to_string(stored) + " bytes, more than the file holds");
       if (k + 1 == blocks) b.before_last = b.stored, b.last_stored = stored;
       b.stored += stored;
+      b.sizes.push_back(stored);
     }
     b.last_content = blocks == 0 ? 0 : (last == 0 ? block_size : last);
+    b.block_size = block_size;
     return b;
   }
 
@@ -491,6 +505,56 @@ class Checker {
     return dec.size() > from % 3 ? dec.substr(from % 3) : std::string();
   }
 
+  // Every byte a block holds (inflated when zlib-compressed); none when that
+  // cannot be had cheaply (another compressor, more than 64 MiB, a damaged
+  // block: VTK would report it, and the cells are only named in a note).
+  std::optional<std::string> content(const Where& w, const Block& b) const {
+    if (b.content > (uint64_t(1) << 26)) return std::nullopt;
+    if (!layout_.compressed) return block_bytes(w, b, b.header, b.content);
+    if (!layout_.zlib) return std::nullopt;
+    std::string out;
+    uint64_t at = 0;
+    for (size_t k = 0; k < b.sizes.size(); ++k) {
+      const std::string packed = block_bytes(w, b, at, b.sizes[k]);
+      const uint64_t plain_size = k + 1 == b.sizes.size() ? b.last_content : b.block_size;
+      const size_t start = out.size();
+      out.resize(start + plain_size);
+      uLongf got = static_cast<uLongf>(plain_size);
+      if (::uncompress(reinterpret_cast<Bytef*>(out.data() + start), &got, reinterpret_cast<const Bytef*>(packed.data()),
+                       static_cast<uLong>(packed.size())) != Z_OK || got != plain_size) {
+        return std::nullopt;
+      }
+      at += b.sizes[k];
+    }
+    return out;
+  }
+
+  // The kinds of cells of an unstructured grid, from its types array.
+  void cell_types(const Where& w, const Block& b, const std::string& format, std::string_view text,
+                  const std::string& type) {
+    if (format == "ascii") {
+      size_t k = 0;
+      while (k < text.size()) {
+        const size_t s = text.find_first_not_of(" \n\r\t", k);
+        if (s == std::string_view::npos) break;
+        size_t e = text.find_first_of(" \n\r\t", s);
+        if (e == std::string_view::npos) e = text.size();
+        int64_t v = 0;
+        if (std::from_chars(text.data() + s, text.data() + e, v).ec == std::errc()) facts_.cell_types.insert(v);
+        k = e;
+      }
+      return;
+    }
+    if (type != "UInt8" && type != "Int8") return;
+    const std::optional<std::string> bytes = content(w, b);
+    if (!bytes) return;
+    std::array<bool, 256> seen{};
+    for (const char c : *bytes) seen[static_cast<unsigned char>(c)] = true;
+    for (int t = 0; t < 256; ++t) {
+      if (seen[t]) facts_.cell_types.insert(type == "Int8" ? static_cast<int8_t>(t) : t);
+    }
+  }
+
   // The last value of an integer array (the end of a cell list), or none
   // when it cannot be had cheaply (another compressor, a damaged block:
   // VTK then reports the block itself).
@@ -557,13 +621,22 @@ class Checker {
   std::optional<uint64_t> points_;
   std::optional<uint64_t> cells_;
   std::optional<uint64_t> connectivity_;  // values in the current cell list's connectivity
+  Where where_;                           // of the last DataArray
+  Block block_;
+  XmlFacts facts_;
 };
 
 }  // namespace
 
-void check_vtk_xml(const std::string& path) { Checker(path).run(); }
+std::vector<std::string> XmlFacts::non_vertex_cells() const {
+  std::vector<std::string> names = cell_lists;
+  for (const std::string& n : non_vertex_names(cell_types)) names.push_back(n);
+  return names;
+}
 
-std::vector<std::string> check_parallel_xml(const std::string& path) {
+XmlFacts check_vtk_xml(const std::string& path) { return Checker(path).run(); }
+
+std::vector<std::string> check_parallel_xml(const std::string& path, XmlFacts& facts) {
   const File file(path);
   uint64_t appended_at = 0;
   const std::string text = file.markup(appended_at);
@@ -589,7 +662,11 @@ std::vector<std::string> check_parallel_xml(const std::string& path) {
     const std::string piece = (folder / normal).string();
     std::error_code ec;
     if (!fs::is_regular_file(piece, ec)) throw Error({path}, where + "'" + *source + "' does not exist");
-    check_vtk_xml(piece);
+    const XmlFacts piece_facts = check_vtk_xml(piece);
+    facts.cell_types.insert(piece_facts.cell_types.begin(), piece_facts.cell_types.end());
+    for (const auto& list : piece_facts.cell_lists) {
+      if (std::find(facts.cell_lists.begin(), facts.cell_lists.end(), list) == facts.cell_lists.end()) facts.cell_lists.push_back(list);
+    }
     pieces.push_back(piece);
   }
   if (pieces.empty()) throw Error({path}, "the file lists no pieces");

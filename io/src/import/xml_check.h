@@ -11,22 +11,36 @@
 //     inline base64), or the values present (inline ascii).
 // and, for cell lists (which VTK sizes by their last offset), that the last
 // offset equals the connectivity's length (for zlib blocks only the last
-// sub-block is inflated). A mismatch throws io::Error naming the file, the
+// sub-block is inflated). The types array of an unstructured grid is read
+// whole (one byte per cell) for the kinds of cells. A mismatch throws io::Error naming the file, the
 // section and the array with both figures. Other compressed contents are not
 // inflated: zlib reports a damaged stream itself, through VTK.
 #pragma once
 
+#include <cstdint>
+#include <set>
 #include <string>
 #include <vector>
 
 namespace sluice::io::detail {
 
+// What the checks learn on the way: the kinds of cells, so that VTK's
+// reader need not read the cells at all (vtk_reader.h).
+struct XmlFacts {
+  std::set<int64_t> cell_types;         // unstructured grids: every value of the types arrays
+  std::vector<std::string> cell_lists;  // polydata: LINES, POLYGONS, TRIANGLE_STRIPS when not empty
+
+  // The names of the cells that are not vertices, for the repair note.
+  std::vector<std::string> non_vertex_cells() const;
+};
+
 // A .vtu or .vtp file.
-void check_vtk_xml(const std::string& path);
+XmlFacts check_vtk_xml(const std::string& path);
 
 // A .pvtu or .pvtp file: its pieces must be .vtu/.vtp files inside the
 // header's folder (no absolute paths, no '..' out of it, no other parallel
-// header), must exist, and each passes check_vtk_xml. Returns the pieces.
-std::vector<std::string> check_parallel_xml(const std::string& path);
+// header), must exist, and each passes check_vtk_xml. Returns the pieces;
+// `facts` gathers theirs.
+std::vector<std::string> check_parallel_xml(const std::string& path, XmlFacts& facts);
 
 }  // namespace sluice::io::detail
