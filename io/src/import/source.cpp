@@ -9,6 +9,8 @@
 #include <fstream>
 #include <functional>
 #include <map>
+#include <new>
+#include <stdexcept>
 #include <set>
 #include <optional>
 #include <sstream>
@@ -127,8 +129,17 @@ FileFrame read_file(const std::string& path, const std::vector<std::string>& att
   }
 #ifdef SLUICE_WITH_VTK
   const detail::XmlFacts facts = check_xml(path);
-  detail::VtkRead r = detail::read_vtk(path, attributes, id_array, facts.non_vertex_cells());
-  return {std::move(r.frame), r.time};
+  try {
+    detail::VtkRead r = detail::read_vtk(path, attributes, id_array, facts.non_vertex_cells());
+    return {std::move(r.frame), r.time};
+  } catch (const std::bad_alloc&) {
+    // VTK sizes some buffers by values inside compressed blocks, which the
+    // checks do not inflate.
+    throw Error({path}, "VTK could not allocate the memory the file asks for: the file is damaged, or too large "
+                        "for this machine");
+  } catch (const std::length_error&) {
+    throw Error({path}, "VTK met a size it cannot hold: the file is damaged");
+  }
 #else
   throw Error({path}, "no VTK support in this build");  // require_readable already threw
 #endif

@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cctype>
 #include <cerrno>
 #include <charconv>
 #include <cstring>
@@ -83,11 +84,20 @@ class File {
       if (text.size() == before) break;  // the file shrank
       const size_t tag = text.find("<AppendedData", from);
       if (tag == std::string::npos) continue;
-      // The data starts after the '_' that follows the tag.
+      // The data starts after the '_' that follows the tag and spaces. VTK
+      // skips the first character after the spaces, whatever it is: any
+      // other than '_' throws (offsets would not mean what they say).
       const size_t close = text.find('>', tag);
-      const size_t underscore = close == std::string::npos ? close : text.find('_', close);
-      if (underscore == std::string::npos && text.size() < size_) continue;
-      if (underscore != std::string::npos) appended_at = underscore + 1;
+      const size_t first = close == std::string::npos ? close : text.find_first_not_of(" \t\r\n", close + 1);
+      if (first == std::string::npos && text.size() < size_) continue;
+      if (first != std::string::npos) {
+        if (text[first] != '_') {
+          throw Error({path_}, "the appended data must start with '_' after <AppendedData>, found '" +
+                                   std::string(std::isprint(static_cast<unsigned char>(text[first])) ? 1 : 0, text[first]) +
+                                   "' at byte " + std::to_string(first));
+        }
+        appended_at = first + 1;
+      }
       text.resize(close == std::string::npos ? text.size() : close + 1);
       return text;
     }
