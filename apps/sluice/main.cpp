@@ -3,10 +3,12 @@
 // messages and exit codes.
 #include <cstdio>
 #include <exception>
+#include <string>
 
 #include "commands.h"
 #include "isolated_source.h"
 #include "sluice/io/error.h"
+#include "sluice/io/format.h"
 
 int main(int argc, char** argv) {
   // A worker process of `convert` (isolated_source.h), before anything else.
@@ -20,7 +22,8 @@ int main(int argc, char** argv) {
       "  sluice bench io 'out/fluid_*.vtu'                              # sluice against VTK's reader\n",
       "sluice"};
   app.require_subcommand(1);
-  app.set_version_flag("--version", "sluice 0.3.0 (container format 1.1)");
+  app.set_version_flag("--version", "sluice 0.3.0 (container format " + std::to_string(sluice::io::kFormatMajor) + "." +
+                                         std::to_string(sluice::io::kFormatMinor) + ")");
   app.footer("Run `sluice COMMAND --help` for the options of a command.");
   sluice::app::add_convert(app);
   sluice::app::add_info(app);

@@ -68,6 +68,11 @@ for stage in $stages; do
         "$S convert '/tmp/imp/zlib_*.vtu' -o /tmp/iso_b.sluice -f -q --in-process"
       paired "workers, raw" "--in-process, raw" "$S convert '/tmp/imp/raw_*.vtu' -o /tmp/iso_a.sluice -f -q" \
         "$S convert '/tmp/imp/raw_*.vtu' -o /tmp/iso_b.sluice -f -q --in-process"
+      log "a longer series: the 13 copies 8 times over (104 frames), where starting the workers counts less"
+      mkdir -p /tmp/imp/long
+      for k in 1 2 3 4 5 6 7 8; do for f in /tmp/imp/raw_*.vtu; do cp "$f" "/tmp/imp/long/r${k}_$(basename "$f")"; done; done
+      paired "workers, 104 frames" "--in-process, 104 frames" "$S convert '/tmp/imp/long/*.vtu' -o /tmp/iso_a.sluice -f -q" \
+        "$S convert '/tmp/imp/long/*.vtu' -o /tmp/iso_b.sluice -f -q --in-process"
       log "the same on 1 thread"
       paired "workers -j1" "--in-process -j1" "$S convert '/tmp/imp/raw_*.vtu' -o /tmp/iso_a.sluice -f -q -j 1" \
         "$S convert '/tmp/imp/raw_*.vtu' -o /tmp/iso_b.sluice -f -q --in-process -j 1"
