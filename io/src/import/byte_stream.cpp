@@ -101,6 +101,7 @@ std::string_view ByteStream::line() {
 }
 
 void ByteStream::read(void* into, uint64_t n) {
+  if (n == 0) return;  // `into` may be the null data of an empty buffer
   if (n > remaining()) {
     throw Error({path_}, "needs " + std::to_string(n) + " bytes at byte " + std::to_string(offset()) + " but " +
                              std::to_string(remaining()) + " remain");

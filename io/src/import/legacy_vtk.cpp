@@ -706,9 +706,8 @@ void copy_ids(const Parser& p, const Array& a, std::vector<uint64_t>& out) {
   if (a.components != 1) {
     throw Error({p.path()}, "id array '" + a.name + "' has " + std::to_string(a.components) + " components; ids need 1");
   }
-  out.resize(a.tuples);
-  const size_t bad = visit(a.values.type, [&](auto t) { return convert_ids(a.values.as<decltype(t)>(), out.size(), out.data()); });
-  if (bad >= out.size()) return;
+  const size_t bad = visit(a.values.type, [&](auto t) { return assign_ids(a.values.as<decltype(t)>(), a.tuples, out); });
+  if (bad >= a.tuples) return;
   const double v = visit(a.values.type, [&](auto t) { return static_cast<double>(a.values.as<decltype(t)>()[bad]); });
   char value[64];
   std::snprintf(value, sizeof value, "%.17g", v);

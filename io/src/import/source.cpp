@@ -170,13 +170,14 @@ std::vector<std::string> file_arrays(const std::string& path) {
 // True when every value is finite: one vectorizable pass over the bits (an
 // exponent of all ones is an infinity or a NaN).
 bool all_finite(const std::vector<float>& values) {
-  uint32_t bad = 0;
+  constexpr uint32_t kExponent = 0x7f800000u;
+  uint32_t most = 0;  // the largest exponent field met
   for (const float v : values) {
     uint32_t bits;
     std::memcpy(&bits, &v, sizeof bits);
-    bad |= static_cast<uint32_t>((bits & 0x7f800000u) == 0x7f800000u);
+    most = std::max(most, bits & kExponent);
   }
-  return bad == 0;
+  return most != kExponent;
 }
 
 void repair_values(ParticleFrame& f, const std::vector<std::string>& attribute_names) {

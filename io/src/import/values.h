@@ -7,6 +7,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <type_traits>
+#include <vector>
 
 namespace sluice::io::detail {
 
@@ -42,6 +43,32 @@ size_t convert_ids(const T* in, size_t count, uint64_t* out) {
     out[k] = static_cast<uint64_t>(v);
   }
   return count;
+}
+
+// The values as floats, into `out` (replacing it, without zero-filling it
+// first: for float input this is a plain copy).
+template <class T>
+void assign_values(const T* in, size_t count, std::vector<float>& out) {
+  out.assign(in, in + count);
+}
+
+// The ids into `out`; returns the index of the first invalid one (see
+// convert_ids), or `count`. Unsigned ids are all valid and copied as they
+// are; signed ones are copied, then checked for a negative one.
+template <class T>
+size_t assign_ids(const T* in, size_t count, std::vector<uint64_t>& out) {
+  if constexpr (std::is_floating_point_v<T>) {
+    out.resize(count);
+    return convert_ids(in, count, out.data());
+  } else {
+    out.assign(in, in + count);
+    if constexpr (std::is_signed_v<T>) {
+      for (size_t k = 0; k < count; ++k) {
+        if (in[k] < 0) return k;
+      }
+    }
+    return count;
+  }
 }
 
 }  // namespace sluice::io::detail

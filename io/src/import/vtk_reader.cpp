@@ -276,16 +276,17 @@ std::string join(const std::vector<std::string>& names) {
 
 // All values of `a` as float, tuple-major. Typed access on contiguous
 // arrays (every array a reader makes); GetComponent only as a fallback.
-void copy_as_float(vtkDataArray* a, float* out) {
+void copy_as_float(vtkDataArray* a, std::vector<float>& out) {
   const size_t count = static_cast<size_t>(a->GetNumberOfTuples()) * a->GetNumberOfComponents();
-  if (count == 0) return;
+  if (count == 0) return out.clear();
   if (a->HasStandardMemoryLayout()) {
     void* raw = a->GetVoidPointer(0);
     switch (a->GetDataType()) {
-      vtkTemplateMacro(convert_values(static_cast<const VTK_TT*>(raw), count, out); return);
+      vtkTemplateMacro(assign_values(static_cast<const VTK_TT*>(raw), count, out); return);
       default: break;
     }
   }
+  out.resize(count);
   const int comps = a->GetNumberOfComponents();
   for (size_t k = 0; k < count; ++k) {
     out[k] = static_cast<float>(a->GetComponent(static_cast<vtkIdType>(k / comps), static_cast<int>(k % comps)));
@@ -293,12 +294,14 @@ void copy_as_float(vtkDataArray* a, float* out) {
 }
 
 // One float per tuple: the value itself, or the magnitude of a vector.
-void copy_scalar(vtkDataArray* a, float* out) {
+void copy_scalar(vtkDataArray* a, std::vector<float>& values) {
   const size_t comps = static_cast<size_t>(a->GetNumberOfComponents());
   if (comps == 1) {
-    copy_as_float(a, out);
+    copy_as_float(a, values);
     return;
   }
+  values.resize(static_cast<size_t>(a->GetNumberOfTuples()));
+  float* out = values.data();
   const size_t tuples = static_cast<size_t>(a->GetNumberOfTuples());
   if (a->HasStandardMemoryLayout()) {
     void* raw = a->GetVoidPointer(0);
@@ -316,16 +319,17 @@ void copy_scalar(vtkDataArray* a, float* out) {
   }
 }
 
-size_t copy_ids(vtkDataArray* a, uint64_t* out) {
+size_t copy_ids(vtkDataArray* a, std::vector<uint64_t>& out) {
   const size_t count = static_cast<size_t>(a->GetNumberOfTuples());
   if (count == 0) return 0;
   if (a->HasStandardMemoryLayout()) {
     void* raw = a->GetVoidPointer(0);
     switch (a->GetDataType()) {
-      vtkTemplateMacro(return convert_ids(static_cast<const VTK_TT*>(raw), count, out));
+      vtkTemplateMacro(return assign_ids(static_cast<const VTK_TT*>(raw), count, out));
       default: break;
     }
   }
+  out.resize(count);
   for (size_t k = 0; k < count; ++k) {
     const double v = a->GetComponent(static_cast<vtkIdType>(k), 0);
     if (!(v >= 0) || std::floor(v) != v || v >= 18446744073709551616.0) return k;
@@ -338,14 +342,14 @@ size_t copy_ids(vtkDataArray* a, uint64_t* out) {
 
 void copy_positions(const std::string& path, vtkDataSet* ds, std::vector<float>& out) {
   const vtkIdType n = ds->GetNumberOfPoints();
-  out.resize(static_cast<size_t>(n) * 3);
   auto* ps = vtkPointSet::SafeDownCast(ds);
   if (ps && ps->GetPoints()) {
     vtkDataArray* a = ps->GetPoints()->GetData();
     if (a->GetNumberOfComponents() != 3) throw Error({path}, "points do not have 3 components");
-    copy_as_float(a, out.data());
+    copy_as_float(a, out);
     return;
   }
+  out.resize(static_cast<size_t>(n) * 3);
   // Image and rectilinear data: points are implicit, generate them.
   double p[3];
   for (vtkIdType i = 0; i < n; ++i) {
@@ -376,9 +380,8 @@ void copy_id_array(const std::string& path, vtkDataArray* a, const std::string& 
     throw Error({path}, "id array '" + name + "' has " + std::to_string(a->GetNumberOfComponents()) +
                             " components; ids need 1");
   }
-  out.resize(static_cast<size_t>(a->GetNumberOfTuples()));
-  const size_t bad = copy_ids(a, out.data());
-  if (bad < out.size()) {
+  const size_t bad = copy_ids(a, out);
+  if (bad < static_cast<size_t>(a->GetNumberOfTuples())) {
     char value[64];
     std::snprintf(value, sizeof value, "%.17g", a->GetComponent(static_cast<vtkIdType>(bad), 0));
     throw Error({path}, "id array '" + name + "' holds " + value + " at index " + std::to_string(bad) +
@@ -427,8 +430,7 @@ VtkRead read_vtk(const std::string& path, const std::vector<std::string>& attrib
   }
   for (size_t k = 0; k < attributes.size(); ++k) {
     vtkDataArray* a = point_array(path, ds, attributes[k], loaded.arrays, "attribute");
-    f.attributes[k].resize(n);
-    copy_scalar(a, f.attributes[k].data());
+    copy_scalar(a, f.attributes[k]);
   }
   if (!non_vertex_cells.empty()) f.repairs.push_back(ignored_cells_note(non_vertex_cells, n));
   return out;
