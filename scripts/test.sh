@@ -72,7 +72,7 @@ secs=${FUZZ_SECONDS:-60}
 "$root/build-fuzz/tests/fuzz/fuzz_text_import" -max_total_time="$secs" -rss_limit_mb=2048 -timeout=10 "$corpus/text"
 # VTK's XML readers leak on some error paths (tests/lsan.supp says which).
 # A fixed seed: the mutations CI tries are a prefix of those tried before a
-# change lands (VTK_FUZZ_SEED=random to explore; findings go to tests/data/fuzz/vtk).
+# change lands (VTK_FUZZ_SEED=0 for a random seed; findings go to tests/data/fuzz/vtk).
 LSAN_OPTIONS=suppressions=$root/tests/lsan.supp \
   "$root/build-fuzz/tests/fuzz/fuzz_vtk_import" -seed="${VTK_FUZZ_SEED:-1}" -max_total_time="$secs" -rss_limit_mb=2048 \
   -timeout=10 "$corpus/vtk"

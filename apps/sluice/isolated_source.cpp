@@ -75,7 +75,10 @@ void injected_fault(const std::string& frame_name) {
   const std::string_view f = fault;
   const size_t colon = f.find(':');
   if (colon == std::string_view::npos || frame_name.find(f.substr(colon + 1)) == std::string::npos) return;
-  if (f.substr(0, colon) == "crash") ::raise(SIGSEGV);
+  if (f.substr(0, colon) == "crash") {
+    ::signal(SIGSEGV, SIG_DFL);  // a real crash's death, also under a sanitizer's handler
+    ::raise(SIGSEGV);
+  }
   if (f.substr(0, colon) == "hang") {
     for (;;) std::this_thread::sleep_for(std::chrono::hours(1));
   }

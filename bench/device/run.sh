@@ -73,6 +73,18 @@ for stage in $stages; do
       for k in 1 2 3 4 5 6 7 8; do for f in /tmp/imp/raw_*.vtu; do cp "$f" "/tmp/imp/long/r${k}_$(basename "$f")"; done; done
       paired "workers, 104 frames" "--in-process, 104 frames" "$S convert '/tmp/imp/long/*.vtu' -o /tmp/iso_a.sluice -f -q" \
         "$S convert '/tmp/imp/long/*.vtu' -o /tmp/iso_b.sluice -f -q --in-process"
+      log "the reliability issue's damaged files, each converted once: exit status and seconds"
+      L=/tmp/imp/legacy_0.vtk; size=$(stat -c %s $L)
+      head -c $((size / 2)) $L > /tmp/imp/cut.vtk
+      LC_ALL=C sed 's/^POINTS 56160 /POINTS 99999999 /' $L > /tmp/imp/raised.vtk
+      cp $L /tmp/imp/flipped.vtk
+      for i in $(seq 200); do head -c 1 /dev/urandom | dd of=/tmp/imp/flipped.vtk bs=1 seek=$(( (RANDOM * 32768 + RANDOM) % size )) conv=notrunc status=none; done
+      head -c $(( $(stat -c %s /tmp/imp/raw_0.vtu) / 3 )) /tmp/imp/raw_0.vtu > /tmp/imp/cut.vtu
+      for f in cut.vtk raised.vtk flipped.vtk cut.vtu; do
+        t0=$EPOCHREALTIME; $S convert /tmp/imp/$f -o /tmp/dmg.sluice -f -q > /tmp/dmg.txt 2>&1; rc=$?
+        printf '%s: exit %s in %s s: %s\n' $f $rc "$(awk -v a="$t0" -v b="$EPOCHREALTIME" 'BEGIN { printf "%.3f", b - a }')" \
+          "$(head -c 300 /tmp/dmg.txt | tr '\n' ' ')" | tee -a "$OUT/summary.txt"
+      done
       log "the same on 1 thread"
       paired "workers -j1" "--in-process -j1" "$S convert '/tmp/imp/raw_*.vtu' -o /tmp/iso_a.sluice -f -q -j 1" \
         "$S convert '/tmp/imp/raw_*.vtu' -o /tmp/iso_b.sluice -f -q --in-process -j 1"
