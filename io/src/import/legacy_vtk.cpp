@@ -119,7 +119,7 @@ std::string shown(std::string_view w) {
 std::string decode_name(std::string_view s) {
   std::string out;
   for (size_t k = 0; k < s.size(); ++k) {
-    if (s[k] == '%' && k + 2 < s.size() + 0 && std::isxdigit(static_cast<unsigned char>(s[k + 1])) &&
+    if (s[k] == '%' && k + 2 < s.size() && std::isxdigit(static_cast<unsigned char>(s[k + 1])) &&
         std::isxdigit(static_cast<unsigned char>(s[k + 2]))) {
       out += static_cast<char>(std::stoi(std::string(s.substr(k + 1, 2)), nullptr, 16));
       k += 2;
@@ -180,10 +180,10 @@ std::string type_word(Scalar s) {
 
 class Parser {
  public:
-  // `wanted`: point arrays whose values are kept; `values`: false when only
+  // `wanted`: point arrays whose values are kept; `read_values`: false when only
   // the names are wanted (positions are not read either).
-  Parser(const std::string& path, std::vector<std::string> wanted, bool values)
-      : in_(path), wanted_(std::move(wanted)), values_(values) {}
+  Parser(const std::string& path, std::vector<std::string> wanted, bool read_values)
+      : in_(path), wanted_(std::move(wanted)), read_values_(read_values) {}
 
   void run() {
     header();
@@ -406,7 +406,7 @@ class Parser {
     if (dataset_ == "structured_grid" && has_dims_ && n != dims_count()) {
       fail("POINTS", "declares " + std::to_string(n) + " points but DIMENSIONS make " + std::to_string(dims_count()));
     }
-    values("POINTS (" + std::to_string(n) + " points)", type, 3 * n, values_ ? &points_ : nullptr);
+    values("POINTS (" + std::to_string(n) + " points)", type, 3 * n, read_values_ ? &points_ : nullptr);
     has_points_ = true;
     point_count = n;
   }
@@ -554,7 +554,7 @@ class Parser {
     const std::string what = section + " '" + name + "'";
     const bool point_array = section_ == Section::kPoints;
     if (point_array) point_arrays.push_back(name);
-    const bool keep = values_ && point_array && is_wanted(name) && !is_kept(name);
+    const bool keep = read_values_ && point_array && is_wanted(name) && !is_kept(name);
     if (!keep) return values(what, type, comps * tuples, nullptr);
     Array a{name, comps, tuples, {}};
     values(what, type, comps * tuples, &a.values);
@@ -621,7 +621,7 @@ class Parser {
       fail("POINTS", "the file has no POINTS section (it ends at byte " + std::to_string(in_.size()) + ")");
     }
     if (!point_set && !has_dims_) fail("DIMENSIONS", "the file has no DIMENSIONS section");
-    if (dataset_ == "rectilinear_grid" && values_) {
+    if (dataset_ == "rectilinear_grid" && read_values_) {
       for (int axis = 0; axis < 3; ++axis) {
         if (coords_[axis].count != dims_[axis]) {
           fail(std::string(1, static_cast<char>('X' + axis)) + "_COORDINATES",
@@ -673,7 +673,7 @@ class Parser {
 
   ByteStream in_;
   std::vector<std::string> wanted_;
-  bool values_;
+  bool read_values_;
   bool binary_ = false;
   int major_ = 0;
   std::string dataset_;
