@@ -1,0 +1,362 @@
+// The Layered Neighborhood Method on a sparse voxel grid: particles sorted by
+// voxel, occupied voxels in a hash table, every voxel decided from its 26
+// neighbours in parallel.
+#include "sluice/io/narrow_band.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+#include <tbb/parallel_sort.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <deque>
+#include <limits>
+#include <stdexcept>
+
+namespace sluice::io {
+namespace {
+
+constexpr int64_t kAxisCells = int64_t(1) << 20;  // per axis; keys hold 21 bits each
+
+struct Box {
+  float lo[3] = {std::numeric_limits<float>::max(), std::numeric_limits<float>::max(), std::numeric_limits<float>::max()};
+  float hi[3] = {std::numeric_limits<float>::lowest(), std::numeric_limits<float>::lowest(),
+                 std::numeric_limits<float>::lowest()};
+  void join(const Box& o) {
+    for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], o.lo[a]), hi[a] = std::max(hi[a], o.hi[a]);
+  }
+};
+
+Box bounds(std::span<const float> xyz) {
+  const size_t n = xyz.size() / 3;
+  return tbb::parallel_reduce(
+      tbb::blocked_range<size_t>(0, n, 16384), Box{},
+      [&](const tbb::blocked_range<size_t>& r, Box b) {
+        for (size_t i = r.begin(); i < r.end(); ++i) {
+          for (int a = 0; a < 3; ++a) {
+            const float v = xyz[3 * i + a];
+            if (!std::isfinite(v)) continue;
+            b.lo[a] = std::min(b.lo[a], v), b.hi[a] = std::max(b.hi[a], v);
+          }
+        }
+        return b;
+      },
+      [](Box a, const Box& b) {
+        a.join(b);
+        return a;
+      });
+}
+
+// Occupied voxels: the particles sorted by voxel, each voxel a run of them,
+// found by key through an open-addressing table.
+class VoxelGrid {
+ public:
+  VoxelGrid(std::span<const float> xyz, float side) : side_(side) {
+    const size_t n = xyz.size() / 3;
+    box_ = bounds(xyz);
+    keyed_.resize(n);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 16384), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t i = r.begin(); i < r.end(); ++i) keyed_[i] = {key_of(xyz, i), uint32_t(i)};
+    });
+    tbb::parallel_sort(keyed_.begin(), keyed_.end());
+    for (size_t i = 0; i < n; ++i) {
+      if (i == 0 || keyed_[i].first != keyed_[i - 1].first) voxels_.push_back({keyed_[i].first, uint32_t(i), 0});
+      ++voxels_.back().count;
+    }
+    size_t capacity = 16;
+    while (capacity < 2 * voxels_.size()) capacity *= 2;
+    table_.assign(capacity, kEmpty);
+    for (uint32_t v = 0; v < voxels_.size(); ++v) {
+      size_t slot = hash(voxels_[v].key) & (capacity - 1);
+      while (table_[slot] != kEmpty) slot = (slot + 1) & (capacity - 1);
+      table_[slot] = v;
+    }
+  }
+
+  struct Voxel {
+    uint64_t key;
+    uint32_t first;  // into particles()
+    uint32_t count;
+  };
+
+  size_t size() const { return voxels_.size(); }
+  const Voxel& voxel(size_t v) const { return voxels_[v]; }
+  // Particle indices, voxel by voxel.
+  uint32_t particle(size_t k) const { return keyed_[k].second; }
+
+  // The voxel at key + (dx, dy, dz), or -1 when empty or outside.
+  int64_t neighbour(uint64_t key, int dx, int dy, int dz) const {
+    const int64_t x = int64_t(key >> 42) + dx, y = int64_t((key >> 21) & 0x1FFFFF) + dy,
+                  z = int64_t(key & 0x1FFFFF) + dz;
+    if (x < 0 || y < 0 || z < 0 || x > kAxisCells || y > kAxisCells || z > kAxisCells) return -1;
+    return find(pack(x, y, z));
+  }
+
+ private:
+  static constexpr uint32_t kEmpty = std::numeric_limits<uint32_t>::max();
+
+  static uint64_t pack(int64_t x, int64_t y, int64_t z) { return (uint64_t(x) << 42) | (uint64_t(y) << 21) | uint64_t(z); }
+  static uint64_t hash(uint64_t k) {
+    k ^= k >> 33;
+    k *= 0xff51afd7ed558ccdULL;
+    k ^= k >> 33;
+    return k;
+  }
+
+  // Voxel coordinates start at 1: voxel 0 of every axis is the outside. The
+  // grid starts a quarter voxel below the lowest particle, so that particles
+  // on a lattice of half the voxel side (a solver's first frame) never lie
+  // on a voxel boundary, where rounding would decide their voxel.
+  uint64_t key_of(std::span<const float> xyz, size_t i) const {
+    int64_t c[3];
+    for (int a = 0; a < 3; ++a) {
+      const float v = xyz[3 * i + a];
+      const double origin = double(box_.lo[a]) - 0.25 * side_;
+      const double cell = std::isfinite(v) ? std::floor((double(v) - origin) / side_) : 0.0;
+      c[a] = 1 + int64_t(std::clamp(cell, 0.0, double(kAxisCells - 2)));
+    }
+    return pack(c[0], c[1], c[2]);
+  }
+
+  int64_t find(uint64_t key) const {
+    size_t slot = hash(key) & (table_.size() - 1);
+    while (table_[slot] != kEmpty) {
+      if (voxels_[table_[slot]].key == key) return table_[slot];
+      slot = (slot + 1) & (table_.size() - 1);
+    }
+    return -1;
+  }
+
+  float side_;
+  Box box_;
+  std::vector<std::pair<uint64_t, uint32_t>> keyed_;  // (voxel key, particle), sorted
+  std::vector<Voxel> voxels_;
+  std::vector<uint32_t> table_;
+};
+
+template <class F>
+void for_each_neighbour(const VoxelGrid& grid, uint64_t key, F&& f) {
+  for (int dx = -1; dx <= 1; ++dx)
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dz = -1; dz <= 1; ++dz) {
+        if (dx == 0 && dy == 0 && dz == 0) continue;
+        if (!f(grid.neighbour(key, dx, dy, dz))) return;
+      }
+}
+
+float distance2(std::span<const float> xyz, size_t i, size_t j) {
+  float d2 = 0;
+  for (int a = 0; a < 3; ++a) {
+    const float d = xyz[3 * i + a] - xyz[3 * j + a];
+    d2 += d * d;
+  }
+  return d2;
+}
+
+// True when no other particle lies within `reach` of particle i, looked for
+// in its voxel and the 26 around (reach <= the voxel side).
+bool alone(const VoxelGrid& grid, std::span<const float> xyz, size_t v, uint32_t i, float reach) {
+  const float r2 = reach * reach;
+  const auto none_near = [&](int64_t w) {
+    if (w < 0) return true;
+    const auto& vox = grid.voxel(size_t(w));
+    for (uint32_t k = vox.first; k < vox.first + vox.count; ++k) {
+      const uint32_t j = grid.particle(k);
+      if (j != i && distance2(xyz, i, j) < r2) return false;
+    }
+    return true;
+  };
+  if (!none_near(int64_t(v))) return false;
+  bool result = true;
+  for_each_neighbour(grid, grid.voxel(v).key, [&](int64_t w) { return result = none_near(w); });
+  return result;
+}
+
+// |x_i - sum_j x_j W_ij| with normalized weights W over the 27 voxels
+// around (the dissertation's asymmetry value).
+float asymmetry(const VoxelGrid& grid, std::span<const float> xyz, size_t v, uint32_t i, float h) {
+  const float support2 = 4 * h * h;
+  double sum[3] = {0, 0, 0}, weights = 0;
+  const auto add = [&](int64_t w) {
+    if (w < 0) return true;
+    const auto& vox = grid.voxel(size_t(w));
+    for (uint32_t k = vox.first; k < vox.first + vox.count; ++k) {
+      const uint32_t j = grid.particle(k);
+      const float q = distance2(xyz, i, j) / support2;
+      if (q >= 1) continue;
+      const double wgt = std::pow(1.0 - q, 3);
+      for (int a = 0; a < 3; ++a) sum[a] += wgt * xyz[3 * size_t(j) + a];
+      weights += wgt;
+    }
+    return true;
+  };
+  add(int64_t(v));
+  for_each_neighbour(grid, grid.voxel(v).key, add);
+  double d2 = 0;
+  for (int a = 0; a < 3; ++a) {
+    const double d = xyz[3 * size_t(i) + a] - sum[a] / weights;
+    d2 += d * d;
+  }
+  return float(std::sqrt(d2));
+}
+
+}  // namespace
+
+NarrowBand classify_narrow_band(std::span<const float> xyz, const NarrowBandOptions& o) {
+  if (!(o.diameter > 0)) throw std::invalid_argument("classify_narrow_band: the particle diameter must be positive");
+  const float h = o.diameter;
+  NarrowBand out;
+  out.voxel = o.voxel > 0 ? o.voxel : 2 * h;
+  const size_t n = xyz.size() / 3;
+  out.layer.assign(n, BandLayer::Interior);
+  if (n == 0) return out;
+  const VoxelGrid grid(xyz, out.voxel);
+  out.voxels = grid.size();
+  // n1 = (d/h)^3: fewer particles than that cannot hide what lies behind.
+  const double n1 = std::pow(double(out.voxel) / h, 3);
+
+  std::vector<uint8_t> kind(grid.size(), 0);  // 1: L1, 2: selected L2
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, grid.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t v = r.begin(); v < r.end(); ++v) {
+      bool l1 = false;
+      for_each_neighbour(grid, grid.voxel(v).key, [&](int64_t w) { return !(l1 = w < 0); });
+      if (l1) kind[v] = 1;
+    }
+  });
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, grid.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t v = r.begin(); v < r.end(); ++v) {
+      if (kind[v] == 1) continue;
+      bool selected = false;
+      for_each_neighbour(grid, grid.voxel(v).key, [&](int64_t w) {
+        selected = kind[size_t(w)] == 1 && double(grid.voxel(size_t(w)).count) <= n1;
+        return !selected;
+      });
+      if (selected) kind[v] = 2;
+    }
+  });
+
+  const float reach = std::min(2 * h, out.voxel);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, grid.size(), 256), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t v = r.begin(); v < r.end(); ++v) {
+      const auto& vox = grid.voxel(v);
+      for (uint32_t k = vox.first; k < vox.first + vox.count; ++k) {
+        const uint32_t i = grid.particle(k);
+        BandLayer l = BandLayer::Interior;
+        if (kind[v] == 1) {
+          l = BandLayer::L1;
+        } else if (kind[v] == 2) {
+          l = o.f2 == F2Test::All || asymmetry(grid, xyz, v, i, h) > 0.1f * h ? BandLayer::L2 : BandLayer::Interior;
+        }
+        // Spray and droplets: a particle alone in a sparse voxel is checked
+        // (a voxel of the dense fluid holds about (d/h)^3 particles).
+        if (vox.count <= 2 && alone(grid, xyz, v, i, reach)) l = BandLayer::Isolated;
+        out.layer[i] = l;
+      }
+    }
+  });
+  for (const BandLayer l : out.layer) ++out.counts[size_t(l)];
+  for (const uint8_t k : kind) {
+    out.l1_voxels += k == 1;
+    out.l2_voxels += k == 2;
+  }
+  return out;
+}
+
+std::vector<bool> exact_narrow_band(std::span<const float> xyz, float diameter, int directions) {
+  const size_t n = xyz.size() / 3;
+  std::vector<bool> out(n, false);
+  if (n == 0 || !(diameter > 0) || directions < 1) return out;
+  const float h = diameter;
+  // Voxels of side h: every particle within h of a point within h of
+  // particle i lies in the 5x5x5 voxels around i's.
+  const VoxelGrid grid(xyz, h);
+  std::vector<std::array<float, 3>> dirs(static_cast<size_t>(directions));
+  const double golden = M_PI * (3.0 - std::sqrt(5.0));
+  for (int k = 0; k < directions; ++k) {
+    const double z = 1.0 - 2.0 * (k + 0.5) / directions, r = std::sqrt(1.0 - z * z), phi = golden * k;
+    dirs[size_t(k)] = {float(r * std::cos(phi)), float(r * std::sin(phi)), float(z)};
+  }
+  std::vector<uint8_t> exposed(n, 0);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, grid.size(), 64), [&](const tbb::blocked_range<size_t>& r) {
+    std::vector<uint32_t> near;
+    for (size_t v = r.begin(); v < r.end(); ++v) {
+      const auto& vox = grid.voxel(v);
+      near.clear();
+      for (int dx = -2; dx <= 2; ++dx)
+        for (int dy = -2; dy <= 2; ++dy)
+          for (int dz = -2; dz <= 2; ++dz) {
+            const int64_t w = (dx | dy | dz) == 0 ? int64_t(v) : grid.neighbour(vox.key, dx, dy, dz);
+            if (w < 0) continue;
+            const auto& other = grid.voxel(size_t(w));
+            for (uint32_t k = other.first; k < other.first + other.count; ++k) near.push_back(grid.particle(k));
+          }
+      for (uint32_t k = vox.first; k < vox.first + vox.count; ++k) {
+        const uint32_t i = grid.particle(k);
+        for (const auto& d : dirs) {
+          float p[3];
+          for (int a = 0; a < 3; ++a) p[a] = xyz[3 * size_t(i) + a] + h * d[a];
+          // Covered: strictly within h of another particle (a tolerance
+          // keeps points exactly at distance h, the lattice's ties, out).
+          const float covered2 = h * h * (1.0f - 1e-4f);
+          bool covered = false;
+          for (const uint32_t j : near) {
+            if (j == i) continue;
+            float d2 = 0;
+            for (int a = 0; a < 3; ++a) {
+              const float e = p[a] - xyz[3 * size_t(j) + a];
+              d2 += e * e;
+            }
+            if (d2 < covered2) {
+              covered = true;
+              break;
+            }
+          }
+          if (!covered) {
+            exposed[i] = 1;
+            break;
+          }
+        }
+      }
+    }
+  });
+  for (size_t i = 0; i < n; ++i) out[i] = exposed[i] != 0;
+  return out;
+}
+
+std::vector<uint8_t> voxel_layers(std::span<const float> xyz, float voxel) {
+  const size_t n = xyz.size() / 3;
+  std::vector<uint8_t> out(n, 0);
+  if (n == 0 || !(voxel > 0)) return out;
+  const VoxelGrid grid(xyz, voxel);
+  // Breadth first from the voxels next to an empty one (L1), inwards.
+  std::vector<uint8_t> layer(grid.size(), 0);
+  std::deque<size_t> queue;
+  for (size_t v = 0; v < grid.size(); ++v) {
+    bool l1 = false;
+    for_each_neighbour(grid, grid.voxel(v).key, [&](int64_t w) { return !(l1 = w < 0); });
+    if (l1) {
+      layer[v] = 1;
+      queue.push_back(v);
+    }
+  }
+  while (!queue.empty()) {
+    const size_t v = queue.front();
+    queue.pop_front();
+    for_each_neighbour(grid, grid.voxel(v).key, [&](int64_t w) {
+      if (w >= 0 && layer[size_t(w)] == 0) {
+        layer[size_t(w)] = uint8_t(std::min(255, layer[v] + 1));
+        queue.push_back(size_t(w));
+      }
+      return true;
+    });
+  }
+  for (size_t v = 0; v < grid.size(); ++v) {
+    const auto& vox = grid.voxel(v);
+    for (uint32_t k = vox.first; k < vox.first + vox.count; ++k) out[grid.particle(k)] = layer[v];
+  }
+  return out;
+}
+
+}  // namespace sluice::io
