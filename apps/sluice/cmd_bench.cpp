@@ -1,5 +1,6 @@
 // `sluice bench`: measurements that print tables (never pass/fail).
 #include "commands.h"
+#include "sluice/bench/band_bench.h"
 #include "sluice/bench/io_bench.h"
 #include "sluice/bench/stream_bench.h"
 #include "sluice/runtime/budget.h"
@@ -21,6 +22,16 @@ void add_bench(CLI::App& app) {
       ->capture_default_str()
       ->check(CLI::Range(1, 1000));
   cmd->callback([io] { bench::run_io_bench(*io); });
+
+  auto band = std::make_shared<bench::BandBenchOptions>();
+  CLI::App* bc = bench->add_subcommand("band", "The narrow-band classifier (LNM) on the input's frames, against the exact narrow band");
+  bc->footer("Example: sluice bench band data/dam_break_3d/dam_break_3d.pvd --frames 3");
+  bc->add_option("input", band->input, "Simulation output, as `sluice convert` takes it")->required();
+  bc->add_option("-t,--threads", band->max_threads, "Most threads (default: all cores)");
+  bc->add_option("--min-time", band->min_seconds, "Seconds each timing repeats for")->capture_default_str();
+  bc->add_option("--frames", band->frames, "Frames measured, first to last")->capture_default_str();
+  bc->add_option("--diameter", band->diameter, "Particle diameter h (default: the estimated spacing)");
+  bc->callback([band] { bench::run_band_bench(*band); });
 
   auto stream = std::make_shared<bench::StreamBenchOptions>();
   auto stream_memory = std::make_shared<std::string>();
