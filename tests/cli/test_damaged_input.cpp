@@ -150,7 +150,8 @@ TEST(DamagedInput, BadFrameStopsCleanlyOrIsSkipped) {
 class ReaderFaults : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fresh_dir("faults");
+    // One folder per test: ctest runs them in parallel processes.
+    dir_ = fresh_dir(std::string("faults_") + ::testing::UnitTest::GetInstance()->current_test_info()->name());
     for (const char* f : {"00000", "00050", "00100", "00150"}) {
       fs::copy_file(fs::path(SLUICE_SAMPLE_DIR) / ("dam_break_3d_fluid_" + std::string(f) + ".vtu"),
                     dir_ / ("dam_break_3d_fluid_" + std::string(f) + ".vtu"));
