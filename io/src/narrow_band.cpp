@@ -225,17 +225,21 @@ NarrowBand classify_narrow_band(std::span<const float> xyz, const NarrowBandOpti
       if (l1) kind[v] = 1;
     }
   });
+  // Selected L2 voxels go to a vector of their own: the pass reads the
+  // neighbours' L1 marks, which must not change under it.
+  std::vector<uint8_t> selected(grid.size(), 0);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, grid.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t v = r.begin(); v < r.end(); ++v) {
       if (kind[v] == 1) continue;
-      bool selected = false;
       for_each_neighbour(grid, grid.voxel(v).key, [&](int64_t w) {
-        selected = kind[size_t(w)] == 1 && double(grid.voxel(size_t(w)).count) <= n1;
-        return !selected;
+        selected[v] = w >= 0 && kind[size_t(w)] == 1 && double(grid.voxel(size_t(w)).count) <= n1;
+        return !selected[v];
       });
-      if (selected) kind[v] = 2;
     }
   });
+  for (size_t v = 0; v < grid.size(); ++v) {
+    if (selected[v]) kind[v] = 2;
+  }
 
   const float reach = std::min(2 * h, out.voxel);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, grid.size(), 256), [&](const tbb::blocked_range<size_t>& r) {
