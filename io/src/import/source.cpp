@@ -164,9 +164,6 @@ std::vector<std::string> file_arrays(const std::string& path) {
 
 // ---------------------------------------------------------------- repairs
 
-// Drops particles with a non-finite coordinate (with their ids and
-// attributes) and zeroes non-finite attribute values of the particles kept.
-// Indices in the notes are positions in the file.
 // True when every value is finite: one vectorizable pass over the bits (an
 // exponent of all ones is an infinity or a NaN).
 bool all_finite(const std::vector<float>& values) {
@@ -180,6 +177,9 @@ bool all_finite(const std::vector<float>& values) {
   return most != kExponent;
 }
 
+// Drops particles with a non-finite coordinate (with their ids and
+// attributes) and zeroes non-finite attribute values of the particles kept.
+// Indices in the notes are positions in the file.
 void repair_values(ParticleFrame& f, const std::vector<std::string>& attribute_names) {
   // The common case, checked at memory speed: nothing to repair.
   if (all_finite(f.positions) &&
