@@ -7,8 +7,6 @@
 // purpose.
 #include <gtest/gtest.h>
 
-#include <sys/wait.h>
-
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -16,40 +14,17 @@
 #include <random>
 #include <string>
 
+#include "cli_run.h"
+
 namespace {
 
 namespace fs = std::filesystem;
 
-struct Result {
-  int status = -1;   // exit status; -1 when killed by a signal
-  int signal = 0;    // the signal that killed it
-  std::string out;   // stdout and stderr
-};
+using sluice::cli_test::Result;
 
-Result sluice(const std::string& args, const std::string& env = "") {
-  const std::string command = env + " \"" + SLUICE_BINARY + "\" " + args + " 2>&1";
-  Result r;
-  FILE* pipe = popen(command.c_str(), "r");
-  if (!pipe) return r;
-  char buf[4096];
-  while (std::fgets(buf, sizeof buf, pipe)) r.out += buf;
-  const int status = pclose(pipe);
-  if (WIFEXITED(status)) {
-    r.status = WEXITSTATUS(status);
-    // The shell reports a child killed by a signal as 128 + signal.
-    if (r.status > 128) r.signal = r.status - 128;
-  } else if (WIFSIGNALED(status)) {
-    r.signal = WTERMSIG(status);
-  }
-  return r;
-}
+Result sluice(const std::string& args, const std::string& env = "") { return sluice::cli_test::run_sluice(args, env); }
 
-fs::path fresh_dir(const std::string& name) {
-  const fs::path dir = fs::path(testing::TempDir()) / "damaged_input" / name;
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
+fs::path fresh_dir(const std::string& name) { return sluice::cli_test::fresh_dir("damaged_input", name); }
 
 void put_be32(std::string& out, uint32_t v) {
   for (int s = 24; s >= 0; s -= 8) out += static_cast<char>((v >> s) & 0xFF);

@@ -11,34 +11,18 @@
 #include <random>
 #include <string>
 
+#include "cli_run.h"
+
 namespace {
 
 namespace fs = std::filesystem;
 
-struct Result {
-  int status = -1;
-  std::string out;  // stdout, then stderr when asked
-};
+using sluice::cli_test::Result;
 
 // Runs `sluice ARGS`; `both`: stderr joins stdout.
-Result sluice(const std::string& args, bool both = true) {
-  const std::string command = std::string("\"") + SLUICE_BINARY + "\" " + args + (both ? " 2>&1" : " 2>/dev/null");
-  Result r;
-  FILE* pipe = popen(command.c_str(), "r");
-  if (!pipe) return r;
-  char buf[4096];
-  while (std::fgets(buf, sizeof buf, pipe)) r.out += buf;
-  const int status = pclose(pipe);
-  r.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
-}
+Result sluice(const std::string& args, bool both = true) { return sluice::cli_test::run_sluice(args, "", both); }
 
-fs::path fresh_dir(const std::string& name) {
-  const fs::path dir = fs::path(testing::TempDir()) / "first_hour" / name;
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
+fs::path fresh_dir(const std::string& name) { return sluice::cli_test::fresh_dir("first_hour", name); }
 
 // Where particle (along, across, height) goes for a solver whose up is
 // `up` (0 x, 1 y, 2 z; negative: pointing down that axis).
