@@ -401,6 +401,11 @@ class Checker {
     const uint64_t block_size = header_int(head, 1);
     const uint64_t last = header_int(head, 2);
     b.header = (3 + blocks) * layout_.header_bytes;
+    // VTK divides by the block size (found by fuzz_vtk_import).
+    if (blocks > 0 && (block_size == 0 || last > block_size)) {
+      fail(what + ": its compression header declares blocks of " + std::to_string(block_size) +
+           " bytes with a last block of " + std::to_string(last));
+    }
     if (blocks > file_.size() / layout_.header_bytes) {
       fail(what + ": its compression header lists " + std::to_string(blocks) + " blocks, more than the file can hold");
     }
