@@ -58,6 +58,10 @@ void add_convert(CLI::App& app) {
       "Times come from the input (.pvd, TimeValue fields); without them give --dt or --fps. Which way is up\n"
       "is found from the frames (the fluid falls along -up; else pressure grows downward; else a flat layer)\n"
       "and stored in the file; --up overrides it.\n\n"
+      "Each frame is split into the particles near the free surface (the narrow band, found on a voxel\n"
+      "grid), the interior, and voxel blobs that stand in for the interior's thickness. Players read the\n"
+      "surface and blobs by default (less to read, decode and draw for the same picture); --layers all\n"
+      "in play and render reads every particle. --no-layers writes frames unclassified.\n\n"
       "Examples:\n"
       "  sluice convert 'dam/dam_break_3d_fluid_*.vtu' -o dam.sluice --attribute rho\n"
       "  sluice convert run.pvd --lossless --jobs 8\n\n"
@@ -86,6 +90,12 @@ void add_convert(CLI::App& app) {
   cmd->add_flag("--smallest", o->smallest,
                 "zstd on every plane it shrinks most: files 1-3% smaller, decoding up to 1.4x slower "
                 "(default: small-valued planes are bit-packed)");
+  cmd->add_flag("--no-layers", [o](int64_t) { o->layers = false; },
+                "Do not classify the narrow band: every frame is one layer of all its particles");
+  cmd->add_option("--band-voxel", o->band_voxel,
+                  "Voxel side of the narrow band and of the interior's blobs, world units (default: twice the "
+                  "spacing)")
+      ->check(CLI::PositiveNumber);
   cmd->add_option("-j,--jobs", o->jobs, "Worker threads (default: all cores)");
   cmd->add_flag("--skip-bad", o->skip_bad,
                 "Leave out frames that cannot be read (damaged, cut short) and list them; without it the\n"

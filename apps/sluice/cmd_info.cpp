@@ -79,7 +79,7 @@ void print_json(const io::ContainerReader& r) {
   const io::FileHeader& h = r.header();
   const auto& frames = r.index().frames;
   uint64_t particles = 0;
-  for (const auto& f : frames) particles += f.particle_count;
+  for (const auto& f : frames) particles += f.count_in(io::LayerSet::particles());
   std::printf("{\n  \"file\": %s,\n  \"format_version\": \"%u.%u\",\n  \"file_bytes\": %llu,\n", json_string(r.path()).c_str(),
               h.version_major, h.version_minor, (unsigned long long)r.file_size());
   std::printf("  \"position_coding\": \"%s\",\n  \"lod_source\": \"%s\",\n  \"lod_id_array\": %s,\n", coding_name(h.position_coding),
@@ -100,7 +100,7 @@ void print_json(const io::ContainerReader& r) {
     const auto& f = frames[i];
     std::printf("    {\"frame\": %zu, \"time\": %s, \"particles\": %llu, \"chunks\": %u, \"offset\": %llu, \"bytes\": %llu, "
                 "\"bounds\": %s, \"layers\": {\"all\": %llu, \"surface\": %llu, \"interior\": %llu, \"blobs\": %llu}}%s\n",
-                i, json_number(f.time).c_str(), (unsigned long long)f.particle_count, f.chunk_count,
+                i, json_number(f.time).c_str(), (unsigned long long)f.count_in(io::LayerSet::particles()), f.chunk_count,
                 (unsigned long long)f.offset, (unsigned long long)f.bytes, json_box(f.bounds).c_str(),
                 (unsigned long long)f.layer_particles[0], (unsigned long long)f.layer_particles[1],
                 (unsigned long long)f.layer_particles[2], (unsigned long long)f.layer_particles[3],
@@ -109,16 +109,32 @@ void print_json(const io::ContainerReader& r) {
   std::printf("  ]\n}\n");
 }
 
+// What a player reading the surface and blobs reads of a frame, against the
+// whole record (from the chunk table).
+struct LayerBytes {
+  uint64_t surface = 0, whole = 0;
+};
+LayerBytes layer_bytes(const io::ContainerReader& r, uint64_t frame) {
+  const io::FrameHeader h = r.read_table(frame);
+  return {io::layers_end(h, io::LayerSet::surface(), r.header().attributes.size()), h.frame_bytes};
+}
+
 void print_text(const io::ContainerReader& r, bool all_frames) {
   const io::FileHeader& h = r.header();
   const auto& frames = r.index().frames;
   uint64_t particles = 0, frame_bytes = 0, chunks = 0, lo = UINT64_MAX, hi = 0;
+  bool layered = false;
+  uint64_t surface = 0, blobs = 0;
   for (const auto& f : frames) {
-    particles += f.particle_count;
+    const uint64_t n = f.count_in(io::LayerSet::particles());
+    particles += n;
     frame_bytes += f.bytes;
     chunks += f.chunk_count;
-    lo = std::min(lo, f.particle_count);
-    hi = std::max(hi, f.particle_count);
+    lo = std::min(lo, n);
+    hi = std::max(hi, n);
+    layered = layered || f.layered();
+    surface += f.layer_particles[size_t(io::Layer::Surface)];
+    blobs += f.layer_particles[size_t(io::Layer::Blobs)];
   }
   const double per = particles ? double(frame_bytes) / double(particles) : 0;
   const size_t decoded = io::decoded_particle_bytes(h.position_coding) + 2 * h.attributes.size();
@@ -154,11 +170,25 @@ void print_text(const io::ContainerReader& r, bool all_frames) {
   std::printf("  particles     %s per frame (min %s, max %s), %s in all\n",
               human_count(double(particles) / double(frames.size())).c_str(), human_count(double(lo)).c_str(),
               human_count(double(hi)).c_str(), human_count(double(particles)).c_str());
+  if (layered) {
+    std::printf("  layers        surface (narrow band) %s of the particles; the interior as %s voxel blobs per frame\n"
+                "                (%s particles each); players read the surface and blobs unless asked for all\n",
+                percent(double(surface) / double(std::max<uint64_t>(particles, 1))).c_str(),
+                human_count(double(blobs) / double(frames.size())).c_str(),
+                fixed(double(particles - surface) / double(std::max<uint64_t>(blobs, 1)), 1).c_str());
+  } else {
+    std::printf("  layers        none (every particle in one layer; `sluice convert` classifies the narrow band)\n");
+  }
   std::printf("  chunks        %s per frame on average\n", fixed(double(chunks) / double(frames.size()), 1).c_str());
   std::printf("  compression   %s bytes/particle on disk; %sx smaller than raw float32 xyz, %sx smaller than decoded (%zu B)\n",
               fixed(per, 2).c_str(), fixed(per > 0 ? 12.0 / per : 0, 2).c_str(),
               fixed(per > 0 ? double(decoded) / per : 0, 2).c_str(), decoded);
-  std::printf("\n  %6s %10s %12s %7s %10s  %s\n", "frame", "time", "particles", "chunks", "bytes", "bounds");
+  if (layered) {
+    std::printf("\n  %6s %10s %12s %10s %8s %7s %10s %10s  %s\n", "frame", "time", "particles", "surface", "blobs", "chunks",
+                "bytes", "read", "bounds");
+  } else {
+    std::printf("\n  %6s %10s %12s %7s %10s  %s\n", "frame", "time", "particles", "chunks", "bytes", "bounds");
+  }
   const size_t n = frames.size();
   for (size_t i = 0; i < n; ++i) {
     if (!all_frames && n > 12 && i == 5) {
@@ -166,8 +196,20 @@ void print_text(const io::ContainerReader& r, bool all_frames) {
       i = n - 5;
     }
     const auto& f = frames[i];
-    std::printf("  %6zu %10.4g %12s %7u %10s  %s\n", i, f.time, human_count(double(f.particle_count)).c_str(),
-                f.chunk_count, human_bytes(double(f.bytes)).c_str(), text_box(f.bounds).c_str());
+    const std::string count = human_count(double(f.count_in(io::LayerSet::particles())));
+    if (!layered) {
+      std::printf("  %6zu %10.4g %12s %7u %10s  %s\n", i, f.time, count.c_str(), f.chunk_count,
+                  human_bytes(double(f.bytes)).c_str(), text_box(f.bounds).c_str());
+      continue;
+    }
+    // "read": what the surface and blobs take of the record, by default all a player reads.
+    const LayerBytes b = layer_bytes(r, i);
+    std::printf("  %6zu %10.4g %12s %10s %8s %7u %10s %10s  %s\n", i, f.time, count.c_str(),
+                human_count(double(f.layer_particles[size_t(io::Layer::Surface)])).c_str(),
+                human_count(double(f.layer_particles[size_t(io::Layer::Blobs)])).c_str(), f.chunk_count,
+                human_bytes(double(f.bytes)).c_str(),
+                (human_bytes(double(b.surface)) + " " + percent(double(b.surface) / double(std::max<uint64_t>(b.whole, 1)))).c_str(),
+                text_box(f.bounds).c_str());
   }
 }
 

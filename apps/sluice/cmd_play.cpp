@@ -10,6 +10,7 @@
 #include "play.h"
 #include "playable.h"
 #include "human.h"
+#include "layers_option.h"
 #include "sluice/io/reader.h"
 #include "sluice/runtime/player.h"
 
@@ -139,6 +140,7 @@ runtime::PlayerOptions player_options(const PlayOptions& o, bool window) {
   po.pipeline.decode_threads = o.threads;
   po.pipeline.read_threads = o.read_threads;
   po.pipeline.direct_io = o.direct;
+  po.pipeline.layers = layer_set(o.layers);
   po.pipeline.budget.max_frames = o.window;
   if (!o.memory.empty()) {
     const auto bytes = runtime::parse_byte_size(o.memory);
@@ -180,6 +182,7 @@ void add_play(CLI::App& app) {
   cmd->add_option("--on-error", o->on_error, "A frame that cannot be read: skip it, or stop")
       ->capture_default_str()
       ->check(CLI::IsMember({"skip", "stop"}));
+  add_layers_option(*cmd, o->layers);
   cmd->add_option("--memory", o->memory, "Cap on the memory the prefetch window uses, e.g. 8G");
   cmd->add_option("--window", o->window, "Cap on the prefetch window, in frames");
   cmd->add_option("-t,--threads", o->threads, "Decode workers (default: all cores but one per 4 kept for reading)");

@@ -14,6 +14,7 @@
 
 #include "commands.h"
 #include "human.h"
+#include "layers_option.h"
 #include "play.h"
 #include "sluice/io/reader.h"
 #include "sluice/render/staging_allocator.h"
@@ -59,6 +60,7 @@ namespace {
 
 struct Player {
   const io::ContainerReader* reader = nullptr;
+  io::LayerSet layers = io::LayerSet::surface();  // --layers
   runtime::Player* playback = nullptr;
   render::Camera camera, home;
   render::FluidOptions fluid;
@@ -196,6 +198,7 @@ void draw_hud(Player& p, const std::string& file) {
     ImGui::Text("frame %llu / %llu (no simulation times)   %s", (unsigned long long)p.frame + 1,
                 (unsigned long long)p.frames, runtime::state_name(p.playback->state()));
   }
+  ImGui::TextUnformatted(("layers: " + layers_text(*p.reader, p.frame, p.layers)).c_str());
   if (ImGui::Button(p.playing() ? "Pause" : "Play")) p.toggle_play();
   ImGui::SameLine();
   if (ImGui::Button("<")) p.step(-1);
@@ -288,6 +291,7 @@ void run_play_window(const PlayOptions& o, const WindowPlayOptions& wo) {
 
   Player p;
   p.reader = &reader;
+  p.layers = layer_set(o.layers);
   p.frames = reader.frame_count();
   p.frame = std::min<uint64_t>(o.start, p.frames - 1);
   p.hud = !wo.no_hud;

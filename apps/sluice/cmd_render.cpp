@@ -7,9 +7,11 @@
 #include "commands.h"
 #include "frame_range.h"
 #include "human.h"
+#include "layers_option.h"
 #include "playable.h"
 #include "view_options.h"
 #include "progress.h"
+#include "sluice/bench/layers_bench.h"
 #include "sluice/bench/render_bench.h"
 #include "sluice/io/reader.h"
 #include "sluice/render/image_io.h"
@@ -30,6 +32,7 @@ struct RenderCommand {
   std::string size = "1280x720";
   double fps = 0;
   bool quiet = false, stats = false, no_cache = false;
+  std::string layers = "surface";
 };
 
 std::string frame_path(const std::string& out, uint64_t frame, bool single) {
@@ -71,9 +74,10 @@ void run_render(const RenderCommand& o, const ViewSettings& v) {
   const render::LodOptions lod = v.lod_options();
   const render::Camera camera = v.camera(scene, float(width) / float(height));
   if (!o.quiet) {
-    std::fprintf(stderr, "rendering %s frames %llu..%llu at %ux%u on %s (%s)\n  camera \"%s\"\n", o.input.c_str(),
-                 (unsigned long long)first, (unsigned long long)last, width, height, context.device().name.c_str(),
-                 context.device().type.c_str(), camera.to_string().c_str());
+    std::fprintf(stderr, "rendering %s frames %llu..%llu at %ux%u on %s (%s)\n  camera \"%s\"\n  layers: %s\n",
+                 o.input.c_str(), (unsigned long long)first, (unsigned long long)last, width, height,
+                 context.device().name.c_str(), context.device().type.c_str(), camera.to_string().c_str(),
+                 layers_text(reader, first, layer_set(o.layers)).c_str());
   }
 
   std::unique_ptr<render::VideoWriter> writer;
@@ -91,6 +95,7 @@ void run_render(const RenderCommand& o, const ViewSettings& v) {
   po.end = runtime::EndMode::Stop;
   po.policy = runtime::RealTimePolicy::HoldLastFrame;
   po.on_error = runtime::ErrorPolicy::Stop;
+  po.pipeline.layers = layer_set(o.layers);
   const int color = fluid.scalar_visibility ? fluid.color_attribute : -1;
   render::FrameFeed::configure(po, staging, color);
   const runtime::SteadyClock clock;
@@ -158,8 +163,32 @@ void add_render(CLI::App& app) {
   cmd->add_option("--fps", o->fps, "MP4 frame rate (default: the file's)");
   cmd->add_flag("--stats", o->stats, "Print particles drawn and GPU ms per pass for every frame");
   cmd->add_flag("-q,--quiet", o->quiet, "No progress bar or notes");
+  add_layers_option(*cmd, o->layers);
   add_view_options(*cmd, *v);
   cmd->callback([o, v] { run_render(*o, *v); });
+}
+
+void add_bench_layers(CLI::App& bench) {
+  auto o = std::make_shared<bench::LayersBenchOptions>();
+  auto size = std::make_shared<std::string>("1280x720");
+  CLI::App* cmd = bench.add_subcommand("layers", "The narrow band's picture against every particle's: PSNR, coverage, bytes, GPU ms");
+  cmd->footer(
+      "FILE must have layers (`sluice convert` writes them). Each frame is drawn from above, grazing, from\n"
+      "inside the splash, close up and from the default view, once from its surface and voxel blobs and\n"
+      "once from all its particles; fluid pixels are those that differ from the view without particles.\n\n"
+      "Example: sluice bench layers dam.sluice --frames 0,6,12 --images layer_images\n");
+  cmd->add_option("file", o->input, ".sluice file with layers")->required()->check(CLI::ExistingFile);
+  cmd->add_option("--frames", o->frames, "Frames to compare (default: the last)")->delimiter(',');
+  cmd->add_option("--size", *size, "Image size WIDTHxHEIGHT")->capture_default_str();
+  cmd->add_option("--repeats", o->repeats, "Renders per case (median GPU time)")->capture_default_str();
+  cmd->add_option("--device", o->device, "Vulkan device: index or part of its name");
+  cmd->add_option("--images", o->images, "Save both images of every case in this directory");
+  cmd->callback([o, size] {
+    const auto [w, h] = parse_size(*size);
+    o->width = w;
+    o->height = h;
+    bench::run_layers_bench(*o);
+  });
 }
 
 void add_bench_render(CLI::App& bench) {

@@ -26,6 +26,10 @@ struct ConversionOptions {
   uint32_t chunk = 65536;
   int level = 3;
   bool smallest = false;
+  // Classify the narrow band: surface, interior and blob layers (format
+  // 1.3). Quantized positions only: --lossless files stay one layer.
+  bool layers = true;
+  float band_voxel = 0;  // 0: twice the spacing
   int jobs = 0;
   bool quiet = false;
   size_t max_warnings = 20;

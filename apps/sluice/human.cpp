@@ -40,3 +40,9 @@ std::string human_duration(double s) {
 }
 
 }  // namespace sluice::app
+
+namespace sluice::app {
+
+std::string percent(double fraction) { return fixed(100.0 * fraction, 1) + "%"; }
+
+}  // namespace sluice::app

@@ -10,5 +10,7 @@ std::string human_bytes(double bytes);      // "12.3 MB" (decimal units, as driv
 std::string human_count(double n);          // "9,360" below a million, else "1.09 M"
 std::string human_duration(double seconds); // "0.84 s", "3:05", "1:02:09"
 std::string fixed(double v, int decimals);
+// A fraction as a percentage with one decimal: 0.234 -> "23.4%".
+std::string percent(double fraction);
 
 }  // namespace sluice::app

@@ -36,6 +36,7 @@ int main(int argc, char** argv) {
 #if SLUICE_WITH_RENDER
   sluice::app::add_render(app);
   sluice::app::add_bench_render(*app.get_subcommand("bench"));
+  sluice::app::add_bench_layers(*app.get_subcommand("bench"));
 #endif
   try {
     app.parse(argc, argv);

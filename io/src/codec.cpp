@@ -18,6 +18,7 @@
 
 #include "bytes.h"
 #include "chunking.h"
+#include "layering.h"
 #include "morton.h"
 #include "packed_plane.h"
 #include "quantized_unpack.h"
@@ -262,6 +263,32 @@ void check_input(const FrameInput& in, const FileHeader& header) {
   }
 }
 
+
+// One layer's records: which of `in`'s particles, in which chunks.
+struct Group {
+  const FrameInput* in;
+  std::vector<uint32_t> order;  // indices into in, chunk by chunk
+  std::vector<ChunkPlan::Range> chunks;
+  Layer layer;
+};
+
+Group plan_group(const FrameInput& in, std::span<const uint32_t> members, Layer layer, uint32_t limit) {
+  std::vector<float> xyz(3 * members.size());
+  Aabb box;
+  for (size_t k = 0; k < members.size(); ++k) {
+    for (int a = 0; a < 3; ++a) xyz[3 * k + a] = in.positions[3 * size_t(members[k]) + a];
+    box.extend(xyz[3 * k], xyz[3 * k + 1], xyz[3 * k + 2]);
+  }
+  ChunkPlan plan = plan_chunks(xyz, box, limit);
+  for (uint32_t& i : plan.order) i = members[i];
+  return {&in, std::move(plan.order), std::move(plan.chunks), layer};
+}
+
+Group plan_all(const FrameInput& in, const Aabb& bounds, uint32_t limit) {
+  ChunkPlan plan = plan_chunks(in.positions, bounds, limit);
+  return {&in, std::move(plan.order), std::move(plan.chunks), Layer::All};
+}
+
 }  // namespace
 
 EncodedFrame encode_frame(const FrameInput& in, const FileHeader& header, const EncodeOptions& options) {
@@ -270,16 +297,40 @@ EncodedFrame encode_frame(const FrameInput& in, const FileHeader& header, const 
   EncodedFrame frame;
   FrameHeader& fh = frame.header;
   fh.time = in.time;
-  fh.particle_count = n;
   for (size_t i = 0; i < n; ++i) fh.bounds.extend(in.positions[3 * i], in.positions[3 * i + 1], in.positions[3 * i + 2]);
 
   const uint32_t limit = std::clamp<uint32_t>(options.chunk_particles, 1, kMaxChunkParticles);
-  const ChunkPlan plan = plan_chunks(in.positions, fh.bounds, limit);
-  std::vector<EncodedChunk> chunks(plan.chunks.size());
+  std::vector<Group> groups;
+  LayeredFrame layered;
+  FrameInput blobs;
+  if (options.layers && header.particle_spacing > 0 && header.position_coding == PositionCoding::Quantized16 && n > 0) {
+    layered = split_layers(in, header.particle_spacing, options.band_voxel);
+    blobs = layered.blobs.input();
+    fh.blob_voxel = layered.blobs.counts.empty() ? 0.f : layered.voxel;
+    // Payload order: surface, blobs, interior (what is read by default first).
+    groups.push_back(plan_group(in, layered.surface, Layer::Surface, limit));
+    std::vector<uint32_t> every_blob(layered.blobs.counts.size());
+    for (uint32_t b = 0; b < every_blob.size(); ++b) every_blob[b] = b;
+    groups.push_back(plan_group(blobs, every_blob, Layer::Blobs, limit));
+    groups.push_back(plan_group(in, layered.interior, Layer::Interior, limit));
+  } else {
+    groups.push_back(plan_all(in, fh.bounds, limit));
+  }
+
+  struct Job {
+    const Group* group;
+    ChunkPlan::Range range;
+  };
+  std::vector<Job> jobs;
+  for (const Group& g : groups) {
+    for (const auto& r : g.chunks) jobs.push_back({&g, r});
+  }
+  std::vector<EncodedChunk> chunks(jobs.size());
   tbb::parallel_for(size_t(0), chunks.size(), [&](size_t c) {
-    const auto& r = plan.chunks[c];
-    chunks[c] = encode_chunk(in, std::span(plan.order).subspan(r.begin, r.end - r.begin), header.position_coding,
-                             options);
+    const Job& j = jobs[c];
+    chunks[c] = encode_chunk(*j.group->in, std::span(j.group->order).subspan(j.range.begin, j.range.end - j.range.begin),
+                             header.position_coding, options);
+    chunks[c].desc.layer = j.group->layer;
   });
 
   const size_t attributes = header.attributes.size();
@@ -288,6 +339,7 @@ EncodedFrame encode_frame(const FrameInput& in, const FileHeader& header, const 
     c.desc.offset = offset;
     offset += c.desc.compressed_size;
     frame.raw_bytes += c.raw_bytes;
+    fh.particle_count += c.desc.particle_count;
     fh.chunks.push_back(c.desc);
   }
   fh.frame_bytes = offset;

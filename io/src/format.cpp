@@ -157,7 +157,7 @@ std::vector<std::byte> serialize_frame_table(const FrameHeader& f, size_t attrib
   w.u32(0);  // flags
   write_aabb(w, f.bounds);
   w.u32(static_cast<uint32_t>(attribute_count));
-  w.u32(0);  // reserved
+  w.f32(f.blob_voxel);  // format 1.3; reserved (0) before
   for (const ChunkDesc& c : f.chunks) {
     w.u64(c.offset);
     w.u32(c.compressed_size);
@@ -202,7 +202,7 @@ void parse_frame_table(std::span<const std::byte> record, size_t attribute_count
   const FramePrefix prefix = parse_frame_prefix(record, where);
   const uint64_t table = frame_table_bytes(prefix.chunk_count, attribute_count);
   ByteReader r(record, where, "frame header");
-  if (table > record.size() || prefix.frame_bytes > record.size()) r.fail("frame record is truncated");
+  if (table > record.size()) r.fail("frame record is truncated");
   uint64_t stored = 0;
   std::memcpy(&stored, record.data() + table - 8, 8);
   if (stored != checksum(record.first(table - 8))) r.fail("frame header checksum mismatch (corrupt header)");
@@ -217,7 +217,8 @@ void parse_frame_table(std::span<const std::byte> record, size_t attribute_count
   f.bounds = read_aabb(r);
   check_aabb(r, f.bounds, true, "frame");
   if (r.u32() != attribute_count) r.fail("attribute count differs from the file header");
-  r.u32();
+  f.blob_voxel = r.f32();
+  if (!std::isfinite(f.blob_voxel) || f.blob_voxel < 0) r.fail("blob voxel side is not a finite size");
   f.chunks.resize(prefix.chunk_count);
   uint64_t particles = 0;
   for (ChunkDesc& c : f.chunks) {
@@ -246,6 +247,7 @@ void parse_frame_table(std::span<const std::byte> record, size_t attribute_count
     if (c.offset < table || c.offset > f.frame_bytes || c.compressed_size > f.frame_bytes - c.offset) {
       r.fail("chunk payload lies outside the frame record");
     }
+    if (c.layer == Layer::Blobs && !(f.blob_voxel > 0)) r.fail("blob chunk in a frame without a blob voxel side");
     particles += c.particle_count;
   }
   if (particles != f.particle_count) r.fail("chunk particle counts do not add up to the frame's");
@@ -310,7 +312,14 @@ FrameIndex parse_index(std::span<const std::byte> bytes, size_t attribute_count,
     r.u32();
     e.bounds = read_aabb(r);
     check_aabb(r, e.bounds, true, "frame");
-    for (uint64_t& n : e.layer_particles) n = r.u64();
+    uint64_t layered = 0;
+    for (uint64_t& n : e.layer_particles) {
+      n = r.u64();
+      layered += n;
+    }
+    if (layered != e.particle_count) {
+      r.fail("frame " + std::to_string(&e - index.frames.data()) + "'s layer counts do not add up to its particles");
+    }
     if (e.offset < previous_end || e.bytes > file_size || e.offset > file_size - e.bytes) {
       r.fail("frame " + std::to_string(&e - index.frames.data()) + " lies outside the file or overlaps");
     }
@@ -346,6 +355,44 @@ FrameIndexEntry index_entry_for(const FrameHeader& frame, uint64_t offset) {
   e.bounds = frame.bounds;
   for (const ChunkDesc& c : frame.chunks) e.layer_particles[static_cast<size_t>(c.layer)] += c.particle_count;
   return e;
+}
+
+const char* layer_name(Layer l) {
+  switch (l) {
+    case Layer::All: return "all";
+    case Layer::Surface: return "surface";
+    case Layer::Interior: return "interior";
+    case Layer::Blobs: return "blobs";
+  }
+  return "?";
+}
+
+uint64_t count_in(const FrameHeader& frame, LayerSet set) {
+  uint64_t n = 0;
+  for (const ChunkDesc& c : frame.chunks) n += set.has(c.layer) ? c.particle_count : 0;
+  return n;
+}
+
+void keep_layers(FrameHeader& frame, LayerSet set) {
+  std::erase_if(frame.chunks, [&](const ChunkDesc& c) { return !set.has(c.layer); });
+  frame.particle_count = 0;
+  for (const ChunkDesc& c : frame.chunks) frame.particle_count += c.particle_count;
+}
+
+uint64_t layers_end(const FrameHeader& frame, LayerSet set, size_t attribute_count) {
+  uint64_t end = frame_table_bytes(frame.chunks.size(), attribute_count);
+  for (const ChunkDesc& c : frame.chunks) {
+    if (set.has(c.layer)) end = std::max(end, c.offset + c.compressed_size);
+  }
+  return end;
+}
+
+uint64_t FrameIndexEntry::count_in(LayerSet set) const {
+  uint64_t n = 0;
+  for (int l = 0; l < kLayerCount; ++l) {
+    if (set.has(Layer(l))) n += layer_particles[size_t(l)];
+  }
+  return n;
 }
 
 void IndexBuilder::add(const FrameHeader& frame, uint64_t offset) {

@@ -202,6 +202,39 @@ float asymmetry(const VoxelGrid& grid, std::span<const float> xyz, size_t v, uin
   return float(std::sqrt(d2));
 }
 
+// One blob per voxel with interior particles, in voxel order (the grid's
+// key order: spatially coherent), centroids summed in double.
+void gather_blobs(const VoxelGrid& grid, std::span<const float> xyz, NarrowBand& out) {
+  const size_t voxels = grid.size();
+  std::vector<uint32_t> interior(voxels, 0);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, voxels, 1024), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t v = r.begin(); v < r.end(); ++v) {
+      const auto& vox = grid.voxel(v);
+      for (uint32_t k = vox.first; k < vox.first + vox.count; ++k) interior[v] += out.layer[grid.particle(k)] == BandLayer::Interior;
+    }
+  });
+  std::vector<uint32_t> first(voxels + 1, 0);  // blob index of each voxel's blob
+  for (size_t v = 0; v < voxels; ++v) first[v + 1] = first[v] + (interior[v] > 0);
+  out.blobs.assign(first[voxels], VoxelBlob{});
+  out.blob_of.assign(out.layer.size(), NarrowBand::kNoBlob);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, voxels, 1024), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t v = r.begin(); v < r.end(); ++v) {
+      if (interior[v] == 0) continue;
+      const auto& vox = grid.voxel(v);
+      double sum[3] = {0, 0, 0};
+      for (uint32_t k = vox.first; k < vox.first + vox.count; ++k) {
+        const uint32_t i = grid.particle(k);
+        if (out.layer[i] != BandLayer::Interior) continue;
+        for (int a = 0; a < 3; ++a) sum[a] += xyz[3 * size_t(i) + a];
+        out.blob_of[i] = first[v];
+      }
+      VoxelBlob& b = out.blobs[first[v]];
+      b.count = interior[v];
+      for (int a = 0; a < 3; ++a) b.centroid[size_t(a)] = float(sum[a] / interior[v]);
+    }
+  });
+}
+
 }  // namespace
 
 NarrowBand classify_narrow_band(std::span<const float> xyz, const NarrowBandOptions& o) {
@@ -261,6 +294,7 @@ NarrowBand classify_narrow_band(std::span<const float> xyz, const NarrowBandOpti
     }
   });
   for (const BandLayer l : out.layer) ++out.counts[size_t(l)];
+  if (o.blobs) gather_blobs(grid, xyz, out);
   for (const uint8_t k : kind) {
     out.l1_voxels += k == 1;
     out.l2_voxels += k == 2;

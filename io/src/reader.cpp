@@ -68,6 +68,16 @@ std::vector<std::byte> ContainerReader::read_record(uint64_t frame) const {
   return out;
 }
 
+FrameHeader ContainerReader::read_table(uint64_t frame) const {
+  if (frame >= frame_count()) throw Error(location(frame), "no such frame (the file has " + std::to_string(frame_count()) + ")");
+  const FrameIndexEntry& e = index_.frames[frame];
+  std::vector<std::byte> table(std::min<uint64_t>(e.bytes, frame_table_bytes(e.chunk_count, header_.attributes.size())));
+  pread_all_or_throw(fd_, table, e.offset, location(frame));
+  FrameHeader h;
+  parse_table(frame, table, h, location(frame));
+  return h;
+}
+
 FrameHeader ContainerReader::parse_record(uint64_t frame, std::span<const std::byte> record) const {
   FrameHeader h;
   parse_record(frame, record, h, location(frame));
@@ -76,18 +86,28 @@ FrameHeader ContainerReader::parse_record(uint64_t frame, std::span<const std::b
 
 void ContainerReader::parse_record(uint64_t frame, std::span<const std::byte> record, FrameHeader& h,
                                    const ErrorLocation& where) const {
-  parse_frame_table(record, header_.attributes.size(), where, h);
+  parse_table(frame, record, h, where);
+  if (record.size() != h.frame_bytes) throw Error(where, "frame record is truncated");
+}
+
+void ContainerReader::parse_table(uint64_t frame, std::span<const std::byte> prefix, FrameHeader& h,
+                                  const ErrorLocation& where) const {
+  parse_frame_table(prefix, header_.attributes.size(), where, h);
   const FrameIndexEntry& e = index_.frames.at(frame);
   if (h.frame_number != frame || h.frame_bytes != e.bytes || h.particle_count != e.particle_count ||
       h.chunks.size() != e.chunk_count) {
     throw Error(where, "frame header disagrees with the frame index");
   }
+  std::array<uint64_t, kLayerCount> layers{};
+  for (const ChunkDesc& c : h.chunks) layers[size_t(c.layer)] += c.particle_count;
+  if (layers != e.layer_particles) throw Error(where, "frame's layer sizes disagree with the frame index");
 }
 
-DecodedFrame decode_frame(const ContainerReader& reader, uint64_t frame) {
+DecodedFrame decode_frame(const ContainerReader& reader, uint64_t frame, LayerSet layers) {
   const std::vector<std::byte> record = reader.read_record(frame);
   DecodedFrame out;
   out.header = reader.parse_record(frame, record);
+  keep_layers(out.header, layers);
   const FileHeader& fh = reader.header();
   const size_t n = out.header.particle_count;
   out.particles.resize(n * decoded_particle_bytes(fh.position_coding));

@@ -29,7 +29,8 @@ struct FramePrefix {
 };
 // Checks the magic and the sizes of the fixed part of a frame record.
 FramePrefix parse_frame_prefix(std::span<const std::byte> fixed, const ErrorLocation& where);
-// Parses and validates header + chunk table; `record` holds the whole frame record.
+// Parses and validates header + chunk table; `record` holds at least the
+// table (the payloads are checked against it when decoded).
 FrameHeader parse_frame_table(std::span<const std::byte> record, size_t attribute_count, const ErrorLocation& where);
 // The same into `into`, reusing its chunk table's memory (no allocation once
 // it has held as many chunks).

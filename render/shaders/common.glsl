@@ -37,7 +37,8 @@ struct Chunk {
   vec3 hi;
   uint count;
   vec2 attr_range;
-  uvec2 pad;
+  uint kind;    // 0: particles; 1: voxel blobs (the LOD value holds the particle count)
+  float voxel;  // blobs: side of their voxels (world)
 };
 
 layout(buffer_reference, std430, buffer_reference_align = 8) readonly buffer Particles8 { uvec2 v[]; };
@@ -104,9 +105,29 @@ void decode_particle(Chunk c, uint index, out vec3 pos, out uint lod_value) {
 
 struct DrawItem {
   vec3 pos;      // world
-  float radius;  // world, grown in density-preserving LOD
+  float radius;  // world, grown in density-preserving LOD; blobs: how far their splat reaches
   float attr;    // colour attribute, 0..1
+  float count;   // blobs: particles the blob stands for; 0: a particle
+  float sigma;   // blobs: the splat's standard deviation (world)
 };
+
+// A blob's splat (section 4 of papers/001, eq. 4.2, normalized): a Gaussian
+// across the view whose integral is `count` particle volumes, so the blobs
+// add the thickness their particles would have added. Its spread is that of
+// the particles' chords: uniform centres over the voxel (d^2/12 per axis)
+// blurred by one sphere's chord profile (r^2/5), widened to the voxel's
+// half-side so neighbouring blobs sum to an even thickness.
+float blob_sigma(float voxel, float r) {
+  return sqrt(max(voxel * voxel / 12.0 + r * r / 5.0, 0.25 * voxel * voxel));
+}
+const float kBlobReach = 3.0;  // splats end at this many sigma (the rest: 1.1% of the volume)
+
+// Thickness (world) a blob adds along a ray passing `d2` (squared, world)
+// from its centroid.
+float blob_thickness(float count, float sigma, float d2) {
+  float volume = count * (4.0 / 3.0) * 3.14159265 * g.radius.x * g.radius.x * g.radius.x;
+  return volume / (6.28318531 * sigma * sigma) * exp(-0.5 * d2 / (sigma * sigma));
+}
 
 DrawItem load_item(uint item) {
   uvec2 d = Draws(pc.draws).d[item];
@@ -118,6 +139,13 @@ DrawItem load_item(uint item) {
   float growth = float((d.y >> 8) & 0xfffu) * (1.0 / 4095.0);
   it.radius = g.radius.x * (1.0 + growth * (g.lod.w - 1.0));
   it.attr = float(d.y >> 20) * (1.0 / 4095.0);
+  it.count = 0.0;
+  it.sigma = 0.0;
+  if (c.kind == 1u) {
+    it.count = float(lod_value);
+    it.sigma = blob_sigma(c.voxel, g.radius.x);
+    it.radius = kBlobReach * it.sigma;
+  }
   return it;
 }
 

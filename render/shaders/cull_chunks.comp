@@ -6,8 +6,9 @@
 
 layout(local_size_x = 64) in;
 
-// Largest distance any particle's sphere reaches beyond its centre.
-float reach() {
+// Largest distance any particle's sphere (or blob's splat) reaches beyond its centre.
+float reach(Chunk c) {
+  if (c.kind == 1u) return kBlobReach * blob_sigma(c.voxel, g.radius.x);
   float r = g.radius.x;
   return g.modes.x == 2u ? r * g.lod.w : r;
 }
@@ -42,12 +43,12 @@ void main() {
   uint i = gl_GlobalInvocationID.y * (gl_NumWorkGroups.x * 64u) + gl_GlobalInvocationID.x;
   if (i >= pc.chunk_count) return;
   Chunk c = Chunks(pc.chunks).c[i];
-  if (c.count == 0u || !aabb_visible(c.lo, c.hi, reach())) return;
+  if (c.count == 0u || !aabb_visible(c.lo, c.hi, reach(c))) return;
   Args args = Args(pc.args);
   atomicAdd(args.visible_chunks, 1u);
   uint blocks = (c.count + kBlock - 1u) / kBlock;
   uint base = atomicAdd(args.block_count, blocks);
-  uint inside = aabb_inside(c.lo, c.hi, reach()) ? 0x80000000u : 0u;
+  uint inside = aabb_inside(c.lo, c.hi, reach(c)) ? 0x80000000u : 0u;
   Blocks list = Blocks(pc.blocks);
   for (uint b = 0u; b < blocks; ++b) list.b[base + b] = uvec2(i, (b * kBlock) | inside);
 }

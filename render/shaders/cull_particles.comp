@@ -34,10 +34,13 @@ void main() {
 
   vec3 e = (g.view * vec4(pos, 1.0)).xyz;
   float dist = -e.z;   // along the view axis
-  float r = g.radius.x;
+  bool blob = c.kind == 1u;
+  float r = blob ? kBlobReach * blob_sigma(c.voxel, g.radius.x) : g.radius.x;
   float scale = 1.0;
 
-  if (g.modes.x != 0u && keep) {
+  // Blobs are few (one per interior voxel) and stand for whole voxels: LOD
+  // keeps them all, so the thickness does not thin out.
+  if (g.modes.x != 0u && keep && !blob) {
     // Importance w (formula 3.1 with CLOD = 1000 / d_ref) and random term.
     vec2 ndc = vec2(g.proj.x * e.x, -g.proj.y * e.y) / max(dist, 1e-20) + g.frustum.xy;
     float centre = max(1.0 - 0.7 * min(length(ndc) * 0.70710678, 1.0), 0.3);

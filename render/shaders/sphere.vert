@@ -9,6 +9,7 @@
 layout(location = 0) flat out vec3 v_center;  // eye space
 layout(location = 1) flat out float v_radius;
 layout(location = 2) flat out float v_attr;
+layout(location = 3) flat out vec2 v_blob;  // blobs: particle count, sigma; (0, 0): a sphere
 
 void hide() {
   gl_Position = vec4(4.0, 4.0, 0.5, 1.0);
@@ -23,7 +24,9 @@ void main() {
   v_center = c;
   v_radius = r;
   v_attr = item.attr;
+  v_blob = vec2(item.count, item.sigma);
   if (d - r <= g.eye.w) { hide(); return; }
+  if (item.count > 0.0 && pc.param0 == 0u) { hide(); return; }  // blobs add thickness only
 
   vec4 vp = pc.param0 == 1u ? g.thick_viewport : g.viewport;
   vec2 lo, hi;

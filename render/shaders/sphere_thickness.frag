@@ -6,6 +6,7 @@
 layout(location = 0) flat in vec3 v_center;
 layout(location = 1) flat in float v_radius;
 layout(location = 2) flat in float v_attr;
+layout(location = 3) flat in vec2 v_blob;
 layout(location = 0) out vec2 o_thickness;
 
 void main() {
@@ -15,5 +16,6 @@ void main() {
   float h2 = v_radius * v_radius - dot(perp, perp);
   if (h2 < 0.0) discard;
   float chord = 2.0 * sqrt(h2);
+  if (v_blob.x > 0.0) chord = blob_thickness(v_blob.x, v_blob.y, v_radius * v_radius - h2);  // h2 = reach^2 - distance^2
   o_thickness = vec2(chord, chord * v_attr);
 }

@@ -14,8 +14,10 @@ layout(local_size_x = 64) in;
 
 struct Sphere {
   vec3 c;   // eye space
-  float r;
+  float r;  // blobs: the splat's reach
   float attr;
+  float count;  // blobs: particles; 0: a sphere
+  float sigma;  // blobs
 };
 
 Sphere load(uint item) {
@@ -24,6 +26,8 @@ Sphere load(uint item) {
   s.c = (g.view * vec4(it.pos, 1.0)).xyz;
   s.r = it.radius;
   s.attr = it.attr;
+  s.count = it.count;
+  s.sigma = it.sigma;
   return s;
 }
 
@@ -59,6 +63,10 @@ void thickness_pixel(Sphere s, ivec2 p, bool attr) {
   float h2 = ray_sphere(s, p, g.thick_ray, z);
   if (h2 < 0.0) return;
   float chord = 2.0 * sqrt(h2) * g.splat.x;
+  if (s.count > 0.0) {
+    // h2 = reach^2 - (distance of the blob from the ray)^2.
+    chord = blob_thickness(s.count, s.sigma, s.r * s.r - h2) * g.splat.x;
+  }
   uint t = uint(chord + 0.5);
   if (t == 0u) return;
   imageAtomicAdd(thick_u, p, t);
@@ -80,8 +88,10 @@ void main() {
       Items(pc.big).i[atomicAdd(args.big_count, 1u)] = item;
       return;
     }
-    for (int y = lo.y; y < hi.y; ++y)
-      for (int x = lo.x; x < hi.x; ++x) depth_pixel(s, ivec2(x, y));
+    if (s.count == 0.0) {  // blobs add thickness only
+      for (int y = lo.y; y < hi.y; ++y)
+        for (int x = lo.x; x < hi.x; ++x) depth_pixel(s, ivec2(x, y));
+    }
     for (int y = tlo.y; y < thi.y; ++y)
       for (int x = tlo.x; x < thi.x; ++x) thickness_pixel(s, ivec2(x, y), attr);
   } else {
@@ -92,7 +102,7 @@ void main() {
     pixel_box(s, g.viewport, lo, hi);
     pixel_box(s, g.thick_viewport, tlo, thi);
     ivec2 size = max(hi - lo, ivec2(0));
-    uint area = uint(size.x) * uint(size.y);
+    uint area = s.count == 0.0 ? uint(size.x) * uint(size.y) : 0u;
     for (uint i = gl_LocalInvocationIndex; i < area; i += 64u) {
       depth_pixel(s, lo + ivec2(int(i % uint(size.x)), int(i / uint(size.x))));
     }

@@ -218,6 +218,10 @@ void fill_chunk_table(const io::FrameHeader& header, std::span<const uint64_t> f
     }
     g.first = uint32_t(total);
     g.count = d.particle_count;
+    if (d.layer == io::Layer::Blobs) {
+      g.kind = 1;
+      g.voxel = header.blob_voxel;
+    }
     if (color_attribute >= 0 && size_t(color_attribute) < d.attribute_ranges.size()) {
       g.attr_lo = d.attribute_ranges[size_t(color_attribute)][0];
       g.attr_hi = d.attribute_ranges[size_t(color_attribute)][1];
@@ -304,9 +308,10 @@ uint64_t Renderer::commit_record(std::span<const std::byte> record, const io::Fr
   return commit_frame();
 }
 
-void Renderer::load_frame(const io::ContainerReader& reader, uint64_t frame, int color_attribute) {
+void Renderer::load_frame(const io::ContainerReader& reader, uint64_t frame, int color_attribute, io::LayerSet layers) {
   const std::vector<std::byte> record = reader.read_record(frame);
-  const io::FrameHeader header = reader.parse_record(frame, record);
+  io::FrameHeader header = reader.parse_record(frame, record);
+  io::keep_layers(header, layers);
   wait_upload(commit_record(record, header, reader.header(), color_attribute, reader.location(frame)));
 }
 

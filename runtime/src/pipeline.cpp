@@ -56,7 +56,7 @@ PipelineCore::PipelineCore(const io::ContainerReader& reader, FrameAllocator& al
       record_returns_(size_t(decode_threads_) + 1),
       records_(size_t(decode_threads_) + 1) {
   stream_of_attribute_ = stream_map(reader_, options_.attributes, attribute_streams_);
-  footprint_ = largest_frame(reader_, attribute_streams_, &allocator_);
+  footprint_ = largest_frame(reader_, attribute_streams_, &allocator_, options_.layers);
   record_where_.file = reader_.path();
   source_ = options_.source ? options_.source
                             : std::make_shared<FileRecordSource>(reader_.path(), reader_.descriptor(), options_.direct_io);

@@ -257,13 +257,6 @@ PipelineCore::Start PipelineCore::start_entry(ReaderState& rs, uint64_t k, uint6
   }
 
   try {
-    if (!read_record(rs, slot, record)) {
-      rs.free_records.push_back(record);
-      slot.record = kNoRecord;
-      slot.state.store(SlotState::Free, kRelaxed);
-      rs.free_slots.push_back(s);
-      return Start::Cancelled;
-    }
     record_where_.frame = frame;
     if (slot.header.chunks.capacity() < most_chunks_) {  // a slot's first use: room for any frame of the file
       slot.header.chunks.reserve(most_chunks_);
@@ -271,7 +264,15 @@ PipelineCore::Start PipelineCore::start_entry(ReaderState& rs, uint64_t k, uint6
       slot.attribute_targets.reserve(reader_.header().attributes.size());
       slot.where.file = reader_.path();
     }
-    reader_.parse_record(frame, slot.record_bytes, slot.header, record_where_);  // no allocation per frame
+    if (!read_record(rs, slot, record)) {
+      rs.free_records.push_back(record);
+      slot.record = kNoRecord;
+      slot.state.store(SlotState::Free, kRelaxed);
+      rs.free_slots.push_back(s);
+      return Start::Cancelled;
+    }
+    if (!slot.partial) reader_.parse_record(frame, slot.record_bytes, slot.header, record_where_);  // no allocation per frame
+    io::keep_layers(slot.header, options_.layers);  // the chunks read (decode checks their payloads lie in the prefix)
     slot.where.frame = frame;  // its file was set with its chunk table
     prepare_decode(rs, slot);
   } catch (const io::Error& e) {
@@ -325,8 +326,25 @@ bool PipelineCore::read_record(ReaderState& rs, Slot& slot, uint32_t record) {
     if (rs.record_held > counters_.peak_record_bytes.load(kRelaxed)) counters_.peak_record_bytes.store(rs.record_held, kRelaxed);
   }
   const std::span<std::byte> dst = buffer.span().first(span);
-  if (!read_pieces(dst, begin, need, slot.frame, rs.generation)) return false;
-  slot.record_bytes = dst.subspan(e.offset - begin, e.bytes);
+  // Some of a layered frame's layers are not wanted: the table first, then
+  // the payloads up to the last wanted one (the interior comes last).
+  slot.partial = e.layered() && e.count_in(options_.layers) != e.particle_count;
+  if (!slot.partial) {
+    if (!read_pieces(dst, begin, need, slot.frame, rs.generation)) return false;
+    slot.record_bytes = dst.subspan(e.offset - begin, e.bytes);
+  } else {
+    const uint64_t table = std::min<uint64_t>(e.bytes, io::frame_table_bytes(e.chunk_count, reader_.header().attributes.size()));
+    const uint64_t first = round_up(e.offset + table - begin, align);
+    if (!read_pieces(dst.first(first), begin, e.offset + table - begin, slot.frame, rs.generation)) return false;
+    reader_.parse_table(slot.frame, dst.subspan(e.offset - begin, table), slot.header, record_where_);
+    const uint64_t end = io::layers_end(slot.header, options_.layers, reader_.header().attributes.size());
+    const uint64_t wanted = e.offset + end - begin;
+    if (wanted > first && !read_pieces(dst.subspan(first, round_up(wanted, align) - first), begin + first, wanted - first,
+                                       slot.frame, rs.generation)) {
+      return false;
+    }
+    slot.record_bytes = dst.subspan(e.offset - begin, end);
+  }
   counters_.frames_read.fetch_add(1, kRelaxed);
   return true;
 }

@@ -56,7 +56,8 @@ struct Slot {
   bool has_buffers = false;
   std::vector<uint16_t*> attribute_targets;      // per header attribute; nullptr where not decoded
   uint32_t record = kNoRecord;                   // record buffer in use while decoding
-  std::span<const std::byte> record_bytes;       // the frame record inside it
+  std::span<const std::byte> record_bytes;       // the frame record inside it (a prefix: see `partial`)
+  bool partial = false;                          // only the wanted layers were read; the table is parsed
 
   // Written by the reader (read errors) or the chunk that won error_claimed.
   FrameError error;

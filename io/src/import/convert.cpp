@@ -95,7 +95,7 @@ ConvertResult convert_frames(const FrameSource& source, std::optional<ParticleFr
               return;
             }
             result.frames++;
-            result.particles += w.encoded.header.particle_count;
+            result.particles += count_in(w.encoded.header, LayerSet::particles());
             result.raw_bytes += w.encoded.raw_bytes;
             result.input_bytes += w.input_bytes;
             writer.append(std::move(w.encoded));

@@ -25,6 +25,13 @@ struct EncodeOptions {
   // bytes per quantized particle): the fastest to encode and to decode, for
   // frames that are decoded at once and not kept (live frames not recorded).
   bool compress = true;
+  // Classify the narrow band (narrow_band.h) and write the frame as surface
+  // chunks, voxel-blob chunks and interior chunks, payloads in that order
+  // (format 1.3), so a reader of the surface and blobs reads a prefix of the
+  // record. Needs the header's particle spacing (> 0); without it, or for
+  // float32 positions, the frame is written as one layer (All).
+  bool layers = false;
+  float band_voxel = 0;  // voxel side d of the classification and the blobs; 0: twice the particle spacing
 };
 
 // One frame to encode. Spans are borrowed for the duration of the call.

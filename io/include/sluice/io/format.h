@@ -17,7 +17,7 @@
 namespace sluice::io {
 
 inline constexpr uint16_t kFormatMajor = 1;  // readers reject other majors
-inline constexpr uint16_t kFormatMinor = 2;  // readers accept any minor of their major
+inline constexpr uint16_t kFormatMinor = 3;  // readers accept any minor of their major
 
 // Hard limits. A header that claims more is rejected before any allocation.
 inline constexpr uint32_t kMaxHeaderBytes = 1u << 20;
@@ -48,6 +48,24 @@ enum class Layer : uint8_t {
   Blobs = 3,     // voxel blobs (centroid + count) standing in for Interior
 };
 inline constexpr int kLayerCount = 4;
+const char* layer_name(Layer l);
+
+// Which layers a reader wants. Blob chunks stand in for interior chunks, so
+// a set holds one or the other; an unlayered file's chunks (All) are in
+// every set.
+class LayerSet {
+ public:
+  // Every particle: what a file without layers holds (All, Surface, Interior).
+  static constexpr LayerSet particles() { return LayerSet(0b0111); }
+  // The narrow band and the blobs: what is drawn by default (All, Surface, Blobs).
+  static constexpr LayerSet surface() { return LayerSet(0b1011); }
+  bool has(Layer l) const { return (bits_ >> unsigned(l)) & 1u; }
+  bool operator==(const LayerSet&) const = default;
+
+ private:
+  constexpr explicit LayerSet(uint8_t bits) : bits_(bits) {}
+  uint8_t bits_;
+};
 
 // Chunk payload compression.
 enum class ChunkCodec : uint8_t {
@@ -101,8 +119,21 @@ struct FrameHeader {
   double time = 0.0;             // simulation time, seconds
   uint64_t particle_count = 0;
   Aabb bounds;
+  // Format 1.3: side of the voxels whose blobs the Blobs chunks hold (world
+  // units; 0 when the frame has none). A blob's LOD value is its count.
+  float blob_voxel = 0;
   std::vector<ChunkDesc> chunks;
 };
+
+// Chunk records (particles, and blobs if `set` has them) of `set`'s layers.
+uint64_t count_in(const FrameHeader& frame, LayerSet set);
+// Drops the chunks of layers not in `set` and recounts the particles: what
+// the renderer and tools see of a frame. Payload offsets stay those of the
+// whole record.
+void keep_layers(FrameHeader& frame, LayerSet set);
+// Bytes from the start of the record that hold its table and every payload
+// of `set`'s chunks: a reader that wants only those reads this many.
+uint64_t layers_end(const FrameHeader& frame, LayerSet set, size_t attribute_count);
 
 struct FrameIndexEntry {
   uint64_t offset = 0;           // of the frame record, from the start of the file
@@ -111,7 +142,11 @@ struct FrameIndexEntry {
   uint64_t particle_count = 0;
   uint32_t chunk_count = 0;
   Aabb bounds;
-  std::array<uint64_t, kLayerCount> layer_particles{};  // by Layer
+  std::array<uint64_t, kLayerCount> layer_particles{};  // by Layer (for Blobs: blobs)
+  // The frame holds classified layers (anything but All).
+  bool layered() const { return layer_particles[0] != particle_count; }
+  // Chunk records (particles, and blobs if `set` has them) of `set`'s layers.
+  uint64_t count_in(LayerSet set) const;
 };
 
 struct FrameIndex {

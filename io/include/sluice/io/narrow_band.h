@@ -42,6 +42,14 @@ struct NarrowBandOptions {
   float diameter = 0;  // h, the particle diameter (the rest spacing); must be > 0
   float voxel = 0;     // d; 0: 2h (d = 4r, as the dissertation's tests)
   F2Test f2 = F2Test::All;
+  bool blobs = false;  // also gather the interior particles of each voxel into a blob
+};
+
+// The interior particles of one voxel, standing in for them where only the
+// fluid's thickness is wanted (dissertation section 4, equation 4.3).
+struct VoxelBlob {
+  std::array<float, 3> centroid{};  // mean position of its particles
+  uint32_t count = 0;               // particles it stands for (>= 1)
 };
 
 struct NarrowBand {
@@ -50,6 +58,11 @@ struct NarrowBand {
   uint64_t voxels = 0;                 // occupied voxels
   uint64_t l1_voxels = 0, l2_voxels = 0;  // L1, selected L2
   float voxel = 0;                     // d used
+  // With options.blobs: one blob per voxel holding interior particles, and
+  // for every particle the blob it belongs to (kNoBlob for surface ones).
+  std::vector<VoxelBlob> blobs;
+  std::vector<uint32_t> blob_of;
+  static constexpr uint32_t kNoBlob = UINT32_MAX;
   uint64_t surface() const { return counts[1] + counts[2] + counts[3]; }
 };
 

@@ -39,6 +39,10 @@ class ContainerReader {
   void read_record(uint64_t frame, std::span<std::byte> out) const;
   std::vector<std::byte> read_record(uint64_t frame) const;
 
+  // Reads and checks frame `frame`'s header and chunk table alone (where its
+  // layers' payloads lie, for tools that report or read parts of it).
+  FrameHeader read_table(uint64_t frame) const;
+
   // Validates a record's header and chunk table (checksum, sizes) and that it
   // matches the index entry of `frame`.
   FrameHeader parse_record(uint64_t frame, std::span<const std::byte> record) const;
@@ -47,6 +51,12 @@ class ContainerReader {
   // `into` has held as many chunks. For the streaming pipeline's reader.
   void parse_record(uint64_t frame, std::span<const std::byte> record, FrameHeader& into,
                     const ErrorLocation& where) const;
+
+  // The header and chunk table alone, from the first bytes of the record
+  // (at least frame_table_bytes(index chunk count, attributes)): for readers
+  // that then read only some layers' payloads (layers_end()). Checked as
+  // parse_record checks them; payloads are checked when decoded.
+  void parse_table(uint64_t frame, std::span<const std::byte> prefix, FrameHeader& into, const ErrorLocation& where) const;
 
   ErrorLocation location(uint64_t frame) const { return {path_, frame, {}}; }
   ErrorLocation location(uint64_t frame, uint64_t chunk) const { return {path_, frame, chunk}; }
@@ -68,8 +78,9 @@ struct DecodedFrame {
   std::vector<uint64_t> chunk_first;               // first particle of each chunk
 };
 
-// Reads and decodes frame `frame`, chunks in parallel (TBB).
-DecodedFrame decode_frame(const ContainerReader& reader, uint64_t frame);
+// Reads and decodes frame `frame`'s chunks of `layers`, in parallel (TBB).
+// The default is every particle: blobs are left out.
+DecodedFrame decode_frame(const ContainerReader& reader, uint64_t frame, LayerSet layers = LayerSet::particles());
 
 // World-space x,y,z of every particle of a decoded frame.
 std::vector<float> world_positions(const DecodedFrame& frame, PositionCoding coding);

@@ -45,7 +45,8 @@ struct GpuChunk {
   float hi[3];
   uint32_t count;
   float attr_lo, attr_hi;  // range the colour attribute is quantized against
-  uint32_t pad[2];
+  uint32_t kind = 0;       // 0: particles; 1: voxel blobs (io::Layer::Blobs: the LOD value is the count)
+  float voxel = 0;         // blobs: side of their voxels (FrameHeader::blob_voxel)
 };
 static_assert(sizeof(GpuChunk) == 48);
 

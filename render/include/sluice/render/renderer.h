@@ -185,8 +185,10 @@ class Renderer {
   // attributes. Throws io::Error at `where` (chunk filled in) on a bad chunk.
   uint64_t commit_record(std::span<const std::byte> record, const io::FrameHeader& header, const io::FileHeader& file,
                          int color_attribute, const io::ErrorLocation& where);
-  // Reads `frame`, commit_record()s it and waits for its copy.
-  void load_frame(const io::ContainerReader& reader, uint64_t frame, int color_attribute);
+  // Reads `frame`'s chunks of `layers` (all of a file without layers),
+  // commit_record()s them and waits for the copy.
+  void load_frame(const io::ContainerReader& reader, uint64_t frame, int color_attribute,
+                  io::LayerSet layers = io::LayerSet::particles());
 
   // Records the fluid for `views` (1..4, all the same size) into `cmd`, a
   // primary command buffer in the recording state, outside a render pass, of

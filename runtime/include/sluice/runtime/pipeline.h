@@ -56,6 +56,11 @@ struct PipelineOptions {
   bool direct_io = false;   // read with O_DIRECT where the filesystem allows it (else buffered, said in stats)
   // Attribute streams to decode (indices into the file header's list); nullopt: all of them.
   std::optional<std::vector<uint32_t>> attributes;
+  // Layers to read and decode (format 1.3). A frame's chunks of other layers
+  // are never read: with the surface set, a layered frame's interior is
+  // skipped on disk (its payloads come last in the record). Frames without
+  // layers are read whole whatever the set.
+  io::LayerSet layers = io::LayerSet::particles();
   BudgetOptions budget;
   const DeviceMemoryBudget* device_budget = nullptr;  // borrowed; null: no device limit
   uint32_t reevaluate_every = 32;                     // frames started between budget re-readings

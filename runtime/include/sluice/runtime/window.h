@@ -17,6 +17,7 @@
 #include <cstdint>
 #include <string>
 
+#include "sluice/io/format.h"
 #include "sluice/runtime/budget.h"
 #include "sluice/runtime/frame_allocator.h"
 
@@ -34,9 +35,12 @@ struct FrameFootprint {
 };
 
 // `attribute_streams`: how many attribute streams are decoded per frame;
-// `allocator`, if given, says what its buffers really take (bytes_for).
+// `allocator`, if given, says what its buffers really take (bytes_for);
+// `layers`: the layers read (a record's size counts whole: the index does not
+// say where its layers' payloads end).
 FrameFootprint largest_frame(const io::ContainerReader& reader, size_t attribute_streams,
-                             const FrameAllocator* allocator = nullptr);
+                             const FrameAllocator* allocator = nullptr,
+                             io::LayerSet layers = io::LayerSet::particles());
 
 struct BudgetOptions {
   uint64_t memory_cap = 0;       // user cap on host bytes (`--memory 8G`); 0: none
