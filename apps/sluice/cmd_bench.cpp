@@ -43,6 +43,8 @@ void add_bench(CLI::App& app) {
   st->add_option("--min-time", stream->min_seconds, "Seconds each page-cache timing runs for")->capture_default_str();
   st->add_option("--memory", *stream_memory, "Memory cap of the pipeline, e.g. 4G (default: 2G)");
   st->add_option("--frames", stream->frames, "Stream the first N frames (default: as many as fit in the page cache)");
+  st->add_flag("--surface", stream->surface,
+               "Read the surface and voxel blobs of a file with layers (what players read), not every particle");
   st->add_flag("!--no-storage", stream->storage, "Skip the storage passes (they drop the file from the page cache)");
   st->callback([stream, stream_memory] {
     if (!stream_memory->empty()) {

@@ -215,6 +215,9 @@ void add_bench_render(CLI::App& bench) {
   cmd->add_option("--splat", o->splat, "Sphere splatting: auto, compute or raster")->capture_default_str();
   cmd->add_option("--csv", o->csv, "Also write the per-pass table as CSV (for plots of ms against particles)");
   cmd->add_option("--plot", o->plot, "Also draw GPU ms against particles as an SVG chart (log-log, one line per LOD)");
+  cmd->add_flag("--layers", o->layers,
+                "Also draw each synthetic frame classified into the narrow band: its surface and voxel blobs, and all\n"
+                "its particles from the same chunks");
   cmd->add_flag("--with-depth", o->with_depth,
                 "Render into a target with a depth image, as a host with its own geometry does (adds the present pass)");
   cmd->callback([o, sizes, size] {

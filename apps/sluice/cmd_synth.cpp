@@ -61,6 +61,8 @@ void add_synth(CLI::App& app) {
   cmd->add_flag("--lossless", o->lossless, "Store float32 positions instead of 16-bit quantized");
   cmd->add_option("--chunk", o->chunk_particles, "Most particles per chunk")->capture_default_str();
   cmd->add_option("--level", o->zstd_level, "zstd level")->capture_default_str();
+  cmd->add_flag("--no-layers", [o](int64_t) { o->layers = false; },
+                "Do not classify the narrow band: every frame one layer of all its particles");
   cmd->add_flag("--smallest", [o](int64_t) { o->pack_planes = false; },
                 "zstd on every plane it shrinks most (smaller, slower to decode)");
   cmd->add_option("-j,--jobs", o->jobs, "Frames encoded at once (default: one per core)");

@@ -76,11 +76,13 @@ std::vector<NamedView> views_of(const Bounds& box, Vec3 up, float aspect) {
   splash.eye = c + along * (0.5f * length + 0.1f * diag) + up * (0.6f * height) + across * (0.1f * diag);
   splash.target = c + along * (0.2f * length);
   out.push_back({"splash", splash});
-  Camera close;
-  close.up = up;
-  close.target = c + up * (0.25f * height);
-  close.eye = close.target + normalize(up * 0.8f - across) * (0.3f * diag);
-  out.push_back({"close-up", close});
+  for (const float d : {0.5f, 0.3f}) {
+    Camera close;
+    close.up = up;
+    close.target = c + up * (0.25f * height);
+    close.eye = close.target + normalize(up * 0.8f - across) * (d * diag);
+    out.push_back({d == 0.5f ? "close-up" : "closer", close});
+  }
   out.push_back({"default", Camera::framing(box, up, aspect)});
   return out;
 }
@@ -92,6 +94,26 @@ double coverage(const std::vector<uint8_t>& a, const std::vector<uint8_t>& empty
     fluid += a[p] != empty[p] || a[p + 1] != empty[p + 1] || a[p + 2] != empty[p + 2];
   }
   return a.empty() ? 0.0 : double(fluid) / double(a.size() / 4);
+}
+
+// Pixels across the largest splat of a particle in front of the eye and
+// inside the view (its centre within the image), as cull_particles.comp sizes it.
+double largest_splat(const std::vector<float>& xyz, const Camera& camera, float radius, uint32_t width, uint32_t height) {
+  const Vec3 f = camera.forward();
+  const Vec3 right = normalize(cross(f, camera.up));
+  const Vec3 up = cross(right, f);
+  const float tan_half = std::tan(camera.fov_deg * 3.14159265f / 360.0f);
+  const float aspect = float(width) / float(height);
+  const float focal = 0.5f * float(height) / tan_half;  // pixels per unit at distance 1
+  double largest = 0;
+  for (size_t i = 0; i + 2 < xyz.size(); i += 3) {
+    const Vec3 d = Vec3{xyz[i], xyz[i + 1], xyz[i + 2]} - camera.eye;
+    const float z = dot(d, f);
+    if (z <= radius) continue;
+    if (std::abs(dot(d, right)) > z * tan_half * aspect || std::abs(dot(d, up)) > z * tan_half) continue;
+    largest = std::max(largest, double(2 * radius * focal / (z - radius)));
+  }
+  return largest;
 }
 
 struct Shot {
@@ -145,6 +167,8 @@ std::vector<LayersRow> compare_layers(const LayersBenchOptions& o) {
     all.load_frame(reader, f, -1, io::LayerSet::particles());
     surface.load_frame(reader, f, -1, io::LayerSet::surface());
     const io::FrameHeader table = reader.read_table(f);
+    const std::vector<float> xyz = io::world_positions(io::decode_frame(reader, f), reader.header().position_coding);
+    const float radius = render::effective_radius(fluid, scene);
     const size_t attributes = reader.header().attributes.size();
     const float aspect = float(o.width) / float(o.height);
     for (const NamedView& v : views_of(bounds_of(e.bounds), scene.up, aspect)) {
@@ -166,6 +190,9 @@ std::vector<LayersRow> compare_layers(const LayersBenchOptions& o) {
       row.bytes_all = io::layers_end(table, io::LayerSet::particles(), attributes);
       row.bytes_surface = io::layers_end(table, io::LayerSet::surface(), attributes);
       row.validation_errors = context.validation_errors() - errors_before;
+      row.largest_splat_px = largest_splat(xyz, v.camera, radius, o.width, o.height);
+      row.splat_limit_px = lod.max_splat_pixels > 0 ? std::min(lod.max_splat_pixels, context.device().max_point_size)
+                                                    : context.device().max_point_size;
       if (!o.images.empty()) {
         const std::string stem = (fs::path(o.images) / ("f" + std::to_string(f) + "_" + v.name)).string();
         render::write_png(stem + "_all.png", ia);
@@ -181,15 +208,23 @@ void run_layers_bench(const LayersBenchOptions& o) {
   const std::vector<LayersRow> rows = compare_layers(o);
   std::printf("sluice bench layers: %s at %ux%u\n", o.input.c_str(), o.width, o.height);
   Table t({"frame", "view", "PSNR dB", "fluid pixels, all", "surface + blobs", "difference", "drawn, all",
-           "surface + blobs", "bytes read, all", "surface + blobs", "GPU ms, all", "surface + blobs"});
+           "surface + blobs", "bytes read, all", "surface + blobs", "GPU ms, all", "surface + blobs",
+           "largest splat px"});
+  bool near = false;
   for (const LayersRow& r : rows) {
     const double diff = r.coverage_all > 0 ? (r.coverage_surface - r.coverage_all) / r.coverage_all : 0.0;
     t.row({std::to_string(r.frame), r.view, std::isinf(r.psnr) ? "identical" : num(r.psnr, 1),
            num(100 * r.coverage_all, 2) + "%", num(100 * r.coverage_surface, 2) + "%", num(100 * diff, 3) + "%",
            count_name(r.drawn_all), count_name(r.drawn_surface), count_name(r.bytes_all), count_name(r.bytes_surface),
-           num(r.gpu_ms_all, 2), num(r.gpu_ms_surface, 2)});
+           num(r.gpu_ms_all, 2), num(r.gpu_ms_surface, 2),
+           num(r.largest_splat_px, 0) + (r.near_cull() ? " > " + num(r.splat_limit_px, 0) + " *" : "")});
+    near = near || r.near_cull();
   }
   t.print("Narrow band (surface + voxel blobs) against every particle; difference in fluid pixels relative to all");
+  if (near) {
+    std::printf("* splats larger than the renderer draws: the nearest particles are culled in both pictures, and\n"
+                "  where surface particles go the narrow band shows the hollow inside (docs/narrow_band.md)\n");
+  }
 }
 
 }  // namespace sluice::bench

@@ -21,6 +21,8 @@
 #include "sluice/render/offscreen.h"
 #include "sluice/render/renderer.h"
 #include "sluice/render/synthetic.h"
+#include "sluice/io/codec.h"
+#include "sluice/io/lod.h"
 #include "table.h"
 
 namespace sluice::bench {
@@ -153,6 +155,28 @@ double run_vtk_peer(const std::vector<float>& xyz, const RenderBenchOptions& o, 
   return seconds;
 }
 
+// A synthetic frame encoded with the narrow band's layers, stored chunks (as
+// live frames are: nothing to decompress).
+struct LayeredFrame {
+  io::FileHeader file;
+  io::EncodedFrame frame;
+};
+
+LayeredFrame layered_frame(const render::SyntheticFluid& f) {
+  const std::vector<float> xyz = render::synthetic_points(f);
+  const std::vector<uint16_t> lod = io::lod_values({}, xyz.size() / 3);
+  LayeredFrame out;
+  out.file.particle_spacing = f.spacing;
+  io::FrameInput in;
+  in.positions = xyz;
+  in.lod = lod;
+  io::EncodeOptions options;
+  options.compress = false;
+  options.layers = true;
+  out.frame = io::encode_frame(in, out.file, options);
+  return out;
+}
+
 }  // namespace
 
 std::vector<uint64_t> parse_counts(const std::string& text) {
@@ -240,11 +264,24 @@ void run_render_bench(const RenderBenchOptions& o) {
   for (uint64_t n : o.sizes) {
     std::fprintf(stderr, "generating %s synthetic particles...\n", count_name(n).c_str());
     const render::SyntheticFluid f = render::synthetic_fluid(n);
-    render::Renderer r(context, f.scene);
-    render::upload_synthetic(r, f);
-    std::vector<float> xyz;
-    if (o.vtk && f.particles <= o.vtk_max) xyz = render::synthetic_points(f);
-    run_frame("synthetic " + count_name(n), r, f.scene, &xyz);
+    {
+      render::Renderer r(context, f.scene);
+      render::upload_synthetic(r, f);
+      std::vector<float> xyz;
+      if (o.vtk && f.particles <= o.vtk_max) xyz = render::synthetic_points(f);
+      run_frame("synthetic " + count_name(n), r, f.scene, &xyz);
+    }
+    if (o.layers) {
+      std::fprintf(stderr, "classifying the narrow band of %s particles...\n", count_name(n).c_str());
+      const LayeredFrame layered = layered_frame(f);
+      for (const bool surface : {false, true}) {
+        render::Renderer r(context, f.scene);
+        io::FrameHeader header = layered.frame.header;
+        io::keep_layers(header, surface ? io::LayerSet::surface() : io::LayerSet::particles());
+        r.wait_upload(r.commit_record(layered.frame.record, header, layered.file, -1, {}));
+        run_frame("synthetic " + count_name(n) + (surface ? ", surface + blobs" : ", all (layered)"), r, f.scene, nullptr);
+      }
+    }
   }
 
   // Per-pass table.

@@ -35,22 +35,26 @@ struct Slice {
   uint64_t offset = 0, bytes = 0;  // their records in the file
   uint64_t particles = 0;          // in all of them
   uint64_t decoded = 0;            // decoded bytes of all of them
-  double in_per_frame() const { return double(bytes) / double(frames); }
+  io::LayerSet layers = io::LayerSet::particles();  // what is read of them
+  uint64_t read = 0;               // bytes of the records the layers take (the read prefix of each)
+  double in_per_frame() const { return double(read) / double(frames); }
   double out_per_frame() const { return double(decoded) / double(frames); }
 };
 
-Slice slice_of(const io::ContainerReader& reader, uint64_t wanted, uint64_t page_cache_room) {
+Slice slice_of(const io::ContainerReader& reader, uint64_t wanted, uint64_t page_cache_room, io::LayerSet layers) {
   const auto& index = reader.index().frames;
   const uint64_t per_particle =
       io::decoded_particle_bytes(reader.header().position_coding) + 2 * reader.header().attributes.size();
   Slice s;
+  s.layers = layers;
   s.offset = index.empty() ? 0 : index.front().offset;
   for (const io::FrameIndexEntry& e : index) {
     if (wanted ? s.frames == wanted : (s.frames > 0 && s.bytes + e.bytes > page_cache_room)) break;
     ++s.frames;
     s.bytes += e.bytes;
-    s.particles += e.particle_count;
-    s.decoded += e.particle_count * per_particle;
+    s.particles += e.count_in(layers);
+    s.decoded += e.count_in(layers) * per_particle;
+    s.read += e.layered() ? io::layers_end(reader.read_table(s.frames - 1), layers, reader.header().attributes.size()) : e.bytes;
   }
   return s;
 }
@@ -73,13 +77,14 @@ struct PassSetup {
 // Streams the slice through a pipeline into a null consumer. Looping passes
 // run for `min_seconds` after one window of warm-up; others run once.
 Pass stream(const io::ContainerReader& reader, const Slice& slice, const PassSetup& setup, bool direct, bool loop,
-            double min_seconds) {
+            double min_seconds, io::LayerSet layers) {
   runtime::HostFrameAllocator allocator;
   runtime::PipelineOptions o;
   o.decode_threads = setup.decode_threads;
   o.read_threads = setup.read_threads;
   o.direct_io = direct;
   o.budget.memory_cap = setup.memory;
+  o.layers = layers;
   // A loop round a slice that fits in the window would be served from the
   // frames kept decoded; at half the slice every frame comes through again.
   if (loop) o.budget.max_frames = static_cast<uint32_t>(std::max<uint64_t>(2, slice.frames / 2));
@@ -123,6 +128,7 @@ double decode_only_fps(const io::ContainerReader& reader, const Slice& slice, in
   for (uint64_t f = 0; f < frames; ++f) {
     records.push_back(reader.read_record(f));
     headers.push_back(reader.parse_record(f, records.back()));
+    io::keep_layers(headers.back(), slice.layers);
     outputs.emplace_back(headers.back().particle_count * stride);
     first.emplace_back();
     uint64_t at = 0;
@@ -161,6 +167,7 @@ double chunk_read_decode_fps(const io::ContainerReader& reader, const Slice& sli
   std::vector<std::vector<uint64_t>> firsts;  // first particle of each chunk
   for (uint64_t f = 0; f < cycle; ++f) {
     headers.push_back(reader.parse_record(f, reader.read_record(f)));
+    io::keep_layers(headers.back(), slice.layers);
     firsts.emplace_back(headers.back().chunks.size());
     for (size_t c = 1; c < headers.back().chunks.size(); ++c) {
       firsts.back()[c] = firsts.back()[c - 1] + headers.back().chunks[c - 1].particle_count;
@@ -215,13 +222,19 @@ void run_stream_bench(const StreamBenchOptions& o) {
   setup.memory = o.memory ? o.memory : uint64_t(2) << 30;
   const int readers = setup.read_threads;
   const runtime::HostMemory host = runtime::read_host_memory();
-  const Slice slice = slice_of(reader, o.frames, static_cast<uint64_t>(0.4 * double(host.available())));
+  const io::LayerSet layers = o.surface ? io::LayerSet::surface() : io::LayerSet::particles();
+  const Slice slice = slice_of(reader, o.frames, static_cast<uint64_t>(0.4 * double(host.available())), layers);
   const double in = slice.in_per_frame(), out = slice.out_per_frame();
 
-  std::printf("sluice bench stream: %s\n", o.file.c_str());
+  std::printf("sluice bench stream: %s%s\n", o.file.c_str(),
+              o.surface ? " (surface and blobs: what a player reads of a file with layers)" : "");
   std::printf("  %llu of %llu frames (%s GB on disk), %.2f M particles/frame, %.1f MB/frame on disk, %.1f MB/frame decoded\n",
               (unsigned long long)slice.frames, (unsigned long long)reader.frame_count(), num(double(slice.bytes) / 1e9, 2).c_str(),
               double(slice.particles) / double(slice.frames) / 1e6, in / 1e6, out / 1e6);
+  if (slice.read != slice.bytes) {
+    std::printf("  the layers read take %.1f MB/frame of %.1f MB/frame of records (%s)\n", in / 1e6,
+                double(slice.bytes) / double(slice.frames) / 1e6, percent(double(slice.read) / double(slice.bytes)).c_str());
+  }
   std::printf("machine: %s; pipeline: %d decode workers, %s reading, memory cap %s GB; timings of at least %.1f s\n",
               cpu_model().c_str(), cores, threads_text(readers).c_str(), num(double(setup.memory) / (1 << 30), 1).c_str(),
               o.min_seconds);
@@ -289,13 +302,13 @@ void run_stream_bench(const StreamBenchOptions& o) {
     const std::string storage_name = "storage read";
     if (direct) {
       drop_from_page_cache(o.file, slice.offset, slice.bytes);
-      pass_row("storage, O_DIRECT", stream(reader, slice, setup, true, false, 0), storage, storage_name);
+      pass_row("storage, O_DIRECT", stream(reader, slice, setup, true, false, 0, layers), storage, storage_name);
     }
     drop_from_page_cache(o.file, slice.offset, slice.bytes);
-    pass_row("storage, cache dropped", stream(reader, slice, setup, false, false, 0), storage, storage_name);
+    pass_row("storage, cache dropped", stream(reader, slice, setup, false, false, 0, layers), storage, storage_name);
     (void)sequential_read_gbps(o.file, slice.offset, slice.bytes, ReadMode::PageCache, 0, readers);  // back into the cache
   }
-  pass_row("page cache", stream(reader, slice, setup, false, true, o.min_seconds), cached,
+  pass_row("page cache", stream(reader, slice, setup, false, true, o.min_seconds, layers), cached,
            "pread, page cache, " + threads_text(readers));
   passes.print("Pipeline: reader thread (" + threads_text(readers) + " reading) + " + std::to_string(cores) +
                " decode workers -> null consumer (bound: the slower of reading the file and memcpy)");
@@ -306,7 +319,7 @@ void run_stream_bench(const StreamBenchOptions& o) {
   for (int t = 1; t <= cores; t = (t == cores ? cores + 1 : std::min(cores, t * 2))) {
     PassSetup scaled = setup;
     scaled.decode_threads = t;
-    const Pass p = stream(reader, slice, scaled, false, true, std::max(1.0, o.min_seconds / 2));
+    const Pass p = stream(reader, slice, scaled, false, true, std::max(1.0, o.min_seconds / 2), layers);
     const double fps = double(p.frames) / p.seconds;
     if (t == 1) base = fps;
     double per_worker = 0, busy = 0;  // averages over the workers that decoded

@@ -59,8 +59,10 @@ void main() {
       if (dot(g.planes[i].xyz, pos) + g.planes[i].w < -r) keep = false;
     }
     // Near-camera culling: too close, or a splat too large for the filter.
-    if (dist - r < max(g.eye.w, g.radius.w)) keep = false;
-    if (2.0 * r * g.proj.y * g.viewport.y * 0.5 > g.radius.z * max(dist - r, 1e-20)) keep = false;
+    // A blob goes when its particles would (its splat is wide by design).
+    float rn = blob ? g.radius.x : r;
+    if (dist - rn < max(g.eye.w, g.radius.w)) keep = false;
+    if (2.0 * rn * g.proj.y * g.viewport.y * 0.5 > g.radius.z * max(dist - rn, 1e-20)) keep = false;
   }
 
   float t = 0.0;

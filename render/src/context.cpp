@@ -85,6 +85,7 @@ DeviceInfo describe(const vk::raii::PhysicalDevice& pd, uint32_t index, bool pre
   d.type = type_name(p.deviceType);
   d.driver = std::string(drv.driverName.data()) + " " + drv.driverInfo.data();
   d.api_version = p.apiVersion;
+  d.max_point_size = p.limits.pointSizeRange[1];
   const auto mem = pd.getMemoryProperties();
   for (uint32_t h = 0; h < mem.memoryHeapCount; ++h) {
     if (mem.memoryHeaps[h].flags & vk::MemoryHeapFlagBits::eDeviceLocal) d.device_local_bytes += mem.memoryHeaps[h].size;

@@ -1,6 +1,7 @@
 // The renderer's lifetime: pipelines, descriptor sets, frame slots, retired
 // objects, stats; record() hands each view to the passes (passes.cpp).
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <stdexcept>
 
@@ -222,6 +223,16 @@ std::vector<std::byte> Renderer::Impl::read_texture(const Texture& t, size_t tex
   return out;
 }
 
+// IEEE half to float (the thickness targets where 32-bit float blending is missing).
+static float half_to_float(uint16_t h) {
+  const uint32_t sign = uint32_t(h >> 15) << 31, exponent = (h >> 10) & 31, mantissa = h & 1023;
+  if (exponent == 0) return (sign ? -1.f : 1.f) * std::ldexp(float(mantissa), -24);
+  uint32_t bits = sign | ((exponent == 31 ? 255u : exponent + 112u) << 23) | (mantissa << 13);
+  float f;
+  std::memcpy(&f, &bits, 4);
+  return f;
+}
+
 Renderer::Renderer(Context& context, const SceneInfo& scene, const RendererOptions& options)
     : impl_(std::make_unique<Impl>(context_impl(context), scene, options)) {
   Impl& r = *impl_;
@@ -401,6 +412,23 @@ std::vector<float> Renderer::read_surface() {
   const std::vector<std::byte> bytes = impl_->read_texture(impl_->targets.aux, 16);
   std::vector<float> out(bytes.size() / 4);
   std::memcpy(out.data(), bytes.data(), bytes.size());
+  return out;
+}
+
+std::vector<float> Renderer::read_raw_thickness() {
+  const Texture& t = impl_->targets.thick_raw;
+  const bool half = impl_->targets.thick_format == vk::Format::eR16G16Sfloat;
+  const std::vector<std::byte> bytes = impl_->read_texture(t, half ? 4 : 8);
+  std::vector<float> out(size_t(t.extent.width) * t.extent.height);
+  for (size_t i = 0; i < out.size(); ++i) {
+    if (half) {
+      uint16_t h;
+      std::memcpy(&h, bytes.data() + 4 * i, 2);
+      out[i] = half_to_float(h);
+    } else {
+      std::memcpy(&out[i], bytes.data() + 8 * i, 4);
+    }
+  }
   return out;
 }
 

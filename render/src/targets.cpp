@@ -20,7 +20,8 @@ void Renderer::Impl::ensure_targets(uint32_t width, uint32_t height, bool half) 
   next.depth_raw = create_texture(ctx, next.size, vk::Format::eR32Sfloat, U::eColorAttachment | U::eStorage | U::eTransferSrc | cleared);
   next.depth_a = create_texture(ctx, next.size, vk::Format::eR32Sfloat, U::eStorage | U::eTransferSrc | cleared);
   next.depth_b = create_texture(ctx, next.size, vk::Format::eR32Sfloat, U::eStorage | cleared);
-  next.thick_raw = create_texture(ctx, next.thick_size, thick_format, U::eColorAttachment | U::eStorage | U::eSampled | cleared);
+  next.thick_raw = create_texture(ctx, next.thick_size, thick_format,
+                                  U::eColorAttachment | U::eStorage | U::eSampled | U::eTransferSrc | cleared);
   next.thick_a = create_texture(ctx, next.thick_size, thick_format, U::eStorage | U::eSampled | cleared);
   next.thick_b = create_texture(ctx, next.thick_size, thick_format, U::eStorage | cleared);
   next.depth_u = create_texture(ctx, next.size, vk::Format::eR32Uint, U::eStorage | cleared);

@@ -247,7 +247,7 @@ TEST(RoundTrip, UpAxisAndTimeSourceSurviveAndCanBeRewrittenInPlace) {
     w.finish();
   }
   const io::ContainerReader r(path);
-  EXPECT_EQ(r.header().version_minor, 2);
+  EXPECT_EQ(r.header().version_minor, io::kFormatMinor);
   EXPECT_EQ(r.header().up, io::UpAxis::NegY);
   EXPECT_EQ(r.header().up_evidence, io::UpEvidence::Motion);
   EXPECT_EQ(r.header().time_source, io::TimeSource::Step);

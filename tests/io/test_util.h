@@ -49,7 +49,8 @@ inline io::FileHeader test_header(io::PositionCoding coding, bool with_attribute
   return h;
 }
 
-inline io::EncodedFrame encode(const io::ParticleFrame& f, const io::FileHeader& h, uint32_t chunk = 4096) {
+inline io::EncodedFrame encode(const io::ParticleFrame& f, const io::FileHeader& h, uint32_t chunk = 4096,
+                               bool layers = false) {
   const std::vector<uint16_t> lod = io::lod_values(f.ids, f.count());
   io::FrameInput in;
   in.positions = f.positions;
@@ -58,14 +59,16 @@ inline io::EncodedFrame encode(const io::ParticleFrame& f, const io::FileHeader&
   in.time = f.time;
   io::EncodeOptions options;
   options.chunk_particles = chunk;
+  options.layers = layers;
   return io::encode_frame(in, h, options);
 }
 
 // Writes frames into a new container and returns its path.
 inline std::filesystem::path write_file(const std::filesystem::path& path, const io::FileHeader& h,
-                                        const std::vector<io::ParticleFrame>& frames, uint32_t chunk = 4096) {
+                                        const std::vector<io::ParticleFrame>& frames, uint32_t chunk = 4096,
+                                        bool layers = false) {
   io::ContainerWriter w(path, h);
-  for (const auto& f : frames) w.append(encode(f, h, chunk));
+  for (const auto& f : frames) w.append(encode(f, h, chunk, layers));
   w.finish();
   return path;
 }

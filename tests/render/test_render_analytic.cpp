@@ -4,11 +4,13 @@
 // also asserts zero validation errors.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
 #include "render_test_util.h"
 #include "sluice/io/codec.h"
+#include "sluice/io/lod.h"
 #include "sluice/render/image_io.h"
 #include "sluice/render/lod.h"
 #include "sluice/render/renderer.h"
@@ -125,6 +127,65 @@ TEST_P(LoneSphere, DepthIsExact) {
   EXPECT_EQ(extra, 0u) << "pixels outside every silhouette covered";
   EXPECT_LT(worst, 1e-3) << "largest relative depth error";
   std::printf("lone spheres (%s): %zu pixels, largest relative depth error %.2e\n", to_string(GetParam()), hits, worst);
+}
+
+// Voxel blobs stand for the interior's thickness: each blob's splat adds its
+// particles' volume (papers/001 eq. 4.2, normalized). Seen from afar, the
+// thickness summed over the image (each pixel weighted by its solid angle)
+// is sum V_i / d_i^2 over the particles, whether they are drawn one by one
+// or as the surface plus blobs.
+TEST_P(LoneSphere, BlobsAddTheThicknessOfTheirParticles) {
+  ValidationGuard guard;
+  const float s = 0.05f;
+  std::vector<float> xyz;
+  for (int k = 0; k < 14; ++k)
+    for (int j = 0; j < 14; ++j)
+      for (int i = 0; i < 14; ++i) xyz.insert(xyz.end(), {s * (float(i) - 6.5f), s * (float(j) - 6.5f), s * (float(k) - 6.5f)});
+  const std::vector<uint16_t> lod = io::lod_values({}, xyz.size() / 3);
+  io::FileHeader file;
+  file.particle_spacing = s;
+  io::FrameInput in;
+  in.positions = xyz;
+  in.lod = lod;
+  io::EncodeOptions eo;
+  eo.layers = true;
+  const io::EncodedFrame frame = io::encode_frame(in, file, eo);
+  ASSERT_GT(std::count_if(frame.header.chunks.begin(), frame.header.chunks.end(),
+                          [](const io::ChunkDesc& c) { return c.layer == io::Layer::Blobs; }),
+            0);
+  const SceneInfo scene = scene_for_points(xyz, s);
+  const float r = s / 2;
+  const Camera cam = camera_at({0.3f, -0.4f, 6}, {0, 0, 0}, 12);
+  double expected = 0;
+  for (size_t i = 0; i < xyz.size(); i += 3) {
+    const double dx = xyz[i] - cam.eye.x, dy = xyz[i + 1] - cam.eye.y, dz = xyz[i + 2] - cam.eye.z;
+    expected += (4.0 / 3.0) * M_PI * r * r * r / (dx * dx + dy * dy + dz * dz);
+  }
+  FluidOptions o = plain(DisplayMode::ThicknessBuffer, r);
+  o.splatting = GetParam();
+  o.half_resolution_thickness = false;
+  const double t = std::tan(double(cam.fov_deg) * M_PI / 360.0);
+  const double pixel = 2 * t / kH;  // side of a pixel at unit distance
+  double sums[2] = {0, 0};
+  for (const bool surface : {false, true}) {
+    testing::OffscreenRenderer rr(context(), scene, kW, kH);
+    io::FrameHeader h = frame.header;
+    io::keep_layers(h, surface ? io::LayerSet::surface() : io::LayerSet::particles());
+    rr.renderer.wait_upload(rr.renderer.commit_record(frame.record, h, file, -1, {}));
+    rr.render(cam, o, {});
+    const std::vector<float> thickness = rr.renderer.read_raw_thickness();
+    ASSERT_EQ(thickness.size(), size_t(kW) * kH);
+    for (uint32_t y = 0; y < kH; ++y) {
+      for (uint32_t x = 0; x < kW; ++x) {
+        const auto d = pixel_ray(cam, x, y);
+        const double len = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+        sums[surface] += thickness[size_t(y) * kW + x] * pixel * pixel / (len * len * len);  // x solid angle
+      }
+    }
+  }
+  std::printf("thickness integral: particles %.6g, surface + blobs %.6g, analytic %.6g\n", sums[0], sums[1], expected);
+  EXPECT_NEAR(sums[0] / expected, 1.0, 0.02);
+  EXPECT_NEAR(sums[1] / expected, 1.0, 0.02);  // 1.1% of each blob lies beyond its splat's 3 sigma
 }
 
 INSTANTIATE_TEST_SUITE_P(RenderAnalytic, LoneSphere, ::testing::Values(Splatting::Compute, Splatting::Raster),

@@ -9,6 +9,8 @@
 #include <random>
 
 #include "runtime_test_util.h"
+#include "sluice/io/lod.h"
+#include "sluice/io/writer.h"
 #include "sluice/runtime/pipeline.h"
 
 using namespace sluice;
@@ -375,4 +377,68 @@ TEST(ThreadSplit, OneReaderPerFourCoresFromEightCoresOn) {
   EXPECT_EQ(default_thread_split(16).read, 4);
   EXPECT_EQ(default_thread_split(64).decode, 60);
   EXPECT_EQ(default_thread_split(64).read, 4);
+}
+
+// A file with the narrow band's layers: with the surface set the pipeline
+// reads each record only up to its last blob payload, and delivers exactly
+// the surface and blob chunks, decoded as decode_frame decodes them.
+TEST(PipelineLayers, SurfaceSetReadsThePrefixAndDeliversSurfaceAndBlobs) {
+  test::TempDir dir;
+  io::FileHeader h;
+  h.particle_spacing = 0.01f;
+  const auto path = dir / "layered.sluice";
+  {
+    io::ContainerWriter w(path, h);
+    for (int f = 0; f < 6; ++f) {
+      std::vector<float> xyz;
+      for (int k = 0; k < 16; ++k)
+        for (int j = 0; j < 16; ++j)
+          for (int i = 0; i < 16 + f; ++i) xyz.insert(xyz.end(), {0.01f * float(i), 0.01f * float(j), 0.01f * float(k)});
+      const std::vector<uint16_t> lod = io::lod_values({}, xyz.size() / 3);
+      io::FrameInput in;
+      in.positions = xyz;
+      in.lod = lod;
+      io::EncodeOptions o;
+      o.chunk_particles = 300;
+      o.layers = true;
+      w.append(io::encode_frame(in, h, o));
+    }
+    w.finish();
+  }
+  const io::ContainerReader reader(path);
+  uint64_t prefix_bytes = 0, whole_bytes = 0;
+  for (uint64_t f = 0; f < reader.frame_count(); ++f) {
+    ASSERT_TRUE(reader.index().frames[f].layered());
+    prefix_bytes += io::layers_end(reader.read_table(f), io::LayerSet::surface(), 0);
+    whole_bytes += reader.index().frames[f].bytes;
+  }
+  ASSERT_LT(prefix_bytes, whole_bytes);
+  for (const bool surface : {true, false}) {
+    HostFrameAllocator allocator;
+    PipelineOptions o;
+    o.decode_threads = 2;
+    o.read_threads = 1;
+    o.budget.max_frames = 2;
+    o.layers = surface ? io::LayerSet::surface() : io::LayerSet::particles();
+    Pipeline p(reader, allocator, o);
+    p.restart({reader.frame_count(), 0, 1, 1, EndMode::Stop});
+    for (uint64_t f = 0; f < reader.frame_count(); ++f) {
+      const NextEntry next = p.wait_next();
+      ASSERT_EQ(next.status, EntryStatus::Ready);
+      FrameHandle got = p.take();
+      const io::DecodedFrame want = io::decode_frame(reader, f, o.layers);
+      ASSERT_EQ(got.header().chunks.size(), want.header.chunks.size());
+      ASSERT_EQ(got.header().particle_count, want.header.particle_count);
+      for (size_t c = 0; c < want.header.chunks.size(); ++c) {
+        EXPECT_EQ(got.header().chunks[c].layer, want.header.chunks[c].layer);
+        EXPECT_NE(got.header().chunks[c].layer, surface ? io::Layer::Interior : io::Layer::Blobs);
+      }
+      EXPECT_TRUE(std::equal(want.particles.begin(), want.particles.end(), got.buffers().particles.begin()));
+    }
+    const PipelineStats st = p.stats();
+    EXPECT_EQ(st.frames_failed, 0u);
+    // Surface: the prefixes (table included, no alignment: buffered reads). All: every
+    // record is read whole (the blobs lie between the surface and the interior).
+    EXPECT_EQ(st.bytes_read, surface ? prefix_bytes : whole_bytes);
+  }
 }

@@ -33,6 +33,12 @@ struct LayersRow {
   double gpu_ms_all = 0, gpu_ms_surface = 0;    // medians
   uint64_t bytes_all = 0, bytes_surface = 0;    // of the record each reads
   uint64_t validation_errors = 0;               // with options.validation
+  // The largest particle splat of the view (pixels across, every particle in
+  // front of the eye) against the largest the renderer draws: beyond it the
+  // nearest particles are culled (thesis 3.4), and where surface particles
+  // go, the narrow band shows the hollow the interior left (docs/narrow_band.md).
+  double largest_splat_px = 0, splat_limit_px = 0;
+  bool near_cull() const { return largest_splat_px > splat_limit_px; }
 };
 
 // Renders every view of every frame both ways. Throws io::Error on a bad

@@ -23,6 +23,10 @@ struct RenderBenchOptions {
   std::string splat = "auto";   // sphere splatting: auto, compute or raster
   std::string csv;              // also write every case (per-pass ms) here, for plots of ms against particles
   std::string plot;             // also draw GPU ms against particles (log-log, one line per LOD) as an SVG here
+  // Also draw each synthetic frame classified into the narrow band's layers
+  // (encoded as `sluice convert` writes it): its surface and voxel blobs,
+  // and all its particles from the same chunks, for the narrow band's saving.
+  bool layers = false;
   bool with_depth = false;      // render into a target with a depth image, as a host with its own geometry does
                                 // (the present pass with the depth test; without, shading writes the image)
 };

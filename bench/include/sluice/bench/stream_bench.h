@@ -21,6 +21,7 @@ struct StreamBenchOptions {
   uint64_t memory = 0;       // the pipeline's memory cap; 0: 2 GiB
   uint64_t frames = 0;       // frames to stream (from frame 0); 0: as many as fit in the page cache
   bool storage = true;       // also measure from storage (drops the file from the page cache)
+  bool surface = false;      // the pipeline reads the surface and blobs of a file with layers (format 1.3)
 };
 
 // Throws io::Error on a bad file.

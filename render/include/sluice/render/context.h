@@ -54,6 +54,9 @@ struct DeviceInfo {
   std::string driver;  // driver name and info
   uint32_t api_version = 0;
   uint64_t device_local_bytes = 0;
+  // Largest point sprite, pixels: the largest splat drawn (LodOptions::
+  // max_splat_pixels lowers it); nearer particles are culled (thesis 3.4).
+  float max_point_size = 0;
   bool usable = false;  // Vulkan 1.3 with what the renderer needs
   std::string why_not;  // when !usable
 };

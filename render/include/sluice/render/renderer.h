@@ -207,6 +207,10 @@ class Renderer {
   // depth (distance along the view axis). Submit and wait on the graphics queue.
   std::vector<float> read_surface();
   std::vector<float> read_raw_depth();
+  // The unfiltered thickness (world units along each pixel's ray) of the
+  // last view, at the thickness buffer's resolution (half size unless
+  // full-resolution thickness was asked for).
+  std::vector<float> read_raw_thickness();
 
   struct Impl;  // render/src/renderer_impl.h
 
