@@ -26,12 +26,17 @@ void add_bench(CLI::App& app) {
   auto band = std::make_shared<bench::BandBenchOptions>();
   CLI::App* bc = bench->add_subcommand("band", "The narrow-band classifier (LNM) on the input's frames, against the exact narrow band");
   bc->footer("Example: sluice bench band data/dam_break_3d/dam_break_3d.pvd --frames 3");
-  bc->add_option("input", band->input, "Simulation output, as `sluice convert` takes it")->required();
+  bc->add_option("input", band->input, "Simulation output, as `sluice convert` takes it");
+  bc->add_option("--synth", band->synth, "Classify one frame of a synthetic sloshing block of N particles instead");
+  bc->add_flag("--no-exact", [band](int64_t) { band->exact = false; }, "Skip the exact narrow band (slow on millions)");
   bc->add_option("-t,--threads", band->max_threads, "Most threads (default: all cores)");
   bc->add_option("--min-time", band->min_seconds, "Seconds each timing repeats for")->capture_default_str();
   bc->add_option("--frames", band->frames, "Frames measured, first to last")->capture_default_str();
   bc->add_option("--diameter", band->diameter, "Particle diameter h (default: the estimated spacing)");
-  bc->callback([band] { bench::run_band_bench(*band); });
+  bc->callback([band] {
+    if (band->input.empty() && band->synth == 0) throw CLI::ValidationError("bench band", "give an input or --synth N");
+    bench::run_band_bench(*band);
+  });
 
   auto stream = std::make_shared<bench::StreamBenchOptions>();
   auto stream_memory = std::make_shared<std::string>();

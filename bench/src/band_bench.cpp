@@ -13,6 +13,7 @@
 #include "machine.h"
 #include "sluice/io/import.h"
 #include "sluice/io/narrow_band.h"
+#include "sluice/bench/synth.h"
 #include "sluice/io/spacing.h"
 #include "table.h"
 
@@ -51,7 +52,15 @@ double timed_classify(const io::ParticleFrame& f, const io::NarrowBandOptions& o
 
 void run_band_bench(const BandBenchOptions& o) {
   const int cores = o.max_threads > 0 ? o.max_threads : core_count();
-  const auto source = io::open_source(o.input, {});
+  std::unique_ptr<io::FrameSource> source;
+  if (o.synth > 0) {
+    SynthOptions so;
+    so.particles = o.synth;
+    so.frames = 1;
+    source = synthetic_source(so);
+  } else {
+    source = io::open_source(o.input, {});
+  }
   std::printf("sluice bench band: %s\nmachine: %s, %d threads\n", source->info().description.c_str(),
               cpu_model().c_str(), cores);
   Table speed({"frame", "particles", "h", "surface (L1 + L2 + isolated)", "kept", "1 thread M/s",
@@ -73,6 +82,7 @@ void run_band_bench(const BandBenchOptions& o) {
                num(100.0 * double(band.surface()) / double(n), 1) + "%", num(double(n) / one / 1e6, 1),
                num(double(n) / all / 1e6, 1)});
 
+    if (!o.exact) continue;
     const std::vector<bool> exact = io::exact_narrow_band(frame.positions, h);
     const std::vector<uint8_t> layer = io::voxel_layers(frame.positions, band.voxel);
     std::array<uint64_t, 6> in_layer{}, exact_in_layer{}, lnm_in_layer{};
@@ -99,6 +109,7 @@ void run_band_bench(const BandBenchOptions& o) {
                num(exact_total ? 100.0 * double(found) / double(exact_total) : 100.0, 2) + "%", std::to_string(extra)});
   }
   speed.print("LNM classification (voxel 2h, F2 = every particle of a selected L2 voxel)");
+  if (!o.exact) return;
   layers.print("The exact narrow band by voxel layer (the LNM dissertation's tables 1 and 2)");
   agree.print("LNM against the exact narrow band (spheres of radius h, 64 directions)");
 }

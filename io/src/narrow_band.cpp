@@ -49,29 +49,28 @@ Box bounds(std::span<const float> xyz) {
       });
 }
 
-// Occupied voxels: the particles sorted by voxel, each voxel a run of them,
-// found by key through an open-addressing table.
+// Occupied voxels: the particles sorted by voxel, each voxel a run of them.
+// Where the particles' box holds few enough cells (a fluid body, not spray
+// flung far away), a dense array maps every cell to its voxel and the sort
+// is a counting sort over cells; otherwise the keys are sorted and an
+// open-addressing table finds voxels by key. Both give the same voxels in
+// the same (x, y, z) order, particles in index order within a voxel.
 class VoxelGrid {
  public:
   VoxelGrid(std::span<const float> xyz, float side) : side_(side) {
     const size_t n = xyz.size() / 3;
     box_ = bounds(xyz);
-    keyed_.resize(n);
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 16384), [&](const tbb::blocked_range<size_t>& r) {
-      for (size_t i = r.begin(); i < r.end(); ++i) keyed_[i] = {key_of(xyz, i), uint32_t(i)};
-    });
-    tbb::parallel_sort(keyed_.begin(), keyed_.end());
-    for (size_t i = 0; i < n; ++i) {
-      if (i == 0 || keyed_[i].first != keyed_[i - 1].first) voxels_.push_back({keyed_[i].first, uint32_t(i), 0});
-      ++voxels_.back().count;
+    uint64_t cells = 1;
+    for (int a = 0; a < 3; ++a) {
+      // Coordinates 1 .. dims-2: cell 0 and the last are the outside.
+      const double extent = box_.hi[a] >= box_.lo[a] ? double(box_.hi[a]) - box_.lo[a] : 0.0;
+      dims_[a] = int64_t(std::min<double>(std::floor(extent / side_ + 0.25) + 3, double(kAxisCells)));
+      cells *= uint64_t(dims_[a]);
     }
-    size_t capacity = 16;
-    while (capacity < 2 * voxels_.size()) capacity *= 2;
-    table_.assign(capacity, kEmpty);
-    for (uint32_t v = 0; v < voxels_.size(); ++v) {
-      size_t slot = hash(voxels_[v].key) & (capacity - 1);
-      while (table_[slot] != kEmpty) slot = (slot + 1) & (capacity - 1);
-      table_[slot] = v;
+    if (cells <= std::max<uint64_t>(8 * uint64_t(n), uint64_t(1) << 20) && cells < kEmpty) {
+      build_dense(xyz, cells);
+    } else {
+      build_sparse(xyz);
     }
   }
 
@@ -84,12 +83,17 @@ class VoxelGrid {
   size_t size() const { return voxels_.size(); }
   const Voxel& voxel(size_t v) const { return voxels_[v]; }
   // Particle indices, voxel by voxel.
-  uint32_t particle(size_t k) const { return keyed_[k].second; }
+  uint32_t particle(size_t k) const { return order_[k]; }
 
   // The voxel at key + (dx, dy, dz), or -1 when empty or outside.
   int64_t neighbour(uint64_t key, int dx, int dy, int dz) const {
     const int64_t x = int64_t(key >> 42) + dx, y = int64_t((key >> 21) & 0x1FFFFF) + dy,
                   z = int64_t(key & 0x1FFFFF) + dz;
+    if (!cell_voxel_.empty()) {
+      if (x < 0 || y < 0 || z < 0 || x >= dims_[0] || y >= dims_[1] || z >= dims_[2]) return -1;
+      const uint32_t v = cell_voxel_[size_t((x * dims_[1] + y) * dims_[2] + z)];
+      return v == kEmpty ? -1 : int64_t(v);
+    }
     if (x < 0 || y < 0 || z < 0 || x > kAxisCells || y > kAxisCells || z > kAxisCells) return -1;
     return find(pack(x, y, z));
   }
@@ -105,6 +109,57 @@ class VoxelGrid {
     return k;
   }
 
+  // Counting sort over the box's cells: linear, and stable (index order).
+  void build_dense(std::span<const float> xyz, uint64_t cells) {
+    const size_t n = xyz.size() / 3;
+    std::vector<uint32_t> cell(n);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 16384), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t i = r.begin(); i < r.end(); ++i) {
+        const uint64_t k = key_of(xyz, i);
+        cell[i] = uint32_t((int64_t(k >> 42) * dims_[1] + int64_t((k >> 21) & 0x1FFFFF)) * dims_[2] + int64_t(k & 0x1FFFFF));
+      }
+    });
+    std::vector<uint32_t> start(cells + 1, 0);
+    for (size_t i = 0; i < n; ++i) ++start[size_t(cell[i]) + 1];
+    for (uint64_t c = 0; c < cells; ++c) start[c + 1] += start[c];
+    order_.resize(n);
+    {
+      std::vector<uint32_t> cursor(start.begin(), start.end() - 1);
+      for (size_t i = 0; i < n; ++i) order_[cursor[cell[i]]++] = uint32_t(i);
+    }
+    cell_voxel_.assign(cells, kEmpty);
+    for (uint64_t c = 0; c < cells; ++c) {
+      if (start[c + 1] == start[c]) continue;
+      const int64_t z = int64_t(c % uint64_t(dims_[2])), y = int64_t(c / uint64_t(dims_[2]) % uint64_t(dims_[1])),
+                    x = int64_t(c / (uint64_t(dims_[2]) * uint64_t(dims_[1])));
+      cell_voxel_[c] = uint32_t(voxels_.size());
+      voxels_.push_back({pack(x, y, z), start[c], start[c + 1] - start[c]});
+    }
+  }
+
+  void build_sparse(std::span<const float> xyz) {
+    const size_t n = xyz.size() / 3;
+    std::vector<std::pair<uint64_t, uint32_t>> keyed(n);  // (voxel key, particle)
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 16384), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t i = r.begin(); i < r.end(); ++i) keyed[i] = {key_of(xyz, i), uint32_t(i)};
+    });
+    tbb::parallel_sort(keyed.begin(), keyed.end());
+    order_.resize(n);
+    for (size_t i = 0; i < n; ++i) {
+      order_[i] = keyed[i].second;
+      if (i == 0 || keyed[i].first != keyed[i - 1].first) voxels_.push_back({keyed[i].first, uint32_t(i), 0});
+      ++voxels_.back().count;
+    }
+    size_t capacity = 16;
+    while (capacity < 2 * voxels_.size()) capacity *= 2;
+    table_.assign(capacity, kEmpty);
+    for (uint32_t v = 0; v < voxels_.size(); ++v) {
+      size_t slot = hash(voxels_[v].key) & (capacity - 1);
+      while (table_[slot] != kEmpty) slot = (slot + 1) & (capacity - 1);
+      table_[slot] = v;
+    }
+  }
+
   // Voxel coordinates start at 1: voxel 0 of every axis is the outside. The
   // grid starts a quarter voxel below the lowest particle, so that particles
   // on a lattice of half the voxel side (a solver's first frame) never lie
@@ -115,7 +170,7 @@ class VoxelGrid {
       const float v = xyz[3 * i + a];
       const double origin = double(box_.lo[a]) - 0.25 * side_;
       const double cell = std::isfinite(v) ? std::floor((double(v) - origin) / side_) : 0.0;
-      c[a] = 1 + int64_t(std::clamp(cell, 0.0, double(kAxisCells - 2)));
+      c[a] = 1 + int64_t(std::clamp(cell, 0.0, double(std::min<int64_t>(kAxisCells, dims_[a]) - 3)));
     }
     return pack(c[0], c[1], c[2]);
   }
@@ -131,9 +186,11 @@ class VoxelGrid {
 
   float side_;
   Box box_;
-  std::vector<std::pair<uint64_t, uint32_t>> keyed_;  // (voxel key, particle), sorted
+  int64_t dims_[3] = {1, 1, 1};         // cells per axis, the outside layer included
+  std::vector<uint32_t> order_;         // particle indices, sorted by voxel
   std::vector<Voxel> voxels_;
-  std::vector<uint32_t> table_;
+  std::vector<uint32_t> table_;         // sparse: voxel by key hash
+  std::vector<uint32_t> cell_voxel_;    // dense: voxel by cell, kEmpty where none
 };
 
 template <class F>

@@ -14,6 +14,8 @@ struct BandBenchOptions {
   double min_seconds = 1.0;  // each timing repeats until it has run this long
   int frames = 3;            // frames measured: the first, the last, and evenly between
   float diameter = 0;        // particle diameter h; 0: the estimated spacing
+  uint64_t synth = 0;        // > 0: instead of `input`, one frame of `sluice synth`'s sloshing block of this many particles
+  bool exact = true;         // also compare with the exact narrow band (slow: minutes per 10M particles)
 };
 
 // Prints the tables to stdout. Throws io::Error on bad input.
