@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Runs on the GPU machine (see bench/device/README.md): every benchmark the
 # issues ask GPU-machine figures for, in one call. Results go to $OUT.
-#   bash bench/device/run.sh [io] [import] [render] [stream] [split] [codec] [huge] [embed] [compare] [live] [firsthour] [streamcmp]   (default: io render stream)
+#   bash bench/device/run.sh [io] [import] [layers] [render] [stream] [split] [codec] [huge] [embed] [compare] [live] [firsthour] [streamcmp]   (default: io render stream)
 set -uo pipefail
 OUT=${OUT:-/tmp/out}
 mkdir -p "$OUT" /tmp/s
@@ -48,6 +48,31 @@ for stage in $stages; do
     split)  # after stream: other splits of the cores between reading and decoding
       run $S bench stream /tmp/synth10m.sluice --memory 16G --no-storage --read-threads 3 --threads 13
       run $S bench stream /tmp/synth10m.sluice --memory 16G --no-storage --read-threads 4 --threads 12
+      ;;
+    layers)  # the narrow band: picture, bytes, classification, frame time (issue 11)
+      $S convert data/dam_break_3d/dam_break_3d.pvd -o /tmp/dam_layers.sluice -q -f
+      run $S info /tmp/dam_layers.sluice
+      run $S bench render --sizes 1M --repeats 3 >/dev/null  # warm-up
+      run $S bench layers /tmp/dam_layers.sluice --frames 0,6,12 --size 1280x720 --repeats 7
+      run $S bench layers /tmp/dam_layers.sluice --frames 0,6,12 --size 2064x2208 --repeats 7
+      if [[ -f .gpu/dam_fine.sluice ]]; then
+        run $S info .gpu/dam_fine.sluice
+        run $S bench layers .gpu/dam_fine.sluice --frames 0,4,8 --size 1280x720 --repeats 7
+      fi
+      run $S bench band data/dam_break_3d/dam_break_3d.pvd --frames 3 --min-time 1
+      run $S bench band --synth 10000000 --no-exact --frames 1 --min-time 2
+      run $S bench band --synth 100000000 --no-exact --frames 1 --min-time 2
+      run $S bench render --repeats 7 --sizes 10M,100M --layers
+      run $S bench render --repeats 7 --sizes 10M,100M --layers --size 2064x2208
+      run $S synth -n 10M --frames 60 -o /tmp/synth10m_layers.sluice --force -q
+      run $S info /tmp/synth10m_layers.sluice
+      run $S bench stream /tmp/synth10m_layers.sluice --memory 16G --no-storage --surface
+      run $S bench stream /tmp/synth10m_layers.sluice --memory 16G --no-storage
+      rm -f /tmp/synth10m_layers.sluice
+      run $S synth -n 100M --frames 6 -o /tmp/synth100m_layers.sluice --force -q
+      run $S info /tmp/synth100m_layers.sluice
+      run $S bench stream /tmp/synth100m_layers.sluice --memory 24G --no-storage --min-time 2 --surface
+      rm -f /tmp/synth100m_layers.sluice
       ;;
     huge)  # 100M particles per frame
       run $S synth -n 100M --frames 12 -o /tmp/synth100m.sluice --force -q
