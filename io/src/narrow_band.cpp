@@ -69,6 +69,11 @@ class VoxelGrid {
     }
     if (cells <= std::max<uint64_t>(8 * uint64_t(n), uint64_t(1) << 20) && cells < kEmpty) {
       build_dense(xyz, cells);
+      for (int dx = -1; dx <= 1; ++dx)
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dz = -1; dz <= 1; ++dz) {
+            if (dx != 0 || dy != 0 || dz != 0) offsets_.push_back((dx * dims_[1] + dy) * dims_[2] + dz);
+          }
     } else {
       build_sparse(xyz);
     }
@@ -84,6 +89,21 @@ class VoxelGrid {
   const Voxel& voxel(size_t v) const { return voxels_[v]; }
   // Particle indices, voxel by voxel.
   uint32_t particle(size_t k) const { return order_[k]; }
+
+  // Dense grids: calls f for the 26 neighbours of voxel v straight from the
+  // cell array (an occupied cell is never on the outside layer, so every
+  // neighbour cell exists) and returns true; sparse grids: returns false.
+  template <class F>
+  bool each_dense_neighbour(size_t v, F& f) const {
+    if (cell_voxel_.empty()) return false;
+    const uint64_t key = voxels_[v].key;
+    const int64_t centre = (int64_t(key >> 42) * dims_[1] + int64_t((key >> 21) & 0x1FFFFF)) * dims_[2] + int64_t(key & 0x1FFFFF);
+    for (const int64_t offset : offsets_) {
+      const uint32_t w = cell_voxel_[size_t(centre + offset)];
+      if (!f(w == kEmpty ? int64_t(-1) : int64_t(w))) break;
+    }
+    return true;
+  }
 
   // The voxel at key + (dx, dy, dz), or -1 when empty or outside.
   int64_t neighbour(uint64_t key, int dx, int dy, int dz) const {
@@ -109,7 +129,12 @@ class VoxelGrid {
     return k;
   }
 
-  // Counting sort over the box's cells: linear, and stable (index order).
+  // Counting sort over the box's cells, in two stable passes that run in
+  // parallel without atomics: particles into buckets of 2^kBucketBits
+  // consecutive cells (each of T index ranges counts and then scatters its
+  // own particles, in index order), then each bucket sorted by cell on its
+  // own. The order is the same on any number of threads: particles in cell
+  // order, index order within a cell.
   void build_dense(std::span<const float> xyz, uint64_t cells) {
     const size_t n = xyz.size() / 3;
     std::vector<uint32_t> cell(n);
@@ -119,22 +144,69 @@ class VoxelGrid {
         cell[i] = uint32_t((int64_t(k >> 42) * dims_[1] + int64_t((k >> 21) & 0x1FFFFF)) * dims_[2] + int64_t(k & 0x1FFFFF));
       }
     });
-    std::vector<uint32_t> start(cells + 1, 0);
-    for (size_t i = 0; i < n; ++i) ++start[size_t(cell[i]) + 1];
-    for (uint64_t c = 0; c < cells; ++c) start[c + 1] += start[c];
+    constexpr int kBucketBits = 12;
+    const size_t buckets = size_t((cells + (uint64_t(1) << kBucketBits) - 1) >> kBucketBits);
+    const size_t ranges = std::clamp<size_t>(n / 65536, 1, 64);
+    const auto range_begin = [&](size_t r) { return n * r / ranges; };
+    // offset[r * buckets + b]: where range r's particles of bucket b go.
+    std::vector<uint32_t> offset(ranges * buckets, 0);
+    tbb::parallel_for(size_t(0), ranges, [&](size_t r) {
+      uint32_t* count = &offset[r * buckets];
+      for (size_t i = range_begin(r); i < range_begin(r + 1); ++i) ++count[cell[i] >> kBucketBits];
+    });
+    std::vector<uint32_t> bucket_start(buckets + 1, 0);
+    uint32_t total = 0;
+    for (size_t b = 0; b < buckets; ++b) {
+      bucket_start[b] = total;
+      for (size_t r = 0; r < ranges; ++r) {
+        const uint32_t c = offset[r * buckets + b];
+        offset[r * buckets + b] = total;
+        total += c;
+      }
+    }
+    bucket_start[buckets] = total;
+    std::vector<uint32_t> by_bucket(n);
+    tbb::parallel_for(size_t(0), ranges, [&](size_t r) {
+      uint32_t* next = &offset[r * buckets];
+      for (size_t i = range_begin(r); i < range_begin(r + 1); ++i) by_bucket[next[cell[i] >> kBucketBits]++] = uint32_t(i);
+    });
+    // Each bucket by cell; its occupied cells counted for the voxel numbering.
     order_.resize(n);
-    {
-      std::vector<uint32_t> cursor(start.begin(), start.end() - 1);
-      for (size_t i = 0; i < n; ++i) order_[cursor[cell[i]]++] = uint32_t(i);
-    }
     cell_voxel_.assign(cells, kEmpty);
-    for (uint64_t c = 0; c < cells; ++c) {
-      if (start[c + 1] == start[c]) continue;
-      const int64_t z = int64_t(c % uint64_t(dims_[2])), y = int64_t(c / uint64_t(dims_[2]) % uint64_t(dims_[1])),
-                    x = int64_t(c / (uint64_t(dims_[2]) * uint64_t(dims_[1])));
-      cell_voxel_[c] = uint32_t(voxels_.size());
-      voxels_.push_back({pack(x, y, z), start[c], start[c + 1] - start[c]});
-    }
+    std::vector<uint32_t> occupied(buckets + 1, 0);
+    tbb::parallel_for(size_t(0), buckets, [&](size_t b) {
+      uint32_t count[size_t(1) << kBucketBits] = {};
+      const uint32_t lo = bucket_start[b], hi = bucket_start[b + 1];
+      for (uint32_t k = lo; k < hi; ++k) ++count[cell[by_bucket[k]] & ((1u << kBucketBits) - 1)];
+      uint32_t at = lo, used = 0;
+      for (uint32_t& c : count) {  // counts into where each cell starts
+        const uint32_t here = c;
+        c = at;
+        at += here;
+        used += here > 0;
+      }
+      occupied[b + 1] = used;
+      for (uint32_t k = lo; k < hi; ++k) {
+        const uint32_t i = by_bucket[k];
+        order_[count[cell[i] & ((1u << kBucketBits) - 1)]++] = i;
+      }
+    });
+    for (size_t b = 0; b < buckets; ++b) occupied[b + 1] += occupied[b];
+    voxels_.resize(occupied[buckets]);
+    tbb::parallel_for(size_t(0), buckets, [&](size_t b) {
+      uint32_t v = occupied[b];
+      uint32_t k = bucket_start[b];
+      while (k < bucket_start[b + 1]) {
+        const uint32_t c = cell[order_[k]];
+        uint32_t end = k + 1;
+        while (end < bucket_start[b + 1] && cell[order_[end]] == c) ++end;
+        const int64_t z = int64_t(c % uint64_t(dims_[2])), y = int64_t(c / uint64_t(dims_[2]) % uint64_t(dims_[1])),
+                      x = int64_t(c / (uint64_t(dims_[2]) * uint64_t(dims_[1])));
+        cell_voxel_[c] = v;
+        voxels_[v++] = {pack(x, y, z), k, end - k};
+        k = end;
+      }
+    });
   }
 
   void build_sparse(std::span<const float> xyz) {
@@ -191,10 +263,15 @@ class VoxelGrid {
   std::vector<Voxel> voxels_;
   std::vector<uint32_t> table_;         // sparse: voxel by key hash
   std::vector<uint32_t> cell_voxel_;    // dense: voxel by cell, kEmpty where none
+  std::vector<int64_t> offsets_;        // dense: the 26 neighbours' cells, relative
 };
 
+// Calls f(w) for the 26 voxels around voxel v (w = -1: empty or outside)
+// until f returns false.
 template <class F>
-void for_each_neighbour(const VoxelGrid& grid, uint64_t key, F&& f) {
+void for_each_neighbour(const VoxelGrid& grid, size_t v, F&& f) {
+  if (grid.each_dense_neighbour(v, f)) return;
+  const uint64_t key = grid.voxel(v).key;
   for (int dx = -1; dx <= 1; ++dx)
     for (int dy = -1; dy <= 1; ++dy)
       for (int dz = -1; dz <= 1; ++dz) {
@@ -227,7 +304,7 @@ bool alone(const VoxelGrid& grid, std::span<const float> xyz, size_t v, uint32_t
   };
   if (!none_near(int64_t(v))) return false;
   bool result = true;
-  for_each_neighbour(grid, grid.voxel(v).key, [&](int64_t w) { return result = none_near(w); });
+  for_each_neighbour(grid, v, [&](int64_t w) { return result = none_near(w); });
   return result;
 }
 
@@ -250,7 +327,7 @@ float asymmetry(const VoxelGrid& grid, std::span<const float> xyz, size_t v, uin
     return true;
   };
   add(int64_t(v));
-  for_each_neighbour(grid, grid.voxel(v).key, add);
+  for_each_neighbour(grid, v, add);
   double d2 = 0;
   for (int a = 0; a < 3; ++a) {
     const double d = xyz[3 * size_t(i) + a] - sum[a] / weights;
@@ -311,7 +388,7 @@ NarrowBand classify_narrow_band(std::span<const float> xyz, const NarrowBandOpti
   tbb::parallel_for(tbb::blocked_range<size_t>(0, grid.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t v = r.begin(); v < r.end(); ++v) {
       bool l1 = false;
-      for_each_neighbour(grid, grid.voxel(v).key, [&](int64_t w) { return !(l1 = w < 0); });
+      for_each_neighbour(grid, v, [&](int64_t w) { return !(l1 = w < 0); });
       if (l1) kind[v] = 1;
     }
   });
@@ -321,7 +398,7 @@ NarrowBand classify_narrow_band(std::span<const float> xyz, const NarrowBandOpti
   tbb::parallel_for(tbb::blocked_range<size_t>(0, grid.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t v = r.begin(); v < r.end(); ++v) {
       if (kind[v] == 1) continue;
-      for_each_neighbour(grid, grid.voxel(v).key, [&](int64_t w) {
+      for_each_neighbour(grid, v, [&](int64_t w) {
         selected[v] = w >= 0 && kind[size_t(w)] == 1 && double(grid.voxel(size_t(w)).count) <= n1;
         return !selected[v];
       });
@@ -430,7 +507,7 @@ std::vector<uint8_t> voxel_layers(std::span<const float> xyz, float voxel) {
   std::deque<size_t> queue;
   for (size_t v = 0; v < grid.size(); ++v) {
     bool l1 = false;
-    for_each_neighbour(grid, grid.voxel(v).key, [&](int64_t w) { return !(l1 = w < 0); });
+    for_each_neighbour(grid, v, [&](int64_t w) { return !(l1 = w < 0); });
     if (l1) {
       layer[v] = 1;
       queue.push_back(v);
@@ -439,7 +516,7 @@ std::vector<uint8_t> voxel_layers(std::span<const float> xyz, float voxel) {
   while (!queue.empty()) {
     const size_t v = queue.front();
     queue.pop_front();
-    for_each_neighbour(grid, grid.voxel(v).key, [&](int64_t w) {
+    for_each_neighbour(grid, v, [&](int64_t w) {
       if (w >= 0 && layer[size_t(w)] == 0) {
         layer[size_t(w)] = uint8_t(std::min(255, layer[v] + 1));
         queue.push_back(size_t(w));

@@ -142,7 +142,8 @@ DrawItem load_item(uint item) {
   it.count = 0.0;
   it.sigma = 0.0;
   if (c.kind == 1u) {
-    it.count = float(lod_value);
+    float grow = 1.0 + growth * (g.lod.w - 1.0);  // density-preserving LOD: it stands for grow^3 times as many
+    it.count = float(lod_value) * grow * grow * grow;
     it.sigma = blob_sigma(c.voxel, g.radius.x);
     it.radius = kBlobReach * it.sigma;
   }

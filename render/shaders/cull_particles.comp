@@ -14,6 +14,19 @@ float position_hash(vec3 p) {
   return fract(sin(dot(p, vec3(12.9898, 78.233, 54.143))) * 437586.5453);
 }
 
+// A blob's random term, 0..1: an integer hash of the world cell of side
+// `voxel` its centroid lies in.
+float cell_hash(vec3 p, float voxel) {
+  ivec3 c = ivec3(floor(p / voxel));
+  uint h = uint(c.x) * 73856093u ^ uint(c.y) * 19349663u ^ uint(c.z) * 83492791u;
+  h ^= h >> 16;
+  h *= 0x7feb352du;
+  h ^= h >> 15;
+  h *= 0x846ca68bu;
+  h ^= h >> 16;
+  return (float(h >> 8) + 0.5) * (1.0 / 16777216.0);
+}
+
 void main() {
   Args args = Args(pc.args);
   uint block_index = gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x;
@@ -38,20 +51,23 @@ void main() {
   float r = blob ? kBlobReach * blob_sigma(c.voxel, g.radius.x) : g.radius.x;
   float scale = 1.0;
 
-  // Blobs are few (one per interior voxel) and stand for whole voxels: LOD
-  // keeps them all, so the thickness does not thin out.
-  if (g.modes.x != 0u && keep && !blob) {
+  // Blobs thin out with LOD like particles; their random term hashes the
+  // world cell of their voxel (their LOD value is a count, and the cell
+  // stays while the voxel is occupied), and in density-preserving LOD a
+  // kept blob stands for scale^3 times its particles (a grown particle's
+  // volume), so the expected thickness stays.
+  if (g.modes.x != 0u && keep) {
     // Importance w (formula 3.1 with CLOD = 1000 / d_ref) and random term.
     vec2 ndc = vec2(g.proj.x * e.x, -g.proj.y * e.y) / max(dist, 1e-20) + g.frustum.xy;
     float centre = max(1.0 - 0.7 * min(length(ndc) * 0.70710678, 1.0), 0.3);
     float w = centre / (max(length(e), 1e-20) * g.lod.z);
-    float u = g.modes.y == 0u ? (float(lod_value) + 0.5) * (1.0 / 65536.0) : position_hash(pos);
+    float u = blob ? cell_hash(pos, c.voxel) : g.modes.y == 0u ? (float(lod_value) + 0.5) * (1.0 / 65536.0) : position_hash(pos);
     float lod = w * -log(1.0 - u);
     keep = lod >= g.lod.y;
     if (g.modes.x == 2u) {
       // Density preserving: grow by (1/p)^(1/3), p = level^(1/w).
       scale = min(exp(g.lod.y / (3.0 * w)), g.lod.w);
-      r *= scale;
+      if (!blob) r *= scale;
     }
   }
   if (keep && !inside) {

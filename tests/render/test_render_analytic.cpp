@@ -129,6 +129,63 @@ TEST_P(LoneSphere, DepthIsExact) {
   std::printf("lone spheres (%s): %zu pixels, largest relative depth error %.2e\n", to_string(GetParam()), hits, worst);
 }
 
+// A block of side^3 lattice particles (spacing s) encoded with the narrow
+// band's layers, as `sluice convert` writes it.
+struct LayeredBlock {
+  std::vector<float> xyz;
+  io::FileHeader file;
+  io::EncodedFrame frame;
+};
+LayeredBlock layered_block(int side, float s) {
+  LayeredBlock b;
+  const float mid = 0.5f * float(side - 1);
+  for (int k = 0; k < side; ++k)
+    for (int j = 0; j < side; ++j)
+      for (int i = 0; i < side; ++i) b.xyz.insert(b.xyz.end(), {s * (float(i) - mid), s * (float(j) - mid), s * (float(k) - mid)});
+  const std::vector<uint16_t> lod = io::lod_values({}, b.xyz.size() / 3);
+  b.file.particle_spacing = s;
+  io::FrameInput in;
+  in.positions = b.xyz;
+  in.lod = lod;
+  io::EncodeOptions eo;
+  eo.layers = true;
+  b.frame = io::encode_frame(in, b.file, eo);
+  return b;
+}
+
+// Thickness x solid angle summed over the image: from afar, sum V_i / d_i^2.
+double thickness_integral(const LayeredBlock& b, io::LayerSet layers, const Camera& cam, const FluidOptions& o,
+                          const LodOptions& lod, uint64_t* drawn = nullptr) {
+  const SceneInfo scene = scene_for_points(b.xyz, b.file.particle_spacing);
+  testing::OffscreenRenderer rr(context(), scene, kW, kH);
+  io::FrameHeader h = b.frame.header;
+  io::keep_layers(h, layers);
+  rr.renderer.wait_upload(rr.renderer.commit_record(b.frame.record, h, b.file, -1, {}));
+  const FrameStats stats = rr.render(cam, o, lod);
+  if (drawn) *drawn = stats.drawn;
+  const std::vector<float> thickness = rr.renderer.read_raw_thickness();
+  EXPECT_EQ(thickness.size(), size_t(kW) * kH);
+  const double pixel = 2 * std::tan(double(cam.fov_deg) * M_PI / 360.0) / kH;  // side of a pixel at unit distance
+  double sum = 0;
+  for (uint32_t y = 0; y < kH; ++y) {
+    for (uint32_t x = 0; x < kW; ++x) {
+      const auto d = pixel_ray(cam, x, y);
+      const double len = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+      sum += thickness[size_t(y) * kW + x] * pixel * pixel / (len * len * len);
+    }
+  }
+  return sum;
+}
+
+double analytic_integral(const std::vector<float>& xyz, float r, const Camera& cam) {
+  double sum = 0;
+  for (size_t i = 0; i < xyz.size(); i += 3) {
+    const double dx = xyz[i] - cam.eye.x, dy = xyz[i + 1] - cam.eye.y, dz = xyz[i + 2] - cam.eye.z;
+    sum += (4.0 / 3.0) * M_PI * r * r * r / (dx * dx + dy * dy + dz * dz);
+  }
+  return sum;
+}
+
 // Voxel blobs stand for the interior's thickness: each blob's splat adds its
 // particles' volume (papers/001 eq. 4.2, normalized). Seen from afar, the
 // thickness summed over the image (each pixel weighted by its solid angle)
@@ -136,56 +193,51 @@ TEST_P(LoneSphere, DepthIsExact) {
 // or as the surface plus blobs.
 TEST_P(LoneSphere, BlobsAddTheThicknessOfTheirParticles) {
   ValidationGuard guard;
-  const float s = 0.05f;
-  std::vector<float> xyz;
-  for (int k = 0; k < 14; ++k)
-    for (int j = 0; j < 14; ++j)
-      for (int i = 0; i < 14; ++i) xyz.insert(xyz.end(), {s * (float(i) - 6.5f), s * (float(j) - 6.5f), s * (float(k) - 6.5f)});
-  const std::vector<uint16_t> lod = io::lod_values({}, xyz.size() / 3);
-  io::FileHeader file;
-  file.particle_spacing = s;
-  io::FrameInput in;
-  in.positions = xyz;
-  in.lod = lod;
-  io::EncodeOptions eo;
-  eo.layers = true;
-  const io::EncodedFrame frame = io::encode_frame(in, file, eo);
-  ASSERT_GT(std::count_if(frame.header.chunks.begin(), frame.header.chunks.end(),
+  const float s = 0.05f, r = s / 2;
+  const LayeredBlock b = layered_block(14, s);
+  ASSERT_GT(std::count_if(b.frame.header.chunks.begin(), b.frame.header.chunks.end(),
                           [](const io::ChunkDesc& c) { return c.layer == io::Layer::Blobs; }),
             0);
-  const SceneInfo scene = scene_for_points(xyz, s);
-  const float r = s / 2;
   const Camera cam = camera_at({0.3f, -0.4f, 6}, {0, 0, 0}, 12);
-  double expected = 0;
-  for (size_t i = 0; i < xyz.size(); i += 3) {
-    const double dx = xyz[i] - cam.eye.x, dy = xyz[i + 1] - cam.eye.y, dz = xyz[i + 2] - cam.eye.z;
-    expected += (4.0 / 3.0) * M_PI * r * r * r / (dx * dx + dy * dy + dz * dz);
-  }
   FluidOptions o = plain(DisplayMode::ThicknessBuffer, r);
   o.splatting = GetParam();
   o.half_resolution_thickness = false;
-  const double t = std::tan(double(cam.fov_deg) * M_PI / 360.0);
-  const double pixel = 2 * t / kH;  // side of a pixel at unit distance
-  double sums[2] = {0, 0};
-  for (const bool surface : {false, true}) {
-    testing::OffscreenRenderer rr(context(), scene, kW, kH);
-    io::FrameHeader h = frame.header;
-    io::keep_layers(h, surface ? io::LayerSet::surface() : io::LayerSet::particles());
-    rr.renderer.wait_upload(rr.renderer.commit_record(frame.record, h, file, -1, {}));
-    rr.render(cam, o, {});
-    const std::vector<float> thickness = rr.renderer.read_raw_thickness();
-    ASSERT_EQ(thickness.size(), size_t(kW) * kH);
-    for (uint32_t y = 0; y < kH; ++y) {
-      for (uint32_t x = 0; x < kW; ++x) {
-        const auto d = pixel_ray(cam, x, y);
-        const double len = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-        sums[surface] += thickness[size_t(y) * kW + x] * pixel * pixel / (len * len * len);  // x solid angle
-      }
-    }
-  }
-  std::printf("thickness integral: particles %.6g, surface + blobs %.6g, analytic %.6g\n", sums[0], sums[1], expected);
-  EXPECT_NEAR(sums[0] / expected, 1.0, 0.02);
-  EXPECT_NEAR(sums[1] / expected, 1.0, 0.02);  // 1.1% of each blob lies beyond its splat's 3 sigma
+  const double expected = analytic_integral(b.xyz, r, cam);
+  const double all = thickness_integral(b, io::LayerSet::particles(), cam, o, {});
+  const double surface = thickness_integral(b, io::LayerSet::surface(), cam, o, {});
+  std::printf("thickness integral: particles %.6g, surface + blobs %.6g, analytic %.6g\n", all, surface, expected);
+  EXPECT_NEAR(all / expected, 1.0, 0.02);
+  EXPECT_NEAR(surface / expected, 1.0, 0.02);  // 1.1% of each blob lies beyond its splat's 3 sigma
+}
+
+// Density-preserving LOD thins blobs as it thins particles, and a kept
+// blob stands for as many more particles as a kept particle grows in
+// volume: the expected thickness stays. A 36^3 block seen from about its
+// diagonal (importance near 1), level 0.5: about a third of everything is
+// drawn.
+TEST_P(LoneSphere, DensityLodKeepsTheBlobsThickness) {
+  ValidationGuard guard;
+  const float s = 0.05f, r = s / 2;
+  const LayeredBlock b = layered_block(36, s);
+  const Camera cam = camera_at({1.2f, -1.9f, 2.0f}, {0, 0, 0}, 50);
+  FluidOptions o = plain(DisplayMode::ThicknessBuffer, r);
+  o.splatting = GetParam();
+  o.half_resolution_thickness = false;
+  LodOptions lod;
+  lod.mode = LodMode::DensityPreserving;
+  lod.level = 0.5f;
+  const double expected = analytic_integral(b.xyz, r, cam);
+  const double all = thickness_integral(b, io::LayerSet::particles(), cam, o, {});
+  const double all_lod = thickness_integral(b, io::LayerSet::particles(), cam, o, lod);
+  uint64_t drawn = 0, drawn_lod = 0;
+  (void)thickness_integral(b, io::LayerSet::surface(), cam, o, {}, &drawn);
+  const double surface_lod = thickness_integral(b, io::LayerSet::surface(), cam, o, lod, &drawn_lod);
+  std::printf("surface + blobs drawn: %llu, with LOD %llu\n", (unsigned long long)drawn, (unsigned long long)drawn_lod);
+  EXPECT_LT(double(drawn_lod), 0.6 * double(drawn));  // blobs thin out too (they are most of the records here)
+  std::printf("thickness integral: analytic %.6g, particles %.6g; with density LOD 0.5: particles %.6g, surface + blobs %.6g\n",
+              expected, all, all_lod, surface_lod);
+  EXPECT_NEAR(all / expected, 1.0, 0.02);
+  EXPECT_NEAR(surface_lod / all_lod, 1.0, 0.05);
 }
 
 INSTANTIATE_TEST_SUITE_P(RenderAnalytic, LoneSphere, ::testing::Values(Splatting::Compute, Splatting::Raster),
