@@ -11,6 +11,7 @@
 #include <optional>
 
 #include "machine.h"
+#include "sluice/io/freed_memory.h"
 #include "sluice/io/import.h"
 #include "sluice/io/narrow_band.h"
 #include "sluice/bench/synth.h"
@@ -51,6 +52,7 @@ double timed_classify(const io::ParticleFrame& f, const io::NarrowBandOptions& o
 }  // namespace
 
 void run_band_bench(const BandBenchOptions& o) {
+  const io::KeepFreedMemory keep;  // as `sluice convert` classifies: frame buffers reused, not faulted in again
   const int cores = o.max_threads > 0 ? o.max_threads : core_count();
   std::unique_ptr<io::FrameSource> source;
   if (o.synth > 0) {
