@@ -17,24 +17,10 @@
 #include "sluice/bench/synth.h"
 #include "sluice/io/spacing.h"
 #include "table.h"
+#include "timing.h"
 
 namespace sluice::bench {
 namespace {
-
-using Clock = std::chrono::steady_clock;
-
-template <class F>
-double seconds_per_pass(double min_seconds, F&& pass) {
-  const auto start = Clock::now();
-  int passes = 0;
-  double elapsed = 0;
-  do {
-    pass();
-    ++passes;
-    elapsed = std::chrono::duration<double>(Clock::now() - start).count();
-  } while (elapsed < min_seconds);
-  return elapsed / passes;
-}
 
 std::vector<uint64_t> picked_frames(uint64_t count, int wanted) {
   std::vector<uint64_t> out;

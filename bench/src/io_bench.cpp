@@ -19,6 +19,7 @@
 #include "sluice/io/reader.h"
 #include "sluice/io/spacing.h"
 #include "table.h"
+#include "timing.h"
 
 namespace sluice::bench {
 namespace {
@@ -29,22 +30,6 @@ std::string input_format(const std::string& description) {
   const size_t open = description.rfind('('), close = description.rfind(')');
   if (open == std::string::npos || close == std::string::npos || close < open) return "the input's reader";
   return description.substr(open + 1, close - open - 1);
-}
-
-using Clock = std::chrono::steady_clock;
-
-double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
-
-// Runs `pass` until `min_seconds` have gone by; returns seconds per pass.
-template <class F>
-double time_passes(double min_seconds, F&& pass) {
-  const auto start = Clock::now();
-  int passes = 0;
-  do {
-    pass();
-    ++passes;
-  } while (seconds_since(start) < min_seconds);
-  return seconds_since(start) / passes;
 }
 
 struct Dataset {
@@ -211,7 +196,7 @@ void compare_with_vtk(const IoBenchOptions& o, const io::FrameSource& source, co
     const std::vector<std::string> files = single_files(*points_ids);
     double n = 0;
     for (uint64_t f = 0; f < points_ids->frame_count(); ++f) n += double(points_ids->read(f).count());
-    const double checks = time_passes(o.min_seconds, [&] {
+    const double checks = seconds_per_pass(o.min_seconds, [&] {
       for (const auto& file : files) io::check_vtk_file(file);
     });
     for (const bool keep_freed : {false, true})
@@ -219,10 +204,10 @@ void compare_with_vtk(const IoBenchOptions& o, const io::FrameSource& source, co
       std::optional<io::KeepFreedMemory> keep;
       if (keep_freed) keep.emplace();
       const io::FrameSource& s = every_array ? *everything : *points_ids;
-      const double vtk = time_passes(o.min_seconds, [&] {
+      const double vtk = seconds_per_pass(o.min_seconds, [&] {
         for (const auto& file : files) (void)io::read_with_vtk(file, every_array ? nullptr : &ids_only);
       });
-      const double import = time_passes(o.min_seconds, [&] {
+      const double import = seconds_per_pass(o.min_seconds, [&] {
         for (uint64_t f = 0; f < s.frame_count(); ++f) (void)s.read(f);
       });
       const bool legacy = fl.spec.size() > 4 && fl.spec.compare(fl.spec.size() - 4, 4, ".vtk") == 0;
@@ -258,18 +243,18 @@ void run_io_bench(const IoBenchOptions& o) {
     std::error_code ec;
     data.input_bytes += std::filesystem::file_size(source->frame_name(f), ec);
   }
-  const double vtk_1 = time_passes(o.min_seconds, [&] {
+  const double vtk_1 = seconds_per_pass(o.min_seconds, [&] {
     for (uint64_t f = 0; f < frame_count; ++f) data.frames[f] = source->read(f);
   });
   for (const auto& f : data.frames) data.particles += f.count();
   // VTK reading every array of each file, as ParaView opens it.
   double vtk_full = 0;
   if (io::has_vtk_support()) {
-    vtk_full = time_passes(o.min_seconds, [&] {
+    vtk_full = seconds_per_pass(o.min_seconds, [&] {
       for (uint64_t f = 0; f < frame_count; ++f) (void)io::read_with_vtk(source->frame_name(f));
     });
   }
-  const double vtk_n = time_passes(o.min_seconds, [&] {
+  const double vtk_n = seconds_per_pass(o.min_seconds, [&] {
     tbb::task_arena arena(cores);
     arena.execute([&] { tbb::parallel_for(uint64_t(0), frame_count, [&](uint64_t f) { (void)source->read(f); }); });
   });
@@ -315,10 +300,10 @@ void run_io_bench(const IoBenchOptions& o) {
 
   // 3. Read + decode against VTK's reader, page cache.
   const double out_bytes = n * 8;
-  const double rd_1 = time_passes(o.min_seconds, [&] { read_and_decode_all(q, 1); });
-  const double rd_n = time_passes(o.min_seconds, [&] { read_and_decode_all(q, cores); });
-  const double rdl_n = time_passes(o.min_seconds, [&] { read_and_decode_all(l, cores); });
-  const double rdz_1 = time_passes(o.min_seconds, [&] { read_and_decode_all(z, 1); });
+  const double rd_1 = seconds_per_pass(o.min_seconds, [&] { read_and_decode_all(q, 1); });
+  const double rd_n = seconds_per_pass(o.min_seconds, [&] { read_and_decode_all(q, cores); });
+  const double rdl_n = seconds_per_pass(o.min_seconds, [&] { read_and_decode_all(l, cores); });
+  const double rdz_1 = seconds_per_pass(o.min_seconds, [&] { read_and_decode_all(z, 1); });
   Table read({"reader", "threads", "M particles/s", "input MB/s", "output GB/s", "vs VTK (same threads)"});
   if (vtk_full > 0) {
     read.row({"VTK's own reader, every array (as ParaView), 1 thread", "1", num(n / vtk_full / 1e6, 2),
@@ -352,7 +337,7 @@ void run_io_bench(const IoBenchOptions& o) {
   Table scaling({"threads", "M particles/s", "output GB/s", "GB/s per thread", "speed-up"});
   double base = 0;
   for (int t = 1; t <= cores; t = (t == cores ? cores + 1 : std::min(cores, t * 2))) {
-    const double s = time_passes(o.min_seconds, [&] { decode_all(q, loaded, t); });
+    const double s = seconds_per_pass(o.min_seconds, [&] { decode_all(q, loaded, t); });
     const double gbps = double(loaded.particles) * 8 / s / 1e9;
     if (t == 1) base = gbps;
     scaling.row({std::to_string(t), num(double(loaded.particles) / s / 1e6, 1), num(gbps, 2), num(gbps / t, 2),
