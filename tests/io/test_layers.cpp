@@ -8,6 +8,7 @@
 
 #include "sluice/io/format.h"
 #include "sluice/io/narrow_band.h"
+#include "records.h"
 #include "sluice/io/reader.h"
 #include "test_util.h"
 
@@ -184,6 +185,42 @@ TEST(Layers, KeepLayersDropsChunksAndRecounts) {
   EXPECT_EQ(io::count_in(h, io::LayerSet::particles()), 11u + 12u + 10u);
   io::keep_layers(h, io::LayerSet::particles());
   EXPECT_EQ(h.chunks.size(), 3u);  // surface, interior, all
+}
+
+// Records that are checksummed but say impossible things about layers:
+// rejected with a message, before any payload is trusted.
+TEST(Layers, InconsistentLayerRecordsAreRejected) {
+  const io::FileHeader h = test::test_header(io::PositionCoding::Quantized16);
+  io::EncodedFrame frame = test::encode(test::lattice_frame(kBlock, 0), h, 512, true);
+  ASSERT_GT(frame.header.blob_voxel, 0.f);
+
+  io::FrameHeader no_side = frame.header;  // blob chunks, but no voxel side to splat them with
+  no_side.blob_voxel = 0;
+  std::vector<std::byte> record = io::serialize_frame_table(no_side, h.attributes.size());
+  record.resize(no_side.frame_bytes);
+  try {
+    (void)io::parse_frame_table(record, h.attributes.size(), {"x.sluice", 0, {}});
+    ADD_FAILURE() << "a blob chunk without a voxel side was accepted";
+  } catch (const io::Error& e) {
+    EXPECT_NE(std::string(e.what()).find("blob voxel"), std::string::npos) << e.what();
+  }
+  io::FrameHeader negative = frame.header;
+  negative.blob_voxel = -1;
+  record = io::serialize_frame_table(negative, h.attributes.size());
+  record.resize(negative.frame_bytes);
+  EXPECT_THROW((void)io::parse_frame_table(record, h.attributes.size(), {"x.sluice", 0, {}}), io::Error);
+
+  io::IndexBuilder builder(h.attributes.size());  // layer counts that do not add up to the frame's
+  builder.add(frame.header, 4096);
+  io::FrameIndex index = builder.index();
+  index.frames[0].layer_particles[size_t(io::Layer::Blobs)] += 1;
+  const std::vector<std::byte> bytes = io::serialize_index(index, h.attributes.size());
+  try {
+    (void)io::parse_index(bytes, h.attributes.size(), uint64_t(1) << 30, {"x.sluice", {}, {}});
+    ADD_FAILURE() << "an index whose layers do not add up was accepted";
+  } catch (const io::Error& e) {
+    EXPECT_NE(std::string(e.what()).find("layer counts"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace
