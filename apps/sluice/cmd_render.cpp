@@ -173,9 +173,10 @@ void add_bench_layers(CLI::App& bench) {
   auto size = std::make_shared<std::string>("1280x720");
   CLI::App* cmd = bench.add_subcommand("layers", "The narrow band's picture against every particle's: PSNR, coverage, bytes, GPU ms");
   cmd->footer(
-      "FILE must have layers (`sluice convert` writes them). Each frame is drawn from above, grazing, from\n"
-      "inside the splash, close up and from the default view, once from its surface and voxel blobs and\n"
-      "once from all its particles; fluid pixels are those that differ from the view without particles.\n\n"
+      "FILE must have layers (`sluice convert` writes them). Each frame is drawn from above, grazing, into\n"
+      "the splash (low over the far end), close up and closer, and from the default view, once from its\n"
+      "surface and voxel blobs and once from all its particles; fluid pixels are those that differ from\n"
+      "the view without particles.\n\n"
       "Example: sluice bench layers dam.sluice --frames 0,6,12 --images layer_images\n");
   cmd->add_option("file", o->input, ".sluice file with layers")->required()->check(CLI::ExistingFile);
   cmd->add_option("--frames", o->frames, "Frames to compare (default: the last)")->delimiter(',');
