@@ -61,14 +61,18 @@ class VoxelGrid {
     const size_t n = xyz.size() / 3;
     box_ = bounds(xyz);
     uint64_t cells = 1;
-    inverse_side_ = 1.0 / double(side_);
+    // Float operations only, each rounded on its own (this file builds
+    // without contraction into FMA): the GPU classifier (render's
+    // band_grid.comp and band.glsl) repeats them and must get the same voxels.
+    inverse_side_ = 1.0f / side_;
     for (int a = 0; a < 3; ++a) {
       // Coordinates 1 .. dims-2: cell 0 and the last are the outside.
-      const double extent = box_.hi[a] >= box_.lo[a] ? double(box_.hi[a]) - box_.lo[a] : 0.0;
-      dims_[a] = int64_t(std::min<double>(std::floor(extent / side_ + 0.25) + 3, double(kAxisCells)));
+      const float extent = box_.hi[a] >= box_.lo[a] ? box_.hi[a] - box_.lo[a] : 0.0f;
+      const float extent_cells = std::floor(extent * inverse_side_ + 0.25f);
+      dims_[a] = int64_t(std::min(extent_cells + 3.0f, float(kAxisCells)));
       cells *= uint64_t(dims_[a]);
-      origin_[a] = double(box_.lo[a]) - 0.25 * side_;
-      last_cell_[a] = double(std::min<int64_t>(kAxisCells, dims_[a]) - 3);
+      origin_[a] = box_.lo[a] - 0.25f * side_;
+      last_cell_[a] = float(dims_[a] - 3);
     }
     if (cells <= std::max<uint64_t>(8 * uint64_t(n), uint64_t(1) << 20) && cells < kEmpty) {
       build_dense(xyz, cells);
@@ -242,11 +246,11 @@ class VoxelGrid {
   uint64_t key_of(std::span<const float> xyz, size_t i) const {
     int64_t c[3];
     for (int a = 0; a < 3; ++a) {
-      const double v = xyz[3 * i + a];
+      const float v = xyz[3 * i + a];
       // >= 0 for a particle in the box, so truncation is floor; a
       // multiplication, not a division: this runs for every particle.
-      const double cell = std::isfinite(v) ? (v - origin_[a]) * inverse_side_ : 0.0;
-      c[a] = 1 + int64_t(std::clamp(cell, 0.0, last_cell_[a]));
+      const float cell = std::isfinite(v) ? (v - origin_[a]) * inverse_side_ : 0.0f;
+      c[a] = 1 + int64_t(std::clamp(cell, 0.0f, last_cell_[a]));
     }
     return pack(c[0], c[1], c[2]);
   }
@@ -263,9 +267,9 @@ class VoxelGrid {
   float side_;
   Box box_;
   int64_t dims_[3] = {1, 1, 1};         // cells per axis, the outside layer included
-  double origin_[3] = {0, 0, 0};        // a quarter voxel below the box
-  double last_cell_[3] = {0, 0, 0};     // the highest cell index a particle may get, per axis
-  double inverse_side_ = 1;
+  float origin_[3] = {0, 0, 0};         // a quarter voxel below the box
+  float last_cell_[3] = {0, 0, 0};      // the highest cell index a particle may get, per axis
+  float inverse_side_ = 1;
   std::vector<uint32_t> order_;         // particle indices, sorted by voxel
   std::vector<Voxel> voxels_;
   std::vector<uint32_t> table_;         // sparse: voxel by key hash

@@ -43,6 +43,33 @@ const uint32_t kPresentVert[] =
 const uint32_t kPresentFrag[] =
 #include "present.frag.inc"
     ;
+const uint32_t kBandBounds[] =
+#include "band_bounds.comp.inc"
+    ;
+const uint32_t kBandGrid[] =
+#include "band_grid.comp.inc"
+    ;
+const uint32_t kBandInsert[] =
+#include "band_insert.comp.inc"
+    ;
+const uint32_t kBandVoxels[] =
+#include "band_voxels.comp.inc"
+    ;
+const uint32_t kBandL1[] =
+#include "band_l1.comp.inc"
+    ;
+const uint32_t kBandL2[] =
+#include "band_l2.comp.inc"
+    ;
+const uint32_t kBandScatter[] =
+#include "band_scatter.comp.inc"
+    ;
+const uint32_t kBandParticles[] =
+#include "band_particles.comp.inc"
+    ;
+const uint32_t kBandBlobs[] =
+#include "band_blobs.comp.inc"
+    ;
 }  // namespace
 
 std::span<const uint32_t> spirv(Shader s) {
@@ -60,6 +87,15 @@ std::span<const uint32_t> spirv(Shader s) {
     case Shader::Composite: return kComposite;
     case Shader::PresentVert: return kPresentVert;
     case Shader::PresentFrag: return kPresentFrag;
+    case Shader::BandBounds: return kBandBounds;
+    case Shader::BandGrid: return kBandGrid;
+    case Shader::BandInsert: return kBandInsert;
+    case Shader::BandVoxels: return kBandVoxels;
+    case Shader::BandL1: return kBandL1;
+    case Shader::BandL2: return kBandL2;
+    case Shader::BandScatter: return kBandScatter;
+    case Shader::BandParticles: return kBandParticles;
+    case Shader::BandBlobs: return kBandBlobs;
   }
   return {};
 }

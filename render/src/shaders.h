@@ -21,6 +21,15 @@ enum class Shader {
   Composite,
   PresentVert,
   PresentFrag,
+  BandBounds,
+  BandGrid,
+  BandInsert,
+  BandVoxels,
+  BandL1,
+  BandL2,
+  BandScatter,
+  BandParticles,
+  BandBlobs,
 };
 
 std::span<const uint32_t> spirv(Shader s);

@@ -1,0 +1,52 @@
+// sluice/render/band_classifier.h: the narrow band (io/narrow_band.h)
+// classified on the GPU, for frames that arrive without layers.
+//
+// The same membership as io::classify_narrow_band, particle by particle:
+// the same voxel grid (computed with the same float operations), L1, the
+// selected L2 voxels with F2 = every particle, and isolated particles. The
+// voxels live in a hash table keyed by their linear cell, so the grid must
+// have fewer than 2^32 cells (a box of about 1600 voxels per side); beyond
+// that classify() throws and the frame stays unlayered.
+//
+// Threads: one call at a time; it submits to the context's graphics queue
+// and waits, so it must not overlap another thread's use of that queue
+// (a Renderer on the same Context, for one).
+#pragma once
+
+#include <memory>
+#include <span>
+
+#include "sluice/io/narrow_band.h"
+#include "sluice/render/context.h"
+
+namespace sluice::render {
+
+class BandClassifier {
+ public:
+  // `context` must outlive the classifier.
+  explicit BandClassifier(Context& context);
+  ~BandClassifier();
+  BandClassifier(const BandClassifier&) = delete;
+  BandClassifier& operator=(const BandClassifier&) = delete;
+
+  // Uploads `xyz` (x, y, z per particle, world units), classifies on the
+  // GPU and reads the result back. options.f2 must be F2Test::All. The
+  // result is io::classify_narrow_band's: layers, counts, voxel counts and,
+  // with options.blobs, one blob per voxel holding interior particles (in
+  // an order of the GPU's choosing; centroids summed in float). Throws
+  // std::invalid_argument for bad options or more than 2^31 particles,
+  // std::runtime_error when the grid does not fit 32-bit keys or memory
+  // runs out.
+  io::NarrowBand classify(std::span<const float> xyz, const io::NarrowBandOptions& options);
+
+  // GPU time of the last classify() (its passes, from timestamps; not the
+  // upload or the read-back), milliseconds; < 0 when the device has no
+  // timestamps.
+  double last_gpu_ms() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace sluice::render

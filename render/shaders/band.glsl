@@ -1,0 +1,112 @@
+// Shared by the narrow-band classifier's passes (band_*.comp; host side in
+// src/band_classifier.cpp): the voxel hash table, the grid and the buffers,
+// reached through buffer device addresses in the push constants.
+//
+// The grid is io::classify_narrow_band's, computed with the same float
+// operations (`precise`: no fused multiply-add), so that every particle
+// lands in the same voxel as on the CPU. Voxels are keyed by their linear
+// cell (x * dims.y + y) * dims.z + z; cells 0 and dims - 1 of each axis are
+// the outside and are never occupied.
+#extension GL_EXT_buffer_reference : require
+#extension GL_EXT_buffer_reference_uvec2 : require
+
+layout(local_size_x = 256) in;
+
+layout(buffer_reference, std430, buffer_reference_align = 4) readonly buffer Floats { float v[]; };
+layout(buffer_reference, std430, buffer_reference_align = 4) buffer Uints { uint v[]; };
+layout(buffer_reference, std430, buffer_reference_align = 16) buffer Vec4s { vec4 v[]; };
+
+// Written by band_bounds and band_grid, counters by the other passes;
+// mirrored by BandParams in src/band_classifier.cpp.
+layout(buffer_reference, std430, buffer_reference_align = 16) buffer Params {
+  uint lo[3];          // the box, as order-preserving uint (ordered())
+  uint fits;           // band_grid: 1 when the grid's cells fit 32 bits
+  uint hi[3];
+  uint voxels;         // occupied voxels
+  float origin[3];     // a quarter voxel below the box
+  uint cursor;         // particles given a place in the voxel lists so far
+  float last_cell[3];  // the highest cell index a particle may get, per axis
+  uint blobs;          // blobs written
+  uint dims[3];        // cells per axis, the outside layer included
+  uint l1;             // L1 voxels
+  uint counts[4];      // particles per layer (io::BandLayer)
+  uint l2;             // selected L2 voxels
+  uint pad[3];
+};
+
+layout(push_constant) uniform Push {
+  uvec2 xyz;       // Floats: x, y, z per particle
+  uvec2 params;    // Params
+  uvec2 keys;      // Uints[capacity]: voxel key per slot, kEmpty where free
+  uvec2 counts;    // Uints[capacity]: particles per slot
+  uvec2 starts;    // Uints[capacity]: first place in lists; band_scatter moves it to the end
+  uvec2 marks;     // Uints[2 capacity]: [slot] 1 for L1, [capacity + slot] 1 for selected L2
+  uvec2 slots;     // Uints[n]: every particle's slot
+  uvec2 lists;     // Uints[n]: particles voxel by voxel
+  uvec2 voxels;    // Uints[n]: occupied slots
+  uvec2 layers;    // Uints[n]: every particle's io::BandLayer
+  uvec2 blob_of;   // Uints[n]: interior particles' blob, kEmpty for the others (with_blobs)
+  uvec2 blobs;     // Vec4s[n]: centroid, count (as uint bits) (with_blobs)
+  uint n;          // particles
+  uint mask;       // capacity - 1 (capacity: a power of two >= 2n)
+  float inverse;   // 1 / voxel side
+  float side;      // voxel side
+  uint n1;         // floor((d / h)^3): L1 voxels with at most this many particles select L2
+  float reach2;    // (min(2h, d))^2: a particle with nobody nearer is isolated
+  uint with_blobs;
+} pc;
+
+const uint kEmpty = 0xffffffffu;
+
+// The workgroup's place in a pass that covers `count` items in rounds of
+// gl_NumWorkGroups.x * 256 (uniform per workgroup, so barriers are legal).
+uint first_item() { return gl_WorkGroupID.x * 256u; }
+uint round_stride() { return gl_NumWorkGroups.x * 256u; }
+
+uint hash_key(uint k) {
+  k ^= k >> 16;
+  k *= 0x7feb352du;
+  k ^= k >> 15;
+  k *= 0x846ca68bu;
+  k ^= k >> 16;
+  return k;
+}
+
+// The slot holding voxel `key`, or kEmpty.
+uint find_slot(uint key) {
+  Uints keys = Uints(pc.keys);
+  uint s = hash_key(key) & pc.mask;
+  for (;;) {
+    uint k = keys.v[s];
+    if (k == key) return s;
+    if (k == kEmpty) return kEmpty;
+    s = (s + 1u) & pc.mask;
+  }
+}
+
+vec3 particle(uint i) {
+  Floats f = Floats(pc.xyz);
+  return vec3(f.v[3u * i], f.v[3u * i + 1u], f.v[3u * i + 2u]);
+}
+
+// Cell coordinates (1 .. dims - 2) of position p, as the CPU computes them.
+uvec3 cell_of(vec3 p, Params g) {
+  uvec3 c;
+  for (int a = 0; a < 3; ++a) {
+    precise float cell = isinf(p[a]) || isnan(p[a]) ? 0.0 : (p[a] - g.origin[a]) * pc.inverse;
+    c[a] = 1u + uint(clamp(cell, 0.0, g.last_cell[a]));
+  }
+  return c;
+}
+
+uint key_of(uvec3 c, Params g) { return (c.x * g.dims[1] + c.y) * g.dims[2] + c.z; }
+
+uvec3 cell_of_key(uint key, Params g) {
+  uint yz = g.dims[1] * g.dims[2];
+  return uvec3(key / yz, (key / g.dims[2]) % g.dims[1], key % g.dims[2]);
+}
+
+// The slot of the voxel at c + d (c: an occupied cell, so c + d exists).
+uint neighbour_slot(uvec3 c, ivec3 d, Params g) {
+  return find_slot(key_of(uvec3(ivec3(c) + d), g));
+}
