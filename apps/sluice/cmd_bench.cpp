@@ -33,6 +33,8 @@ void add_bench(CLI::App& app) {
   bc->add_option("--min-time", band->min_seconds, "Seconds each timing repeats for")->capture_default_str();
   bc->add_option("--frames", band->frames, "Frames measured, first to last")->capture_default_str();
   bc->add_option("--diameter", band->diameter, "Particle diameter h (default: the estimated spacing)");
+  bc->add_flag("--gpu", band->gpu, "Also classify on the GPU: its speed, and how many particles differ from the CPU's layers");
+  bc->add_option("--device", band->device, "Vulkan device for --gpu: index or part of its name (default: the first discrete GPU)");
   bc->callback([band] {
     if (band->input.empty() && band->synth == 0) throw CLI::ValidationError("bench band", "give an input or --synth N");
     bench::run_band_bench(*band);

@@ -74,6 +74,13 @@ for stage in $stages; do
       run $S bench stream /tmp/synth100m_layers.sluice --memory 24G --no-storage --min-time 2 --surface
       rm -f /tmp/synth100m_layers.sluice
       ;;
+    band)  # the GPU narrow-band classifier beside the CPU one (issue 11)
+      run $S bench band --synth 1000000 --no-exact --frames 1 --min-time 1 --gpu >/dev/null  # warm-up
+      [[ -n ${BAND_QUICK:-} ]] || run $S bench band data/dam_break_3d/dam_break_3d.pvd --frames 3 --min-time 1 --gpu --no-exact
+      [[ -n ${BAND_QUICK:-} ]] || run $S bench band --synth 1000000 --no-exact --frames 1 --min-time 2 --gpu
+      run $S bench band --synth 10000000 --no-exact --frames 1 --min-time 2 --gpu
+      run $S bench band --synth 100000000 --no-exact --frames 1 --min-time 2 --gpu
+      ;;
     huge)  # 100M particles per frame
       run $S synth -n 100M --frames 12 -o /tmp/synth100m.sluice --force -q
       run $S bench stream /tmp/synth100m.sluice --memory 24G --no-storage --min-time 2

@@ -7,6 +7,12 @@
 // lands in the same voxel as on the CPU. Voxels are keyed by their linear
 // cell (x * dims.y + y) * dims.z + z; cells 0 and dims - 1 of each axis are
 // the outside and are never occupied.
+//
+// Where the grid has no more cells than the table has slots (a fluid body,
+// not spray flung far away), the table is dense: a voxel's slot is its cell
+// and a slot is occupied when its count is not zero, so neighbours are
+// found by address and lie next to each other in memory. Otherwise slots
+// hold keys, placed by hashing with linear probing.
 #extension GL_EXT_buffer_reference : require
 #extension GL_EXT_buffer_reference_uvec2 : require
 
@@ -31,7 +37,9 @@ layout(buffer_reference, std430, buffer_reference_align = 16) buffer Params {
   uint l1;             // L1 voxels
   uint counts[4];      // particles per layer (io::BandLayer)
   uint l2;             // selected L2 voxels
-  uint pad[3];
+  uint dense;          // band_grid: 1 when slot = cell (cells <= capacity)
+  uint cells;          // band_grid: dims.x * dims.y * dims.z, when it fits 32 bits
+  uint pad;
 };
 
 layout(push_constant) uniform Push {
@@ -73,7 +81,8 @@ uint hash_key(uint k) {
 }
 
 // The slot holding voxel `key`, or kEmpty.
-uint find_slot(uint key) {
+uint find_slot(uint key, Params g) {
+  if (g.dense != 0u) return Uints(pc.counts).v[key] != 0u ? key : kEmpty;
   Uints keys = Uints(pc.keys);
   uint s = hash_key(key) & pc.mask;
   for (;;) {
@@ -101,6 +110,9 @@ uvec3 cell_of(vec3 p, Params g) {
 
 uint key_of(uvec3 c, Params g) { return (c.x * g.dims[1] + c.y) * g.dims[2] + c.z; }
 
+// The key of occupied slot s.
+uint key_of_slot(uint s, Params g) { return g.dense != 0u ? s : Uints(pc.keys).v[s]; }
+
 uvec3 cell_of_key(uint key, Params g) {
   uint yz = g.dims[1] * g.dims[2];
   return uvec3(key / yz, (key / g.dims[2]) % g.dims[1], key % g.dims[2]);
@@ -108,5 +120,5 @@ uvec3 cell_of_key(uint key, Params g) {
 
 // The slot of the voxel at c + d (c: an occupied cell, so c + d exists).
 uint neighbour_slot(uvec3 c, ivec3 d, Params g) {
-  return find_slot(key_of(uvec3(ivec3(c) + d), g));
+  return find_slot(key_of(uvec3(ivec3(c) + d), g), g);
 }

@@ -30,4 +30,6 @@ void main() {
   umulExtended(g.dims[0], g.dims[1], high, low);
   umulExtended(low, g.dims[2], high2, low2);
   g.fits = high == 0u && high2 == 0u && low2 != 0xffffffffu ? 1u : 0u;
+  g.cells = g.fits != 0u ? low2 : 0u;
+  g.dense = g.fits != 0u && low2 <= pc.mask ? 1u : 0u;
 }

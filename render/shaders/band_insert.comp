@@ -1,6 +1,6 @@
 #version 460
-// Narrow band, pass 3: every particle into its voxel's slot of the hash
-// table (inserted by the first particle to reach it), counted there.
+// Narrow band, pass 3: every particle into its voxel's slot (hashed: the
+// key inserted by the first particle to reach it), counted there.
 #include "band.glsl"
 
 void main() {
@@ -9,10 +9,16 @@ void main() {
   Uints keys = Uints(pc.keys);
   for (uint i = first_item() + gl_LocalInvocationIndex; i < pc.n; i += round_stride()) {
     uint key = key_of(cell_of(particle(i), g), g);
-    uint s = hash_key(key) & pc.mask;
-    for (;;) {
-      uint before = atomicCompSwap(keys.v[s], kEmpty, key);
-      if (before == kEmpty || before == key) break;
+    uint s = g.dense != 0u ? key : hash_key(key) & pc.mask;
+    while (g.dense == 0u) {
+      // A slot's key never changes once set: a plain read that finds it
+      // saves the atomic (most particles share their voxel with others).
+      uint seen = keys.v[s];
+      if (seen == key) break;
+      if (seen == kEmpty) {
+        seen = atomicCompSwap(keys.v[s], kEmpty, key);
+        if (seen == kEmpty || seen == key) break;
+      }
       s = (s + 1u) & pc.mask;
     }
     atomicAdd(Uints(pc.counts).v[s], 1u);

@@ -13,7 +13,7 @@ void main() {
   barrier();
   for (uint v = first_item() + gl_LocalInvocationIndex; v < voxels; v += round_stride()) {
     uint s = Uints(pc.voxels).v[v];
-    uvec3 c = cell_of_key(Uints(pc.keys).v[s], g);
+    uvec3 c = cell_of_key(key_of_slot(s, g), g);
     bool l1 = false;
     for (int dx = -1; dx <= 1 && !l1; ++dx)
       for (int dy = -1; dy <= 1 && !l1; ++dy)

@@ -17,7 +17,7 @@ void main() {
   for (uint v = first_item() + gl_LocalInvocationIndex; v < voxels; v += round_stride()) {
     uint s = Uints(pc.voxels).v[v];
     if (marks.v[s] != 0u) continue;
-    uvec3 c = cell_of_key(Uints(pc.keys).v[s], g);
+    uvec3 c = cell_of_key(key_of_slot(s, g), g);
     bool selected = false;
     for (int dx = -1; dx <= 1 && !selected; ++dx)
       for (int dy = -1; dy <= 1 && !selected; ++dy)

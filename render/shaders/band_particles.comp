@@ -32,7 +32,7 @@ bool none_near(uint s, uint i, vec3 p) {
 bool alone(uint s, uint i, Params g) {
   vec3 p = particle(i);
   if (!none_near(s, i, p)) return false;
-  uvec3 c = cell_of_key(Uints(pc.keys).v[s], g);
+  uvec3 c = cell_of_key(key_of_slot(s, g), g);
   for (int dx = -1; dx <= 1; ++dx)
     for (int dy = -1; dy <= 1; ++dy)
       for (int dz = -1; dz <= 1; ++dz) {

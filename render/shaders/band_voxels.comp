@@ -17,7 +17,7 @@ void main() {
     }
     barrier();
     uint s = base + gl_LocalInvocationIndex;
-    bool occupied = s < capacity && Uints(pc.keys).v[s] != kEmpty;
+    bool occupied = s < capacity && (g.dense != 0u ? Uints(pc.counts).v[s] != 0u : Uints(pc.keys).v[s] != kEmpty);
     uint index = 0u, place = 0u;
     if (occupied) {
       index = atomicAdd(s_voxels, 1u);

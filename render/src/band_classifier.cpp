@@ -1,5 +1,6 @@
-// The narrow band on the GPU: nine compute passes over a voxel hash table
-// (render/shaders/band_*.comp), recorded into one command buffer.
+// The narrow band on the GPU: nine compute passes over a table of voxels
+// (render/shaders/band.glsl says how it is laid out), recorded into one
+// command buffer.
 #include "sluice/render/band_classifier.h"
 
 #include <array>
@@ -32,7 +33,9 @@ struct BandParams {
   uint32_t l1;
   uint32_t counts[4];
   uint32_t l2;
-  uint32_t pad[3];
+  uint32_t dense;
+  uint32_t cells;
+  uint32_t pad;
 };
 static_assert(sizeof(BandParams) == 112);
 
@@ -51,6 +54,9 @@ static_assert(sizeof(BandPush) == 128);
 constexpr std::array kPasses{Shader::BandBounds, Shader::BandGrid,  Shader::BandInsert,
                              Shader::BandVoxels, Shader::BandL1,    Shader::BandL2,
                              Shader::BandScatter, Shader::BandParticles, Shader::BandBlobs};
+constexpr std::array<const char*, kPasses.size() + 1> kPassNames{
+    "fills", "bounds", "grid", "insert", "voxels", "L1", "L2", "scatter", "particles", "blobs"};
+constexpr uint32_t kStamps = uint32_t(kPassNames.size()) + 1;  // before the fills, after each step
 constexpr uint32_t kMaxGroups = 65535;  // the guaranteed maxComputeWorkGroupCount[0]
 constexpr uint32_t kEmpty = std::numeric_limits<uint32_t>::max();
 
@@ -65,6 +71,8 @@ struct BandClassifier::Impl {
   vk::raii::QueryPool stamps{nullptr};
   bool timestamps = false;
   double gpu_ms = -1;
+  std::vector<BandClassifier::PassTime> pass_ms;
+  bool hashed = false;
 
   // Grown to the largest frame seen, never shrunk.
   Buffer upload, xyz, params, keys, counts, starts, marks, slots, lists, voxels, layers, blob_of, blobs, readback;
@@ -81,7 +89,7 @@ struct BandClassifier::Impl {
     }
     const auto families = ctx.physical.getQueueFamilyProperties();
     timestamps = ctx.graphics_family < families.size() && families[ctx.graphics_family].timestampValidBits > 0;
-    stamps = vk::raii::QueryPool(ctx.device, vk::QueryPoolCreateInfo({}, vk::QueryType::eTimestamp, 2));
+    stamps = vk::raii::QueryPool(ctx.device, vk::QueryPoolCreateInfo({}, vk::QueryType::eTimestamp, kStamps));
   }
 
   void ensure(Buffer& b, vk::DeviceSize size, vk::BufferUsageFlags usage, MemoryKind kind) {
@@ -124,7 +132,7 @@ struct BandClassifier::Impl {
     memory_barrier(cmd, Stage::eTransfer, Access::eTransferWrite, Stage::eComputeShader | Stage::eTransfer,
                    Access::eShaderRead | Access::eTransferWrite);
     if (timestamps) {
-      cmd.resetQueryPool(*stamps, 0, 2);
+      cmd.resetQueryPool(*stamps, 0, kStamps);
       cmd.writeTimestamp2(Stage::eAllCommands, *stamps, 0);
     }
     BandParams initial{};
@@ -135,18 +143,20 @@ struct BandClassifier::Impl {
     cmd.fillBuffer(*marks.buffer, 0, capacity * 8, 0);
     if (with_blobs) cmd.fillBuffer(*blob_of.buffer, 0, n * 4, kEmpty);
     between_passes(cmd);
+    if (timestamps) cmd.writeTimestamp2(Stage::eAllCommands, *stamps, 1);
     cmd.pushConstants<BandPush>(*layout, vk::ShaderStageFlagBits::eCompute, 0, push);
     for (size_t p = 0; p < pipelines.size(); ++p) {
       const Shader s = kPasses[p];
-      if (s == Shader::BandBlobs && !with_blobs) continue;
-      cmd.bindPipeline(vk::PipelineBindPoint::eCompute, *pipelines[p]);
+      if (s != Shader::BandBlobs || with_blobs) {
+        cmd.bindPipeline(vk::PipelineBindPoint::eCompute, *pipelines[p]);
       // Passes loop over their items in rounds, so any group count covers
       // them; over the slots for BandVoxels, one for BandGrid.
-      const uint32_t groups = s == Shader::BandGrid ? 1 : groups_for(s == Shader::BandVoxels ? capacity : n);
-      cmd.dispatch(groups, 1, 1);
-      between_passes(cmd);
+        const uint32_t groups = s == Shader::BandGrid ? 1 : groups_for(s == Shader::BandVoxels ? capacity : n);
+        cmd.dispatch(groups, 1, 1);
+        between_passes(cmd);
+      }
+      if (timestamps) cmd.writeTimestamp2(Stage::eAllCommands, *stamps, uint32_t(p) + 2);
     }
-    if (timestamps) cmd.writeTimestamp2(Stage::eAllCommands, *stamps, 1);
     cmd.copyBuffer(*params.buffer, *readback.buffer, vk::BufferCopy(0, 0, sizeof(BandParams)));
     cmd.copyBuffer(*layers.buffer, *readback.buffer, vk::BufferCopy(0, sizeof(BandParams), n * 4));
     if (with_blobs) cmd.copyBuffer(*blob_of.buffer, *readback.buffer, vk::BufferCopy(0, sizeof(BandParams) + n * 4, n * 4));
@@ -157,6 +167,8 @@ struct BandClassifier::Impl {
 BandClassifier::BandClassifier(Context& context) : impl_(std::make_unique<Impl>(context_impl(context))) {}
 BandClassifier::~BandClassifier() = default;
 double BandClassifier::last_gpu_ms() const { return impl_->gpu_ms; }
+std::vector<BandClassifier::PassTime> BandClassifier::last_pass_ms() const { return impl_->pass_ms; }
+bool BandClassifier::last_hashed() const { return impl_->hashed; }
 
 io::NarrowBand BandClassifier::classify(std::span<const float> xyz, const io::NarrowBandOptions& o) {
   if (!(o.diameter > 0)) throw std::invalid_argument("BandClassifier: the particle diameter must be positive");
@@ -199,14 +211,19 @@ io::NarrowBand BandClassifier::classify(std::span<const float> xyz, const io::Na
   r.ctx.run_once([&](vk::CommandBuffer cmd) { r.record(cmd, push, n, capacity, o.blobs); });
 
   if (r.timestamps) {
-    std::array<uint64_t, 2> t{};
-    r.gpu_ms = (*r.ctx.device).getQueryPoolResults(*r.stamps, 0, 2, sizeof t, t.data(), sizeof(uint64_t),
-                                                   vk::QueryResultFlagBits::e64) == vk::Result::eSuccess
-                   ? double(t[1] - t[0]) * r.ctx.properties.limits.timestampPeriod * 1e-6
-                   : -1;
+    std::array<uint64_t, kStamps> t{};
+    r.gpu_ms = -1;
+    r.pass_ms.clear();
+    if ((*r.ctx.device).getQueryPoolResults(*r.stamps, 0, kStamps, sizeof t, t.data(), sizeof(uint64_t),
+                                            vk::QueryResultFlagBits::e64) == vk::Result::eSuccess) {
+      const double to_ms = r.ctx.properties.limits.timestampPeriod * 1e-6;
+      r.gpu_ms = double(t[kStamps - 1] - t[0]) * to_ms;
+      for (size_t k = 0; k < kPassNames.size(); ++k) r.pass_ms.push_back({kPassNames[k], double(t[k + 1] - t[k]) * to_ms});
+    }
   }
   BandParams params;
   std::memcpy(&params, r.readback.mapped, sizeof params);
+  r.hashed = params.dense == 0;
   if (!params.fits) {
     throw std::runtime_error("BandClassifier: the particles' box holds " + std::to_string(params.dims[0]) + " x " +
                              std::to_string(params.dims[1]) + " x " + std::to_string(params.dims[2]) +

@@ -35,6 +35,7 @@ BandClassifier& classifier() {
 void expect_same_band(std::span<const float> xyz, const io::NarrowBandOptions& o, const char* what) {
   const io::NarrowBand cpu = io::classify_narrow_band(xyz, o);
   const io::NarrowBand gpu = classifier().classify(xyz, o);
+  std::printf("%s: %zu particles, voxels %s\n", what, cpu.layer.size(), classifier().last_hashed() ? "hashed" : "by cell");
   ASSERT_EQ(gpu.layer.size(), cpu.layer.size()) << what;
   size_t differ = 0, first = 0;
   for (size_t i = 0; i < cpu.layer.size(); ++i) {
@@ -134,6 +135,21 @@ TEST(BandClassifierGpu, SameLayersAsTheCpuWithJitterSprayAndStrayCoordinates) {
     expect_same_band(xyz, {.diameter = h, .blobs = true}, "pool with spray");
     expect_same_band(xyz, {.diameter = h, .voxel = 1.5f * h, .blobs = true}, "pool with spray, voxel 1.5h");
   }
+}
+
+// Droplets far from the pool: the grid has more cells than the table has
+// slots, so voxels are placed by hashing their keys (the other tests' grids
+// are compact: a voxel's slot is its cell).
+TEST(BandClassifierGpu, SameLayersAsTheCpuWhenVoxelsAreHashed) {
+  ValidationGuard guard;
+  const float h = 0.02f;
+  std::vector<float> xyz = jittered_pool_with_spray(h, 4);
+  for (int k = 0; k < 20; ++k) xyz.insert(xyz.end(), {(300.f + 7 * k) * h, -250.f * h + k * h, (260.f - 3 * k) * h});
+  (void)classifier().classify(xyz, {.diameter = h});
+  EXPECT_TRUE(classifier().last_hashed());
+  expect_same_band(xyz, {.diameter = h, .blobs = true}, "pool with far droplets");
+  (void)classifier().classify(lattice_box(17, 0.1f), {.diameter = 0.1f});
+  EXPECT_FALSE(classifier().last_hashed());
 }
 
 TEST(BandClassifierGpu, SameLayersAsTheCpuOnTheSyntheticPool) {

@@ -1,7 +1,8 @@
 // sluice/bench/band_bench.h: `sluice bench band`, the narrow-band classifier
 // (io/narrow_band.h) on real frames: how fast, how much it keeps, and how
 // the exact narrow band spreads over the voxel layers (the statistic of the
-// LNM dissertation's tables 1 and 2).
+// LNM dissertation's tables 1 and 2); with `gpu`, the GPU classifier beside
+// the CPU one.
 #pragma once
 
 #include <string>
@@ -16,6 +17,8 @@ struct BandBenchOptions {
   float diameter = 0;        // particle diameter h; 0: the estimated spacing
   uint64_t synth = 0;        // > 0: instead of `input`, one frame of `sluice synth`'s sloshing block of this many particles
   bool exact = true;         // also compare with the exact narrow band (slow: minutes per 10M particles)
+  bool gpu = false;          // also classify on the GPU (render/band_classifier.h): speed, and agreement with the CPU
+  std::string device;        // Vulkan device for `gpu`: index or part of its name
 };
 
 // Prints the tables to stdout. Throws io::Error on bad input.

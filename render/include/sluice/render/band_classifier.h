@@ -15,6 +15,7 @@
 
 #include <memory>
 #include <span>
+#include <vector>
 
 #include "sluice/io/narrow_band.h"
 #include "sluice/render/context.h"
@@ -43,6 +44,20 @@ class BandClassifier {
   // upload or the read-back), milliseconds; < 0 when the device has no
   // timestamps.
   double last_gpu_ms() const;
+
+  // The same, pass by pass (setup fills first, then band_bounds ...
+  // band_blobs), for benchmarks that look for the slow one; empty without
+  // timestamps.
+  struct PassTime {
+    const char* name;
+    double ms;
+  };
+  std::vector<PassTime> last_pass_ms() const;
+
+  // Whether the last classify() placed voxels by hashing their keys: its
+  // grid had more cells than the table has slots (2n rounded up to a power
+  // of two). Otherwise a voxel's slot is its cell.
+  bool last_hashed() const;
 
  private:
   struct Impl;
