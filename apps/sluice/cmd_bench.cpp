@@ -25,7 +25,9 @@ void add_bench(CLI::App& app) {
 
   auto band = std::make_shared<bench::BandBenchOptions>();
   CLI::App* bc = bench->add_subcommand("band", "The narrow-band classifier (LNM) on the input's frames, against the exact narrow band");
-  bc->footer("Example: sluice bench band data/dam_break_3d/dam_break_3d.pvd --frames 3");
+  bc->footer(
+      "Examples: sluice bench band data/dam_break_3d/dam_break_3d.pvd --frames 3\n"
+      "          sluice bench band --synth 10000000 --no-exact --frames 1 --gpu   (CPU against GPU)");
   bc->add_option("input", band->input, "Simulation output, as `sluice convert` takes it");
   bc->add_option("--synth", band->synth, "Classify one frame of a synthetic sloshing block of N particles instead");
   bc->add_flag("--no-exact", [band](int64_t) { band->exact = false; }, "Skip the exact narrow band (slow on millions)");
