@@ -43,26 +43,38 @@ layout(buffer_reference, std430, buffer_reference_align = 16) buffer Params {
 };
 
 layout(push_constant) uniform Push {
-  uvec2 xyz;       // Floats: x, y, z per particle
-  uvec2 params;    // Params
-  uvec2 keys;      // Uints[capacity]: voxel key per slot, kEmpty where free
-  uvec2 counts;    // Uints[capacity]: particles per slot
-  uvec2 starts;    // Uints[capacity]: first place in lists; band_scatter moves it to the end
-  uvec2 marks;     // Uints[2 capacity]: [slot] 1 for L1, [capacity + slot] 1 for selected L2
-  uvec2 slots;     // Uints[n]: every particle's slot
-  uvec2 lists;     // Uints[n]: particles voxel by voxel
-  uvec2 voxels;    // Uints[n]: occupied slots
-  uvec2 layers;    // Uints[n]: every particle's io::BandLayer
-  uvec2 blob_of;   // Uints[n]: interior particles' blob, kEmpty for the others (with_blobs)
-  uvec2 blobs;     // Vec4s[n]: centroid, count (as uint bits) (with_blobs)
-  uint n;          // particles
-  uint mask;       // capacity - 1 (capacity: a power of two >= 2n)
-  float inverse;   // 1 / voxel side
-  float side;      // voxel side
-  uint n1;         // floor((d / h)^3): L1 voxels with at most this many particles select L2
-  float reach2;    // (min(2h, d))^2: a particle with nobody nearer is isolated
+  uvec2 xyz;        // Floats: x, y, z per particle
+  uvec2 attr;       // Floats[n]: an attribute per particle whose mean each blob takes; 0: none
+  uvec2 params;     // Params
+  uvec2 table;      // Uints[5 capacity], per slot: KEY COUNT START L1MARK L2MARK (below)
+  uvec2 particles;  // Uints[5 n], per particle: SLOT LIST VOXEL LAYER BLOB_OF (below)
+  uvec2 blobs;      // Vec4s[n]: centroid, count (as uint bits) (with_blobs)
+  uvec2 blob_attr;  // Floats[n]: each blob's mean of attr (with_blobs and attr)
+  uint n;           // particles (at most 2^28: 5 capacity indices fit 32 bits)
+  uint mask;        // capacity - 1 (capacity: a power of two >= 2n)
+  float inverse;    // 1 / voxel side
+  float side;       // voxel side
+  uint n1;          // floor((d / h)^3): L1 voxels with at most this many particles select L2
+  float reach2;     // (min(2h, d))^2: a particle with nobody nearer is isolated
   uint with_blobs;
 } pc;
+
+// The table, by slot: the voxel key (kEmpty where free; unused when dense),
+// its particle count, its first place in the lists (band_scatter moves it
+// to the end), 1 when L1, 1 when a selected L2 (a separate word: the L2
+// pass writes it while reading neighbours' L1 marks).
+#define KEY(s) Uints(pc.table).v[s]
+#define COUNT(s) Uints(pc.table).v[(pc.mask + 1u) + (s)]
+#define START(s) Uints(pc.table).v[2u * (pc.mask + 1u) + (s)]
+#define L1MARK(s) Uints(pc.table).v[3u * (pc.mask + 1u) + (s)]
+#define L2MARK(s) Uints(pc.table).v[4u * (pc.mask + 1u) + (s)]
+// By particle: its slot; the lists (particles voxel by voxel); the occupied
+// slots (first Params.voxels); its io::BandLayer; its blob (kEmpty: none).
+#define SLOT(i) Uints(pc.particles).v[i]
+#define LIST(k) Uints(pc.particles).v[pc.n + (k)]
+#define VOXEL(k) Uints(pc.particles).v[2u * pc.n + (k)]
+#define LAYER(i) Uints(pc.particles).v[3u * pc.n + (i)]
+#define BLOB_OF(i) Uints(pc.particles).v[4u * pc.n + (i)]
 
 const uint kEmpty = 0xffffffffu;
 
@@ -82,11 +94,10 @@ uint hash_key(uint k) {
 
 // The slot holding voxel `key`, or kEmpty.
 uint find_slot(uint key, Params g) {
-  if (g.dense != 0u) return Uints(pc.counts).v[key] != 0u ? key : kEmpty;
-  Uints keys = Uints(pc.keys);
+  if (g.dense != 0u) return COUNT(key) != 0u ? key : kEmpty;
   uint s = hash_key(key) & pc.mask;
   for (;;) {
-    uint k = keys.v[s];
+    uint k = KEY(s);
     if (k == key) return s;
     if (k == kEmpty) return kEmpty;
     s = (s + 1u) & pc.mask;
@@ -111,7 +122,7 @@ uvec3 cell_of(vec3 p, Params g) {
 uint key_of(uvec3 c, Params g) { return (c.x * g.dims[1] + c.y) * g.dims[2] + c.z; }
 
 // The key of occupied slot s.
-uint key_of_slot(uint s, Params g) { return g.dense != 0u ? s : Uints(pc.keys).v[s]; }
+uint key_of_slot(uint s, Params g) { return g.dense != 0u ? s : KEY(s); }
 
 uvec3 cell_of_key(uint key, Params g) {
   uint yz = g.dims[1] * g.dims[2];

@@ -1,6 +1,6 @@
 #version 460
 // Narrow band, pass 9: one blob per voxel holding interior particles (their
-// centroid and count), and every interior particle's blob.
+// centroid, count and mean attribute), and every interior particle's blob.
 #include "band.glsl"
 
 shared uint s_blobs, s_base;
@@ -13,16 +13,18 @@ void main() {
     if (gl_LocalInvocationIndex == 0u) s_blobs = 0u;
     barrier();
     uint v = base + gl_LocalInvocationIndex;
-    uint s = v < voxels ? Uints(pc.voxels).v[v] : kEmpty;
+    uint s = v < voxels ? VOXEL(v) : kEmpty;
     uint first = 0u, end = 0u, interior = 0u;
     vec3 sum = vec3(0.0);
+    float attr_sum = 0.0;
     if (s != kEmpty) {
-      end = Uints(pc.starts).v[s];
-      first = end - Uints(pc.counts).v[s];
+      end = START(s);
+      first = end - COUNT(s);
       for (uint k = first; k < end; ++k) {
-        uint j = Uints(pc.lists).v[k];
-        if (Uints(pc.layers).v[j] != 0u) continue;
+        uint j = LIST(k);
+        if (LAYER(j) != 0u) continue;
         sum += particle(j);
+        if (pc.attr != uvec2(0u)) attr_sum += Floats(pc.attr).v[j];
         ++interior;
       }
     }
@@ -33,9 +35,10 @@ void main() {
     if (interior > 0u) {
       uint b = s_base + index;
       Vec4s(pc.blobs).v[b] = vec4(sum / float(interior), uintBitsToFloat(interior));
+      if (pc.attr != uvec2(0u)) Floats(pc.blob_attr).v[b] = attr_sum / float(interior);
       for (uint k = first; k < end; ++k) {
-        uint j = Uints(pc.lists).v[k];
-        if (Uints(pc.layers).v[j] == 0u) Uints(pc.blob_of).v[j] = b;
+        uint j = LIST(k);
+        if (LAYER(j) == 0u) BLOB_OF(j) = b;
       }
     }
     barrier();

@@ -12,7 +12,7 @@ void main() {
   if (gl_LocalInvocationIndex == 0u) s_l1 = 0u;
   barrier();
   for (uint v = first_item() + gl_LocalInvocationIndex; v < voxels; v += round_stride()) {
-    uint s = Uints(pc.voxels).v[v];
+    uint s = VOXEL(v);
     uvec3 c = cell_of_key(key_of_slot(s, g), g);
     bool l1 = false;
     for (int dx = -1; dx <= 1 && !l1; ++dx)
@@ -22,7 +22,7 @@ void main() {
           l1 = neighbour_slot(c, ivec3(dx, dy, dz), g) == kEmpty;
         }
     if (l1) {
-      Uints(pc.marks).v[s] = 1u;
+      L1MARK(s) = 1u;
       atomicAdd(s_l1, 1u);
     }
   }

@@ -1,7 +1,7 @@
 #version 460
 // Narrow band, pass 6: selected L2 voxels, next to an L1 voxel holding at
-// most n1 particles (too few to hide what lies behind it). Marks go to the
-// second half of the marks, which no invocation of this pass reads.
+// most n1 particles (too few to hide what lies behind it). Its marks go to
+// words no invocation of this pass reads.
 #include "band.glsl"
 
 shared uint s_l2;
@@ -10,13 +10,11 @@ void main() {
   Params g = Params(pc.params);
   if (g.fits == 0u) return;
   uint voxels = g.voxels;
-  uint capacity = pc.mask + 1u;
-  Uints marks = Uints(pc.marks);
   if (gl_LocalInvocationIndex == 0u) s_l2 = 0u;
   barrier();
   for (uint v = first_item() + gl_LocalInvocationIndex; v < voxels; v += round_stride()) {
-    uint s = Uints(pc.voxels).v[v];
-    if (marks.v[s] != 0u) continue;
+    uint s = VOXEL(v);
+    if (L1MARK(s) != 0u) continue;
     uvec3 c = cell_of_key(key_of_slot(s, g), g);
     bool selected = false;
     for (int dx = -1; dx <= 1 && !selected; ++dx)
@@ -24,10 +22,10 @@ void main() {
         for (int dz = -1; dz <= 1 && !selected; ++dz) {
           if (dx == 0 && dy == 0 && dz == 0) continue;
           uint w = neighbour_slot(c, ivec3(dx, dy, dz), g);
-          selected = w != kEmpty && marks.v[w] != 0u && Uints(pc.counts).v[w] <= pc.n1;
+          selected = w != kEmpty && L1MARK(w) != 0u && COUNT(w) <= pc.n1;
         }
     if (selected) {
-      marks.v[capacity + s] = 1u;
+      L2MARK(s) = 1u;
       atomicAdd(s_l2, 1u);
     }
   }

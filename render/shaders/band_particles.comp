@@ -8,15 +8,15 @@ shared uint s_counts[4];
 
 // The particles of slot s: [first, end) of the lists.
 uvec2 list_of(uint s) {
-  uint end = Uints(pc.starts).v[s];
-  return uvec2(end - Uints(pc.counts).v[s], end);
+  uint end = START(s);
+  return uvec2(end - COUNT(s), end);
 }
 
 bool none_near(uint s, uint i, vec3 p) {
   if (s == kEmpty) return true;
   uvec2 range = list_of(s);
   for (uint k = range.x; k < range.y; ++k) {
-    uint j = Uints(pc.lists).v[k];
+    uint j = LIST(k);
     if (j == i) continue;
     vec3 q = particle(j);
     precise float d2 = 0.0;
@@ -45,15 +45,14 @@ bool alone(uint s, uint i, Params g) {
 void main() {
   Params g = Params(pc.params);
   if (g.fits == 0u) return;
-  uint capacity = pc.mask + 1u;
   if (gl_LocalInvocationIndex < 4u) s_counts[gl_LocalInvocationIndex] = 0u;
   barrier();
   uint counts[4] = uint[4](0u, 0u, 0u, 0u);
   for (uint i = first_item() + gl_LocalInvocationIndex; i < pc.n; i += round_stride()) {
-    uint s = Uints(pc.slots).v[i];
-    uint layer = Uints(pc.marks).v[s] != 0u ? 1u : Uints(pc.marks).v[capacity + s] != 0u ? 2u : 0u;
-    if (Uints(pc.counts).v[s] <= 2u && alone(s, i, g)) layer = 3u;
-    Uints(pc.layers).v[i] = layer;
+    uint s = SLOT(i);
+    uint layer = L1MARK(s) != 0u ? 1u : L2MARK(s) != 0u ? 2u : 0u;
+    if (COUNT(s) <= 2u && alone(s, i, g)) layer = 3u;
+    LAYER(i) = layer;
     ++counts[layer];
   }
   for (int l = 0; l < 4; ++l) {

@@ -17,11 +17,11 @@ void main() {
     }
     barrier();
     uint s = base + gl_LocalInvocationIndex;
-    bool occupied = s < capacity && (g.dense != 0u ? Uints(pc.counts).v[s] != 0u : Uints(pc.keys).v[s] != kEmpty);
+    bool occupied = s < capacity && (g.dense != 0u ? COUNT(s) != 0u : KEY(s) != kEmpty);
     uint index = 0u, place = 0u;
     if (occupied) {
       index = atomicAdd(s_voxels, 1u);
-      place = atomicAdd(s_places, Uints(pc.counts).v[s]);
+      place = atomicAdd(s_places, COUNT(s));
     }
     barrier();
     if (gl_LocalInvocationIndex == 0u && s_voxels > 0u) {
@@ -30,8 +30,8 @@ void main() {
     }
     barrier();
     if (occupied) {
-      Uints(pc.voxels).v[s_voxel_base + index] = s;
-      Uints(pc.starts).v[s] = s_place_base + place;
+      VOXEL(s_voxel_base + index) = s;
+      START(s) = s_place_base + place;
     }
     barrier();
   }
