@@ -12,6 +12,7 @@
 
 #include "commands.h"
 #include "human.h"
+#include "layers_option.h"
 #include "play.h"
 #include "sluice/io/reader.h"
 #include "sluice/render/frame_feed.h"
@@ -42,6 +43,7 @@ void run_play_gpu(const PlayOptions& o, const WindowPlayOptions& w) {
   constexpr uint32_t kInFlight = 2;
   render::RendererOptions ro;
   ro.frames_in_flight = kInFlight;
+  ro.classify_unlayered = classify_unlayered(o.layers);
   render::Renderer renderer(context, scene, ro);
   v.apply_environment(renderer);
   const render::FluidOptions fluid = v.fluid_options(scene);

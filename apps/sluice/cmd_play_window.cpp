@@ -306,7 +306,9 @@ void run_play_window(const PlayOptions& o, const WindowPlayOptions& wo) {
   options.title = "sluice - " + std::filesystem::path(shown).filename().string();
   options.vsync = !wo.no_vsync;
   desktop::Window window(context, options, {on_key, on_mouse_button, on_cursor, on_scroll, &p});
-  render::Renderer renderer(context, scene);
+  render::RendererOptions ro;
+  ro.classify_unlayered = classify_unlayered(o.layers);
+  render::Renderer renderer(context, scene, ro);
   v.apply_environment(renderer);
   p.times_known = reader.header().time_source != io::TimeSource::FrameNumber;
   const auto aspect = [&] { return float(std::max(window.width(), 1u)) / float(std::max(window.height(), 1u)); };

@@ -67,7 +67,9 @@ void run_render(const RenderCommand& o, const ViewSettings& v) {
 
   render::Context context(v.context_options());
   render::SceneInfo scene = render::scene_info(reader);
-  render::Renderer renderer(context, scene);
+  render::RendererOptions ro;
+  ro.classify_unlayered = classify_unlayered(o.layers);
+  render::Renderer renderer(context, scene, ro);
   render::OffscreenTarget target(context, width, height);
   v.apply_environment(renderer);
   const render::FluidOptions fluid = v.fluid_options(scene);
@@ -173,12 +175,15 @@ void add_bench_layers(CLI::App& bench) {
   auto size = std::make_shared<std::string>("1280x720");
   CLI::App* cmd = bench.add_subcommand("layers", "The narrow band's picture against every particle's: PSNR, coverage, bytes, GPU ms");
   cmd->footer(
-      "FILE must have layers (`sluice convert` writes them). Each frame is drawn from above, grazing, into\n"
-      "the splash (low over the far end), close up and closer, and from the default view, once from its\n"
-      "surface and voxel blobs and once from all its particles; fluid pixels are those that differ from\n"
-      "the view without particles.\n\n"
-      "Example: sluice bench layers dam.sluice --frames 0,6,12 --images layer_images\n");
-  cmd->add_option("file", o->input, ".sluice file with layers")->required()->check(CLI::ExistingFile);
+      "FILE must have layers (`sluice convert` writes them), unless --gpu. Each frame is drawn from above,\n"
+      "grazing, into the splash (low over the far end), close up and closer, and from the default view,\n"
+      "once from its surface and voxel blobs and once from all its particles; fluid pixels are those that\n"
+      "differ from the view without particles. With --gpu the surface and blobs come from the GPU\n"
+      "classifier (the frame read whole, as a file converted with --no-layers is drawn).\n\n"
+      "Examples: sluice bench layers dam.sluice --frames 0,6,12 --images layer_images\n"
+      "          sluice bench layers dam.sluice --frames 0,6,12 --gpu\n");
+  cmd->add_option("file", o->input, ".sluice file with layers (any .sluice with --gpu)")->required()->check(CLI::ExistingFile);
+  cmd->add_flag("--gpu", o->gpu, "Classify the narrow band on the GPU instead of reading the file's layers");
   cmd->add_option("--frames", o->frames, "Frames to compare (default: the last)")->delimiter(',');
   cmd->add_option("--size", *size, "Image size WIDTHxHEIGHT")->capture_default_str();
   cmd->add_option("--repeats", o->repeats, "Renders per case (median GPU time)")->capture_default_str();

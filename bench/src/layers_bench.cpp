@@ -119,7 +119,8 @@ double largest_splat(const std::vector<float>& xyz, const Camera& camera, float 
 struct Shot {
   std::vector<uint8_t> rgba;
   uint64_t drawn = 0;
-  double gpu_ms = 0;
+  double gpu_ms = 0;       // median, the classification left out
+  double classify_ms = 0;  // the narrow band classified on the GPU (the first render of a frame)
 };
 
 Shot shoot(render::OffscreenTarget& target, render::Renderer& r, const Camera& camera, const render::FluidOptions& fluid,
@@ -128,7 +129,10 @@ Shot shoot(render::OffscreenTarget& target, render::Renderer& r, const Camera& c
   std::vector<double> ms;
   for (int k = 0; k < std::max(1, repeats); ++k) {
     const render::FrameStats stats = target.render(r, camera, fluid, lod);
-    ms.push_back(stats.gpu_ms);
+    double classify = 0;
+    for (const render::PassTime& p : stats.passes) classify += p.name == "classify" ? p.ms : 0.0;
+    ms.push_back(stats.gpu_ms - classify);
+    s.classify_ms = std::max(s.classify_ms, classify);
     s.drawn = stats.drawn;
   }
   s.rgba = target.read_rgba8();
@@ -150,7 +154,9 @@ std::vector<LayersRow> compare_layers(const LayersBenchOptions& o) {
   co.quiet_validation = true;
   render::Context context(co);
   const render::SceneInfo scene = render::scene_info(reader);
-  render::Renderer all(context, scene), surface(context, scene);
+  render::RendererOptions gpu_options;
+  gpu_options.classify_unlayered = o.gpu;
+  render::Renderer all(context, scene), surface(context, scene, gpu_options);
   render::OffscreenTarget target(context, o.width, o.height);
   const render::FluidOptions fluid;  // the player's defaults: transparent fluid, narrow-range filter
   render::LodOptions lod, empty = lod;
@@ -160,12 +166,21 @@ std::vector<LayersRow> compare_layers(const LayersBenchOptions& o) {
   for (const uint64_t f : frames) {
     if (f >= reader.frame_count()) throw std::runtime_error(o.input + ": no frame " + std::to_string(f));
     const io::FrameIndexEntry& e = reader.index().frames[f];
-    if (!e.layered()) {
+    if (!e.layered() && !o.gpu) {
       throw std::runtime_error(o.input + ": frame " + std::to_string(f) +
                                " has no layers (convert it again with a sluice that writes format 1.3)");
     }
     all.load_frame(reader, f, -1, io::LayerSet::particles());
-    surface.load_frame(reader, f, -1, io::LayerSet::surface());
+    if (o.gpu) {
+      // Every particle, its layers forgotten: a frame the renderer classifies.
+      const std::vector<std::byte> record = reader.read_record(f);
+      io::FrameHeader header = reader.parse_record(f, record);
+      io::keep_layers(header, io::LayerSet::particles());
+      for (io::ChunkDesc& c : header.chunks) c.layer = io::Layer::All;
+      surface.wait_upload(surface.commit_record(record, header, reader.header(), -1, reader.location(f)));
+    } else {
+      surface.load_frame(reader, f, -1, io::LayerSet::surface());
+    }
     const io::FrameHeader table = reader.read_table(f);
     const std::vector<float> xyz = io::world_positions(io::decode_frame(reader, f), reader.header().position_coding);
     const float radius = render::effective_radius(fluid, scene);
@@ -188,7 +203,8 @@ std::vector<LayersRow> compare_layers(const LayersBenchOptions& o) {
       row.gpu_ms_all = a.gpu_ms;
       row.gpu_ms_surface = s.gpu_ms;
       row.bytes_all = io::layers_end(table, io::LayerSet::particles(), attributes);
-      row.bytes_surface = io::layers_end(table, io::LayerSet::surface(), attributes);
+      row.bytes_surface = io::layers_end(table, o.gpu ? io::LayerSet::particles() : io::LayerSet::surface(), attributes);
+      row.classify_ms = s.classify_ms;
       row.validation_errors = context.validation_errors() - errors_before;
       row.largest_splat_px = largest_splat(xyz, v.camera, radius, o.width, o.height);
       row.splat_limit_px = lod.max_splat_pixels > 0 ? std::min(lod.max_splat_pixels, context.device().max_point_size)
@@ -207,20 +223,27 @@ std::vector<LayersRow> compare_layers(const LayersBenchOptions& o) {
 void run_layers_bench(const LayersBenchOptions& o) {
   const std::vector<LayersRow> rows = compare_layers(o);
   std::printf("sluice bench layers: %s at %ux%u\n", o.input.c_str(), o.width, o.height);
-  Table t({"frame", "view", "PSNR dB", "fluid pixels, all", "surface + blobs", "difference", "drawn, all",
-           "surface + blobs", "bytes read, all", "surface + blobs", "GPU ms, all", "surface + blobs",
-           "largest splat px"});
+  std::vector<std::string> columns{"frame", "view", "PSNR dB", "fluid pixels, all", "surface + blobs", "difference",
+                                   "drawn, all", "surface + blobs", "bytes read, all", "surface + blobs", "GPU ms, all",
+                                   "surface + blobs", "largest splat px"};
+  if (o.gpu) columns.push_back("GPU classification ms");
+  Table t(columns);
   bool near = false;
   for (const LayersRow& r : rows) {
     const double diff = r.coverage_all > 0 ? (r.coverage_surface - r.coverage_all) / r.coverage_all : 0.0;
-    t.row({std::to_string(r.frame), r.view, std::isinf(r.psnr) ? "identical" : num(r.psnr, 1),
-           num(100 * r.coverage_all, 2) + "%", num(100 * r.coverage_surface, 2) + "%", num(100 * diff, 3) + "%",
-           count_name(r.drawn_all), count_name(r.drawn_surface), count_name(r.bytes_all), count_name(r.bytes_surface),
-           num(r.gpu_ms_all, 2), num(r.gpu_ms_surface, 2),
-           num(r.largest_splat_px, 0) + (r.near_cull() ? " > " + num(r.splat_limit_px, 0) + " *" : "")});
+    std::vector<std::string> cells{std::to_string(r.frame), r.view, std::isinf(r.psnr) ? "identical" : num(r.psnr, 1),
+                                   num(100 * r.coverage_all, 2) + "%", num(100 * r.coverage_surface, 2) + "%",
+                                   num(100 * diff, 3) + "%", count_name(r.drawn_all), count_name(r.drawn_surface),
+                                   count_name(r.bytes_all), count_name(r.bytes_surface), num(r.gpu_ms_all, 2),
+                                   num(r.gpu_ms_surface, 2),
+                                   num(r.largest_splat_px, 0) + (r.near_cull() ? " > " + num(r.splat_limit_px, 0) + " *" : "")};
+    if (o.gpu) cells.push_back(r.classify_ms > 0 ? num(r.classify_ms, 3) : "-");
+    t.row(cells);
     near = near || r.near_cull();
   }
-  t.print("Narrow band (surface + voxel blobs) against every particle; difference in fluid pixels relative to all");
+  t.print(o.gpu ? "Narrow band classified on the GPU (surface + voxel blobs) against every particle; difference in "
+                  "fluid pixels relative to all"
+                : "Narrow band (surface + voxel blobs) against every particle; difference in fluid pixels relative to all");
   if (near) {
     std::printf("* splats larger than the renderer draws: the nearest particles are culled in both pictures, and\n"
                 "  where surface particles go the narrow band shows the hollow inside (docs/narrow_band.md)\n");

@@ -72,6 +72,8 @@ layout(buffer_reference, std430, buffer_reference_align = 16) buffer Args {
   uint big_z;
 };
 layout(buffer_reference, std430, buffer_reference_align = 4) buffer Items { uint i[]; };
+// [0]: 1 when valid; then one bit per particle of the frame, 1: surface.
+layout(buffer_reference, std430, buffer_reference_align = 4) readonly buffer Surface { uint w[]; };
 
 layout(push_constant) uniform Push {
   uvec2 particles;
@@ -81,6 +83,7 @@ layout(push_constant) uniform Push {
   uvec2 draws;
   uvec2 args;
   uvec2 big;    // Items: draw-list indices of the large splats
+  uvec2 surface;  // Surface of a frame classified on the GPU (src/frame_band.h), or 0
   uint chunk_count;
   uint param0;  // per pass: filter direction, thickness pass flag, ...
   uint param1;

@@ -44,10 +44,17 @@ void main() {
   vec3 pos;
   uint lod_value;
   decode_particle(c, index, pos, lod_value);
+  bool blob = c.kind == 1u;
+
+  // A frame classified on the GPU: its interior particles are not drawn
+  // (its blobs, a chunk of their own, stand for them).
+  if (keep && !blob && pc.surface != uvec2(0u)) {
+    Surface s = Surface(pc.surface);
+    if (s.w[0] != 0u && ((s.w[1u + (index >> 5)] >> (index & 31u)) & 1u) == 0u) keep = false;
+  }
 
   vec3 e = (g.view * vec4(pos, 1.0)).xyz;
   float dist = -e.z;   // along the view axis
-  bool blob = c.kind == 1u;
   float r = blob ? kBlobReach * blob_sigma(c.voxel, g.radius.x) : g.radius.x;
   float scale = 1.0;
 

@@ -119,6 +119,10 @@ void PassRecorder::begin_view(uint32_t globals_offset, const FrameSet* frame) {
     pc_.chunks = frame->chunks.address;
     pc_.attributes = frame->has_attribute ? frame->attributes.address : frame->chunks.address;
     pc_.chunk_count = frame->chunk_count;
+    if (frame->classified) {
+      pc_.chunk_count += 1;  // the blobs' row
+      pc_.surface = frame->surface.address;
+    }
   }
   pc_.blocks = r_.blocks.address;
   pc_.draws = r_.draws.address;
@@ -126,6 +130,14 @@ void PassRecorder::begin_view(uint32_t globals_offset, const FrameSet* frame) {
   pc_.big = r_.big.address;
   // The previous view's passes are done with the shared targets and lists.
   memory_barrier(cmd_, Stage::eAllCommands, Access::eMemoryWrite, Stage::eAllCommands, Access::eMemoryRead | Access::eMemoryWrite);
+}
+
+void PassRecorder::classify(FrameSet& frame) {
+  r_.band->record(cmd_, frame, r_.scene.coding == io::PositionCoding::Float32, [&](Buffer&& b) { r_.retire(std::move(b)); });
+  memory_barrier(cmd_, Stage::eComputeShader, Access::eShaderStorageWrite, Stage::eComputeShader,
+                 Access::eShaderStorageRead | Access::eShaderStorageWrite);
+  frame.classified = true;
+  stamp("classify");
 }
 
 void PassRecorder::cull() {

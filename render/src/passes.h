@@ -19,6 +19,9 @@ class PassRecorder {
   void begin_frame(const RenderTarget& target, bool direct);
   // Binds the view's uniforms (dynamic offset) and the frame's buffers.
   void begin_view(uint32_t globals_offset, const FrameSet* frame);
+  // A frame without layers, first drawn: its narrow band on the GPU
+  // (frame_band.h), once; the views then draw its surface and blobs.
+  void classify(FrameSet& frame);
   void cull();                          // chunks -> blocks -> particles -> draw list
   void splat();                         // compute splatting of depth and thickness, then resolve
   void raster_spheres();                // point sprites: exact depth, additive thickness

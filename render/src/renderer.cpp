@@ -252,6 +252,10 @@ Renderer::Renderer(Context& context, const SceneInfo& scene, const RendererOptio
     slot.readback = create_buffer(r.ctx, sizeof(GpuArgs), vk::BufferUsageFlagBits::eTransferDst, MemoryKind::Readback);
   }
   r.create_pipelines();
+  if (options.classify_unlayered) {
+    const float h = scene.particle_spacing > 0 ? scene.particle_spacing : 2 * scene.particle_radius;
+    if (h > 0) r.band = std::make_unique<FrameBand>(r.ctx, h);
+  }
   r.upload_environment({});
   r.transfer_pool = vk::raii::CommandPool(
       device, vk::CommandPoolCreateInfo(vk::CommandPoolCreateFlagBits::eResetCommandBuffer, r.ctx.transfer_family));
@@ -370,6 +374,7 @@ FrameSync Renderer::record(VkCommandBuffer command_buffer, const RenderTarget& t
 
   PassRecorder pass(r, vk::CommandBuffer(command_buffer), slot, slot_index);
   pass.begin_frame(target, direct);
+  if (frame && frame->band_eligible && !frame->classified) pass.classify(*frame);
   for (uint32_t v = 0; v < views.size(); ++v) {
     ViewSetup setup;
     setup.width = size.width;

@@ -8,6 +8,7 @@
 #include <functional>
 
 #include "gpu_types.h"
+#include "frame_band.h"
 #include "sluice/render/renderer.h"
 #include "vk_common.h"
 
@@ -47,6 +48,12 @@ struct FrameSet {
   uint64_t ticket = 0;             // timeline value its copy signals; 0: never filled
   uint64_t last_drawn = UINT64_MAX;  // record() call that last drew it; UINT64_MAX: never
   double upload_ms = -1;           // read once the copy is done
+  // Frames without layers, with RendererOptions::classify_unlayered:
+  bool unlayered = false;          // every chunk io::Layer::All (or staged without blob rows)
+  bool layering_known = false;     // `unlayered` came from the io headers
+  bool band_eligible = false;      // uploaded with room for blobs: to be classified when first drawn
+  bool classified = false;         // its classification is recorded: draw surface + blobs
+  Buffer surface;                  // frame_band.h: validity word, a bit per particle
 };
 
 // Host-written and host-read resources of one frame in flight.
@@ -104,6 +111,7 @@ struct Renderer::Impl {
   int shown = -1;              // set record() draws
   int staged = -1;             // set stage_frame() filled
   size_t stride = 8;
+  std::unique_ptr<FrameBand> band;  // with options.classify_unlayered and a known particle size
   vk::raii::Semaphore upload_done{nullptr};  // timeline: value = uploads submitted
   uint64_t upload_value = 0;
 

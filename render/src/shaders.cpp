@@ -70,6 +70,12 @@ const uint32_t kBandParticles[] =
 const uint32_t kBandBlobs[] =
 #include "band_blobs.comp.inc"
     ;
+const uint32_t kBandGather[] =
+#include "band_gather.comp.inc"
+    ;
+const uint32_t kBandApply[] =
+#include "band_apply.comp.inc"
+    ;
 }  // namespace
 
 std::span<const uint32_t> spirv(Shader s) {
@@ -96,6 +102,8 @@ std::span<const uint32_t> spirv(Shader s) {
     case Shader::BandScatter: return kBandScatter;
     case Shader::BandParticles: return kBandParticles;
     case Shader::BandBlobs: return kBandBlobs;
+    case Shader::BandGather: return kBandGather;
+    case Shader::BandApply: return kBandApply;
   }
   return {};
 }

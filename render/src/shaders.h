@@ -30,6 +30,8 @@ enum class Shader {
   BandScatter,
   BandParticles,
   BandBlobs,
+  BandGather,
+  BandApply,
 };
 
 std::span<const uint32_t> spirv(Shader s);

@@ -132,6 +132,7 @@ FrameStaging Renderer::stage_frame(uint64_t particles, uint32_t chunks) {
   set.chunk_count = chunks;
   set.has_attribute = attribute;
   set.ticket = 0;  // being refilled: never shown until its new copy is done
+  set.layering_known = false;
   auto* base = static_cast<std::byte*>(set.staging.mapped);
   FrameStaging s;
   s.stride = r.stride;
@@ -167,12 +168,23 @@ uint64_t upload_frame(Renderer::Impl& r, FrameSet& set, UploadSource particles_s
     }
     blocks += (table[c].count + 255) / 256;
   }
-  r.ensure(set.particles, std::max<uint64_t>(n * r.stride, 16), kDeviceUsage, MemoryKind::DeviceLocal);
-  r.ensure(set.chunks, std::max<uint64_t>(chunks * sizeof(GpuChunk), 16), kDeviceUsage, MemoryKind::DeviceLocal);
-  r.ensure(set.attributes, std::max<uint64_t>(n * 2 + 4, 16), kDeviceUsage, MemoryKind::DeviceLocal);
+  if (!set.layering_known) {  // staged by a host: unlayered unless it staged blob rows
+    set.unlayered = std::none_of(table, table + chunks, [](const GpuChunk& c) { return c.kind == 1; });
+  }
+  // Frames to classify on the GPU when first drawn: room for blobs after
+  // the particles (and their attribute), a chunk row for them, the bits.
+  set.classified = false;
+  set.band_eligible = r.band && set.unlayered && n > 0 && n <= BandPasses::kMaxParticles;
+  const uint64_t room = set.band_eligible ? blob_room(n) : 0;
+  blocks += (room + 255) / 256;
+  const uint64_t rows = chunks + (set.band_eligible ? 1 : 0);
+  r.ensure(set.particles, std::max<uint64_t>((n + room) * r.stride, 16), kDeviceUsage, MemoryKind::DeviceLocal);
+  r.ensure(set.chunks, std::max<uint64_t>(rows * sizeof(GpuChunk), 16), kDeviceUsage, MemoryKind::DeviceLocal);
+  r.ensure(set.attributes, std::max<uint64_t>((n + room) * 2 + 4, 16), kDeviceUsage, MemoryKind::DeviceLocal);
+  if (set.band_eligible) r.ensure(set.surface, surface_words(n) * 4, kDeviceUsage, MemoryKind::DeviceLocal);
   r.ensure(r.blocks, std::max<uint64_t>(blocks * 8, 16), kDeviceUsage, MemoryKind::DeviceLocal);
-  r.ensure(r.draws, std::max<uint64_t>(n * 8, 16), kDeviceUsage, MemoryKind::DeviceLocal);
-  r.ensure(r.big, std::max<uint64_t>(n * 4, 16), kDeviceUsage, MemoryKind::DeviceLocal);
+  r.ensure(r.draws, std::max<uint64_t>((n + room) * 8, 16), kDeviceUsage, MemoryKind::DeviceLocal);
+  r.ensure(r.big, std::max<uint64_t>((n + room) * 4, 16), kDeviceUsage, MemoryKind::DeviceLocal);
 
   (*r.ctx.device).resetQueryPool(*set.stamps, 0, 2);
   vk::CommandBuffer cmd = *set.copy;
@@ -182,6 +194,10 @@ uint64_t upload_frame(Renderer::Impl& r, FrameSet& set, UploadSource particles_s
   if (n > 0) cmd.copyBuffer(particles_src.buffer, *set.particles.buffer, vk::BufferCopy(particles_src.offset, 0, n * r.stride));
   if (chunks > 0) {
     cmd.copyBuffer(*set.staging.buffer, *set.chunks.buffer, vk::BufferCopy(chunks_offset, 0, chunks * sizeof(GpuChunk)));
+  }
+  if (set.band_eligible) {
+    const GpuChunk row = blob_chunk_row({table, chunks}, n, r.band->voxel());
+    cmd.updateBuffer<GpuChunk>(*set.chunks.buffer, chunks * sizeof(GpuChunk), row);
   }
   if (set.has_attribute && n > 0) {
     // Rounded up to 4 bytes: every source has room (streams are padded).
@@ -197,6 +213,13 @@ uint64_t upload_frame(Renderer::Impl& r, FrameSet& set, UploadSource particles_s
   set.ticket = r.upload_value;
   set.upload_ms = -1;
   return set.ticket;
+}
+
+// Whether the frame's chunks carry layers (for RendererOptions::classify_unlayered).
+void mark_layers(FrameSet& set, const io::FrameHeader& header) {
+  set.unlayered = std::all_of(header.chunks.begin(), header.chunks.end(),
+                              [](const io::ChunkDesc& c) { return c.layer == io::Layer::All; });
+  set.layering_known = true;
 }
 
 // The chunk table rows of a frame: AABBs, first particle, count and the
@@ -262,6 +285,7 @@ uint64_t Renderer::commit_decoded(const DecodedFrameView& frame, const StagingAl
     FrameSet& set = r.sets[size_t(r.staged)];
     fill_chunk_table(header, frame.chunk_first, attribute ? frame.color_attribute : -1, s.chunks,
                      io::ErrorLocation{{}, header.frame_number, {}});
+    mark_layers(set, header);
     const bool copy_attribute = attribute && !s.color_attribute.empty();
     tbb::parallel_for(tbb::blocked_range<uint64_t>(0, n, 1 << 18), [&](const tbb::blocked_range<uint64_t>& range) {
       const size_t begin = range.begin(), count = range.size();
@@ -283,6 +307,7 @@ uint64_t Renderer::commit_decoded(const DecodedFrameView& frame, const StagingAl
   set.ticket = 0;
   fill_chunk_table(header, frame.chunk_first, attribute ? frame.color_attribute : -1,
                    {static_cast<GpuChunk*>(set.staging.mapped), chunks}, io::ErrorLocation{{}, header.frame_number, {}});
+  mark_layers(set, header);
   set.particle_count = n;
   set.chunk_count = chunks;
   set.has_attribute = attribute;
@@ -299,6 +324,7 @@ uint64_t Renderer::commit_record(std::span<const std::byte> record, const io::Fr
   FrameStaging s = stage_frame(header.particle_count, chunks);
   const bool attr = color_attribute >= 0 && size_t(color_attribute) < file.attributes.size() && !s.color_attribute.empty();
   fill_chunk_table(header, {}, attr ? color_attribute : -1, s.chunks, where);
+  mark_layers(impl_->sets[size_t(impl_->staged)], header);
   std::vector<uint64_t> starts(chunks);
   io::chunk_starts(header, starts);
   std::vector<uint16_t*> attributes(file.attributes.size(), nullptr);

@@ -64,7 +64,9 @@ inline Camera camera_looking_along_y(float distance) {
 class OffscreenRenderer {
  public:
   OffscreenRenderer(Context& c, const SceneInfo& scene, uint32_t width, uint32_t height)
-      : renderer(c, scene, debug_options()), target(c, width, height) {}
+      : OffscreenRenderer(c, scene, width, height, debug_options()) {}
+  OffscreenRenderer(Context& c, const SceneInfo& scene, uint32_t width, uint32_t height, const RendererOptions& options)
+      : renderer(c, scene, options), target(c, width, height) {}
   FrameStats render(const Camera& camera, const FluidOptions& options, const LodOptions& lod) {
     return target.render(renderer, camera, options, lod);
   }
@@ -87,7 +89,6 @@ class OffscreenRenderer {
   Renderer renderer;
   OffscreenTarget target;
 
- private:
   static RendererOptions debug_options() {
     RendererOptions o;
     o.debug_surfaces = true;

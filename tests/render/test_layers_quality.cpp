@@ -2,11 +2,13 @@
 // break, converted with layers, drawn from its surface and voxel blobs and
 // from all its particles from five viewpoints (bench/src/layers_bench.cpp):
 // PSNR at least 40 dB and the same fluid pixels within 0.1%, wherever the
-// near-camera cull leaves the surface whole; no validation error.
+// near-camera cull leaves the surface whole; no validation error. The same
+// with the narrow band classified on the GPU (RendererOptions::classify_unlayered).
 #include <gtest/gtest.h>
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -38,11 +40,11 @@ fs::path convert_sample_with_layers(const fs::path& out) {
   return out;
 }
 
-TEST(LayersQuality, SurfaceAndBlobsLookLikeEveryParticle) {
-#if !SLUICE_WITH_VTK
-  GTEST_SKIP() << "needs the VTK importer to convert the sample";
-#endif
-  const fs::path file = fs::temp_directory_path() / ("sluice_layers_quality_" + std::to_string(::getpid()) + ".sluice");
+// Both narrow bands against every particle: `gpu` classifies the frame
+// (read whole, its layers forgotten) on the GPU when it is first drawn.
+void expect_same_picture(bool gpu) {
+  const fs::path file = fs::temp_directory_path() /
+                        ("sluice_layers_quality_" + std::to_string(::getpid()) + (gpu ? "_gpu" : "") + ".sluice");
   convert_sample_with_layers(file);
   bench::LayersBenchOptions o;
   o.input = file.string();
@@ -51,23 +53,42 @@ TEST(LayersQuality, SurfaceAndBlobsLookLikeEveryParticle) {
   o.height = 360;
   o.repeats = 1;
   o.validation = true;
+  o.gpu = gpu;
   const std::vector<bench::LayersRow> rows = bench::compare_layers(o);
   fs::remove(file);
   ASSERT_EQ(rows.size(), 3u * 6);
   size_t judged = 0;
   for (const bench::LayersRow& r : rows) {
-    std::printf("frame %2llu %-9s PSNR %6.1f dB, fluid %6.2f%% vs %6.2f%%, largest splat %4.0f px (limit %.0f)\n",
+    std::printf("frame %2llu %-9s PSNR %6.1f dB, fluid %6.2f%% vs %6.2f%%, drawn %llu vs %llu, largest splat %4.0f px (limit %.0f)\n",
                 (unsigned long long)r.frame, r.view.c_str(), r.psnr, 100 * r.coverage_all, 100 * r.coverage_surface,
-                r.largest_splat_px, r.splat_limit_px);
+                (unsigned long long)r.drawn_all, (unsigned long long)r.drawn_surface, r.largest_splat_px, r.splat_limit_px);
     EXPECT_EQ(r.validation_errors, 0u) << r.view << " frame " << r.frame;
     EXPECT_GT(r.coverage_all, 0.05) << r.view << " frame " << r.frame << ": the view misses the fluid";
     EXPECT_LE(std::abs(r.coverage_surface - r.coverage_all), 0.001 * r.coverage_all) << r.view << " frame " << r.frame;
-    EXPECT_LT(r.bytes_surface, r.bytes_all);
+    if (!gpu) EXPECT_LT(r.bytes_surface, r.bytes_all);
     if (r.near_cull()) continue;
     ++judged;
+    EXPECT_LT(r.drawn_surface, r.drawn_all) << r.view << " frame " << r.frame << ": the interior is left out";
     EXPECT_GE(r.psnr, 40.0) << r.view << " frame " << r.frame;
   }
   EXPECT_GE(judged, rows.size() - 3);  // at most one near-culled view per frame
+  if (gpu) {  // once per frame, when it is first drawn
+    EXPECT_EQ(std::count_if(rows.begin(), rows.end(), [](const bench::LayersRow& r) { return r.classify_ms > 0; }), 3);
+  }
+}
+
+TEST(LayersQuality, SurfaceAndBlobsLookLikeEveryParticle) {
+#if !SLUICE_WITH_VTK
+  GTEST_SKIP() << "needs the VTK importer to convert the sample";
+#endif
+  expect_same_picture(false);
+}
+
+TEST(LayersQuality, SurfaceAndBlobsClassifiedOnTheGpuLookLikeEveryParticle) {
+#if !SLUICE_WITH_VTK
+  GTEST_SKIP() << "needs the VTK importer to convert the sample";
+#endif
+  expect_same_picture(true);
 }
 
 }  // namespace

@@ -136,7 +136,7 @@ struct LayeredBlock {
   io::FileHeader file;
   io::EncodedFrame frame;
 };
-LayeredBlock layered_block(int side, float s) {
+LayeredBlock layered_block(int side, float s, bool layers = true) {
   LayeredBlock b;
   const float mid = 0.5f * float(side - 1);
   for (int k = 0; k < side; ++k)
@@ -148,16 +148,18 @@ LayeredBlock layered_block(int side, float s) {
   in.positions = b.xyz;
   in.lod = lod;
   io::EncodeOptions eo;
-  eo.layers = true;
+  eo.layers = layers;
   b.frame = io::encode_frame(in, b.file, eo);
   return b;
 }
 
 // Thickness x solid angle summed over the image: from afar, sum V_i / d_i^2.
 double thickness_integral(const LayeredBlock& b, io::LayerSet layers, const Camera& cam, const FluidOptions& o,
-                          const LodOptions& lod, uint64_t* drawn = nullptr) {
+                          const LodOptions& lod, uint64_t* drawn = nullptr, bool classify_unlayered = false) {
   const SceneInfo scene = scene_for_points(b.xyz, b.file.particle_spacing);
-  testing::OffscreenRenderer rr(context(), scene, kW, kH);
+  RendererOptions ro = testing::OffscreenRenderer::debug_options();
+  ro.classify_unlayered = classify_unlayered;
+  testing::OffscreenRenderer rr(context(), scene, kW, kH, ro);
   io::FrameHeader h = b.frame.header;
   io::keep_layers(h, layers);
   rr.renderer.wait_upload(rr.renderer.commit_record(b.frame.record, h, b.file, -1, {}));
@@ -208,6 +210,36 @@ TEST_P(LoneSphere, BlobsAddTheThicknessOfTheirParticles) {
   std::printf("thickness integral: particles %.6g, surface + blobs %.6g, analytic %.6g\n", all, surface, expected);
   EXPECT_NEAR(all / expected, 1.0, 0.02);
   EXPECT_NEAR(surface / expected, 1.0, 0.02);  // 1.1% of each blob lies beyond its splat's 3 sigma
+}
+
+// A frame without layers, classified on the GPU when first drawn
+// (RendererOptions::classify_unlayered), draws what the same frame written
+// with layers draws: the same surface particles and blobs, and the same
+// thickness.
+TEST_P(LoneSphere, FramesWithoutLayersAreClassifiedOnTheGpu) {
+  ValidationGuard guard;
+  const float s = 0.05f, r = s / 2;
+  const LayeredBlock layered = layered_block(14, s), whole = layered_block(14, s, false);
+  ASSERT_TRUE(std::all_of(whole.frame.header.chunks.begin(), whole.frame.header.chunks.end(),
+                          [](const io::ChunkDesc& c) { return c.layer == io::Layer::All; }));
+  const Camera cam = camera_at({0.3f, -0.4f, 6}, {0, 0, 0}, 12);
+  FluidOptions o = plain(DisplayMode::ThicknessBuffer, r);
+  o.splatting = GetParam();
+  o.half_resolution_thickness = false;
+  uint64_t drawn_all = 0, drawn_layered = 0, drawn_gpu = 0;
+  const double expected = analytic_integral(whole.xyz, r, cam);
+  const double all = thickness_integral(whole, io::LayerSet::particles(), cam, o, {}, &drawn_all);
+  const double cpu = thickness_integral(layered, io::LayerSet::surface(), cam, o, {}, &drawn_layered);
+  const double gpu = thickness_integral(whole, io::LayerSet::particles(), cam, o, {}, &drawn_gpu, true);
+  std::printf("drawn: every particle %llu, layers written by the CPU %llu, classified on the GPU %llu\n",
+              (unsigned long long)drawn_all, (unsigned long long)drawn_layered, (unsigned long long)drawn_gpu);
+  std::printf("thickness integral: analytic %.6g, particles %.6g, CPU layers %.6g, GPU layers %.6g\n", expected, all, cpu,
+              gpu);
+  EXPECT_EQ(drawn_all, 14u * 14 * 14);
+  EXPECT_EQ(drawn_gpu, drawn_layered);  // the same surface particles and as many blobs
+  EXPECT_LT(drawn_gpu, drawn_all);
+  EXPECT_NEAR(gpu / expected, 1.0, 0.02);
+  EXPECT_NEAR(gpu / cpu, 1.0, 1e-3);
 }
 
 // Density-preserving LOD thins blobs as it thins particles, and a kept

@@ -19,6 +19,11 @@ struct LayersBenchOptions {
   bool validation = false;       // run with the validation layer (tests)
   int repeats = 5;               // renders per case for the GPU time (median)
   std::string images;            // directory to save every image in; empty: none
+  // The narrow band classified on the GPU instead of read from the file:
+  // the frame is loaded whole into a renderer that classifies frames
+  // without layers (RendererOptions::classify_unlayered); the file may then
+  // have no layers.
+  bool gpu = false;
 };
 
 // One view of one frame, both ways.
@@ -30,7 +35,8 @@ struct LayersRow {
   // as fractions of the image.
   double coverage_all = 0, coverage_surface = 0;
   uint64_t drawn_all = 0, drawn_surface = 0;    // particles (and blobs) after culling
-  double gpu_ms_all = 0, gpu_ms_surface = 0;    // medians
+  double gpu_ms_all = 0, gpu_ms_surface = 0;    // medians (the classification left out)
+  double classify_ms = 0;                       // with options.gpu: the classification, once per frame
   uint64_t bytes_all = 0, bytes_surface = 0;    // of the record each reads
   uint64_t validation_errors = 0;               // with options.validation
   // The largest particle splat of the view (pixels across, every particle in
@@ -42,7 +48,7 @@ struct LayersRow {
 };
 
 // Renders every view of every frame both ways. Throws io::Error on a bad
-// file, std::runtime_error when the file has no layers.
+// file, std::runtime_error when the file has no layers (without gpu).
 std::vector<LayersRow> compare_layers(const LayersBenchOptions& options);
 
 // compare_layers(), printed as a table on stdout.

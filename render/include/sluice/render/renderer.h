@@ -144,6 +144,16 @@ struct RendererOptions {
   // Keep each view's eye normals and depth for read_surface() (tests; costs
   // 16 bytes per pixel per frame).
   bool debug_surfaces = false;
+  // Frames that arrive without layers (files converted with --no-layers,
+  // frames a host pushes live: every chunk io::Layer::All, or staged rows
+  // with no blob chunk) are classified on the GPU when first drawn (the
+  // narrow band of io/narrow_band.h, voxel 2h, h = the scene's particle
+  // spacing, else twice its radius) and drawn from their surface and voxel
+  // blobs, as a layered file's surface set is. Costs the classification once
+  // per uploaded frame (a pass "classify" in FrameStats), a bit per particle,
+  // and room for n/4 blobs after the particles; a frame with more blobs, or
+  // whose grid is too large, is drawn whole.
+  bool classify_unlayered = false;
 };
 
 class Renderer {

@@ -1,0 +1,127 @@
+// The narrow band of frames that arrive without layers (frame_band.h).
+#include "frame_band.h"
+
+#include <algorithm>
+#include <limits>
+
+#include "renderer_impl.h"
+#include "shaders.h"
+
+namespace sluice::render {
+namespace {
+
+using Stage = vk::PipelineStageFlagBits2;
+using Access = vk::AccessFlagBits2;
+
+// Mirrors Push in band_frame.glsl.
+struct FramePush {
+  uint64_t particles, chunks, attributes, xyz, attr, params, layers, blobs, blob_attr, surface;
+  uint32_t n, chunk_count, room, float_positions, step;
+  uint32_t pad;  // to the 8-byte alignment of the addresses; not in the shader's block
+};
+static_assert(sizeof(FramePush) == 104);
+
+vk::raii::Pipeline compute(const vk::raii::Device& device, const vk::raii::PipelineLayout& layout, Shader s) {
+  const std::span<const uint32_t> code = spirv(s);
+  const vk::raii::ShaderModule m(device, vk::ShaderModuleCreateInfo({}, code.size_bytes(), code.data()));
+  return vk::raii::Pipeline(
+      device, nullptr,
+      vk::ComputePipelineCreateInfo({}, vk::PipelineShaderStageCreateInfo({}, vk::ShaderStageFlagBits::eCompute, *m, "main"),
+                                    *layout));
+}
+
+// 2D dispatch of `groups` workgroups (x at most 65535).
+void dispatch(vk::CommandBuffer cmd, uint64_t groups) {
+  const uint32_t x = uint32_t(std::clamp<uint64_t>(groups, 1, 65535));
+  cmd.dispatch(x, uint32_t((std::max<uint64_t>(groups, 1) + x - 1) / x), 1);
+}
+
+void compute_barrier(vk::CommandBuffer cmd) {
+  memory_barrier(cmd, Stage::eComputeShader | Stage::eTransfer, Access::eShaderWrite | Access::eTransferWrite,
+                 Stage::eComputeShader | Stage::eTransfer, Access::eShaderRead | Access::eShaderWrite | Access::eTransferRead);
+}
+
+}  // namespace
+
+uint64_t blob_room(uint64_t particles) { return std::max<uint64_t>(particles / 4, 1024); }
+uint64_t surface_words(uint64_t particles) { return 1 + (particles + 31) / 32; }
+
+GpuChunk blob_chunk_row(std::span<const GpuChunk> table, uint64_t particles, float voxel) {
+  GpuChunk row{};
+  constexpr float kMax = std::numeric_limits<float>::max();
+  for (int a = 0; a < 3; ++a) row.lo[a] = kMax, row.hi[a] = -kMax;
+  row.attr_lo = kMax;
+  row.attr_hi = -kMax;
+  for (const GpuChunk& c : table) {
+    if (c.count == 0) continue;
+    for (int a = 0; a < 3; ++a) row.lo[a] = std::min(row.lo[a], c.lo[a]), row.hi[a] = std::max(row.hi[a], c.hi[a]);
+    row.attr_lo = std::min(row.attr_lo, c.attr_lo);
+    row.attr_hi = std::max(row.attr_hi, c.attr_hi);
+  }
+  if (row.lo[0] > row.hi[0]) {  // no particles: an empty row
+    for (int a = 0; a < 3; ++a) row.lo[a] = row.hi[a] = 0;
+    row.attr_lo = row.attr_hi = 0;
+  }
+  row.first = uint32_t(particles);
+  row.count = 0;
+  row.kind = 1;
+  row.voxel = voxel;
+  return row;
+}
+
+FrameBand::FrameBand(Context::Impl& ctx, float diameter) : ctx_(ctx), diameter_(diameter), passes_(ctx) {
+  const vk::PushConstantRange range(vk::ShaderStageFlagBits::eCompute, 0, sizeof(FramePush));
+  layout_ = vk::raii::PipelineLayout(ctx.device, vk::PipelineLayoutCreateInfo({}, {}, range));
+  gather_ = compute(ctx.device, layout_, Shader::BandGather);
+  apply_ = compute(ctx.device, layout_, Shader::BandApply);
+}
+
+void FrameBand::record(vk::CommandBuffer cmd, FrameSet& set, bool float_positions,
+                       const std::function<void(Buffer&&)>& retire) {
+  const uint64_t n = set.particle_count;
+  constexpr auto usage = vk::BufferUsageFlagBits::eStorageBuffer | vk::BufferUsageFlagBits::eShaderDeviceAddress;
+  const auto grow = [&](Buffer& b, uint64_t bytes) {
+    if (*b.buffer && b.size >= bytes) return;
+    if (*b.buffer) retire(std::move(b));
+    b = create_buffer(ctx_, std::max<uint64_t>(bytes, 16), usage, MemoryKind::DeviceLocal);
+  };
+  grow(xyz_, n * 12);
+  grow(attr_, n * 4);
+  passes_.reserve(n, true, retire);
+
+  FramePush push{};
+  push.particles = set.particles.address;
+  push.chunks = set.chunks.address;
+  push.attributes = set.has_attribute ? set.attributes.address : 0;
+  push.xyz = xyz_.address;
+  push.attr = set.has_attribute ? attr_.address : 0;
+  push.params = passes_.params.address;
+  push.layers = passes_.particles.address + BandPasses::kLayerWord * n * 4;
+  push.blobs = passes_.blobs.address;
+  push.blob_attr = passes_.blob_attr.address;
+  push.surface = set.surface.address;
+  push.n = uint32_t(n);
+  push.chunk_count = set.chunk_count;
+  push.room = uint32_t(blob_room(n));
+  push.float_positions = float_positions ? 1 : 0;
+
+  cmd.bindPipeline(vk::PipelineBindPoint::eCompute, *gather_);
+  cmd.pushConstants<FramePush>(*layout_, vk::ShaderStageFlagBits::eCompute, 0, push);
+  dispatch(cmd, set.chunk_count);
+  compute_barrier(cmd);
+  passes_.record(cmd, BandRun{.n = n,
+                              .xyz = xyz_.address,
+                              .attr = set.has_attribute ? attr_.address : 0,
+                              .diameter = diameter_,
+                              .voxel = voxel(),
+                              .blobs = true});
+  cmd.bindPipeline(vk::PipelineBindPoint::eCompute, *apply_);
+  for (uint32_t step : {0u, 1u}) {
+    push.step = step;
+    cmd.pushConstants<FramePush>(*layout_, vk::ShaderStageFlagBits::eCompute, 0, push);
+    dispatch(cmd, step == 0 ? (surface_words(n) - 1 + 255) / 256 : (blob_room(n) + 255) / 256);
+    compute_barrier(cmd);
+  }
+}
+
+}  // namespace sluice::render
