@@ -80,6 +80,16 @@ for stage in $stages; do
       [[ -n ${BAND_QUICK:-} ]] || run $S bench band --synth 1000000 --no-exact --frames 1 --min-time 2 --gpu
       run $S bench band --synth 10000000 --no-exact --frames 1 --min-time 2 --gpu
       run $S bench band --synth 100000000 --no-exact --frames 1 --min-time 2 --gpu
+      [[ -n ${BAND_QUICK:-} ]] && continue
+      # Frames without layers, classified by the renderer when first drawn.
+      $S convert data/dam_break_3d/dam_break_3d.pvd -o /tmp/dam_nolayers.sluice --no-layers -q -f
+      run $S bench layers /tmp/dam_nolayers.sluice --gpu --frames 0,6,12 --repeats 7
+      for n in 10M 100M; do
+        $S synth -n $n --frames 2 --no-layers -o /tmp/synth_nolayers.sluice --force -q
+        run $S bench layers /tmp/synth_nolayers.sluice --gpu --frames 1 --repeats 7
+        run $S bench layers /tmp/synth_nolayers.sluice --gpu --frames 1 --repeats 7 --size 2064x2208
+      done
+      rm -f /tmp/synth_nolayers.sluice
       ;;
     huge)  # 100M particles per frame
       run $S synth -n 100M --frames 12 -o /tmp/synth100m.sluice --force -q

@@ -196,8 +196,12 @@ uint64_t upload_frame(Renderer::Impl& r, FrameSet& set, UploadSource particles_s
     cmd.copyBuffer(*set.staging.buffer, *set.chunks.buffer, vk::BufferCopy(chunks_offset, 0, chunks * sizeof(GpuChunk)));
   }
   if (set.band_eligible) {
+    // An empty blob row and an invalid surface: until a classification
+    // recorded by record() has run (a host may drop a recorded frame), the
+    // frame is drawn whole.
     const GpuChunk row = blob_chunk_row({table, chunks}, n, r.band->voxel());
     cmd.updateBuffer<GpuChunk>(*set.chunks.buffer, chunks * sizeof(GpuChunk), row);
+    cmd.fillBuffer(*set.surface.buffer, 0, 4, 0);
   }
   if (set.has_attribute && n > 0) {
     // Rounded up to 4 bytes: every source has room (streams are padded).
