@@ -126,6 +126,7 @@ void run_render(const RenderCommand& o, const ViewSettings& v) {
       for (const render::PassTime& p : stats.passes) passes += " " + p.name + " " + fixed(p.ms, 2);
       bar.print("frame " + std::to_string(f) + ": " + std::to_string(stats.drawn) + "/" + std::to_string(stats.particles) +
                " particles drawn; GPU ms:" + passes + "; total " + fixed(stats.gpu_ms, 2));
+      if (stats.classification.ran) bar.print("  " + render::describe(stats.classification));
     }
     bar.update(f - first + 1);
     ++f;

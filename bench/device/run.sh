@@ -91,6 +91,12 @@ for stage in $stages; do
       done
       rm -f /tmp/synth_nolayers.sluice
       ;;
+    band100)  # the renderer classifying a 100M-particle frame without layers
+      $S synth -n 100M --frames 2 --no-layers -o /tmp/synth_nolayers.sluice --force -q
+      run $S bench layers /tmp/synth_nolayers.sluice --gpu --frames 1 --repeats 7
+      run $S bench layers /tmp/synth_nolayers.sluice --gpu --frames 1 --repeats 7 --size 2064x2208
+      rm -f /tmp/synth_nolayers.sluice
+      ;;
     huge)  # 100M particles per frame
       run $S synth -n 100M --frames 12 -o /tmp/synth100m.sluice --force -q
       run $S bench stream /tmp/synth100m.sluice --memory 24G --no-storage --min-time 2

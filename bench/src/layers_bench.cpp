@@ -121,6 +121,7 @@ struct Shot {
   uint64_t drawn = 0;
   double gpu_ms = 0;       // median, the classification left out
   double classify_ms = 0;  // the narrow band classified on the GPU (the first render of a frame)
+  std::string classification;
 };
 
 Shot shoot(render::OffscreenTarget& target, render::Renderer& r, const Camera& camera, const render::FluidOptions& fluid,
@@ -133,6 +134,7 @@ Shot shoot(render::OffscreenTarget& target, render::Renderer& r, const Camera& c
     for (const render::PassTime& p : stats.passes) classify += p.name == "classify" ? p.ms : 0.0;
     ms.push_back(stats.gpu_ms - classify);
     s.classify_ms = std::max(s.classify_ms, classify);
+    if (stats.classification.ran) s.classification = render::describe(stats.classification);
     s.drawn = stats.drawn;
   }
   s.rgba = target.read_rgba8();
@@ -205,6 +207,7 @@ std::vector<LayersRow> compare_layers(const LayersBenchOptions& o) {
       row.bytes_all = io::layers_end(table, io::LayerSet::particles(), attributes);
       row.bytes_surface = io::layers_end(table, o.gpu ? io::LayerSet::particles() : io::LayerSet::surface(), attributes);
       row.classify_ms = s.classify_ms;
+      row.classification = s.classification;
       row.validation_errors = context.validation_errors() - errors_before;
       row.largest_splat_px = largest_splat(xyz, v.camera, radius, o.width, o.height);
       row.splat_limit_px = lod.max_splat_pixels > 0 ? std::min(lod.max_splat_pixels, context.device().max_point_size)
@@ -244,6 +247,9 @@ void run_layers_bench(const LayersBenchOptions& o) {
   t.print(o.gpu ? "Narrow band classified on the GPU (surface + voxel blobs) against every particle; difference in "
                   "fluid pixels relative to all"
                 : "Narrow band (surface + voxel blobs) against every particle; difference in fluid pixels relative to all");
+  for (const LayersRow& r : rows) {
+    if (!r.classification.empty()) std::printf("frame %llu: %s\n", (unsigned long long)r.frame, r.classification.c_str());
+  }
   if (near) {
     std::printf("* splats larger than the renderer draws: the nearest particles are culled in both pictures, and\n"
                 "  where surface particles go the narrow band shows the hollow inside (docs/narrow_band.md)\n");

@@ -40,6 +40,8 @@ class FrameBand {
   // `retire` keeps grown-out scratch alive while recorded work may use it.
   void record(vk::CommandBuffer cmd, FrameSet& set, bool float_positions,
               const std::function<void(Buffer&&)>& retire);
+  // The classifier's Params (BandParams) of the last recorded run.
+  const Buffer& params() const { return passes_.params; }
 
  private:
   Context::Impl& ctx_;

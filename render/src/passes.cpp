@@ -137,6 +137,11 @@ void PassRecorder::classify(FrameSet& frame) {
   memory_barrier(cmd_, Stage::eComputeShader, Access::eShaderStorageWrite, Stage::eComputeShader,
                  Access::eShaderStorageRead | Access::eShaderStorageWrite);
   frame.classified = true;
+  // What came of it, for FrameStats::classification.
+  memory_barrier(cmd_, Stage::eComputeShader, Access::eShaderStorageWrite, Stage::eCopy, Access::eTransferRead);
+  cmd_.copyBuffer(*r_.band->params().buffer, *slot_.readback.buffer, vk::BufferCopy(0, sizeof(GpuArgs), sizeof(BandParams)));
+  slot_.classified = true;
+  slot_.blob_room = blob_room(frame.particle_count);
   stamp("classify");
 }
 

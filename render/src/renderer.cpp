@@ -249,7 +249,8 @@ Renderer::Renderer(Context& context, const SceneInfo& scene, const RendererOptio
                          kBufferUsage | vk::BufferUsageFlagBits::eIndirectBuffer | vk::BufferUsageFlagBits::eTransferSrc,
                          MemoryKind::DeviceLocal);
   for (FrameSlot& slot : r.slots) {
-    slot.readback = create_buffer(r.ctx, sizeof(GpuArgs), vk::BufferUsageFlagBits::eTransferDst, MemoryKind::Readback);
+    slot.readback = create_buffer(r.ctx, sizeof(GpuArgs) + sizeof(BandParams), vk::BufferUsageFlagBits::eTransferDst,
+                                  MemoryKind::Readback);
   }
   r.create_pipelines();
   if (options.classify_unlayered) {
@@ -321,8 +322,38 @@ void Renderer::Impl::collect_slot(FrameSlot& slot, uint32_t slot_index, bool fin
     s.gpu_ms = double(stamps[count - 1] - stamps[0]) * ns * 1e-6;
   }
   s.upload_ms = slot.upload_ms;
+  if (slot.classified) {
+    BandParams p;
+    std::memcpy(&p, static_cast<const std::byte*>(slot.readback.mapped) + sizeof(GpuArgs), sizeof p);
+    FrameStats::Classification& c = s.classification;
+    c.ran = true;
+    c.grid_fits = p.fits != 0;
+    c.surface = uint64_t(p.counts[1]) + p.counts[2] + p.counts[3];
+    c.blobs = p.blobs;
+    c.blob_room = slot.blob_room;
+    c.narrowed = c.grid_fits && c.blobs <= c.blob_room;
+    for (int a = 0; a < 3; ++a) c.cells[a] = p.dims[a];
+  }
   slot.collected = true;
   if (stats.passes.empty() || s.frame >= stats.frame) stats = std::move(s);
+}
+
+std::string describe(const FrameStats::Classification& c) {
+  if (!c.ran) return "";
+  const auto count = [](uint64_t v) {
+    std::string digits = std::to_string(v), out;
+    for (size_t i = 0; i < digits.size(); ++i) {
+      if (i > 0 && (digits.size() - i) % 3 == 0) out += ',';
+      out += digits[i];
+    }
+    return out;
+  };
+  if (!c.grid_fits) {
+    return "drawn whole: its voxel grid (" + std::to_string(c.cells[0]) + " x " + std::to_string(c.cells[1]) + " x " +
+           std::to_string(c.cells[2]) + ") has 2^32 cells or more";
+  }
+  if (!c.narrowed) return "drawn whole: " + count(c.blobs) + " blobs, room for " + count(c.blob_room);
+  return "classified on the GPU: " + count(c.surface) + " surface + " + count(c.blobs) + " blobs";
 }
 
 FrameStats Renderer::last_stats() {
@@ -369,6 +400,7 @@ FrameSync Renderer::record(VkCommandBuffer command_buffer, const RenderTarget& t
   slot.frame = r.frames_recorded;
   slot.collected = false;
   slot.stamp_names.clear();
+  slot.classified = false;
   slot.particles = frame ? frame->particle_count : 0;
   slot.upload_ms = frame ? std::max(frame->upload_ms, 0.0) : 0;
 

@@ -65,6 +65,8 @@ struct FrameSlot {
   std::vector<const char*> stamp_names;   // per timestamp after the first
   uint64_t particles = 0;
   double upload_ms = 0;
+  bool classified = false;                // its frame classified one: BandParams after the GpuArgs
+  uint64_t blob_room = 0;
   bool collected = true;
 };
 

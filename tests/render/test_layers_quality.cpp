@@ -74,6 +74,9 @@ void expect_same_picture(bool gpu) {
   EXPECT_GE(judged, rows.size() - 3);  // at most one near-culled view per frame
   if (gpu) {  // once per frame, when it is first drawn
     EXPECT_EQ(std::count_if(rows.begin(), rows.end(), [](const bench::LayersRow& r) { return r.classify_ms > 0; }), 3);
+    for (const bench::LayersRow& r : rows) {
+      if (!r.classification.empty()) EXPECT_EQ(r.classification.rfind("classified on the GPU: ", 0), 0u) << r.classification;
+    }
   }
 }
 

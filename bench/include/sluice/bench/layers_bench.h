@@ -37,6 +37,7 @@ struct LayersRow {
   uint64_t drawn_all = 0, drawn_surface = 0;    // particles (and blobs) after culling
   double gpu_ms_all = 0, gpu_ms_surface = 0;    // medians (the classification left out)
   double classify_ms = 0;                       // with options.gpu: the classification, once per frame
+  std::string classification;                   // with options.gpu: render::describe() of it (first view of a frame)
   uint64_t bytes_all = 0, bytes_surface = 0;    // of the record each reads
   uint64_t validation_errors = 0;               // with options.validation
   // The largest particle splat of the view (pixels across, every particle in

@@ -64,7 +64,22 @@ struct FrameStats {
   std::vector<PassTime> passes;
   double gpu_ms = 0;           // first to last timestamp of the frame
   double upload_ms = 0;        // GPU time of the copy of the frame drawn
+  // RendererOptions::classify_unlayered: what the classification this frame
+  // ran (if it ran one: the first draw of a frame without layers) made of it.
+  struct Classification {
+    bool ran = false;
+    bool narrowed = false;       // drawn from surface + blobs; false: drawn whole
+    uint64_t surface = 0;        // particles kept (L1 + L2 + isolated)
+    uint64_t blobs = 0;          // voxel blobs (drawn only when narrowed: at most blob_room)
+    uint64_t blob_room = 0;      // blobs the frame had room for
+    uint32_t cells[3] = {};      // the voxel grid; 2^32 cells or more cannot be classified
+    bool grid_fits = false;
+  } classification;
 };
+
+// For logs and the HUD: "classified on the GPU: 5,012 surface + 1,190 blobs"
+// or why the frame was drawn whole; "" when no classification ran.
+std::string describe(const FrameStats::Classification& c);
 
 // A decoded frame as the runtime hands it over (runtime::FrameHandle has
 // every field). Borrowed for the call.
