@@ -174,7 +174,10 @@ uint64_t upload_frame(Renderer::Impl& r, FrameSet& set, UploadSource particles_s
   // Frames to classify on the GPU when first drawn: room for blobs after
   // the particles (and their attribute), a chunk row for them, the bits.
   set.classified = false;
-  set.band_eligible = r.band && set.unlayered && n > 0 && n <= BandPasses::kMaxParticles;
+  // Every array the classification indexes stays below 4 GB (see band.glsl).
+  constexpr uint64_t k4G = uint64_t(1) << 32;
+  set.band_eligible = r.band && set.unlayered && n > 0 && n <= BandPasses::kMaxParticles &&
+                      (n + blob_room(n)) * r.stride < k4G;
   const uint64_t room = set.band_eligible ? blob_room(n) : 0;
   blocks += (room + 255) / 256;
   const uint64_t rows = chunks + (set.band_eligible ? 1 : 0);
