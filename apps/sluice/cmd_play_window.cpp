@@ -72,6 +72,7 @@ struct Player {
   bool orbiting = false, panning = false;
   double mouse_x = 0, mouse_y = 0;
   render::FrameStats stats;
+  std::string classification;  // render::describe() of the newest frame classified on the GPU
   double upload_wall_ms = 0, frame_ms = 0, shown_fps = 0;
   runtime::PlaybackStats stream;
   runtime::PipelineRates rates;
@@ -199,6 +200,7 @@ void draw_hud(Player& p, const std::string& file) {
                 (unsigned long long)p.frames, runtime::state_name(p.playback->state()));
   }
   ImGui::TextUnformatted(("layers: " + layers_text(*p.reader, p.frame, p.layers)).c_str());
+  if (!p.classification.empty()) ImGui::TextUnformatted(("  newest frame " + p.classification).c_str());
   if (ImGui::Button(p.playing() ? "Pause" : "Play")) p.toggle_play();
   ImGui::SameLine();
   if (ImGui::Button("<")) p.step(-1);
@@ -370,6 +372,7 @@ void run_play_window(const PlayOptions& o, const WindowPlayOptions& wo) {
     }
 
     p.stats = renderer.last_stats();
+    if (p.stats.classification.ran) p.classification = render::describe(p.stats.classification);
     window.new_ui_frame();
     if (p.hud) draw_hud(p, shown);
     // The default view frames the data beside the HUD; it follows the

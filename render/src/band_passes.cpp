@@ -46,13 +46,7 @@ void between_passes(vk::CommandBuffer cmd) {
 BandPasses::BandPasses(Context::Impl& ctx) : ctx_(ctx) {
   const vk::PushConstantRange range(vk::ShaderStageFlagBits::eCompute, 0, sizeof(BandPush));
   layout_ = vk::raii::PipelineLayout(ctx.device, vk::PipelineLayoutCreateInfo({}, {}, range));
-  for (const Shader s : kPasses) {
-    const std::span<const uint32_t> code = spirv(s);
-    const vk::raii::ShaderModule m(ctx.device, vk::ShaderModuleCreateInfo({}, code.size_bytes(), code.data()));
-    const vk::ComputePipelineCreateInfo info(
-        {}, vk::PipelineShaderStageCreateInfo({}, vk::ShaderStageFlagBits::eCompute, *m, "main"), *layout_);
-    pipelines_.emplace_back(ctx.device, nullptr, info);
-  }
+  for (const Shader s : kPasses) pipelines_.push_back(compute_pipeline(ctx.device, layout_, s));
 }
 
 void BandPasses::reserve(uint64_t n, bool with_blobs, const std::function<void(Buffer&&)>& retire) {

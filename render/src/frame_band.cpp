@@ -21,15 +21,6 @@ struct FramePush {
 };
 static_assert(sizeof(FramePush) == 104);
 
-vk::raii::Pipeline compute(const vk::raii::Device& device, const vk::raii::PipelineLayout& layout, Shader s) {
-  const std::span<const uint32_t> code = spirv(s);
-  const vk::raii::ShaderModule m(device, vk::ShaderModuleCreateInfo({}, code.size_bytes(), code.data()));
-  return vk::raii::Pipeline(
-      device, nullptr,
-      vk::ComputePipelineCreateInfo({}, vk::PipelineShaderStageCreateInfo({}, vk::ShaderStageFlagBits::eCompute, *m, "main"),
-                                    *layout));
-}
-
 // 2D dispatch of `groups` workgroups (x at most 65535).
 void dispatch(vk::CommandBuffer cmd, uint64_t groups) {
   const uint32_t x = uint32_t(std::clamp<uint64_t>(groups, 1, 65535));
@@ -72,8 +63,8 @@ GpuChunk blob_chunk_row(std::span<const GpuChunk> table, uint64_t particles, flo
 FrameBand::FrameBand(Context::Impl& ctx, float diameter) : ctx_(ctx), diameter_(diameter), passes_(ctx) {
   const vk::PushConstantRange range(vk::ShaderStageFlagBits::eCompute, 0, sizeof(FramePush));
   layout_ = vk::raii::PipelineLayout(ctx.device, vk::PipelineLayoutCreateInfo({}, {}, range));
-  gather_ = compute(ctx.device, layout_, Shader::BandGather);
-  apply_ = compute(ctx.device, layout_, Shader::BandApply);
+  gather_ = compute_pipeline(ctx.device, layout_, Shader::BandGather);
+  apply_ = compute_pipeline(ctx.device, layout_, Shader::BandApply);
 }
 
 void FrameBand::record(vk::CommandBuffer cmd, FrameSet& set, bool float_positions,

@@ -22,13 +22,6 @@ vk::raii::ShaderModule module(const vk::raii::Device& device, Shader s) {
   return vk::raii::ShaderModule(device, vk::ShaderModuleCreateInfo({}, code.size_bytes(), code.data()));
 }
 
-vk::raii::Pipeline compute_pipeline(const vk::raii::Device& device, const vk::raii::PipelineLayout& layout, Shader s) {
-  const vk::raii::ShaderModule m = module(device, s);
-  vk::ComputePipelineCreateInfo info({}, vk::PipelineShaderStageCreateInfo({}, vk::ShaderStageFlagBits::eCompute, *m, "main"),
-                                     *layout);
-  return vk::raii::Pipeline(device, nullptr, info);
-}
-
 // Point sprites into one colour target (and optionally reversed-z depth).
 vk::raii::Pipeline sphere_pipeline(const vk::raii::Device& device, const vk::raii::PipelineLayout& layout, Shader fragment,
                                    vk::Format color, bool depth, bool additive) {

@@ -78,6 +78,14 @@ const uint32_t kBandApply[] =
     ;
 }  // namespace
 
+vk::raii::Pipeline compute_pipeline(const vk::raii::Device& device, const vk::raii::PipelineLayout& layout, Shader s) {
+  const std::span<const uint32_t> code = spirv(s);
+  const vk::raii::ShaderModule m(device, vk::ShaderModuleCreateInfo({}, code.size_bytes(), code.data()));
+  const vk::ComputePipelineCreateInfo info(
+      {}, vk::PipelineShaderStageCreateInfo({}, vk::ShaderStageFlagBits::eCompute, *m, "main"), *layout);
+  return vk::raii::Pipeline(device, nullptr, info);
+}
+
 std::span<const uint32_t> spirv(Shader s) {
   switch (s) {
     case Shader::CullChunks: return kCullChunks;

@@ -5,6 +5,8 @@
 #include <cstdint>
 #include <span>
 
+#include "vk_common.h"
+
 namespace sluice::render {
 
 enum class Shader {
@@ -35,5 +37,8 @@ enum class Shader {
 };
 
 std::span<const uint32_t> spirv(Shader s);
+
+// A compute pipeline of shader `s` ("main") with `layout`.
+vk::raii::Pipeline compute_pipeline(const vk::raii::Device& device, const vk::raii::PipelineLayout& layout, Shader s);
 
 }  // namespace sluice::render
