@@ -28,7 +28,7 @@ void main() {
   bool valid = g.fits != 0u && g.blobs <= pc.room;
   if (index == 0u) {
     Words(pc.surface).v[0] = valid ? 1u : 0u;
-    Chunks(pc.chunks).c[pc.chunk_count].count = valid ? g.blobs : 0u;
+    ChunksOut(pc.chunks).c[pc.chunk_count].count = valid ? g.blobs : 0u;
   }
   if (!valid || index >= g.blobs) return;
   Chunk c = Chunks(pc.chunks).c[pc.chunk_count];
@@ -37,9 +37,9 @@ void main() {
   uint i = pc.n + index;
   if (pc.float_positions == 0u) {
     uvec3 q = uvec3(quantize(blob.x, c.lo.x, c.hi.x), quantize(blob.y, c.lo.y, c.hi.y), quantize(blob.z, c.lo.z, c.hi.z));
-    Particles8(pc.particles).v[i] = uvec2(q.x | (q.y << 16), q.z | (count << 16));
+    ParticlesOut8(pc.particles).v[i] = uvec2(q.x | (q.y << 16), q.z | (count << 16));
   } else {
-    Particles16(pc.particles).v[i] = uvec4(floatBitsToUint(blob.xyz), count);
+    ParticlesOut16(pc.particles).v[i] = uvec4(floatBitsToUint(blob.xyz), count);
   }
   if (pc.attributes != uvec2(0u)) {
     // Two values share a word, and a blob's may share the last particle's.

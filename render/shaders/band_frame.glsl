@@ -1,24 +1,14 @@
 // Shared by band_gather.comp and band_apply.comp: the narrow band of a frame
-// that arrived without layers, between the renderer's buffers (common.glsl's
-// layouts) and the classifier's (band.glsl). Host side: src/frame_band.cpp.
-#extension GL_EXT_buffer_reference : require
-#extension GL_EXT_buffer_reference_uvec2 : require
+// that arrived without layers, between the renderer's buffers
+// (frame_layout.glsl) and the classifier's (band.glsl). Host side: src/frame_band.cpp.
+#include "frame_layout.glsl"
 
 layout(local_size_x = 256) in;
 
-struct Chunk {  // common.glsl's
-  vec3 lo;
-  uint first;
-  vec3 hi;
-  uint count;
-  vec2 attr_range;
-  uint kind;
-  float voxel;
-};
-
-layout(buffer_reference, std430, buffer_reference_align = 8) buffer Particles8 { uvec2 v[]; };
-layout(buffer_reference, std430, buffer_reference_align = 16) buffer Particles16 { uvec4 v[]; };
-layout(buffer_reference, std430, buffer_reference_align = 16) buffer Chunks { Chunk c[]; };
+// What band_apply writes: blobs after the particles, the blobs' row count.
+layout(buffer_reference, std430, buffer_reference_align = 8) buffer ParticlesOut8 { uvec2 v[]; };
+layout(buffer_reference, std430, buffer_reference_align = 16) buffer ParticlesOut16 { uvec4 v[]; };
+layout(buffer_reference, std430, buffer_reference_align = 16) buffer ChunksOut { Chunk c[]; };
 layout(buffer_reference, std430, buffer_reference_align = 4) buffer Words { uint v[]; };
 layout(buffer_reference, std430, buffer_reference_align = 4) buffer Floats { float v[]; };
 layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer Vec4s { vec4 v[]; };

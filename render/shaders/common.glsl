@@ -1,8 +1,7 @@
 // Shared by every sluice shader: the per-frame uniforms (mirrored by
 // struct Globals in src/gpu_types.h; keep the two in step), the buffer layouts
 // reached through buffer device addresses, and the push constants.
-#extension GL_EXT_buffer_reference : require
-#extension GL_EXT_buffer_reference_uvec2 : require
+#include "frame_layout.glsl"
 
 layout(set = 0, binding = 0, std140) uniform Globals {
   mat4 view;            // world -> eye
@@ -31,20 +30,6 @@ layout(set = 0, binding = 0, std140) uniform Globals {
   vec4 thick_ray;       // the same for the thickness buffer's pixels
 } g;
 
-struct Chunk {
-  vec3 lo;
-  uint first;
-  vec3 hi;
-  uint count;
-  vec2 attr_range;
-  uint kind;    // 0: particles; 1: voxel blobs (the LOD value holds the particle count)
-  float voxel;  // blobs: side of their voxels (world)
-};
-
-layout(buffer_reference, std430, buffer_reference_align = 8) readonly buffer Particles8 { uvec2 v[]; };
-layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer Particles16 { uvec4 v[]; };
-layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer Chunks { Chunk c[]; };
-layout(buffer_reference, std430, buffer_reference_align = 4) readonly buffer Attributes { uint v[]; };
 layout(buffer_reference, std430, buffer_reference_align = 8) buffer Blocks { uvec2 b[]; };
 // The draw list: one uvec2 per kept particle, x = its 256-particle block
 // in Blocks, y = index in the block (8 bits) | splat growth (12-bit unorm
@@ -94,16 +79,7 @@ const uint kBlock = 256;  // particles per cull workgroup
 
 // World position and stable LOD value of particle `index` of chunk `c`.
 void decode_particle(Chunk c, uint index, out vec3 pos, out uint lod_value) {
-  if (g.modes.z == 0u) {
-    uvec2 raw = Particles8(pc.particles).v[index];
-    uvec3 q = uvec3(raw.x & 0xffffu, raw.x >> 16, raw.y & 0xffffu);
-    pos = c.lo + vec3(q) * ((c.hi - c.lo) * (1.0 / 65535.0));
-    lod_value = raw.y >> 16;
-  } else {
-    uvec4 raw = Particles16(pc.particles).v[index];
-    pos = uintBitsToFloat(raw.xyz);
-    lod_value = raw.w & 0xffffu;
-  }
+  decode_position(pc.particles, g.modes.z != 0u, c, index, pos, lod_value);
 }
 
 struct DrawItem {

@@ -90,9 +90,7 @@ void main() {
 
   float t = 0.0;
   if (keep && g.modes.w != 0u) {
-    uint word = Attributes(pc.attributes).v[index >> 1];
-    float q = float((index & 1u) == 0u ? (word & 0xffffu) : (word >> 16));
-    float value = c.attr_range.x + q * ((c.attr_range.y - c.attr_range.x) * (1.0 / 65535.0));
+    float value = attribute_value(pc.attributes, c, index);
     t = clamp((value - g.color.x) * g.color.y, 0.0, 1.0);
   }
 

@@ -34,12 +34,6 @@ struct BandClassifier::Impl {
     stamps = vk::raii::QueryPool(ctx.device, vk::QueryPoolCreateInfo({}, vk::QueryType::eTimestamp, kStamps));
   }
 
-  void ensure(Buffer& b, vk::DeviceSize size, vk::BufferUsageFlags usage, MemoryKind kind) {
-    if (b.size >= size && *b.buffer) return;
-    b = Buffer{};  // free before allocating the larger one
-    b = create_buffer(ctx, size, usage, kind);
-  }
-
   void read_timestamps() {
     gpu_ms = -1;
     pass_ms.clear();
@@ -73,14 +67,14 @@ io::NarrowBand BandClassifier::classify(std::span<const float> xyz, const io::Na
   if (n == 0) return out;
 
   r.passes.reserve(n, o.blobs);
-  r.ensure(r.upload, n * 12, vk::BufferUsageFlagBits::eTransferSrc, MemoryKind::Upload);
-  r.ensure(r.xyz, n * 12,
+  grow_buffer(r.ctx, r.upload, n * 12, vk::BufferUsageFlagBits::eTransferSrc, MemoryKind::Upload);
+  grow_buffer(r.ctx, r.xyz, n * 12,
            vk::BufferUsageFlagBits::eStorageBuffer | vk::BufferUsageFlagBits::eShaderDeviceAddress |
                vk::BufferUsageFlagBits::eTransferDst,
            MemoryKind::DeviceLocal);
   // Params, layers, blob_of; the blobs go through it in a second copy.
-  r.ensure(r.readback, sizeof(BandParams) + n * (o.blobs ? 16 : 4), vk::BufferUsageFlagBits::eTransferDst,
-           MemoryKind::Readback);
+  grow_buffer(r.ctx, r.readback, sizeof(BandParams) + n * (o.blobs ? 16 : 4), vk::BufferUsageFlagBits::eTransferDst,
+              MemoryKind::Readback);
   std::memcpy(r.upload.mapped, xyz.data(), n * 12);
   const BandRun run{.n = n, .xyz = r.xyz.address, .diameter = o.diameter, .voxel = out.voxel, .blobs = o.blobs};
   r.ctx.run_once([&](vk::CommandBuffer cmd) {

@@ -36,12 +36,12 @@ constexpr uint32_t kEmpty = std::numeric_limits<uint32_t>::max();
 uint32_t groups_for(uint64_t items) { return uint32_t(std::clamp<uint64_t>((items + 255) / 256, 1, kMaxGroups)); }
 uint64_t capacity_for(uint64_t n) { return std::bit_ceil(std::max<uint64_t>(2 * n, 256)); }
 
-void between_passes(vk::CommandBuffer cmd) {
+}  // namespace
+
+void BandPasses::barrier(vk::CommandBuffer cmd) {
   memory_barrier(cmd, Stage::eComputeShader | Stage::eTransfer, Access::eShaderWrite | Access::eTransferWrite,
                  Stage::eComputeShader | Stage::eTransfer, Access::eShaderRead | Access::eShaderWrite | Access::eTransferRead);
 }
-
-}  // namespace
 
 BandPasses::BandPasses(Context::Impl& ctx) : ctx_(ctx) {
   const vk::PushConstantRange range(vk::ShaderStageFlagBits::eCompute, 0, sizeof(BandPush));
@@ -98,7 +98,7 @@ void BandPasses::record(vk::CommandBuffer cmd, const BandRun& run, const std::fu
   cmd.fillBuffer(*table_.buffer, capacity * 4, capacity * 4, 0);       // COUNT
   cmd.fillBuffer(*table_.buffer, capacity * 12, capacity * 8, 0);      // L1MARK, L2MARK
   if (run.blobs) cmd.fillBuffer(*particles.buffer, kBlobOfWord * n * 4, n * 4, kEmpty);
-  between_passes(cmd);
+  barrier(cmd);
   if (after) after(kSteps[0]);
   cmd.pushConstants<BandPush>(*layout_, vk::ShaderStageFlagBits::eCompute, 0, push);
   for (size_t p = 0; p < pipelines_.size(); ++p) {
@@ -109,7 +109,7 @@ void BandPasses::record(vk::CommandBuffer cmd, const BandRun& run, const std::fu
       // them; over the slots for BandVoxels, one for BandGrid.
       const uint32_t groups = s == Shader::BandGrid ? 1 : groups_for(s == Shader::BandVoxels ? capacity : n);
       cmd.dispatch(groups, 1, 1);
-      between_passes(cmd);
+      barrier(cmd);
     }
     if (after) after(kSteps[p + 1]);
   }

@@ -57,6 +57,10 @@ class BandPasses {
   // by a barrier that makes them visible to compute shaders and transfers.
   void record(vk::CommandBuffer cmd, const BandRun& run, const std::function<void(const char*)>& after = {}) const;
 
+  // Orders compute and transfer work after the compute and transfer writes
+  // before it (between the passes, and around them).
+  static void barrier(vk::CommandBuffer cmd);
+
   // Every step's name, in the order record() reports them.
   static constexpr const char* kSteps[] = {"fills", "bounds", "grid", "insert", "voxels", "L1",
                                            "L2", "scatter", "particles", "blobs"};

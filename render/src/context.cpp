@@ -458,6 +458,14 @@ Buffer create_buffer(const Context::Impl& ctx, vk::DeviceSize size, vk::BufferUs
   return b;
 }
 
+void grow_buffer(const Context::Impl& ctx, Buffer& b, vk::DeviceSize size, vk::BufferUsageFlags usage, MemoryKind kind,
+                 const std::function<void(Buffer&&)>& retire) {
+  if (*b.buffer && b.size >= size) return;
+  if (retire && *b.buffer) retire(std::move(b));
+  b = Buffer{};
+  b = create_buffer(ctx, size, usage, kind);
+}
+
 Texture create_texture(const Context::Impl& ctx, vk::Extent2D extent, vk::Format format, vk::ImageUsageFlags usage,
                        uint32_t layers) {
   Texture t;

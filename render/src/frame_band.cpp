@@ -10,9 +10,6 @@
 namespace sluice::render {
 namespace {
 
-using Stage = vk::PipelineStageFlagBits2;
-using Access = vk::AccessFlagBits2;
-
 // Mirrors Push in band_frame.glsl.
 struct FramePush {
   uint64_t particles, chunks, attributes, xyz, attr, params, layers, blobs, blob_attr, surface;
@@ -25,11 +22,6 @@ static_assert(sizeof(FramePush) == 104);
 void dispatch(vk::CommandBuffer cmd, uint64_t groups) {
   const uint32_t x = uint32_t(std::clamp<uint64_t>(groups, 1, 65535));
   cmd.dispatch(x, uint32_t((std::max<uint64_t>(groups, 1) + x - 1) / x), 1);
-}
-
-void compute_barrier(vk::CommandBuffer cmd) {
-  memory_barrier(cmd, Stage::eComputeShader | Stage::eTransfer, Access::eShaderWrite | Access::eTransferWrite,
-                 Stage::eComputeShader | Stage::eTransfer, Access::eShaderRead | Access::eShaderWrite | Access::eTransferRead);
 }
 
 }  // namespace
@@ -71,13 +63,8 @@ void FrameBand::record(vk::CommandBuffer cmd, FrameSet& set, bool float_position
                        const std::function<void(Buffer&&)>& retire) {
   const uint64_t n = set.particle_count;
   constexpr auto usage = vk::BufferUsageFlagBits::eStorageBuffer | vk::BufferUsageFlagBits::eShaderDeviceAddress;
-  const auto grow = [&](Buffer& b, uint64_t bytes) {
-    if (*b.buffer && b.size >= bytes) return;
-    if (*b.buffer) retire(std::move(b));
-    b = create_buffer(ctx_, std::max<uint64_t>(bytes, 16), usage, MemoryKind::DeviceLocal);
-  };
-  grow(xyz_, n * 12);
-  grow(attr_, n * 4);
+  grow_buffer(ctx_, xyz_, n * 12, usage, MemoryKind::DeviceLocal, retire);
+  grow_buffer(ctx_, attr_, n * 4, usage, MemoryKind::DeviceLocal, retire);
   passes_.reserve(n, true, retire);
 
   FramePush push{};
@@ -99,7 +86,7 @@ void FrameBand::record(vk::CommandBuffer cmd, FrameSet& set, bool float_position
   cmd.bindPipeline(vk::PipelineBindPoint::eCompute, *gather_);
   cmd.pushConstants<FramePush>(*layout_, vk::ShaderStageFlagBits::eCompute, 0, push);
   dispatch(cmd, set.chunk_count);
-  compute_barrier(cmd);
+  BandPasses::barrier(cmd);
   passes_.record(cmd, BandRun{.n = n,
                               .xyz = xyz_.address,
                               .attr = set.has_attribute ? attr_.address : 0,
@@ -111,7 +98,7 @@ void FrameBand::record(vk::CommandBuffer cmd, FrameSet& set, bool float_position
     push.step = step;
     cmd.pushConstants<FramePush>(*layout_, vk::ShaderStageFlagBits::eCompute, 0, push);
     dispatch(cmd, step == 0 ? (surface_words(n) - 1 + 255) / 256 : (blob_room(n) + 255) / 256);
-    compute_barrier(cmd);
+    BandPasses::barrier(cmd);
   }
 }
 

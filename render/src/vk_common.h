@@ -67,6 +67,11 @@ struct Buffer {
 
 enum class MemoryKind { DeviceLocal, Upload, Readback };
 Buffer create_buffer(const Context::Impl& ctx, vk::DeviceSize size, vk::BufferUsageFlags usage, MemoryKind kind);
+// Makes `b` at least `size` bytes (contents lost when it grows). The old
+// buffer goes to `retire` when given (recorded work may still use it), else
+// it is freed before the new one is allocated.
+void grow_buffer(const Context::Impl& ctx, Buffer& b, vk::DeviceSize size, vk::BufferUsageFlags usage, MemoryKind kind,
+                 const std::function<void(Buffer&&)>& retire = {});
 
 // A 2D image (array of `layers`, 1 today; 2 for multiview stereo) with a view.
 struct Texture {
