@@ -12,7 +12,7 @@ packages=(
 # The renderer's packages, when the tree has a renderer.
 if [[ -d "$(dirname "$0")/../render/src" ]]; then
   packages+=(libvulkan-dev glslc mesa-vulkan-drivers vulkan-validationlayers libglfw3-dev libimgui-dev
-             libpng-dev xvfb xauth)
+             libpng-dev xvfb xauth libopenxr-dev libopenxr-loader1)
 fi
 
 missing=()

@@ -17,6 +17,8 @@ void add_export(CLI::App& app);
 void add_render(CLI::App& app);
 void add_bench_render(CLI::App& bench);
 void add_bench_layers(CLI::App& bench);  // `sluice bench layers`  // `sluice bench render`, under the bench command
+// Only in builds with SLUICE_WITH_XR:
+void add_xr(CLI::App& app);
 
 // Thrown by a subcommand that has already printed what went wrong, to set the
 // process exit code without another message.

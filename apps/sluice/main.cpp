@@ -38,6 +38,9 @@ int main(int argc, char** argv) {
   sluice::app::add_bench_render(*app.get_subcommand("bench"));
   sluice::app::add_bench_layers(*app.get_subcommand("bench"));
 #endif
+#if SLUICE_WITH_XR
+  sluice::app::add_xr(app);
+#endif
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
