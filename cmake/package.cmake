@@ -1,5 +1,5 @@
 # The installed package: `find_package(sluice)` gives sluice::io,
-# sluice::runtime, sluice::render and (where built) sluice::desktop, with
+# sluice::runtime, sluice::render and (where built) sluice::desktop and sluice::xr, with
 # headers under include/sluice and the shaders embedded in the libraries.
 # The importer (sluice_import, which links VTK) is the CLI's and is not
 # installed.
@@ -23,6 +23,13 @@ if(TARGET sluice_desktop)
   set_target_properties(sluice_desktop PROPERTIES EXPORT_NAME desktop)
   install(DIRECTORY desktop/include/sluice/desktop DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/sluice)
   set(SLUICE_PACKAGE_DESKTOP ON)
+endif()
+set(SLUICE_PACKAGE_XR OFF)
+if(TARGET sluice_xr)
+  list(APPEND sluice_targets sluice_xr)
+  set_target_properties(sluice_xr PROPERTIES EXPORT_NAME xr)
+  install(DIRECTORY xr/include/sluice/xr DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/sluice)
+  set(SLUICE_PACKAGE_XR ON)
 endif()
 foreach(t ${sluice_targets})
   target_include_directories(${t} INTERFACE $<INSTALL_INTERFACE:${CMAKE_INSTALL_INCLUDEDIR}>)

@@ -5,6 +5,8 @@
 #   3. TSan build with oneTBB rebuilt with TSan (scripts/tsan_tbb.sh): the runtime
 #      and io suites, once each
 #   4. libFuzzer targets (clang, ASan + UBSan), a short run of each (container, chunk, text)
+# The XR tests run against Monado (a real OpenXR runtime), built headless from
+# Debian 13's source by scripts/monado.sh outside the checkout and reused.
 # Set QUICK=1 to run step 1 only.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
@@ -14,13 +16,19 @@ export CCACHE_DIR=${CCACHE_DIR:-$root/.cache/ccache}
 
 step() { printf '\n=== %s ===\n' "$*"; }
 
+step "Monado (OpenXR runtime for the XR tests)"
+monado=${SLUICE_MONADO:-${XDG_CACHE_HOME:-$HOME/.cache}/sluice/monado}
+"$root/scripts/monado.sh" "$monado"
+xr_runtime=(-DSLUICE_OPENXR_RUNTIME="$monado/openxr_monado.json")
+
 step "Release build and tests"
-BUILD_DIR="$root/build" "$root/scripts/build.sh"
+BUILD_DIR="$root/build" "$root/scripts/build.sh" "${xr_runtime[@]}"
 ctest --test-dir "$root/build" --output-on-failure -j "$jobs"
 [[ "${QUICK:-0}" == 1 ]] && exit 0
 
 step "ASan + UBSan build and tests"
-BUILD_DIR="$root/build-asan" "$root/scripts/build.sh" -DSLUICE_SANITIZE=address,undefined -DCMAKE_BUILD_TYPE=RelWithDebInfo
+BUILD_DIR="$root/build-asan" "$root/scripts/build.sh" -DSLUICE_SANITIZE=address,undefined -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+  "${xr_runtime[@]}"
 # Lavapipe preloaded so its own leaks can be named and suppressed (tests/lsan.supp).
 lvp=$(ls /usr/lib/*/libvulkan_lvp.so 2>/dev/null | head -1 || true)
 LD_PRELOAD=${lvp} ASAN_OPTIONS=detect_leaks=1:verify_asan_link_order=0 UBSAN_OPTIONS=print_stacktrace=1 \

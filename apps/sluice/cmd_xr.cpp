@@ -29,7 +29,7 @@ namespace {
 struct XrOptions {
   PlayOptions play;
   ViewSettings view;
-  uint64_t frames = 0;  // exit after this many frames drawn (0: until the runtime ends the session)
+  uint64_t frames = 0;  // exit after this many frames (0: until the runtime ends the session)
   bool no_depth = false, local = false;
   float size = 1.5f;    // metres the data spans at first
 };
@@ -107,7 +107,7 @@ void run_xr(const XrOptions& o) {
   xr::Controls controls(xr::initial_placement(scene, sys.floor, placement));
   if (!p.paused) player.play();
 
-  uint64_t drawn = 0, errors_printed = 0;
+  uint64_t drawn = 0, ended = 0, errors_printed = 0;
   bool exit_asked = false;
   double last_display = -1;
   std::vector<double> gpu_ms;
@@ -142,12 +142,13 @@ void run_xr(const XrOptions& o) {
     }
     session.end_frame(frame, sync);
     if (frame.render) ++drawn;
+    ++ended;
     const render::FrameStats stats = renderer.last_stats();
     if (stats.frame != last_stats && stats.particles > 0) {
       gpu_ms.push_back(stats.gpu_ms);
       last_stats = stats.frame;
     }
-    if (o.frames > 0 && drawn >= o.frames && !exit_asked) {
+    if (o.frames > 0 && ended >= o.frames && !exit_asked) {
       session.request_exit();
       exit_asked = true;
     }
@@ -189,7 +190,7 @@ void add_xr(CLI::App& app) {
               "the views; the look options are `render`'s.");
   cmd->add_option("file", o->play.file, ".sluice file, or anything `convert` reads (converted once into a cache)")->required();
   cmd->add_flag("--no-cache", o->play.no_cache, "Input that is not .sluice: convert into a temporary file, not the cache");
-  cmd->add_option("--frames", o->frames, "End the session after this many frames drawn (scripted runs)");
+  cmd->add_option("--frames", o->frames, "End the session after this many frames (scripted runs)");
   cmd->add_option("--size", o->size, "Metres the data's largest extent spans at first")->capture_default_str();
   cmd->add_flag("--local", o->local, "Use the LOCAL space (seated) even where STAGE exists");
   cmd->add_flag("--no-depth", o->no_depth, "Do not submit depth to the compositor");

@@ -346,8 +346,7 @@ void Session::end_frame(Frame& f, const render::FrameSync& sync) {
     ++s.counters.projection_layers;
     if (!s.depth.empty()) ++s.counters.depth_layers;
   }
-  f.render = false;
-  f.command_buffer = VK_NULL_HANDLE;
+  f.command_buffer = VK_NULL_HANDLE;  // submitted: no more recording into it
 }
 
 }  // namespace sluice::xr

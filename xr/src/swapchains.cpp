@@ -73,7 +73,8 @@ void Session::Impl::create_swapchains() {
     }
     return s;
   };
-  const XrSwapchainUsageFlags color_usage = XR_SWAPCHAIN_USAGE_COLOR_ATTACHMENT_BIT;
+  const XrSwapchainUsageFlags color_usage =
+      XR_SWAPCHAIN_USAGE_COLOR_ATTACHMENT_BIT | (options.readable_images ? XR_SWAPCHAIN_USAGE_TRANSFER_SRC_BIT : 0);
   const XrSwapchainUsageFlags depth_usage = XR_SWAPCHAIN_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT;
   if (info.array_swapchain) {
     color.push_back(make(info.color_format, color_usage, info.eye_width[0], info.eye_height[0], 2));

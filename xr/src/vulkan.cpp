@@ -27,6 +27,34 @@ VKAPI_ATTR VkBool32 VKAPI_CALL count_message(VkDebugUtilsMessageSeverityFlagBits
   return VK_FALSE;
 }
 
+// The Vulkan 1.2 features sluice needs, as the structs of the extensions
+// that became 1.2 (see create_vulkan). Throws std::logic_error when sluice
+// asks for a 1.2 feature this does not carry over.
+class Vulkan12Structs {
+ public:
+  explicit Vulkan12Structs(VkPhysicalDeviceVulkan12Features f) {
+    address_.bufferDeviceAddress = f.bufferDeviceAddress;
+    timeline_.timelineSemaphore = f.timelineSemaphore;
+    reset_.hostQueryReset = f.hostQueryReset;
+    f.bufferDeviceAddress = f.timelineSemaphore = f.hostQueryReset = VK_FALSE;
+    f.pNext = nullptr;
+    VkPhysicalDeviceVulkan12Features none{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES};
+    if (std::memcmp(&f, &none, sizeof f) != 0) {
+      throw std::logic_error("xr: render::required_device_features() asks for a Vulkan 1.2 feature the XR device setup does not pass on");
+    }
+    address_.pNext = &timeline_;
+    timeline_.pNext = &reset_;
+  }
+  Vulkan12Structs(const Vulkan12Structs&) = delete;
+  Vulkan12Structs& operator=(const Vulkan12Structs&) = delete;
+  void* first() { return &address_; }
+
+ private:
+  VkPhysicalDeviceBufferDeviceAddressFeatures address_{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_BUFFER_DEVICE_ADDRESS_FEATURES};
+  VkPhysicalDeviceTimelineSemaphoreFeatures timeline_{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_TIMELINE_SEMAPHORE_FEATURES};
+  VkPhysicalDeviceHostQueryResetFeatures reset_{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_HOST_QUERY_RESET_FEATURES};
+};
+
 bool layer_available(const char* name) {
   uint32_t n = 0;
   vkEnumerateInstanceLayerProperties(&n, nullptr);
@@ -204,8 +232,15 @@ void Session::Impl::create_vulkan() {
   const std::vector<const char*> device_extensions = render::required_device_extensions(physical_device);
   memory_budget = std::any_of(device_extensions.begin(), device_extensions.end(),
                               [](const char* e) { return std::strcmp(e, VK_EXT_MEMORY_BUDGET_EXTENSION_NAME) == 0; });
+  // sluice's features, with the Vulkan 1.2 ones as their own structs: the
+  // runtime adds VkPhysicalDeviceTimelineSemaphoreFeatures to the chain
+  // unless it finds one there (Monado 25 looks for that struct only), and a
+  // chain must not hold both it and VkPhysicalDeviceVulkan12Features.
   render::DeviceFeatures features = render::required_device_features();
-  features.chain();
+  Vulkan12Structs v12(features.vulkan12);
+  features.features2.pNext = &features.vulkan11;
+  features.vulkan11.pNext = &features.vulkan13;
+  features.vulkan13.pNext = v12.first();
   VkDeviceCreateInfo device_create{VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO};
   device_create.pNext = &features.features2;
   device_create.queueCreateInfoCount = uint32_t(queues.size());

@@ -57,6 +57,9 @@ struct SessionOptions {
   Floor floor = Floor::Stage;   // STAGE where the runtime has it, else LOCAL
   float near = 0.05f;           // metres; the depth planes of the eyes' projections
   float far = 1000.0f;
+  // The eye images may also be copied from (transfer source usage): a
+  // desktop mirror, screenshots, tests.
+  bool readable_images = false;
 };
 
 // XrSessionState, as sluice names it.
