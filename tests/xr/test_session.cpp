@@ -158,6 +158,7 @@ TEST(Monado, SessionReachesFocusedDrawsBothEyesWithDepthAndExitsCleanly) {
   uint64_t drawn = 0;
   bool exit_asked = false;
   std::array<Eye, 2> checked_eyes;
+  std::array<uint64_t, 2> tracked_hands{};  // frames with the hand's grip pose located
   Vec3 ball_centre;
   const auto start = std::chrono::steady_clock::now();
   while (session.poll()) {
@@ -186,6 +187,7 @@ TEST(Monado, SessionReachesFocusedDrawsBothEyesWithDepthAndExitsCleanly) {
     }
     session.end_frame(frame, sync);
     if (frame.render) ++drawn;
+    for (size_t hand = 0; hand < 2; ++hand) tracked_hands[hand] += frame.actions.hands[hand].pose_valid ? 1 : 0;
     if (drawn >= kFrames && !exit_asked) {
       session.request_exit();
       exit_asked = true;
@@ -198,6 +200,12 @@ TEST(Monado, SessionReachesFocusedDrawsBothEyesWithDepthAndExitsCleanly) {
   }
   EXPECT_GE(n.projection_layers, kFrames);
   EXPECT_EQ(n.depth_layers, n.projection_layers);
+  // The simulated controllers (SIMULATED_LEFT/RIGHT=simple) through the
+  // khr/simple_controller bindings: the grip poses are located while focused.
+  std::printf("frames with a tracked hand: left %llu, right %llu\n", (unsigned long long)tracked_hands[0],
+              (unsigned long long)tracked_hands[1]);
+  EXPECT_GT(tracked_hands[0], kFrames / 2);
+  EXPECT_GT(tracked_hands[1], kFrames / 2);
   EXPECT_EQ(session.validation_errors(), 0u) << [&] {
     std::string all;
     for (const std::string& m : session.validation_messages()) all += m + "\n";
