@@ -135,9 +135,15 @@ void run_xr(const XrOptions& o) {
     }
     render::FrameSync sync;
     if (frame.render) {
-      for (const xr::Eye& eye : frame.eyes) {
-        const render::View view = xr::eye_view(eye.pose, eye.fov, controls.placement(), so.near, so.far, eye.viewport);
-        sync = renderer.record(frame.command_buffer, eye.target, std::span(&view, 1), fluid, lod);
+      std::array<render::View, 2> views;
+      for (size_t e = 0; e < 2; ++e) {
+        const xr::Eye& eye = frame.eyes[e];
+        views[e] = xr::eye_view(eye.pose, eye.fov, controls.placement(), so.near, so.far, eye.viewport);
+      }
+      if (frame.stereo) {
+        sync = renderer.record(frame.command_buffer, frame.stereo_target, views, fluid, lod);  // both eyes, one pass
+      } else {
+        for (size_t e = 0; e < 2; ++e) sync = renderer.record(frame.command_buffer, frame.eyes[e].target, std::span(&views[e], 1), fluid, lod);
       }
     }
     session.end_frame(frame, sync);
@@ -166,9 +172,10 @@ void run_xr(const XrOptions& o) {
               (unsigned long long)drawn, human_duration(elapsed).c_str(), fixed(double(drawn) / std::max(elapsed, 1e-9), 1).c_str(),
               (unsigned long long)n.frames, (unsigned long long)n.projection_layers, (unsigned long long)n.depth_layers,
               states_text(n.states_seen).c_str());
-  std::printf("  %llu media frames shown; stalls %llu, drops %llu, errors %llu; GPU per eye %s ms (median)\n",
+  std::printf("  %llu media frames shown; stalls %llu, drops %llu, errors %llu; GPU %s ms (median) per %s\n",
               (unsigned long long)s.frames_shown, (unsigned long long)s.stalls, (unsigned long long)s.drops,
-              (unsigned long long)s.errors, fixed(median(gpu_ms), 2).c_str());
+              (unsigned long long)s.errors, fixed(median(gpu_ms), 2).c_str(),
+              sys.array_swapchain ? "frame (both eyes in one pass)" : "eye");
   if (so.validation && session.validation_errors() > 0) {
     std::fprintf(stderr, "sluice: %llu Vulkan validation errors\n", (unsigned long long)session.validation_errors());
     throw ExitCode{1};

@@ -1,9 +1,9 @@
-// Shared by every sluice shader: the per-frame uniforms (mirrored by
-// struct Globals in src/gpu_types.h; keep the two in step), the buffer layouts
+// Shared by every sluice shader: the per-frame uniforms of each eye (mirrored
+// by struct Globals in src/gpu_types.h; keep the two in step), the buffer layouts
 // reached through buffer device addresses, and the push constants.
 #include "frame_layout.glsl"
 
-layout(set = 0, binding = 0, std140) uniform Globals {
+struct Globals {
   mat4 view;            // world -> eye
   mat4 inv_view;        // eye -> world
   vec4 planes[5];       // world frustum planes (left, right, bottom, top, near): inside when dot(n, x) + w >= 0
@@ -28,7 +28,15 @@ layout(set = 0, binding = 0, std140) uniform Globals {
   vec4 frustum;         // ndc offset x, y of an asymmetric frustum; target depth = z + w / distance
   vec4 ray;             // pixel centre -> eye ray (z = -1): x = px * ray.x + ray.y, y = py * ray.z + ray.w
   vec4 thick_ray;       // the same for the thickness buffer's pixels
-} g;
+  uvec4 stereo;         // x: eyes drawn in one pass (1, or 2 with multiview targets)
+};
+// One Globals per eye (the second is unused in mono).
+layout(set = 0, binding = 0, std140) uniform Views { Globals views[2]; };
+// The eye (target layer) this invocation works for, set first in main():
+// compute passes take it from the dispatch's z, raster passes from
+// gl_ViewIndex. 0 in mono.
+uint eye = 0u;
+#define g views[eye]
 
 layout(buffer_reference, std430, buffer_reference_align = 8) buffer Blocks { uvec2 b[]; };
 // The draw list: one uvec2 per kept particle, x = its 256-particle block

@@ -42,30 +42,31 @@ vec3 to_srgb(vec3 c) {
 }
 
 void main() {
+  eye = gl_GlobalInvocationID.z;
   ivec2 p = ivec2(gl_GlobalInvocationID.xy);
   if (any(greaterThanEqual(p, ivec2(g.viewport.xy)))) return;
   vec3 de = eye_ray(vec2(p) + 0.5, g.ray);
   vec3 dir = normalize(mat3(g.inv_view) * de);
-  vec3 eye = g.eye.xyz;
+  vec3 origin = g.eye.xyz;  // the eye's world position
   uint mode = g.display.x;
 
   float z = load_depth(depth_source(), p);
   float dist = z * length(de);
-  float tg = ground_hit(eye, dir);
+  float tg = ground_hit(origin, dir);
   bool fluid = z > 0.0 && (tg < 0.0 || dist < tg);
   vec3 color;
   vec3 n = vec3(0.0);
   if (!fluid) {
-    color = mode >= 2u && mode <= 7u ? vec3(0.0) : environment(eye, dir);
+    color = mode >= 2u && mode <= 7u ? vec3(0.0) : environment(origin, dir);
   } else {
     vec3 pe = de * z;
     n = surface_normal(p, z, pe);
     vec2 uv = (vec2(p) + 0.5) * g.viewport.zw;
-    vec2 th = g.filter_modes.w != 0u ? texture(thick_a_tex, uv).xy : texture(thick_raw_tex, uv).xy;
+    vec2 th = g.filter_modes.w != 0u ? texture(thick_a_tex, vec3(uv, eye)).xy : texture(thick_raw_tex, vec3(uv, eye)).xy;
     float thickness = th.x;
     float attr = th.x > 0.0 ? th.y / th.x : 0.0;
     vec3 nw = normalize(mat3(g.inv_view) * n);
-    vec3 pw = eye + dir * dist;
+    vec3 pw = origin + dir * dist;
     vec3 l = normalize(g.light.xyz);
     float ior = g.shade.x;
     float f0 = (ior - 1.0) / (ior + 1.0);
@@ -81,7 +82,7 @@ void main() {
     if (mode == 2u || mode == 3u) {
       color = n * 0.5 + 0.5;
     } else if (mode == 4u || mode == 5u) {
-      float centre = length(g.scene.xyz - eye);
+      float centre = length(g.scene.xyz - origin);
       float v = clamp((z - (centre - 0.5 * g.scene.w)) / max(g.scene.w, 1e-6), 0.0, 1.0);
       color = vec3(1.0 - v);
     } else if (mode == 6u || mode == 7u) {
@@ -107,6 +108,6 @@ void main() {
   // pc.param0, param1: the view's origin in the output; param2 bit 0: leave
   // pixels without fluid alone (the caller's image, background off).
   bool store = fluid || (pc.param2 & 1u) == 0u;
-  if (store) imageStore(out_color, p + ivec2(pc.param0, pc.param1), vec4(raw_view ? clamp(color, 0.0, 1.0) : to_srgb(color), 1.0));
-  if (g.display.z != 0u) imageStore(out_aux, p, vec4(n, fluid ? z : 0.0));
+  if (store) imageStore(out_color, ivec3(p + ivec2(pc.param0, pc.param1), eye), vec4(raw_view ? clamp(color, 0.0, 1.0) : to_srgb(color), 1.0));
+  if (g.display.z != 0u) imageStore(out_aux, ivec3(p, eye), vec4(n, fluid ? z : 0.0));
 }

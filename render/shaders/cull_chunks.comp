@@ -1,5 +1,5 @@
 #version 460
-// Chunk frustum test: one thread per chunk. A visible chunk appends its
+// Chunk frustum test: one thread per chunk, against every eye's frustum. A visible chunk appends its
 // 256-particle blocks to the block list that the particle pass walks, so
 // culled chunks cost nothing further.
 #include "common.glsl"
@@ -43,12 +43,20 @@ void main() {
   uint i = gl_GlobalInvocationID.y * (gl_NumWorkGroups.x * 64u) + gl_GlobalInvocationID.x;
   if (i >= pc.chunk_count) return;
   Chunk c = Chunks(pc.chunks).c[i];
-  if (c.count == 0u || !aabb_visible(c.lo, c.hi, reach(c))) return;
+  if (c.count == 0u) return;
+  // One cull for every eye: visible to any, "inside" only when inside all.
+  bool visible = false, inside_all = true;
+  for (eye = 0u; eye < views[0].stereo.x; ++eye) {
+    float r = reach(c);
+    visible = visible || aabb_visible(c.lo, c.hi, r);
+    inside_all = inside_all && aabb_inside(c.lo, c.hi, r);
+  }
+  if (!visible) return;
   Args args = Args(pc.args);
   atomicAdd(args.visible_chunks, 1u);
   uint blocks = (c.count + kBlock - 1u) / kBlock;
   uint base = atomicAdd(args.block_count, blocks);
-  uint inside = aabb_inside(c.lo, c.hi, reach(c)) ? 0x80000000u : 0u;
+  uint inside = inside_all ? 0x80000000u : 0u;
   Blocks list = Blocks(pc.blocks);
   for (uint b = 0u; b < blocks; ++b) list.b[base + b] = uvec2(i, (b * kBlock) | inside);
 }

@@ -53,39 +53,54 @@ void main() {
     if (s.w[0] != 0u && ((s.w[1u + (index >> 5)] >> (index & 31u)) & 1u) == 0u) keep = false;
   }
 
-  vec3 e = (g.view * vec4(pos, 1.0)).xyz;
-  float dist = -e.z;   // along the view axis
-  float r = blob ? kBlobReach * blob_sigma(c.voxel, g.radius.x) : g.radius.x;
+  // One decision for every eye (a particle kept for one eye and not the
+  // other would shimmer between them): the LOD importance is the largest
+  // any eye gives it; it is kept when some eye's frustum holds it and no eye
+  // has it too near or too large.
+  float r0 = blob ? kBlobReach * blob_sigma(c.voxel, views[0].radius.x) : views[0].radius.x;
   float scale = 1.0;
-
-  // Blobs thin out with LOD like particles; their random term hashes the
-  // world cell of their voxel (their LOD value is a count, and the cell
-  // stays while the voxel is occupied), and in density-preserving LOD a
-  // kept blob stands for scale^3 times its particles (a grown particle's
-  // volume), so the expected thickness stays.
-  if (g.modes.x != 0u && keep) {
+  if (views[0].modes.x != 0u && keep) {
     // Importance w (formula 3.1 with CLOD = 1000 / d_ref) and random term.
-    vec2 ndc = vec2(g.proj.x * e.x, -g.proj.y * e.y) / max(dist, 1e-20) + g.frustum.xy;
-    float centre = max(1.0 - 0.7 * min(length(ndc) * 0.70710678, 1.0), 0.3);
-    float w = centre / (max(length(e), 1e-20) * g.lod.z);
+    float w = 0.0;
+    for (eye = 0u; eye < views[0].stereo.x; ++eye) {
+      vec3 e = (g.view * vec4(pos, 1.0)).xyz;
+      vec2 ndc = vec2(g.proj.x * e.x, -g.proj.y * e.y) / max(-e.z, 1e-20) + g.frustum.xy;
+      float centre = max(1.0 - 0.7 * min(length(ndc) * 0.70710678, 1.0), 0.3);
+      w = max(w, centre / (max(length(e), 1e-20) * g.lod.z));
+    }
+    eye = 0u;
+    // Blobs thin out with LOD like particles; their random term hashes the
+    // world cell of their voxel (their LOD value is a count, and the cell
+    // stays while the voxel is occupied), and in density-preserving LOD a
+    // kept blob stands for scale^3 times its particles (a grown particle's
+    // volume), so the expected thickness stays.
     float u = blob ? cell_hash(pos, c.voxel) : g.modes.y == 0u ? (float(lod_value) + 0.5) * (1.0 / 65536.0) : position_hash(pos);
     float lod = w * -log(1.0 - u);
     keep = lod >= g.lod.y;
     if (g.modes.x == 2u) {
       // Density preserving: grow by (1/p)^(1/3), p = level^(1/w).
       scale = min(exp(g.lod.y / (3.0 * w)), g.lod.w);
-      if (!blob) r *= scale;
     }
   }
+  float r = blob ? r0 : r0 * scale;
   if (keep && !inside) {
-    for (int i = 0; i < 5; ++i) {
-      if (dot(g.planes[i].xyz, pos) + g.planes[i].w < -r) keep = false;
+    // In some eye's frustum, and not too near or too large in any.
+    bool seen = false, fits = true;
+    for (eye = 0u; eye < views[0].stereo.x; ++eye) {
+      bool in_eye = true;
+      for (int i = 0; i < 5; ++i) {
+        if (dot(g.planes[i].xyz, pos) + g.planes[i].w < -r) in_eye = false;
+      }
+      seen = seen || in_eye;
+      // Near-camera culling: too close, or a splat too large for the filter.
+      // A blob goes when its particles would (its splat is wide by design).
+      float dist = -(g.view * vec4(pos, 1.0)).z;  // along the view axis
+      float rn = blob ? g.radius.x : r;
+      if (dist - rn < max(g.eye.w, g.radius.w)) fits = false;
+      if (2.0 * rn * g.proj.y * g.viewport.y * 0.5 > g.radius.z * max(dist - rn, 1e-20)) fits = false;
     }
-    // Near-camera culling: too close, or a splat too large for the filter.
-    // A blob goes when its particles would (its splat is wide by design).
-    float rn = blob ? g.radius.x : r;
-    if (dist - rn < max(g.eye.w, g.radius.w)) keep = false;
-    if (2.0 * rn * g.proj.y * g.viewport.y * 0.5 > g.radius.z * max(dist - rn, 1e-20)) keep = false;
+    eye = 0u;
+    keep = seen && fits;
   }
 
   float t = 0.0;

@@ -16,8 +16,9 @@
 layout(local_size_x = 16, local_size_y = 16) in;
 
 void main() {
+  eye = gl_GlobalInvocationID.z;
   ivec2 p = ivec2(gl_GlobalInvocationID.xy);
-  if (any(greaterThanEqual(p, imageSize(depth_a)))) return;
+  if (any(greaterThanEqual(p, imageSize(depth_a).xy))) return;
   uint src = pc.param0, dst = pc.param1;
   ivec2 axis = pc.param2 == 0u ? ivec2(1, 0) : ivec2(0, 1);
   float zi = load_depth(src, p);

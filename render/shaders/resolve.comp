@@ -9,14 +9,15 @@
 layout(local_size_x = 16, local_size_y = 16) in;
 
 void main() {
-  ivec2 p = ivec2(gl_GlobalInvocationID.xy);
+  eye = gl_GlobalInvocationID.z;
+  ivec3 p = ivec3(gl_GlobalInvocationID);
   if (pc.param0 == 0u) {
-    if (any(greaterThanEqual(p, imageSize(depth_raw)))) return;
+    if (any(greaterThanEqual(p.xy, imageSize(depth_raw).xy))) return;
     uint bits = imageLoad(depth_u, p).x;
     imageStore(depth_raw, p, vec4(bits == 0xffffffffu ? 0.0 : uintBitsToFloat(bits)));
     imageStore(depth_u, p, uvec4(0xffffffffu));
   } else {
-    if (any(greaterThanEqual(p, imageSize(thick_raw)))) return;
+    if (any(greaterThanEqual(p.xy, imageSize(thick_raw).xy))) return;
     vec2 t = vec2(imageLoad(thick_u, p).x, imageLoad(thick_attr_u, p).x) * g.splat.y;
     imageStore(thick_raw, p, vec4(t, 0.0, 0.0));
     imageStore(thick_u, p, uvec4(0u));

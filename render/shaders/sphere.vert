@@ -4,6 +4,7 @@
 // viewport so the point's centre is always inside the clip volume (points
 // whose centre is outside may be discarded whole). The fragment shaders
 // intersect the pixel's ray with the sphere, so the sprite only has to cover.
+#extension GL_EXT_multiview : require
 #include "common.glsl"
 
 layout(location = 0) flat out vec3 v_center;  // eye space
@@ -17,6 +18,7 @@ void hide() {
 }
 
 void main() {
+  eye = gl_ViewIndex;  // multiview: one layer per eye (0 otherwise)
   DrawItem item = load_item(uint(gl_VertexIndex));
   float r = item.radius;
   vec3 c = (g.view * vec4(item.pos, 1.0)).xyz;

@@ -1,6 +1,7 @@
 #version 460
 // Exact sphere depth per pixel: ray-sphere intersection in eye space. Writes
 // the hardware depth (reversed z) and the linear depth used by the filters.
+#extension GL_EXT_multiview : require
 #include "common.glsl"
 
 layout(location = 0) flat in vec3 v_center;
@@ -10,6 +11,7 @@ layout(location = 0) out float o_depth;  // distance along the view axis
 layout(depth_less) out float gl_FragDepth;
 
 void main() {
+  eye = gl_ViewIndex;  // multiview: one layer per eye (0 otherwise)
   vec3 dir = eye_ray(gl_FragCoord.xy, g.ray);
   float inv_len = inversesqrt(dot(dir, dir));
   vec3 n = dir * inv_len;

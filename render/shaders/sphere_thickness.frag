@@ -1,6 +1,7 @@
 #version 460
 // Additive thickness: the chord of the pixel's ray through the sphere, and
 // the chord weighted by the colour attribute (for volume colour).
+#extension GL_EXT_multiview : require
 #include "common.glsl"
 
 layout(location = 0) flat in vec3 v_center;
@@ -10,6 +11,7 @@ layout(location = 3) flat in vec2 v_blob;
 layout(location = 0) out vec2 o_thickness;
 
 void main() {
+  eye = gl_ViewIndex;  // multiview: one layer per eye (0 otherwise)
   vec3 n = normalize(eye_ray(gl_FragCoord.xy, g.thick_ray));
   float tc = dot(n, v_center);
   vec3 perp = v_center - tc * n;

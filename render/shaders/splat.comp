@@ -4,7 +4,8 @@
 // through it (fixed-point atomicAdd, with the colour attribute weighted in)
 // at the thickness buffer's resolution. pc.param0 = 0: one thread per draw
 // item; items covering more than g.splat.z pixels are listed for param0 = 1:
-// one workgroup per listed item. GPUs with few raster units (H100) run this
+// one workgroup per listed item. The dispatch's z is the eye (both eyes of a
+// multiview target splat the same draw list). GPUs with few raster units (H100) run this
 // far faster than point sprites, and integer atomics make the sums
 // independent of order (deterministic images).
 #include "common.glsl"
@@ -55,7 +56,8 @@ void depth_pixel(Sphere s, ivec2 p) {
   float z;
   if (ray_sphere(s, p, g.ray, z) < 0.0) return;
   uint bits = floatBitsToUint(z);
-  if (imageLoad(depth_u, p).x > bits) imageAtomicMin(depth_u, p, bits);
+  ivec3 q = ivec3(p, eye);
+  if (imageLoad(depth_u, q).x > bits) imageAtomicMin(depth_u, q, bits);
 }
 
 void thickness_pixel(Sphere s, ivec2 p, bool attr) {
@@ -69,13 +71,14 @@ void thickness_pixel(Sphere s, ivec2 p, bool attr) {
   }
   uint t = uint(chord + 0.5);
   if (t == 0u) return;
-  imageAtomicAdd(thick_u, p, t);
-  if (attr) imageAtomicAdd(thick_attr_u, p, uint(chord * s.attr + 0.5));
+  imageAtomicAdd(thick_u, ivec3(p, eye), t);
+  if (attr) imageAtomicAdd(thick_attr_u, ivec3(p, eye), uint(chord * s.attr + 0.5));
 }
 
 void main() {
-  bool attr = g.modes.w != 0u;
+  bool attr = views[0].modes.w != 0u;
   if (pc.param0 == 0u) {
+    eye = gl_WorkGroupID.z;  // every eye splats the whole draw list
     uint item = (gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x) * 64u + gl_LocalInvocationIndex;
     Args args = Args(pc.args);
     if (item >= args.vertex_count) return;
@@ -85,7 +88,7 @@ void main() {
     pixel_box(s, g.thick_viewport, tlo, thi);
     ivec2 size = max(hi - lo, ivec2(0));
     if (float(size.x) * float(size.y) > g.splat.z) {
-      Items(pc.big).i[atomicAdd(args.big_count, 1u)] = item;
+      Items(pc.big).i[atomicAdd(args.big_count, 1u)] = item | (eye << 31);  // large in this eye
       return;
     }
     if (s.count == 0.0) {  // blobs add thickness only
@@ -97,7 +100,9 @@ void main() {
   } else {
     uint index = gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x;
     if (index >= Args(pc.args).big_count) return;
-    Sphere s = load(Items(pc.big).i[index]);
+    uint listed = Items(pc.big).i[index];
+    eye = listed >> 31;
+    Sphere s = load(listed & 0x7fffffffu);
     ivec2 lo, hi, tlo, thi;
     pixel_box(s, g.viewport, lo, hi);
     pixel_box(s, g.thick_viewport, tlo, thi);

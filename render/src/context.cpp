@@ -467,7 +467,7 @@ void grow_buffer(const Context::Impl& ctx, Buffer& b, vk::DeviceSize size, vk::B
 }
 
 Texture create_texture(const Context::Impl& ctx, vk::Extent2D extent, vk::Format format, vk::ImageUsageFlags usage,
-                       uint32_t layers) {
+                       uint32_t layers, bool array_view) {
   Texture t;
   t.format = format;
   t.extent = extent;
@@ -482,7 +482,7 @@ Texture create_texture(const Context::Impl& ctx, vk::Extent2D extent, vk::Format
       ctx.device, vk::MemoryAllocateInfo(req.size, ctx.memory_type(req.memoryTypeBits, vk::MemoryPropertyFlagBits::eDeviceLocal)));
   t.image.bindMemory(*t.memory, 0);
   t.view = vk::raii::ImageView(
-      ctx.device, vk::ImageViewCreateInfo({}, *t.image, layers > 1 ? vk::ImageViewType::e2DArray : vk::ImageViewType::e2D,
+      ctx.device, vk::ImageViewCreateInfo({}, *t.image, layers > 1 || array_view ? vk::ImageViewType::e2DArray : vk::ImageViewType::e2D,
                                           format, {}, vk::ImageSubresourceRange(t.aspect, 0, 1, 0, layers)));
   return t;
 }

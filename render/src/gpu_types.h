@@ -31,8 +31,9 @@ struct Globals {
   float splat[4];
   float frustum[4];
   float ray[4], thick_ray[4];
+  uint32_t stereo[4];  // x: eyes drawn in one pass
 };
-static_assert(sizeof(Globals) == 2 * 64 + 26 * 16);
+static_assert(sizeof(Globals) == 2 * 64 + 27 * 16);
 
 struct PushConstants {
   uint64_t particles = 0, chunks = 0, attributes = 0, blocks = 0, draws = 0, args = 0, big = 0, surface = 0;

@@ -20,11 +20,12 @@ bool has_stencil(vk::Format f) {
 
 // A caller's image from one layout to another, ordered against all work on
 // the queue before and after (the host's own passes are unknown to us).
-vk::ImageMemoryBarrier2 host_barrier(VkImage image, vk::ImageAspectFlags aspect, uint32_t layer, VkImageLayout from,
+vk::ImageMemoryBarrier2 host_barrier(VkImage image, vk::ImageAspectFlags aspect, const RenderTarget& target, VkImageLayout from,
                                      vk::ImageLayout to) {
   return vk::ImageMemoryBarrier2(Stage::eAllCommands, Access::eMemoryWrite, Stage::eAllCommands,
                                  Access::eMemoryRead | Access::eMemoryWrite, vk::ImageLayout(from), to, VK_QUEUE_FAMILY_IGNORED,
-                                 VK_QUEUE_FAMILY_IGNORED, vk::Image(image), vk::ImageSubresourceRange(aspect, 0, 1, layer, 1));
+                                 VK_QUEUE_FAMILY_IGNORED, vk::Image(image),
+                                 vk::ImageSubresourceRange(aspect, 0, 1, target.base_layer, target.layer_count));
 }
 
 vk::ImageAspectFlags depth_aspect(VkFormat f) {
@@ -93,22 +94,23 @@ void PassRecorder::begin_frame(const RenderTarget& target, bool direct) {
     cmd_.pipelineBarrier2(vk::DependencyInfo({}, {}, {}, barriers));
     const vk::ClearColorValue zero(std::array<float, 4>{0, 0, 0, 0});
     const vk::ClearColorValue far(std::array<uint32_t, 4>{0xffffffffu, 0xffffffffu, 0xffffffffu, 0xffffffffu});
-    const vk::ImageSubresourceRange range(vk::ImageAspectFlagBits::eColor, 0, 1, 0, 1);
+    const vk::ImageSubresourceRange range(vk::ImageAspectFlagBits::eColor, 0, 1, 0, VK_REMAINING_ARRAY_LAYERS);
     for (const Texture* x : all) cmd_.clearColorImage(*x->image, vk::ImageLayout::eGeneral, x == &t.depth_u ? far : zero, range);
     memory_barrier(cmd_, Stage::eClear, Access::eTransferWrite, Stage::eAllCommands, Access::eMemoryRead | Access::eMemoryWrite);
     t.initialized = true;
   }
   std::vector<vk::ImageMemoryBarrier2> to;
-  to.push_back(host_barrier(target.color_image, vk::ImageAspectFlagBits::eColor, target.base_layer, target.color_layout_before,
+  to.push_back(host_barrier(target.color_image, vk::ImageAspectFlagBits::eColor, target, target.color_layout_before,
                             direct ? vk::ImageLayout::eGeneral : vk::ImageLayout::eAttachmentOptimal));
   if (target.depth_image) {
-    to.push_back(host_barrier(target.depth_image, depth_aspect(target.depth_format), target.base_layer,
+    to.push_back(host_barrier(target.depth_image, depth_aspect(target.depth_format), target,
                               target.depth_layout_before, vk::ImageLayout::eAttachmentOptimal));
   }
   cmd_.pipelineBarrier2(vk::DependencyInfo({}, {}, {}, to));
 }
 
-void PassRecorder::begin_view(uint32_t globals_offset, const FrameSet* frame) {
+void PassRecorder::begin_view(uint32_t globals_offset, const FrameSet* frame, uint32_t layers) {
+  layers_ = layers;
   const vk::DescriptorSet set = *slot_.set;
   cmd_.bindDescriptorSets(vk::PipelineBindPoint::eCompute, *r_.layout, 0, set, globals_offset);
   cmd_.bindDescriptorSets(vk::PipelineBindPoint::eGraphics, *r_.layout, 0, set, globals_offset);
@@ -197,10 +199,10 @@ void PassRecorder::splat() {
   cmd_.bindPipeline(vk::PipelineBindPoint::eCompute, *r_.resolve);
   push(0);
   const auto gr = groups(t.size, 16);
-  cmd_.dispatch(gr[0], gr[1], 1);
+  cmd_.dispatch(gr[0], gr[1], layers_);
   push(1);
   const auto gt = groups(t.thick_size, 16);
-  cmd_.dispatch(gt[0], gt[1], 1);
+  cmd_.dispatch(gt[0], gt[1], layers_);
   memory_barrier(cmd_, Stage::eComputeShader, Access::eShaderStorageWrite, Stage::eComputeShader | Stage::eFragmentShader,
                  Access::eShaderStorageRead | Access::eShaderSampledRead);
   stamp("resolve");
@@ -225,7 +227,7 @@ void PassRecorder::raster_spheres() {
                                       vk::AttachmentLoadOp::eClear, vk::AttachmentStoreOp::eStore,
                                       vk::ClearValue(vk::ClearColorValue(std::array<float, 4>{0, 0, 0, 0})));
     vk::RenderingAttachmentInfo depth_info;
-    vk::RenderingInfo info({}, area, 1, 0, color);
+    vk::RenderingInfo info({}, area, 1, view_mask(layers_), color);
     if (depth) {
       depth_info = vk::RenderingAttachmentInfo(*depth->view, vk::ImageLayout::eDepthAttachmentOptimal, {}, {}, {},
                                                vk::AttachmentLoadOp::eClear, vk::AttachmentStoreOp::eDontCare,
@@ -247,9 +249,9 @@ void PassRecorder::raster_spheres() {
                                     Access::eShaderStorageRead | Access::eShaderSampledRead);
     cmd_.pipelineBarrier2(vk::DependencyInfo({}, {}, {}, back));
   };
-  raster(t.depth_raw, &t.depth_hw, r_.depth_pass, 0);
+  raster(t.depth_raw, &t.depth_hw, r_.depth_pass[layers_ - 1], 0);
   stamp("depth");
-  raster(t.thick_raw, nullptr, r_.thickness_pass, 1);
+  raster(t.thick_raw, nullptr, r_.thickness_pass[layers_ - 1], 1);
   stamp("thickness");
 }
 
@@ -259,10 +261,10 @@ void PassRecorder::separable(const vk::raii::Pipeline& pipeline, vk::Extent2D si
   const auto g = groups(size, 16);
   for (int i = 0; i < iterations; ++i) {
     push(i == 0 ? 0u : 1u, 2u, 0u);
-    cmd_.dispatch(g[0], g[1], 1);
+    cmd_.dispatch(g[0], g[1], layers_);
     compute_to_compute();
     push(2u, 1u, 1u);
-    cmd_.dispatch(g[0], g[1], 1);
+    cmd_.dispatch(g[0], g[1], layers_);
     compute_to_compute();
   }
 }
@@ -279,13 +281,31 @@ void PassRecorder::shade(const Viewport& origin, bool fluid_only) {
   cmd_.bindPipeline(vk::PipelineBindPoint::eCompute, *r_.composite);
   push(origin.x, origin.y, fluid_only ? 1u : 0u);
   const auto g = groups(r_.targets.size, 8);
-  cmd_.dispatch(g[0], g[1], 1);
+  cmd_.dispatch(g[0], g[1], layers_);
   memory_barrier(cmd_, Stage::eComputeShader, Access::eShaderStorageWrite, Stage::eFragmentShader, Access::eShaderStorageRead);
   stamp("shade");
 }
 
 void PassRecorder::present(const RenderTarget& target, const View& view, bool first) {
-  const vk::Format depth_format = target.depth_view ? vk::Format(target.depth_format) : vk::Format::eUndefined;
+  // One layer at a time (a 2-layer target: each eye's layer through a view
+  // of its own): a full-screen pass per eye costs little, and lavapipe (Mesa
+  // 22.3) leaves the second layer of a multiview pass of this shape unwritten.
+  for (uint32_t e = 0; e < layers_; ++e) {
+    VkImageView color = target.color_view, depth = target.depth_view;
+    if (layers_ > 1) {
+      color = r_.layer_view(target.color_image, target.color_format, vk::ImageAspectFlagBits::eColor, target.base_layer + e);
+      if (target.depth_view) {
+        depth = r_.layer_view(target.depth_image, target.depth_format, depth_aspect(target.depth_format), target.base_layer + e);
+      }
+    }
+    present_layer(target, color, depth, view, first, e);
+  }
+  stamp("present");
+}
+
+void PassRecorder::present_layer(const RenderTarget& target, VkImageView color_view, VkImageView depth_view, const View& view,
+                                 bool first, uint32_t eye) {
+  const vk::Format depth_format = depth_view ? vk::Format(target.depth_format) : vk::Format::eUndefined;
   const vk::raii::Pipeline& pipeline = r_.present_pipeline(vk::Format(target.color_format), depth_format);
   const vk::Rect2D area({int32_t(view.viewport.x), int32_t(view.viewport.y)}, {view.viewport.width, view.viewport.height});
   const bool clear_color = first && target.color_layout_before == VK_IMAGE_LAYOUT_UNDEFINED;
@@ -293,14 +313,14 @@ void PassRecorder::present(const RenderTarget& target, const View& view, bool fi
   // The far plane of the view's projection (reversed depth: 0).
   const float depth_b = view.projection.at(2, 3);
   const bool reversed = depth_b > 0;
-  vk::RenderingAttachmentInfo color(vk::ImageView(target.color_view), vk::ImageLayout::eAttachmentOptimal, {}, {}, {},
+  vk::RenderingAttachmentInfo color(vk::ImageView(color_view), vk::ImageLayout::eAttachmentOptimal, {}, {}, {},
                                     clear_color ? vk::AttachmentLoadOp::eClear : vk::AttachmentLoadOp::eLoad,
                                     vk::AttachmentStoreOp::eStore,
                                     vk::ClearValue(vk::ClearColorValue(std::array<float, 4>{0, 0, 0, 0})));
   vk::RenderingInfo info({}, area, 1, 0, color);
   vk::RenderingAttachmentInfo depth;
-  if (target.depth_view) {
-    depth = vk::RenderingAttachmentInfo(vk::ImageView(target.depth_view), vk::ImageLayout::eAttachmentOptimal, {}, {}, {},
+  if (depth_view) {
+    depth = vk::RenderingAttachmentInfo(vk::ImageView(depth_view), vk::ImageLayout::eAttachmentOptimal, {}, {}, {},
                                         clear_depth ? vk::AttachmentLoadOp::eClear : vk::AttachmentLoadOp::eLoad,
                                         vk::AttachmentStoreOp::eStore,
                                         vk::ClearValue(vk::ClearDepthStencilValue(reversed ? 0.0f : 1.0f, 0)));
@@ -311,7 +331,7 @@ void PassRecorder::present(const RenderTarget& target, const View& view, bool fi
     }
   }
   cmd_.beginRendering(info);
-  if (target.depth_view && has_stencil(depth_format) && clear_depth) {
+  if (depth_view && has_stencil(depth_format) && clear_depth) {
     const vk::ClearAttachment clear(vk::ImageAspectFlagBits::eDepth, 0, vk::ClearDepthStencilValue(reversed ? 0.0f : 1.0f, 0));
     cmd_.clearAttachments(clear, vk::ClearRect(area, 0, 1));
   }
@@ -319,15 +339,15 @@ void PassRecorder::present(const RenderTarget& target, const View& view, bool fi
   cmd_.setViewport(0, vk::Viewport(float(area.offset.x), float(area.offset.y), float(area.extent.width),
                                    float(area.extent.height), 0, 1));
   cmd_.setScissor(0, area);
-  cmd_.setDepthTestEnable(target.depth_view != VK_NULL_HANDLE);
-  cmd_.setDepthWriteEnable(target.depth_view != VK_NULL_HANDLE);
+  cmd_.setDepthTestEnable(depth_view != VK_NULL_HANDLE);
+  cmd_.setDepthWriteEnable(depth_view != VK_NULL_HANDLE);
   cmd_.setDepthCompareOp(reversed ? vk::CompareOp::eGreaterOrEqual : vk::CompareOp::eLessOrEqual);
   uint32_t flags = target.background ? 1u : 0u;
   if (is_srgb(vk::Format(target.color_format))) flags |= 2u;
+  flags |= eye << 2;
   push(view.viewport.x, view.viewport.y, flags);
   cmd_.draw(3, 1, 0, 0);
   cmd_.endRendering();
-  stamp("present");
 }
 
 void PassRecorder::end_frame(const RenderTarget& target, bool direct) {
@@ -336,11 +356,11 @@ void PassRecorder::end_frame(const RenderTarget& target, bool direct) {
   cmd_.copyBuffer(*r_.args.buffer, *slot_.readback.buffer, vk::BufferCopy(0, 0, sizeof(GpuArgs)));
   memory_barrier(cmd_, Stage::eCopy, Access::eTransferWrite, Stage::eHost, Access::eHostRead);
   std::vector<vk::ImageMemoryBarrier2> after;
-  after.push_back(host_barrier(target.color_image, vk::ImageAspectFlagBits::eColor, target.base_layer,
+  after.push_back(host_barrier(target.color_image, vk::ImageAspectFlagBits::eColor, target,
                                direct ? VK_IMAGE_LAYOUT_GENERAL : VK_IMAGE_LAYOUT_ATTACHMENT_OPTIMAL,
                                vk::ImageLayout(target.color_layout_after)));
   if (target.depth_image) {
-    after.push_back(host_barrier(target.depth_image, depth_aspect(target.depth_format), target.base_layer,
+    after.push_back(host_barrier(target.depth_image, depth_aspect(target.depth_format), target,
                                  VK_IMAGE_LAYOUT_ATTACHMENT_OPTIMAL, vk::ImageLayout(target.depth_layout_after)));
   }
   cmd_.pipelineBarrier2(vk::DependencyInfo({}, {}, {}, after));

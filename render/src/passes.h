@@ -17,8 +17,9 @@ class PassRecorder {
   // new targets, moves the caller's images to attachment layouts.
   // `direct`: shading writes the caller's colour image (GENERAL layout).
   void begin_frame(const RenderTarget& target, bool direct);
-  // Binds the view's uniforms (dynamic offset) and the frame's buffers.
-  void begin_view(uint32_t globals_offset, const FrameSet* frame);
+  // Binds the view's uniforms (dynamic offset: a Globals per eye) and the
+  // frame's buffers; `layers` eyes are drawn by the passes that follow.
+  void begin_view(uint32_t globals_offset, const FrameSet* frame, uint32_t layers);
   // A frame without layers, first drawn: its narrow band on the GPU
   // (frame_band.h), once; the views then draw its surface and blobs.
   void classify(FrameSet& frame);
@@ -36,6 +37,8 @@ class PassRecorder {
   void end_frame(const RenderTarget& target, bool direct);
 
  private:
+  void present_layer(const RenderTarget& target, VkImageView color, VkImageView depth, const View& view, bool first,
+                     uint32_t eye);
   void stamp(const char* name);
   void push(uint32_t p0 = 0, uint32_t p1 = 0, uint32_t p2 = 0);
   void compute_to_compute();
@@ -47,6 +50,7 @@ class PassRecorder {
   uint32_t first_stamp_;
   PushConstants pc_{};
   bool have_frame_ = false;
+  uint32_t layers_ = 1;  // eyes drawn at once: the screen-space passes' dispatch z, the raster passes' views
 };
 
 }  // namespace sluice::render

@@ -24,7 +24,7 @@ vk::raii::ShaderModule module(const vk::raii::Device& device, Shader s) {
 
 // Point sprites into one colour target (and optionally reversed-z depth).
 vk::raii::Pipeline sphere_pipeline(const vk::raii::Device& device, const vk::raii::PipelineLayout& layout, Shader fragment,
-                                   vk::Format color, bool depth, bool additive) {
+                                   vk::Format color, bool depth, bool additive, uint32_t view_mask) {
   const vk::raii::ShaderModule vs = module(device, Shader::SphereVert);
   const vk::raii::ShaderModule fs = module(device, fragment);
   const std::array stages{vk::PipelineShaderStageCreateInfo({}, vk::ShaderStageFlagBits::eVertex, *vs, "main"),
@@ -43,7 +43,7 @@ vk::raii::Pipeline sphere_pipeline(const vk::raii::Device& device, const vk::rai
   vk::PipelineColorBlendStateCreateInfo blend_state({}, VK_FALSE, vk::LogicOp::eCopy, blend);
   const std::array dynamic{vk::DynamicState::eViewport, vk::DynamicState::eScissor};
   vk::PipelineDynamicStateCreateInfo dynamic_state({}, dynamic);
-  vk::PipelineRenderingCreateInfo rendering(0, color, depth ? vk::Format::eD32Sfloat : vk::Format::eUndefined);
+  vk::PipelineRenderingCreateInfo rendering(view_mask, color, depth ? vk::Format::eD32Sfloat : vk::Format::eUndefined);
   vk::GraphicsPipelineCreateInfo info({}, stages, &vertex_input, &assembly, nullptr, &viewport, &raster, &multisample,
                                       &depth_state, &blend_state, &dynamic_state, *layout);
   info.pNext = &rendering;
@@ -102,8 +102,13 @@ void Renderer::Impl::create_pipelines() {
   filter_depth = compute_pipeline(device, layout, Shader::FilterDepth);
   filter_thickness = compute_pipeline(device, layout, Shader::FilterThickness);
   composite = compute_pipeline(device, layout, Shader::Composite);
-  depth_pass = sphere_pipeline(device, layout, Shader::SphereDepthFrag, vk::Format::eR32Sfloat, true, false);
-  thickness_pass = sphere_pipeline(device, layout, Shader::SphereThicknessFrag, targets.thick_format, false, true);
+  // Point sprites into one layer, or into both eyes' layers at once (multiview).
+  for (uint32_t layers = 1; layers <= 2; ++layers) {
+    const uint32_t mask = view_mask(layers);
+    depth_pass[layers - 1] = sphere_pipeline(device, layout, Shader::SphereDepthFrag, vk::Format::eR32Sfloat, true, false, mask);
+    thickness_pass[layers - 1] =
+        sphere_pipeline(device, layout, Shader::SphereThicknessFrag, targets.thick_format, false, true, mask);
+  }
 }
 
 
@@ -157,7 +162,7 @@ void Renderer::Impl::collect_retired() {
 void Renderer::Impl::write_descriptors(FrameSlot& slot) {
   const Targets& t = targets;
   const vk::DescriptorSet set = *slot.set;
-  vk::DescriptorBufferInfo ubo(*globals.buffer, 0, sizeof(Globals));
+  vk::DescriptorBufferInfo ubo(*globals.buffer, 0, 2 * sizeof(Globals));  // both eyes' uniforms
   const vk::ImageLayout gen = vk::ImageLayout::eGeneral;
   const std::array storage{vk::DescriptorImageInfo({}, *t.depth_raw.view, gen), vk::DescriptorImageInfo({}, *t.depth_a.view, gen),
                            vk::DescriptorImageInfo({}, *t.depth_b.view, gen), vk::DescriptorImageInfo({}, *t.thick_raw.view, gen),
@@ -197,6 +202,27 @@ void Renderer::Impl::bind_output(FrameSlot& slot, VkImageView view) {
   ctx.device.updateDescriptorSets(vk::WriteDescriptorSet(*slot.set, 9, 0, 1, vk::DescriptorType::eStorageImage, &image), {});
 }
 
+VkImageView Renderer::Impl::layer_view(VkImage image, VkFormat format, vk::ImageAspectFlags aspect, uint32_t layer) {
+  vk::raii::ImageView view(ctx.device, vk::ImageViewCreateInfo({}, vk::Image(image), vk::ImageViewType::e2D, vk::Format(format), {},
+                                                               vk::ImageSubresourceRange(aspect, 0, 1, layer, 1)));
+  const VkImageView handle = *view;
+  retire(std::move(view));  // lives as long as this frame's commands
+  return handle;
+}
+
+VkImageView Renderer::Impl::array_view_of(const RenderTarget& target) {
+  // A view of the caller's layers as the shading pass's storage image
+  // (an array, one layer per eye); it lives as long as this frame's commands.
+  vk::raii::ImageView view(ctx.device,
+                           vk::ImageViewCreateInfo({}, vk::Image(target.color_image), vk::ImageViewType::e2DArray,
+                                                   vk::Format(target.color_format), {},
+                                                   vk::ImageSubresourceRange(vk::ImageAspectFlagBits::eColor, 0, 1,
+                                                                             target.base_layer, target.layer_count)));
+  const VkImageView handle = *view;
+  retire(std::move(view));
+  return handle;
+}
+
 std::vector<std::byte> Renderer::Impl::read_texture(const Texture& t, size_t texel_bytes) {
   const size_t bytes = size_t(t.extent.width) * t.extent.height * texel_bytes;
   Buffer readback = create_buffer(ctx, bytes, vk::BufferUsageFlagBits::eTransferDst, MemoryKind::Readback);
@@ -204,7 +230,7 @@ std::vector<std::byte> Renderer::Impl::read_texture(const Texture& t, size_t tex
     const auto to_copy = image_barrier(t, vk::ImageLayout::eGeneral, vk::ImageLayout::eTransferSrcOptimal, Stage::eAllCommands,
                                        Access::eMemoryWrite, Stage::eCopy, Access::eTransferRead);
     c.pipelineBarrier2(vk::DependencyInfo({}, {}, {}, to_copy));
-    vk::BufferImageCopy region(0, 0, 0, vk::ImageSubresourceLayers(t.aspect, 0, 0, 1), {}, vk::Extent3D(t.extent, 1));
+    vk::BufferImageCopy region(0, 0, 0, vk::ImageSubresourceLayers(t.aspect, 0, t.layers - 1, 1), {}, vk::Extent3D(t.extent, 1));
     c.copyImageToBuffer(*t.image, vk::ImageLayout::eTransferSrcOptimal, *readback.buffer, region);
     const auto back = image_barrier(t, vk::ImageLayout::eTransferSrcOptimal, vk::ImageLayout::eGeneral, Stage::eCopy, {},
                                     Stage::eAllCommands, Access::eMemoryRead | Access::eMemoryWrite);
@@ -236,7 +262,7 @@ Renderer::Renderer(Context& context, const SceneInfo& scene, const RendererOptio
   const uint32_t n = options.frames_in_flight;
   r.slots.resize(n);
   const vk::DeviceSize align = std::max<vk::DeviceSize>(r.ctx.properties.limits.minUniformBufferOffsetAlignment, 16);
-  r.globals_stride = (sizeof(Globals) + align - 1) / align * align;
+  r.globals_stride = (2 * sizeof(Globals) + align - 1) / align * align;  // a Globals per eye
   r.globals = create_buffer(r.ctx, r.globals_stride * n * kMaxViews, vk::BufferUsageFlagBits::eUniformBuffer, MemoryKind::Upload);
   r.args = create_buffer(r.ctx, sizeof(GpuArgs),
                          kBufferUsage | vk::BufferUsageFlagBits::eIndirectBuffer | vk::BufferUsageFlagBits::eTransferSrc,
@@ -363,7 +389,9 @@ FrameSync Renderer::record(VkCommandBuffer command_buffer, const RenderTarget& t
   if (!target.color_view || !target.color_image || target.width == 0 || target.height == 0) {
     throw std::invalid_argument("record: the target needs a colour image, its view and its size");
   }
-  if (target.layer_count != 1) throw std::invalid_argument("record: targets of one layer only (multiview is not supported yet)");
+  const uint32_t layers = target.layer_count;
+  if (layers != 1 && layers != 2) throw std::invalid_argument("record: targets of 1 layer, or 2 (both eyes in one pass)");
+  if (layers == 2 && views.size() != 2) throw std::invalid_argument("record: a 2-layer target takes 2 views, one per layer");
   if (bool(target.depth_view) != bool(target.depth_image)) throw std::invalid_argument("record: a depth image needs its view");
   const Viewport size = views[0].viewport;
   for (const View& v : views) {
@@ -373,6 +401,9 @@ FrameSync Renderer::record(VkCommandBuffer command_buffer, const RenderTarget& t
     if (uint64_t(v.viewport.x) + v.viewport.width > target.width || uint64_t(v.viewport.y) + v.viewport.height > target.height) {
       throw std::invalid_argument("record: a viewport reaches outside the target");
     }
+    if (layers == 2 && (v.viewport.x != size.x || v.viewport.y != size.y)) {
+      throw std::invalid_argument("record: both eyes of a 2-layer target need the same viewport");
+    }
   }
 
   r.collect_retired();
@@ -380,13 +411,13 @@ FrameSync Renderer::record(VkCommandBuffer command_buffer, const RenderTarget& t
   FrameSlot& slot = r.slots[slot_index];
   r.collect_slot(slot, slot_index, true);  // its last use has finished (the frames-in-flight contract)
   r.pick_shown_set();
-  r.ensure_targets(size.width, size.height, options.half_resolution_thickness);
+  r.ensure_targets(size.width, size.height, options.half_resolution_thickness, layers);
   if (slot.set_generation != r.targets.generation + (r.environment_generation << 32)) r.write_descriptors(slot);
   // Shading straight into the caller's image where it allows storage and no
   // depth test is needed; else into sluice's image, then the present pass.
   const bool direct = target.color_storage && !target.depth_view && !is_srgb(vk::Format(target.color_format)) &&
                       (target.background || target.color_layout_before != VK_IMAGE_LAYOUT_UNDEFINED);
-  r.bind_output(slot, direct ? target.color_view : static_cast<VkImageView>(*r.targets.color.view));
+  r.bind_output(slot, direct ? r.array_view_of(target) : static_cast<VkImageView>(*r.targets.color.view));
   FrameSet* frame = r.shown >= 0 ? &r.sets[size_t(r.shown)] : nullptr;
   if (frame) frame->last_drawn = r.frames_recorded;
 
@@ -400,7 +431,10 @@ FrameSync Renderer::record(VkCommandBuffer command_buffer, const RenderTarget& t
   PassRecorder pass(r, vk::CommandBuffer(command_buffer), slot, slot_index);
   pass.begin_frame(target, direct);
   if (frame && frame->band_eligible && !frame->classified) pass.classify(*frame);
-  for (uint32_t v = 0; v < views.size(); ++v) {
+  // Mono: each view its own pass over the targets. A 2-layer target: both
+  // eyes in one pass (one cull, every screen-space pass over both layers).
+  const uint32_t passes = layers == 2 ? 1 : uint32_t(views.size());
+  for (uint32_t v = 0; v < passes; ++v) {
     ViewSetup setup;
     setup.width = size.width;
     setup.height = size.height;
@@ -408,11 +442,14 @@ FrameSync Renderer::record(VkCommandBuffer command_buffer, const RenderTarget& t
     setup.thick_height = r.targets.thick_size.height;
     setup.max_point_size = r.ctx.properties.limits.pointSizeRange[1];
     setup.write_aux = r.options.debug_surfaces;
-    Globals globals = make_globals(r.scene, views[v], options, lod, setup);
-    globals.light[3] = r.has_environment ? 1.0f : 0.0f;
     const vk::DeviceSize offset = (vk::DeviceSize(slot_index) * kMaxViews + v) * r.globals_stride;
-    std::memcpy(static_cast<std::byte*>(r.globals.mapped) + offset, &globals, sizeof globals);
-    pass.begin_view(uint32_t(offset), frame);
+    for (uint32_t e = 0; e < layers; ++e) {
+      Globals globals = make_globals(r.scene, views[v + e], options, lod, setup);
+      globals.light[3] = r.has_environment ? 1.0f : 0.0f;
+      globals.stereo[0] = layers;
+      std::memcpy(static_cast<std::byte*>(r.globals.mapped) + offset + e * sizeof(Globals), &globals, sizeof globals);
+    }
+    pass.begin_view(uint32_t(offset), frame, layers);
     const bool compute_splat = options.splatting == Splatting::Compute ||
                                (options.splatting == Splatting::Auto && r.ctx.info.type != "cpu");
     pass.cull();

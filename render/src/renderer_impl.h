@@ -26,6 +26,7 @@ struct Targets {
   vk::Extent2D size, thick_size;
   vk::Format thick_format = vk::Format::eR32G32Sfloat;
   bool half_thickness = true;
+  uint32_t layers = 1;                         // eyes drawn in one pass (multiview targets: 2)
   Texture depth_hw;                            // D32, reversed z (point-sprite path)
   Texture depth_raw, depth_a, depth_b;         // R32F linear depth
   Texture thick_raw, thick_a, thick_b;         // thickness, thickness * attribute
@@ -80,7 +81,7 @@ struct Renderer::Impl {
   vk::raii::DescriptorPool pool{nullptr};
   vk::raii::Sampler sampler{nullptr};
   vk::raii::Pipeline cull_chunks{nullptr}, cull_args{nullptr}, cull_particles{nullptr};
-  vk::raii::Pipeline depth_pass{nullptr}, thickness_pass{nullptr};
+  std::array<vk::raii::Pipeline, 2> depth_pass{nullptr, nullptr}, thickness_pass{nullptr, nullptr};  // [eyes - 1]
   vk::raii::Pipeline splat{nullptr}, resolve{nullptr};
   vk::raii::Pipeline filter_depth{nullptr}, filter_thickness{nullptr}, composite{nullptr};
   struct PresentPipeline {
@@ -96,7 +97,8 @@ struct Renderer::Impl {
   vk::raii::Sampler environment_sampler{nullptr};
   bool has_environment = false;
 
-  // Uniforms: frames_in_flight * kMaxViews Globals, each at its dynamic offset.
+  // Uniforms: frames_in_flight * kMaxViews pairs of Globals (one per eye; the
+  // second unused in mono), each pair at its dynamic offset.
   Buffer globals;
   vk::DeviceSize globals_stride = 0;
   // Counters and work lists written and read by the GPU only (ordered by
@@ -128,10 +130,14 @@ struct Renderer::Impl {
 
   void create_pipelines();
   const vk::raii::Pipeline& present_pipeline(vk::Format color, vk::Format depth);
-  // Makes the targets `width` x `height` (retiring the old ones).
-  void ensure_targets(uint32_t width, uint32_t height, bool half_thickness);
+  // Makes the targets `width` x `height` x `layers` (retiring the old ones).
+  void ensure_targets(uint32_t width, uint32_t height, bool half_thickness, uint32_t layers);
   void write_descriptors(FrameSlot& slot);
   void bind_output(FrameSlot& slot, VkImageView view);  // binding 9: where shading writes
+  // The caller's colour layers as an array view, for shading straight into them.
+  VkImageView array_view_of(const RenderTarget& target);
+  // A 2D view of one layer of a caller's image, for this frame's commands.
+  VkImageView layer_view(VkImage image, VkFormat format, vk::ImageAspectFlags aspect, uint32_t layer);
   void upload_environment(const Image& equirect);  // empty: a 1x1 placeholder
   // Grows a buffer to at least `size` bytes (contents are lost; the old one is retired).
   void ensure(Buffer& b, vk::DeviceSize size, vk::BufferUsageFlags usage, MemoryKind kind);
@@ -151,6 +157,9 @@ struct Renderer::Impl {
   void collect_slot(FrameSlot& slot, uint32_t slot_index, bool finished);
   std::vector<std::byte> read_texture(const Texture& t, size_t texel_bytes);
 };
+
+// The multiview mask that draws `layers` eyes at once (0: no multiview).
+constexpr uint32_t view_mask(uint32_t layers) { return layers > 1 ? (1u << layers) - 1u : 0u; }
 
 // Formats the hardware sRGB-encodes on write (no storage, present pass only).
 bool is_srgb(vk::Format f);

@@ -73,7 +73,8 @@ Buffer create_buffer(const Context::Impl& ctx, vk::DeviceSize size, vk::BufferUs
 void grow_buffer(const Context::Impl& ctx, Buffer& b, vk::DeviceSize size, vk::BufferUsageFlags usage, MemoryKind kind,
                  const std::function<void(Buffer&&)>& retire = {});
 
-// A 2D image (array of `layers`, 1 today; 2 for multiview stereo) with a view.
+// A 2D image (array of `layers`: one per eye for multiview stereo) with a
+// view; an array view (2D_ARRAY) when `array_view` or layers > 1.
 struct Texture {
   vk::raii::Image image{nullptr};
   vk::raii::DeviceMemory memory{nullptr};
@@ -84,7 +85,7 @@ struct Texture {
   vk::ImageAspectFlags aspect = vk::ImageAspectFlagBits::eColor;
 };
 Texture create_texture(const Context::Impl& ctx, vk::Extent2D extent, vk::Format format, vk::ImageUsageFlags usage,
-                       uint32_t layers = 1);
+                       uint32_t layers = 1, bool array_view = false);
 
 // An image layout transition with synchronization2 scopes.
 vk::ImageMemoryBarrier2 image_barrier(const Texture& t, vk::ImageLayout from, vk::ImageLayout to,

@@ -85,18 +85,20 @@ class TestHost {
     vk::Format format{};
     vk::ImageAspectFlags aspect;
   };
-  Image image(uint32_t w, uint32_t h, vk::Format format, vk::ImageUsageFlags usage) {
+  // `layers` > 1: an array image (one layer per eye) with a 2D_ARRAY view.
+  Image image(uint32_t w, uint32_t h, vk::Format format, vk::ImageUsageFlags usage, uint32_t layers = 1) {
     Image i;
     i.format = format;
     const bool depth = format == vk::Format::eD32Sfloat || format == vk::Format::eD24UnormS8Uint;
     i.aspect = depth ? vk::ImageAspectFlagBits::eDepth : vk::ImageAspectFlagBits::eColor;
-    i.image = vk::raii::Image(device_, vk::ImageCreateInfo({}, vk::ImageType::e2D, format, vk::Extent3D(w, h, 1), 1, 1,
+    i.image = vk::raii::Image(device_, vk::ImageCreateInfo({}, vk::ImageType::e2D, format, vk::Extent3D(w, h, 1), 1, layers,
                                                            vk::SampleCountFlagBits::e1, vk::ImageTiling::eOptimal, usage));
     const auto req = i.image.getMemoryRequirements();
     i.memory = vk::raii::DeviceMemory(device_, vk::MemoryAllocateInfo(req.size, memory_type(req.memoryTypeBits, {})));
     i.image.bindMemory(*i.memory, 0);
-    i.view = vk::raii::ImageView(device_, vk::ImageViewCreateInfo({}, *i.image, vk::ImageViewType::e2D, format, {},
-                                                                  vk::ImageSubresourceRange(i.aspect, 0, 1, 0, 1)));
+    i.view = vk::raii::ImageView(
+        device_, vk::ImageViewCreateInfo({}, *i.image, layers > 1 ? vk::ImageViewType::e2DArray : vk::ImageViewType::e2D, format,
+                                         {}, vk::ImageSubresourceRange(i.aspect, 0, 1, 0, layers)));
     return i;
   }
 
@@ -116,9 +118,9 @@ class TestHost {
     }
   }
 
-  // The image's texels (4 bytes each: RGBA8 or D32), top row first. The
+  // The texels of one layer (4 bytes each: RGBA8 or D32), top row first. The
   // image must be in TRANSFER_SRC_OPTIMAL.
-  std::vector<uint32_t> read(const Image& i, uint32_t w, uint32_t h) {
+  std::vector<uint32_t> read(const Image& i, uint32_t w, uint32_t h, uint32_t layer = 0) {
     const vk::DeviceSize bytes = vk::DeviceSize(w) * h * 4;
     vk::raii::Buffer buffer(device_, vk::BufferCreateInfo({}, bytes, vk::BufferUsageFlagBits::eTransferDst));
     const auto req = buffer.getMemoryRequirements();
@@ -128,7 +130,7 @@ class TestHost {
     buffer.bindMemory(*memory, 0);
     submit([&](vk::CommandBuffer c) {
       c.copyImageToBuffer(*i.image, vk::ImageLayout::eTransferSrcOptimal, *buffer,
-                          vk::BufferImageCopy(0, 0, 0, vk::ImageSubresourceLayers(i.aspect, 0, 0, 1), {}, {w, h, 1}));
+                          vk::BufferImageCopy(0, 0, 0, vk::ImageSubresourceLayers(i.aspect, 0, layer, 1), {}, {w, h, 1}));
     });
     std::vector<uint32_t> out(size_t(w) * h);
     std::memcpy(out.data(), memory.mapMemory(0, bytes), bytes);

@@ -173,12 +173,16 @@ TEST(Monado, SessionReachesFocusedDrawsBothEyesWithDepthAndExitsCleanly) {
       Placement placement;
       placement.scale = 0.1f;
       placement.pose.position = mid + ahead;
+      std::array<render::View, 2> views;
       for (size_t e = 0; e < 2; ++e) {
-        Eye& eye = frame.eyes[e];
-        eye.target.background = false;  // only the fluid: alpha says where it is
-        const render::View view = eye_view(eye.pose, eye.fov, placement, so.near, so.far, eye.viewport);
-        sync = renderer.record(frame.command_buffer, eye.target, std::span(&view, 1), {}, {});
-        if (drawn == kChecked) readback.copy(frame.command_buffer, eye.target, VkDeviceSize(w) * h * 4 * e);
+        views[e] = eye_view(frame.eyes[e].pose, frame.eyes[e].fov, placement, so.near, so.far, frame.eyes[e].viewport);
+      }
+      // Both eyes in one pass (Monado's eyes share a size: an array swapchain).
+      ASSERT_TRUE(frame.stereo);
+      frame.stereo_target.background = false;  // only the fluid: alpha says where it is
+      sync = renderer.record(frame.command_buffer, frame.stereo_target, views, {}, {});
+      if (drawn == kChecked) {
+        for (size_t e = 0; e < 2; ++e) readback.copy(frame.command_buffer, frame.eyes[e].target, VkDeviceSize(w) * h * 4 * e);
       }
       if (drawn == kChecked) {
         checked_eyes = frame.eyes;

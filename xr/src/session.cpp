@@ -265,6 +265,16 @@ Frame Session::begin_frame() {
     }
     eye.viewport = {0, 0, c.width, c.height};
   }
+  if (s.info.array_swapchain) {
+    // Both layers at once: the renderer draws the two eyes in one pass.
+    const SwapchainImages& c = s.color[0];
+    f.stereo = true;
+    f.stereo_target = f.eyes[0].target;
+    f.stereo_target.color_view = c.array_views[c.acquired];
+    f.stereo_target.base_layer = 0;
+    f.stereo_target.layer_count = 2;
+    if (!s.depth.empty()) f.stereo_target.depth_view = s.depth[0].array_views[s.depth[0].acquired];
+  }
 
   const size_t slot = s.frame_index % s.fences.size();
   vkWaitForFences(s.device, 1, &s.fences[slot], VK_TRUE, UINT64_MAX);

@@ -22,6 +22,7 @@ struct SwapchainImages {
   VkFormat format = VK_FORMAT_UNDEFINED;
   std::vector<VkImage> images;
   std::vector<std::array<VkImageView, 2>> views;  // per image, per layer (one used when layers == 1)
+  std::vector<VkImageView> array_views;           // per image, both layers (array swapchains)
   uint32_t acquired = UINT32_MAX;
 };
 

@@ -70,6 +70,18 @@ void Session::Impl::create_swapchains() {
         if (vkCreateImageView(device, &v, nullptr, &views[layer]) != VK_SUCCESS) throw std::runtime_error("vkCreateImageView failed");
       }
       s.views.push_back(views);
+      if (layers > 1) {
+        VkImageViewCreateInfo v{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
+        v.image = image.image;
+        v.viewType = VK_IMAGE_VIEW_TYPE_2D_ARRAY;
+        v.format = format;
+        VkImageAspectFlags aspect = is_depth ? VK_IMAGE_ASPECT_DEPTH_BIT : VK_IMAGE_ASPECT_COLOR_BIT;
+        if (format == VK_FORMAT_D24_UNORM_S8_UINT || format == VK_FORMAT_D32_SFLOAT_S8_UINT) aspect |= VK_IMAGE_ASPECT_STENCIL_BIT;
+        v.subresourceRange = {aspect, 0, 1, 0, layers};
+        VkImageView array = VK_NULL_HANDLE;
+        if (vkCreateImageView(device, &v, nullptr, &array) != VK_SUCCESS) throw std::runtime_error("vkCreateImageView failed");
+        s.array_views.push_back(array);
+      }
     }
     return s;
   };
@@ -95,6 +107,7 @@ void Session::Impl::destroy_swapchains() {
           if (v) vkDestroyImageView(device, v, nullptr);
         }
       }
+      for (VkImageView v : s.array_views) vkDestroyImageView(device, v, nullptr);
       if (s.handle) xrDestroySwapchain(s.handle);
     }
     list->clear();

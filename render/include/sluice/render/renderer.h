@@ -120,7 +120,9 @@ View camera_view(const Camera& camera, const Viewport& viewport);
 struct RenderTarget {
   uint32_t width = 0, height = 0;  // extent of the images (every view's viewport lies inside)
   VkImage color_image = VK_NULL_HANDLE;
-  VkImageView color_view = VK_NULL_HANDLE;  // a 2D view of one layer; colour attachment usage
+  // A 2D view of layer base_layer (layer_count 1), or a 2D_ARRAY view of
+  // layers base_layer.. base_layer + 1 (layer_count 2); colour attachment usage.
+  VkImageView color_view = VK_NULL_HANDLE;
   VkFormat color_format = VK_FORMAT_UNDEFINED;  // *_SRGB formats get linear values (the hardware encodes)
   VkImageLayout color_layout_before = VK_IMAGE_LAYOUT_UNDEFINED;
   VkImageLayout color_layout_after = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
@@ -132,12 +134,18 @@ struct RenderTarget {
   // Optional: the host's depth (its opaque geometry). The fluid is hidden
   // behind it and writes its own depth into it.
   VkImage depth_image = VK_NULL_HANDLE;
-  VkImageView depth_view = VK_NULL_HANDLE;
+  VkImageView depth_view = VK_NULL_HANDLE;  // as color_view: 2D, or 2D_ARRAY of layer_count layers
   VkFormat depth_format = VK_FORMAT_UNDEFINED;  // D16, D32, D24S8, D32S8
   VkImageLayout depth_layout_before = VK_IMAGE_LAYOUT_UNDEFINED;
   VkImageLayout depth_layout_after = VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL;
-  uint32_t base_layer = 0;   // the array layer the views above show
-  uint32_t layer_count = 1;  // 1 (multiview stereo comes with the XR module)
+  uint32_t base_layer = 0;   // the first array layer drawn
+  // 1: every view into layer base_layer (side by side, each its own pass).
+  // 2: stereo in one pass: views[0] into base_layer, views[1] into the next
+  // (same viewport), with one cull for both eyes (a particle is kept for
+  // both or neither: the larger LOD importance of the two eyes decides),
+  // the point-sprite passes through multiview, and every screen-space pass
+  // over both layers at once.
+  uint32_t layer_count = 1;
   // Draw sluice's sky and ground where the host's depth is still at the far
   // plane (everywhere without a host depth); off: only the fluid is drawn.
   bool background = true;
@@ -215,7 +223,8 @@ class Renderer {
   void load_frame(const io::ContainerReader& reader, uint64_t frame, int color_attribute,
                   io::LayerSet layers = io::LayerSet::particles());
 
-  // Records the fluid for `views` (1..4, all the same size) into `cmd`, a
+  // Records the fluid for `views` (1..4, all the same size; 2 for a 2-layer
+  // target, see RenderTarget::layer_count) into `cmd`, a
   // primary command buffer in the recording state, outside a render pass, of
   // the graphics family. The caller submits it (with FrameSync's wait).
   // Particles get the radius options.particle_radius (0: scene spacing).

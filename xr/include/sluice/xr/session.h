@@ -10,7 +10,8 @@
 //     if (!session.running()) { wait a little; continue; }
 //     xr::Frame frame = session.begin_frame();
 //     render::FrameSync sync;
-//     if (frame.render) for (eye : frame.eyes) sync = renderer.record(frame.command_buffer, eye.target, {view}, ...);
+//     if (frame.render && frame.stereo) sync = renderer.record(frame.command_buffer, frame.stereo_target, {left, right}, ...);
+//     else if (frame.render) for (eye : frame.eyes) sync = renderer.record(frame.command_buffer, eye.target, {view}, ...);
 //     session.end_frame(frame, sync);
 //   }
 //
@@ -90,6 +91,11 @@ struct Frame {
   bool render = false;          // the runtime wants pictures: record both eyes
   VkCommandBuffer command_buffer = VK_NULL_HANDLE;  // begun; graphics family (only when render)
   std::array<Eye, 2> eyes;
+  // Both eyes in one record() (array swapchains, SystemInfo::array_swapchain):
+  // the two layers as one 2-layer target, views = {left, right}. Otherwise
+  // each eye's target is recorded on its own.
+  bool stereo = false;
+  render::RenderTarget stereo_target;
   ActionState actions;          // sampled this frame (all idle unless FOCUSED)
 };
 
