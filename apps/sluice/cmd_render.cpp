@@ -227,6 +227,9 @@ void add_bench_render(CLI::App& bench) {
                 "its particles from the same chunks");
   cmd->add_flag("--with-depth", o->with_depth,
                 "Render into a target with a depth image, as a host with its own geometry does (adds the present pass)");
+  cmd->add_flag("--stereo", o->stereo,
+                "Two eyes of --size each (as a headset: e.g. --size 2064x2208), both in one pass into a 2-layer target,\n"
+                "against the same two views as two mono passes");
   cmd->callback([o, sizes, size] {
     o->sizes = sizes->empty() ? std::vector<uint64_t>{} : bench::parse_counts(*sizes);
     const auto [w, h] = parse_size(*size);

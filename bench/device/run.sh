@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Runs on the GPU machine (see bench/device/README.md): every benchmark the
 # issues ask GPU-machine figures for, in one call. Results go to $OUT.
-#   bash bench/device/run.sh [io] [import] [layers] [band] [render] [stream] [split] [codec] [huge] [embed] [compare] [live] [firsthour] [streamcmp]   (default: io render stream)
+#   bash bench/device/run.sh [io] [import] [layers] [band] [render] [stream] [split] [codec] [huge] [embed] [compare] [live] [stereo] [xrsize] [firsthour] [streamcmp]   (default: io render stream)
 set -uo pipefail
 OUT=${OUT:-/tmp/out}
 mkdir -p "$OUT" /tmp/s
@@ -101,6 +101,11 @@ for stage in $stages; do
       run $S synth -n 100M --frames 12 -o /tmp/synth100m.sluice --force -q
       run $S bench stream /tmp/synth100m.sluice --memory 24G --no-storage --min-time 2
       rm -f /tmp/synth100m.sluice
+      ;;
+    stereo)  # both eyes at 2 x (2064x2208): one pass against two mono passes; all particles, then the narrow band
+      run $S bench render --sizes 1M --repeats 3 >/dev/null  # warm-up
+      run $S bench render --stereo --repeats 7 --sizes 1M,10M,100M --size 2064x2208
+      run $S bench render --stereo --repeats 7 --sizes 10M,100M --size 2064x2208 --layers --with-depth
       ;;
     xrsize)  # one eye at 2064x2208: shading into the image against the present pass with a host depth image
       run $S bench render --sizes 1M --repeats 3 >/dev/null  # warm-up

@@ -13,6 +13,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <memory>
 #include <stdexcept>
 
 #include "machine.h"
@@ -98,17 +99,17 @@ struct Case {
 };
 
 
-// Renders `repeats` times after one warm-up; per-pass medians.
-Case measure(render::Renderer& r, render::OffscreenTarget& out, const render::Camera& cam, const render::FluidOptions& fluid,
-             const render::LodOptions& lod, int repeats) {
+// Renders `views` `repeats` times after one warm-up; per-pass medians.
+Case measure(render::Renderer& r, render::OffscreenTarget& out, std::span<const render::View> views,
+             const render::FluidOptions& fluid, const render::LodOptions& lod, int repeats) {
   Case c;
-  out.render(r, cam, fluid, lod);  // warm-up: first-use costs (shader JIT on lavapipe)
+  out.render(r, views, fluid, lod);  // warm-up: first-use costs (shader JIT on lavapipe)
   std::map<std::string, std::vector<double>> passes;
   std::vector<double> total, wall;
   render::FrameStats last;
   for (int i = 0; i < std::max(repeats, 1); ++i) {
     const auto t0 = Clock::now();
-    last = out.render(r, cam, fluid, lod);
+    last = out.render(r, views, fluid, lod);
     wall.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
     for (const render::PassTime& p : last.passes) passes[p.name].push_back(p.ms);
     total.push_back(last.gpu_ms);
@@ -118,6 +119,22 @@ Case measure(render::Renderer& r, render::OffscreenTarget& out, const render::Ca
   c.stats.gpu_ms = median(total);
   c.wall_ms = median(wall);
   return c;
+}
+
+// The two eyes of `cam`: moved -/+ half the separation along its right axis.
+std::array<render::View, 2> eye_views(const render::Camera& cam, float separation, uint32_t width, uint32_t height,
+                                      bool side_by_side) {
+  const render::Vec3 forward = render::normalize(cam.target - cam.eye);
+  const render::Vec3 right = render::normalize(render::cross(forward, cam.up));
+  std::array<render::View, 2> v;
+  for (uint32_t e = 0; e < 2; ++e) {
+    render::Camera c = cam;
+    const render::Vec3 shift = right * ((e == 0 ? -0.5f : 0.5f) * separation);
+    c.eye = c.eye + shift;
+    c.target = c.target + shift;
+    v[e] = render::camera_view(c, {side_by_side ? e * width : 0, 0, width, height});
+  }
+  return v;
 }
 
 // Runs the VTK peer on the positions; seconds per frame, or -1 with a note.
@@ -212,8 +229,17 @@ void run_render_bench(const RenderBenchOptions& o) {
   render::OffscreenOptions oo;
   oo.depth = o.with_depth;
   render::OffscreenTarget out(context, o.width, o.height, oo);
+  // Stereo: both eyes in one 2-layer target, and the same eyes side by side.
+  std::unique_ptr<render::OffscreenTarget> stereo_out, pair_out;
+  if (o.stereo) {
+    render::OffscreenOptions so = oo;
+    so.layers = 2;
+    stereo_out = std::make_unique<render::OffscreenTarget>(context, o.width, o.height, so);
+    pair_out = std::make_unique<render::OffscreenTarget>(context, 2 * o.width, o.height, oo);
+  }
   const render::DeviceInfo& dev = context.device();
-  std::printf("sluice bench render: %ux%u, median of %d renders after a warm-up\n", o.width, o.height, o.repeats);
+  std::printf("sluice bench render: %ux%u%s, median of %d renders after a warm-up\n", o.width, o.height,
+              o.stereo ? " per eye, two eyes" : "", o.repeats);
   std::printf("device: %s (%s, %s)%s\n", dev.name.c_str(), dev.type.c_str(), dev.driver.c_str(),
               dev.type == "cpu" ? "  -- a CPU implementation: these are CPU milliseconds, not GPU ones" : "");
   std::printf("host: %s, %d cores; splatting %s; target %s\n", cpu_model().c_str(), core_count(), o.splat.c_str(),
@@ -232,10 +258,27 @@ void run_render_bench(const RenderBenchOptions& o) {
         lod.mode = render::LodMode::DensityPreserving;
         lod.level = o.lod_level;
       }
-      Case c = measure(r, out, cam, fluid, lod, o.repeats);
+      const std::string lod_name = lod_on ? "density " + num(o.lod_level, 2) : "off";
+      if (o.stereo) {
+        const render::Bounds& b = scene.bounds;
+        const float extent = std::max({b.max.x - b.min.x, b.max.y - b.min.y, b.max.z - b.min.z});
+        const float separation = extent * 0.064f / 1.5f;
+        for (const bool one_pass : {true, false}) {
+          const auto views = eye_views(cam, separation, o.width, o.height, !one_pass);
+          Case c = measure(r, one_pass ? *stereo_out : *pair_out, views, fluid, lod, o.repeats);
+          c.name = name + (one_pass ? ", stereo one pass" : ", stereo two mono passes");
+          c.particles = c.stats.particles;
+          c.lod = lod_name;
+          std::fprintf(stderr, "  %s, LOD %s: %.1f ms GPU\n", c.name.c_str(), c.lod.c_str(), c.stats.gpu_ms);
+          cases.push_back(c);
+        }
+        continue;
+      }
+      const render::View view = render::camera_view(cam, {0, 0, o.width, o.height});
+      Case c = measure(r, out, std::span(&view, 1), fluid, lod, o.repeats);
       c.name = name;
       c.particles = c.stats.particles;
-      c.lod = lod_on ? "density " + num(o.lod_level, 2) : "off";
+      c.lod = lod_name;
       if (!o.images.empty()) {
         render::write_png((fs::path(o.images) / (name + (lod_on ? "_lod" : "") + ".png")).string(),
                           {o.width, o.height, out.read_rgba8()});
@@ -341,6 +384,21 @@ void run_render_bench(const RenderBenchOptions& o) {
     write_loglog_svg(o.plot, "Frame time at " + std::to_string(o.width) + "x" + std::to_string(o.height) + ", " + dev.name,
                      "particles per frame", "GPU ms per frame", std::move(series));
     std::printf("wrote %s\n", o.plot.c_str());
+  }
+
+  if (o.stereo) {
+    // One pass against two, per frame and LOD setting, beside the budget of
+    // a 90 Hz headset (11.1 ms for both eyes).
+    Table stereo({"frame", "LOD", "drawn (one pass)", "one pass ms", "two mono passes ms", "two / one", "within 11.1 ms"});
+    for (size_t i = 0; i + 1 < cases.size(); i += 2) {
+      const Case& one = cases[i];
+      const Case& two = cases[i + 1];
+      const std::string frame = one.name.substr(0, one.name.rfind(", stereo"));
+      stereo.row({frame, one.lod, count_name(one.stats.drawn), num(one.stats.gpu_ms, 2), num(two.stats.gpu_ms, 2),
+                  num(two.stats.gpu_ms / std::max(one.stats.gpu_ms, 1e-9), 2) + "x", one.stats.gpu_ms <= 11.1 ? "yes" : "no"});
+    }
+    stereo.print("Stereo: both eyes at " + std::to_string(o.width) + "x" + std::to_string(o.height) +
+                 " each, in one pass (2-layer target) against two mono passes of the same views (GPU ms)");
   }
 
   bool any_vtk = false;

@@ -42,8 +42,12 @@ struct OffscreenTarget::Impl {
   void create(uint32_t width, uint32_t height) {
     if (width == 0 || height == 0) throw std::invalid_argument("offscreen target: size must be at least 1x1");
     using U = vk::ImageUsageFlagBits;
-    color = create_texture(ctx, {width, height}, vk::Format::eR8G8B8A8Unorm, U::eColorAttachment | U::eStorage | U::eTransferSrc);
-    if (options.depth) depth = create_texture(ctx, {width, height}, vk::Format::eD32Sfloat, U::eDepthStencilAttachment);
+    if (options.layers < 1 || options.layers > 2) throw std::invalid_argument("offscreen target: 1 or 2 layers");
+    color = create_texture(ctx, {width, height}, vk::Format::eR8G8B8A8Unorm, U::eColorAttachment | U::eStorage | U::eTransferSrc,
+                           options.layers);
+    if (options.depth) {
+      depth = create_texture(ctx, {width, height}, vk::Format::eD32Sfloat, U::eDepthStencilAttachment, options.layers);
+    }
     for (Slot& s : slots) {
       s.readback = options.read_back ? create_buffer(ctx, vk::DeviceSize(width) * height * 4, vk::BufferUsageFlagBits::eTransferDst,
                                                      MemoryKind::Readback)
@@ -115,6 +119,7 @@ FrameStats OffscreenTarget::render(Renderer& renderer, std::span<const View> vie
     target.depth_layout_before = VK_IMAGE_LAYOUT_UNDEFINED;
   }
   target.background = background;
+  target.layer_count = o.options.layers;
   vk::CommandBuffer cmd = *slot.cmd;
   cmd.reset();
   cmd.begin(vk::CommandBufferBeginInfo(vk::CommandBufferUsageFlagBits::eOneTimeSubmit));

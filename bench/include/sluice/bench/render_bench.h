@@ -29,6 +29,10 @@ struct RenderBenchOptions {
   bool layers = false;
   bool with_depth = false;      // render into a target with a depth image, as a host with its own geometry does
                                 // (the present pass with the depth test; without, shading writes the image)
+  // Stereo rows instead of mono ones: two eyes of width x height each (64 mm
+  // apart for data shown 1.5 m across), both in one pass into a 2-layer
+  // target, against the same two views as two mono passes side by side.
+  bool stereo = false;
 };
 
 // Runs the benchmark and prints its tables to stdout.
