@@ -23,7 +23,7 @@ void main() {
     uvec3 d = groups_for((args.vertex_count + 63u) / 64u);
     args.splat_x = d.x;
     args.splat_y = d.y;
-    args.splat_z = d.y == 0u ? 0u : views[0].stereo.x;  // z: the eye
+    args.splat_z = d.z;
   } else {
     uvec3 d = groups_for(args.big_count);
     args.big_x = d.x;

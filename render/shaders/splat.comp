@@ -4,8 +4,11 @@
 // through it (fixed-point atomicAdd, with the colour attribute weighted in)
 // at the thickness buffer's resolution. pc.param0 = 0: one thread per draw
 // item; items covering more than g.splat.z pixels are listed for param0 = 1:
-// one workgroup per listed item. The dispatch's z is the eye (both eyes of a
-// multiview target splat the same draw list). GPUs with few raster units (H100) run this
+// one workgroup per listed item. Both eyes of a 2-layer target splat the
+// same draw list: one small-splat dispatch per eye (pc.param1), in turn, so
+// only one eye's targets are hit by atomics at a time (both eyes' at once
+// took twice as long on the H200 at 2064x2208, likely outgrowing its L2);
+// large items carry their eye in the top bit. GPUs with few raster units (H100) run this
 // far faster than point sprites, and integer atomics make the sums
 // independent of order (deterministic images).
 #include "common.glsl"
@@ -78,7 +81,7 @@ void thickness_pixel(Sphere s, ivec2 p, bool attr) {
 void main() {
   bool attr = views[0].modes.w != 0u;
   if (pc.param0 == 0u) {
-    eye = gl_WorkGroupID.z;  // every eye splats the whole draw list
+    eye = pc.param1;  // one dispatch per eye over the whole draw list
     uint item = (gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x) * 64u + gl_LocalInvocationIndex;
     Args args = Args(pc.args);
     if (item >= args.vertex_count) return;

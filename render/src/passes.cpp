@@ -185,9 +185,11 @@ void PassRecorder::splat() {
   if (have_frame_) {
     args_then(1);
     cmd_.bindPipeline(vk::PipelineBindPoint::eCompute, *r_.splat);
-    push(0);
-    cmd_.dispatchIndirect(*r_.args.buffer, offsetof(GpuArgs, splat_x));
-    compute_to_compute();
+    for (uint32_t e = 0; e < layers_; ++e) {  // eyes in turn (splat.comp says why)
+      push(0, e);
+      cmd_.dispatchIndirect(*r_.args.buffer, offsetof(GpuArgs, splat_x));
+      compute_to_compute();
+    }
     args_then(2);
     cmd_.bindPipeline(vk::PipelineBindPoint::eCompute, *r_.splat);
     push(1);

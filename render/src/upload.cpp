@@ -187,7 +187,8 @@ uint64_t upload_frame(Renderer::Impl& r, FrameSet& set, UploadSource particles_s
   if (set.band_eligible) r.ensure(set.surface, surface_words(n) * 4, kDeviceUsage, MemoryKind::DeviceLocal);
   r.ensure(r.blocks, std::max<uint64_t>(blocks * 8, 16), kDeviceUsage, MemoryKind::DeviceLocal);
   r.ensure(r.draws, std::max<uint64_t>((n + room) * 8, 16), kDeviceUsage, MemoryKind::DeviceLocal);
-  r.ensure(r.big, std::max<uint64_t>((n + room) * 4, 16), kDeviceUsage, MemoryKind::DeviceLocal);
+  // Large splats: up to one entry per drawn item and eye (two eyes in one pass).
+  r.ensure(r.big, std::max<uint64_t>((n + room) * 4 * 2, 16), kDeviceUsage, MemoryKind::DeviceLocal);
 
   (*r.ctx.device).resetQueryPool(*set.stamps, 0, 2);
   vk::CommandBuffer cmd = *set.copy;
