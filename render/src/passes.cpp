@@ -319,7 +319,11 @@ void PassRecorder::present_layer(const RenderTarget& target, VkImageView color_v
                                     clear_color ? vk::AttachmentLoadOp::eClear : vk::AttachmentLoadOp::eLoad,
                                     vk::AttachmentStoreOp::eStore,
                                     vk::ClearValue(vk::ClearColorValue(std::array<float, 4>{0, 0, 0, 0})));
-  vk::RenderingInfo info({}, area, 1, 0, color);
+  // The first view clears the whole image (what an UNDEFINED layout
+  // promises), not only its own viewport; later views load and draw theirs.
+  const vk::Rect2D whole({0, 0}, {target.width, target.height});
+  const vk::Rect2D render_area = clear_color || clear_depth ? whole : area;
+  vk::RenderingInfo info({}, render_area, 1, 0, color);
   vk::RenderingAttachmentInfo depth;
   if (depth_view) {
     depth = vk::RenderingAttachmentInfo(vk::ImageView(depth_view), vk::ImageLayout::eAttachmentOptimal, {}, {}, {},
@@ -335,7 +339,7 @@ void PassRecorder::present_layer(const RenderTarget& target, VkImageView color_v
   cmd_.beginRendering(info);
   if (depth_view && has_stencil(depth_format) && clear_depth) {
     const vk::ClearAttachment clear(vk::ImageAspectFlagBits::eDepth, 0, vk::ClearDepthStencilValue(reversed ? 0.0f : 1.0f, 0));
-    cmd_.clearAttachments(clear, vk::ClearRect(area, 0, 1));
+    cmd_.clearAttachments(clear, vk::ClearRect(render_area, 0, 1));
   }
   cmd_.bindPipeline(vk::PipelineBindPoint::eGraphics, *pipeline);
   cmd_.setViewport(0, vk::Viewport(float(area.offset.x), float(area.offset.y), float(area.extent.width),
