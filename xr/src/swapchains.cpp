@@ -16,6 +16,21 @@ VkFormat pick(const std::vector<int64_t>& offered, std::initializer_list<VkForma
   return VK_FORMAT_UNDEFINED;
 }
 
+// A view of `count` layers from `first` (2D for one layer, else 2D_ARRAY);
+// depth formats with stencil see both aspects.
+VkImageView make_view(VkDevice device, VkImage image, VkFormat format, bool depth, uint32_t first, uint32_t count) {
+  VkImageViewCreateInfo v{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
+  v.image = image;
+  v.viewType = count > 1 ? VK_IMAGE_VIEW_TYPE_2D_ARRAY : VK_IMAGE_VIEW_TYPE_2D;
+  v.format = format;
+  VkImageAspectFlags aspect = depth ? VK_IMAGE_ASPECT_DEPTH_BIT : VK_IMAGE_ASPECT_COLOR_BIT;
+  if (format == VK_FORMAT_D24_UNORM_S8_UINT || format == VK_FORMAT_D32_SFLOAT_S8_UINT) aspect |= VK_IMAGE_ASPECT_STENCIL_BIT;
+  v.subresourceRange = {aspect, 0, 1, first, count};
+  VkImageView view = VK_NULL_HANDLE;
+  if (vkCreateImageView(device, &v, nullptr, &view) != VK_SUCCESS) throw std::runtime_error("vkCreateImageView failed");
+  return view;
+}
+
 }  // namespace
 
 void Session::Impl::create_swapchains() {
@@ -59,29 +74,9 @@ void Session::Impl::create_swapchains() {
     for (const auto& image : images) {
       s.images.push_back(image.image);
       std::array<VkImageView, 2> views{};
-      for (uint32_t layer = 0; layer < layers; ++layer) {
-        VkImageViewCreateInfo v{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
-        v.image = image.image;
-        v.viewType = VK_IMAGE_VIEW_TYPE_2D;
-        v.format = format;
-        VkImageAspectFlags aspect = is_depth ? VK_IMAGE_ASPECT_DEPTH_BIT : VK_IMAGE_ASPECT_COLOR_BIT;
-        if (format == VK_FORMAT_D24_UNORM_S8_UINT || format == VK_FORMAT_D32_SFLOAT_S8_UINT) aspect |= VK_IMAGE_ASPECT_STENCIL_BIT;
-        v.subresourceRange = {aspect, 0, 1, layer, 1};
-        if (vkCreateImageView(device, &v, nullptr, &views[layer]) != VK_SUCCESS) throw std::runtime_error("vkCreateImageView failed");
-      }
+      for (uint32_t layer = 0; layer < layers; ++layer) views[layer] = make_view(device, image.image, format, is_depth, layer, 1);
       s.views.push_back(views);
-      if (layers > 1) {
-        VkImageViewCreateInfo v{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
-        v.image = image.image;
-        v.viewType = VK_IMAGE_VIEW_TYPE_2D_ARRAY;
-        v.format = format;
-        VkImageAspectFlags aspect = is_depth ? VK_IMAGE_ASPECT_DEPTH_BIT : VK_IMAGE_ASPECT_COLOR_BIT;
-        if (format == VK_FORMAT_D24_UNORM_S8_UINT || format == VK_FORMAT_D32_SFLOAT_S8_UINT) aspect |= VK_IMAGE_ASPECT_STENCIL_BIT;
-        v.subresourceRange = {aspect, 0, 1, 0, layers};
-        VkImageView array = VK_NULL_HANDLE;
-        if (vkCreateImageView(device, &v, nullptr, &array) != VK_SUCCESS) throw std::runtime_error("vkCreateImageView failed");
-        s.array_views.push_back(array);
-      }
+      if (layers > 1) s.array_views.push_back(make_view(device, image.image, format, is_depth, 0, layers));
     }
     return s;
   };
