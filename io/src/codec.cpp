@@ -81,7 +81,13 @@ ZSTD_CCtx* thread_compressor() {
 // per byte to decode and unpacking 0.1-0.2).
 constexpr double kMinPlaneGain = 0.15;
 constexpr double kZstdGainOverPacked = 1.0 / 3.0;
-constexpr uint32_t kPackedFlag = 0x80000000u;
+constexpr uint32_t kPackedFlag = kPackedPlaneFlag;
+
+void entry_stored(std::vector<std::byte>& payload, const std::byte* plane, size_t n, size_t p) {
+  const auto entry = static_cast<uint32_t>(n);
+  std::memcpy(payload.data() + 4 * p, &entry, 4);
+  payload.insert(payload.end(), plane, plane + n);
+}
 
 void compress_planes(std::vector<std::byte>& raw, size_t n, const EncodeOptions& options,
                      std::vector<std::byte>& payload, ChunkCodec& codec) {
@@ -98,11 +104,18 @@ void compress_planes(std::vector<std::byte>& raw, size_t n, const EncodeOptions&
   for (size_t p = 0; p < planes; ++p) {
     const std::byte* plane = raw.data() + p * n;
     const std::span<const uint8_t> values(reinterpret_cast<const uint8_t*>(plane), n);
-    const size_t zstd_size = ZSTD_compressCCtx(cctx, frame.data(), frame.size(), plane, n, options.zstd_level);
-    if (ZSTD_isError(zstd_size)) throw Error({}, std::string("zstd: ") + ZSTD_getErrorName(zstd_size));
+    size_t zstd_size = 0;
+    if (options.zstd_planes) {
+      zstd_size = ZSTD_compressCCtx(cctx, frame.data(), frame.size(), plane, n, options.zstd_level);
+      if (ZSTD_isError(zstd_size)) throw Error({}, std::string("zstd: ") + ZSTD_getErrorName(zstd_size));
+    }
     const PackedPlan packed = options.pack_planes ? plan_packed_plane(values) : PackedPlan{};
-    const bool use_zstd =
-        packed.width == 0 || double(zstd_size) < double(packed.bytes) * (1.0 - kZstdGainOverPacked);
+    const bool use_zstd = options.zstd_planes &&
+                          (packed.width == 0 || double(zstd_size) < double(packed.bytes) * (1.0 - kZstdGainOverPacked));
+    if (!use_zstd && packed.width == 0) {  // neither zstd nor packing: stored
+      entry_stored(payload, plane, n, p);
+      continue;
+    }
     const size_t size = use_zstd ? zstd_size : packed.bytes;
     uint32_t entry = static_cast<uint32_t>(size);
     if (double(size) > double(n) * (1.0 - kMinPlaneGain)) {

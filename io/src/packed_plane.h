@@ -16,6 +16,10 @@ namespace sluice::io {
 
 inline constexpr int kMaxPackedWidth = 7;
 
+// A chunk's plane table entry with this bit set is a packed plane of the
+// remaining size (codec Packed; codec.cpp has the table's layout).
+inline constexpr uint32_t kPackedPlaneFlag = 0x80000000u;
+
 // The width (1..7) that packs `plane` smallest, and that size in bytes.
 struct PackedPlan {
   int width = 0;

@@ -57,6 +57,8 @@ std::string missing_features(const vk::raii::PhysicalDevice& pd, bool presentati
   if (!f.largePoints) return "no largePoints";
   if (!f.shaderStorageImageWriteWithoutFormat) return "no shaderStorageImageWriteWithoutFormat";
   if (!f11.multiview) return "no multiview";
+  if (!f.shaderInt64) return "no shaderInt64";
+  if (!f11.storageBuffer16BitAccess) return "no storageBuffer16BitAccess";
   if (!f12.bufferDeviceAddress) return "no bufferDeviceAddress";
   if (!f12.timelineSemaphore) return "no timelineSemaphore";
   if (!f13.synchronization2) return "no synchronization2";
@@ -339,6 +341,9 @@ DeviceFeatures required_device_features() {
   f.features2.features.largePoints = VK_TRUE;
   f.features2.features.shaderStorageImageWriteWithoutFormat = VK_TRUE;  // shading straight into the caller's image
   f.vulkan11.multiview = VK_TRUE;  // stereo (OpenXR) renders both eyes in one pass
+  // The GPU decoder (decode.comp): 64-bit Morton codes, 16-bit attribute values.
+  f.features2.features.shaderInt64 = VK_TRUE;
+  f.vulkan11.storageBuffer16BitAccess = VK_TRUE;
   f.vulkan12.bufferDeviceAddress = VK_TRUE;
   f.vulkan12.timelineSemaphore = VK_TRUE;
   f.vulkan12.hostQueryReset = VK_TRUE;

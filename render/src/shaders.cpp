@@ -76,6 +76,9 @@ const uint32_t kBandGather[] =
 const uint32_t kBandApply[] =
 #include "band_apply.comp.inc"
     ;
+const uint32_t kDecode[] =
+#include "decode.comp.inc"
+    ;
 }  // namespace
 
 vk::raii::Pipeline compute_pipeline(const vk::raii::Device& device, const vk::raii::PipelineLayout& layout, Shader s) {
@@ -112,6 +115,7 @@ std::span<const uint32_t> spirv(Shader s) {
     case Shader::BandBlobs: return kBandBlobs;
     case Shader::BandGather: return kBandGather;
     case Shader::BandApply: return kBandApply;
+    case Shader::Decode: return kDecode;
   }
   return {};
 }

@@ -34,6 +34,7 @@ enum class Shader {
   BandBlobs,
   BandGather,
   BandApply,
+  Decode,
 };
 
 std::span<const uint32_t> spirv(Shader s);

@@ -21,6 +21,10 @@ struct EncodeOptions {
   // decoding 1.4-2x faster for 1-2% more bytes (docs/format.md). false:
   // zstd wherever it is smaller (files readable by format 1.0 readers).
   bool pack_planes = true;
+  // false: no plane is zstd, each is stored or bit-packed: every chunk
+  // decodes on the GPU (gpu_decode_plan.h) with no CPU work but the
+  // checksum (`sluice convert --gpu`; the size cost is in docs/format.md).
+  bool zstd_planes = true;
   // false: every chunk's planes stored as they are (ChunkCodec::Stored, 8
   // bytes per quantized particle): the fastest to encode and to decode, for
   // frames that are decoded at once and not kept (live frames not recorded).

@@ -1,0 +1,108 @@
+// sluice/io/gpu_decode_plan.h: what a GPU needs to decode a frame record's
+// chunks itself (render/shaders/decode.comp), and the CPU's share of it.
+//
+// A chunk of a Quantized16 file is 8 + 2 x attributes byte planes (codec.h).
+// The GPU decodes planes that are stored or bit-packed (packed_plane.h)
+// straight from the record's bytes; planes compressed with zstd (which a
+// GPU decodes badly: one entropy stream per plane) are inflated on the CPU
+// into an area appended after the record ("the mixed rule"). The plan says,
+// per chunk and plane, where the GPU finds it and how it is coded, after
+// checking every size against the record, so that the GPU never reads
+// outside the bytes it is given whatever the file holds.
+//
+// The encoded area a plan refers to: the record's bytes (as read: a prefix
+// holding the chunks of the header, see keep_layers) at offset 0, then
+// `inflated_bytes` of CPU-inflated planes at `inflated_offset`, then at
+// least kGpuReadPadding bytes of anything (the GPU reads whole words).
+//
+// Plain functions over caller-owned memory; thread-safe.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "sluice/io/codec.h"
+#include "sluice/io/error.h"
+#include "sluice/io/format.h"
+
+namespace sluice::io {
+
+// Planes the GPU decodes per chunk: the 6 bytes of the Morton deltas, the
+// LOD value's 2 bytes, the colour attribute's 2 delta bytes.
+inline constexpr int kGpuPlanes = 10;
+inline constexpr uint64_t kGpuReadPadding = 16;
+
+// One plane as the GPU reads it (std430, 16 bytes). Mirrored in decode.comp.
+struct GpuPlane {
+  uint32_t offset = 0;        // byte offset of the plane in the encoded area (packed: its width byte)
+  uint32_t escapes = 0;       // packed: byte offset of its escape list
+  uint32_t escape_count = 0;  // packed: escapes stored (the GPU checks the codes it finds against it)
+  uint32_t width = 0;         // 0: stored (n bytes); 1..7: bit-packed at that width
+};
+
+// One chunk (std430, 176 bytes). Mirrored in decode.comp.
+struct GpuChunkPlan {
+  uint32_t first = 0;      // index of the chunk's first particle in the frame
+  uint32_t count = 0;      // particles
+  uint32_t attribute = 0;  // 1: planes 8 and 9 hold the colour attribute; 0: none is written
+  uint32_t pad = 0;
+  GpuPlane planes[kGpuPlanes];
+};
+static_assert(sizeof(GpuChunkPlan) == 176);
+
+// Where one zstd plane goes: inflated on the CPU into the encoded area.
+struct InflateJob {
+  uint64_t source = 0;  // byte offset of the zstd frame in the record
+  uint32_t size = 0;    // its bytes
+  uint32_t plane_bytes = 0;  // what it must inflate to (the chunk's particle count)
+  uint64_t target = 0;  // byte offset in the encoded area
+  uint32_t chunk = 0;   // for errors
+  uint32_t plane = 0;
+};
+
+struct GpuDecodePlan {
+  std::vector<GpuChunkPlan> chunks;  // one per chunk of the header, in order
+  std::vector<InflateJob> inflate;   // zstd planes, for inflate_planes()
+  uint64_t record_bytes = 0;         // bytes of the record the plan reads (a prefix of it)
+  uint64_t inflated_offset = 0;      // record_bytes rounded up to 16
+  uint64_t inflated_bytes = 0;       // the CPU-inflated planes
+  uint64_t encoded_bytes() const { return inflated_offset + inflated_bytes + kGpuReadPadding; }
+  // Planes by how they reach the GPU (statistics, bench).
+  uint64_t stored_planes = 0, packed_planes = 0, zstd_planes = 0;
+};
+
+struct GpuPlanOptions {
+  int color_attribute = -1;  // attribute index decoded into planes 8-9; < 0: none
+  bool verify_checksums = true;  // XXH3 of each chunk's payload, as decode_chunk does
+};
+
+// Whether files with this header can be decoded on the GPU (Quantized16
+// positions; Float32 positions are decoded on the CPU).
+bool gpu_decodable(const FileHeader& file);
+
+// Checks every chunk of `header` (parsed from `record`, possibly cut to some
+// layers) and builds its plan into `plan` (reusing its memory). Throws
+// io::Error at `where` (chunk filled in) on any inconsistency: a plane
+// beyond its payload, a packed width outside 1..7, a packed plane shorter
+// than its values, a checksum that differs, trailing bytes, offsets that
+// do not fit 32 bits (records of 4 GiB or more are decoded on the CPU).
+void plan_gpu_decode(std::span<const std::byte> record, const FrameHeader& header, const FileHeader& file,
+                     const GpuPlanOptions& options, GpuDecodePlan& plan, const ErrorLocation& where);
+
+// Inflates the plan's zstd planes (TBB, in parallel) into
+// encoded[inflated_offset, + inflated_bytes). `encoded` holds at least
+// plan.encoded_bytes() bytes; `record` is the one the plan was made from
+// (it may be encoded's own prefix). Throws io::Error at `where` (chunk
+// filled in) when a plane does not inflate to its size.
+void inflate_planes(std::span<const std::byte> record, const GpuDecodePlan& plan, std::span<std::byte> encoded,
+                    const ErrorLocation& where);
+
+// The CPU's reference for what the GPU decodes from a plan: particles
+// (8 bytes each) and the colour attribute, bit for bit what decode_chunk
+// writes. For tests of the plan and the kernels.
+void decode_plan_on_cpu(std::span<const std::byte> encoded, const GpuDecodePlan& plan, std::span<uint64_t> particles,
+                        std::span<uint16_t> attribute);
+
+}  // namespace sluice::io

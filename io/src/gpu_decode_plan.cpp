@@ -1,0 +1,212 @@
+// Plans for the GPU decoder: the chunk payloads' plane tables read and
+// checked on the CPU (a few bytes per plane), zstd planes inflated here.
+#include "sluice/io/gpu_decode_plan.h"
+
+#include <tbb/parallel_for.h>
+#include <zstd.h>
+
+#include <cstring>
+#include <string>
+
+#include "bytes.h"
+#include "morton.h"
+#include "packed_plane.h"
+
+namespace sluice::io {
+namespace {
+
+constexpr uint64_t kMax32 = UINT32_MAX;
+
+uint64_t groups_of(uint64_t n) { return (n + 7) / 8; }
+
+// Planes of the chunk's payload, in file order, as positions in the record.
+struct PlaneSource {
+  uint64_t at = 0;
+  uint32_t size = 0;
+  enum Kind : uint8_t { Stored, Packed, Zstd } kind = Stored;
+};
+
+// Reads a chunk's plane table (codecs Zstd and Packed) or lays out its
+// concatenated planes (Stored) into `out`, checking sizes against the payload.
+void locate(std::span<const std::byte> payload, uint64_t payload_at, ChunkCodec codec, uint64_t n, size_t planes,
+            std::vector<PlaneSource>& out, const ErrorLocation& where) {
+  out.resize(planes);
+  if (codec == ChunkCodec::Stored) {
+    if (payload.size() != n * planes) throw Error(where, "stored chunk has the wrong size");
+    for (size_t p = 0; p < planes; ++p) out[p] = {payload_at + p * n, uint32_t(n), PlaneSource::Stored};
+    return;
+  }
+  if (payload.size() < 4 * planes) throw Error(where, "chunk payload is smaller than its plane table");
+  uint64_t at = 4 * planes;
+  for (size_t p = 0; p < planes; ++p) {
+    uint32_t entry;
+    std::memcpy(&entry, payload.data() + 4 * p, 4);
+    const bool packed = codec == ChunkCodec::Packed && (entry & kPackedPlaneFlag) != 0;
+    const uint32_t size = packed ? entry & ~kPackedPlaneFlag : entry;
+    if (size > payload.size() - at) throw Error(where, "plane " + std::to_string(p) + " runs past the chunk payload");
+    const auto kind = packed ? PlaneSource::Packed : size == n ? PlaneSource::Stored : PlaneSource::Zstd;
+    out[p] = {payload_at + at, size, kind};
+    at += size;
+  }
+  if (at != payload.size()) throw Error(where, "chunk payload has trailing bytes");
+}
+
+// A packed plane's width, values and escapes, checked as unpack_plane does.
+GpuPlane packed_plane(std::span<const std::byte> record, const PlaneSource& s, uint64_t n, size_t p,
+                      const ErrorLocation& where) {
+  const std::string what = "plane " + std::to_string(p);
+  if (s.size == 0) throw Error(where, what + ": packed plane is empty");
+  const uint32_t width = uint32_t(record[s.at]);
+  if (width < 1 || width > uint32_t(kMaxPackedWidth)) {
+    throw Error(where, what + ": packed width " + std::to_string(width) + " is not 1..7");
+  }
+  const uint64_t packed_bytes = groups_of(n) * width;
+  if (s.size - 1 < packed_bytes) throw Error(where, what + ": packed plane is shorter than its values");
+  GpuPlane g;
+  g.offset = uint32_t(s.at);
+  g.width = width;
+  g.escapes = uint32_t(s.at + 1 + packed_bytes);
+  g.escape_count = uint32_t(s.size - 1 - packed_bytes);
+  return g;
+}
+
+uint64_t round16(uint64_t v) { return (v + 15) & ~uint64_t(15); }
+
+}  // namespace
+
+bool gpu_decodable(const FileHeader& file) { return file.position_coding == PositionCoding::Quantized16; }
+
+void plan_gpu_decode(std::span<const std::byte> record, const FrameHeader& header, const FileHeader& file,
+                     const GpuPlanOptions& options, GpuDecodePlan& plan, const ErrorLocation& where) {
+  if (!gpu_decodable(file)) throw Error(where, "float32 positions are not decoded on the GPU");
+  const size_t attributes = file.attributes.size();
+  const size_t planes = raw_chunk_bytes(file.position_coding, 1, attributes);
+  const bool attribute = options.color_attribute >= 0 && size_t(options.color_attribute) < attributes;
+  plan.chunks.resize(header.chunks.size());
+  plan.inflate.clear();
+  plan.record_bytes = 0;
+  plan.inflated_bytes = 0;
+  plan.stored_planes = plan.packed_planes = plan.zstd_planes = 0;
+  for (const ChunkDesc& c : header.chunks) plan.record_bytes = std::max(plan.record_bytes, c.offset + c.compressed_size);
+  if (plan.record_bytes > record.size()) throw Error(where, "a chunk payload lies outside the frame record");
+  plan.inflated_offset = round16(plan.record_bytes);
+
+  thread_local std::vector<PlaneSource> sources;
+  // The GPU planes of a chunk, in GpuChunkPlan order, by payload plane.
+  uint64_t first = 0;
+  for (size_t c = 0; c < header.chunks.size(); ++c) {
+    ErrorLocation at = where;
+    at.chunk = c;
+    const ChunkDesc& chunk = header.chunks[c];
+    const uint64_t n = chunk.particle_count;
+    const std::span<const std::byte> payload = record.subspan(chunk.offset, chunk.compressed_size);
+    if (options.verify_checksums && checksum(payload) != chunk.checksum) {
+      throw Error(at, "chunk checksum mismatch (the chunk's bytes are corrupt)");
+    }
+    locate(payload, chunk.offset, chunk.codec, n, planes, sources, at);
+    GpuChunkPlan& g = plan.chunks[c];
+    g = GpuChunkPlan{};
+    g.first = uint32_t(first);
+    g.count = uint32_t(n);
+    g.attribute = attribute ? 1 : 0;
+    const size_t colour = 8 + 2 * size_t(attribute ? options.color_attribute : 0);
+    for (int k = 0; k < kGpuPlanes; ++k) {
+      if (k >= 8 && !attribute) break;
+      const size_t p = k < 8 ? size_t(k) : colour + size_t(k - 8);
+      const PlaneSource& s = sources[p];
+      GpuPlane& out = g.planes[k];
+      switch (s.kind) {
+        case PlaneSource::Stored:
+          out = {uint32_t(s.at), 0, 0, 0};
+          ++plan.stored_planes;
+          break;
+        case PlaneSource::Packed:
+          out = packed_plane(record, s, n, p, at);
+          ++plan.packed_planes;
+          break;
+        case PlaneSource::Zstd: {
+          const uint64_t target = plan.inflated_offset + plan.inflated_bytes;
+          plan.inflate.push_back({s.at, s.size, uint32_t(n), target, uint32_t(c), uint32_t(p)});
+          out = {uint32_t(target), 0, 0, 0};
+          plan.inflated_bytes = round16(plan.inflated_bytes + n);
+          ++plan.zstd_planes;
+          break;
+        }
+      }
+    }
+    first += n;
+    if (first > kMax32) throw Error(at, "the frame has 2^32 particles or more");
+  }
+  if (plan.encoded_bytes() > kMax32) {
+    throw Error(where, "the frame's encoded bytes (" + std::to_string(plan.encoded_bytes()) +
+                           ") do not fit the GPU decoder's 32-bit offsets");
+  }
+}
+
+void inflate_planes(std::span<const std::byte> record, const GpuDecodePlan& plan, std::span<std::byte> encoded,
+                    const ErrorLocation& where) {
+  if (encoded.size() < plan.encoded_bytes()) throw Error(where, "inflate_planes: the encoded area is too small");
+  tbb::parallel_for(size_t(0), plan.inflate.size(), [&](size_t j) {
+    struct Holder {
+      ZSTD_DCtx* ctx = ZSTD_createDCtx();
+      ~Holder() { ZSTD_freeDCtx(ctx); }
+    };
+    thread_local Holder zstd;
+    const InflateJob& job = plan.inflate[j];
+    const size_t got = ZSTD_decompressDCtx(zstd.ctx, encoded.data() + job.target, job.plane_bytes,
+                                           record.data() + job.source, job.size);
+    if (ZSTD_isError(got) || got != job.plane_bytes) {
+      ErrorLocation at = where;
+      at.chunk = job.chunk;
+      const std::string why = ZSTD_isError(got) ? std::string("zstd: ") + ZSTD_getErrorName(got)
+                                                : "decompressed to " + std::to_string(got) + " bytes, expected " +
+                                                      std::to_string(job.plane_bytes);
+      throw Error(at, "plane " + std::to_string(job.plane) + ": " + why);
+    }
+  });
+}
+
+namespace {
+
+// Value i of a plane of the encoded area, escapes resolved in order.
+struct PlaneReader {
+  const uint8_t* base;
+  GpuPlane plane;
+  uint32_t escape = 0;
+  uint8_t next(uint32_t i) {
+    if (plane.width == 0) return base[plane.offset + i];
+    const uint32_t w = plane.width, code = (1u << w) - 1;
+    const uint64_t bit = uint64_t(i) * w;
+    const uint8_t* group = base + plane.offset + 1;
+    uint32_t bits = 0;
+    for (uint32_t b = 0; b < w; ++b) bits |= uint32_t((group[(bit + b) / 8] >> ((bit + b) % 8)) & 1u) << b;
+    if (bits != code) return uint8_t(bits);
+    return escape < plane.escape_count ? base[plane.escapes + escape++] : uint8_t(code);
+  }
+};
+
+}  // namespace
+
+void decode_plan_on_cpu(std::span<const std::byte> encoded, const GpuDecodePlan& plan, std::span<uint64_t> particles,
+                        std::span<uint16_t> attribute) {
+  const auto* base = reinterpret_cast<const uint8_t*>(encoded.data());
+  for (const GpuChunkPlan& c : plan.chunks) {
+    std::vector<PlaneReader> planes;
+    for (const GpuPlane& p : c.planes) planes.push_back({base, p});
+    uint64_t code = 0;
+    uint16_t value = 0;
+    for (uint32_t i = 0; i < c.count; ++i) {
+      uint64_t delta = 0;
+      for (int b = 0; b < 6; ++b) delta |= uint64_t(planes[size_t(b)].next(i)) << (8 * b);
+      const uint64_t lod = planes[6].next(i) | uint64_t(planes[7].next(i)) << 8;
+      code += delta;
+      particles[c.first + i] = morton_to_packed16(code) | lod << 48;
+      if (c.attribute != 0) {
+        value = uint16_t(value + (planes[8].next(i) | planes[9].next(i) << 8));
+        attribute[c.first + i] = value;
+      }
+    }
+  }
+}
+
+}  // namespace sluice::io

@@ -1,0 +1,201 @@
+#version 460
+// GPU decode of Quantized16 chunks (io/gpu_decode_plan.h has the plan, io
+// codec.h the planes): one workgroup per chunk, in tiles of 8 particles per
+// thread. Per tile, each thread reads its 8 values of every plane (stored:
+// 8 bytes; packed: one group of `width` bytes, spread), a workgroup scan of
+// the escape codes found gives each thread its place in the planes' escape
+// lists, and a second scan of the Morton deltas' and attribute deltas' sums
+// gives each particle its code and value. Writes what io::decode_chunk
+// writes, bit for bit: x | y << 16 | z << 32 | lod << 48 per particle and
+// the colour attribute's 16-bit values.
+//
+// A packed plane whose escape codes disagree with its stored escape count
+// (a corrupt file whose checksum was not checked) sets its chunk's error
+// word; reads stay inside the encoded area whatever the bytes say (the plan
+// checked every offset and size on the CPU).
+#extension GL_EXT_buffer_reference : require
+#extension GL_EXT_buffer_reference_uvec2 : require
+#extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
+#extension GL_EXT_shader_16bit_storage : require
+
+const uint T = 256;        // threads
+const uint PER = 8;        // particles per thread: one packed group
+const uint TILE = T * PER;
+const uint PLANES = 10;    // io::kGpuPlanes
+
+layout(local_size_x = 256) in;
+
+struct Plane {
+  uint offset;    // byte offset (packed: of its width byte)
+  uint escapes;   // packed: byte offset of its escape list
+  uint count;     // packed: escapes stored
+  uint width;     // 0: stored; 1..7: packed
+};
+struct ChunkPlan {
+  uint first;
+  uint count;
+  uint with_attribute;
+  uint pad;
+  Plane planes[PLANES];
+};
+
+layout(buffer_reference, std430, buffer_reference_align = 4) readonly buffer Words { uint v[]; };
+layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer Plans { ChunkPlan c[]; };
+layout(buffer_reference, std430, buffer_reference_align = 8) writeonly buffer Particles { uvec2 v[]; };
+layout(buffer_reference, std430, buffer_reference_align = 2) writeonly buffer Values { uint16_t v[]; };
+layout(buffer_reference, std430, buffer_reference_align = 4) writeonly buffer Errors { uint v[]; };
+
+layout(push_constant) uniform Push {
+  uvec2 encoded;    // Words: the encoded area (record, inflated planes, padding)
+  uvec2 plans;      // Plans
+  uvec2 particles;  // Particles: the frame's decoded particles
+  uvec2 values;     // Values: the colour attribute (chunks with attribute = 1)
+  uvec2 errors;     // Errors: one word per chunk, written only on error
+  uint chunk_base;  // the plan of workgroup g is chunk_base + g
+} pc;
+
+shared u64vec4 scan_ping[T];
+shared u64vec4 scan_pong[T];
+
+// Exclusive sum over the workgroup's threads; `total` is the sum of all.
+u64vec4 exclusive_scan(u64vec4 v, out u64vec4 total) {
+  const uint t = gl_LocalInvocationID.x;
+  scan_ping[t] = v;
+  barrier();
+  bool ping = true;
+  for (uint d = 1; d < T; d <<= 1) {
+    u64vec4 x = ping ? scan_ping[t] : scan_pong[t];
+    if (t >= d) x += ping ? scan_ping[t - d] : scan_pong[t - d];
+    if (ping) scan_pong[t] = x; else scan_ping[t] = x;
+    ping = !ping;
+    barrier();
+  }
+  const u64vec4 inclusive = ping ? scan_ping[t] : scan_pong[t];
+  total = ping ? scan_ping[T - 1] : scan_pong[T - 1];
+  barrier();  // everyone has read before the next scan writes
+  return inclusive - v;
+}
+
+// 8 bytes at byte offset `at`, little-endian (the area is padded behind).
+uint64_t load8(Words w, uint at) {
+  const uint i = at >> 2, s = (at & 3u) * 8u;
+  const uint64_t lo = uint64_t(w.v[i]) | (uint64_t(w.v[i + 1]) << 32);
+  return s == 0 ? lo : (lo >> s) | (uint64_t(w.v[i + 2]) << (64 - s));
+}
+
+uint load_byte(Words w, uint at) { return (w.v[at >> 2] >> ((at & 3u) * 8u)) & 0xffu; }
+
+// The low `m` bytes of v (m in 0..8).
+uint64_t keep_bytes(uint64_t v, uint m) { return m >= 8 ? v : v & ((uint64_t(1) << (8 * m)) - 1); }
+
+// Gathers bits 0, 3, 6, ... of v into the low bits (io/src/morton.h).
+uint compact3(uint64_t v) {
+  v &= 0x1249249249249249UL;
+  v = (v ^ (v >> 2)) & 0x10c30c30c30c30c3UL;
+  v = (v ^ (v >> 4)) & 0x100f00f00f00f00fUL;
+  v = (v ^ (v >> 8)) & 0x1f0000ff0000ffUL;
+  v = (v ^ (v >> 16)) & 0x1f00000000ffffUL;
+  v = (v ^ (v >> 32)) & 0x1fffffUL;
+  return uint(v);
+}
+
+// This thread's 8 raw values of plane p (escape codes unresolved) and how
+// many escape codes are among its first m.
+uint64_t raw_values(Words w, Plane p, uint i0, uint m, out uint codes) {
+  codes = 0;
+  if (m == 0) return 0;
+  if (p.width == 0) return keep_bytes(load8(w, p.offset + i0), m);
+  const uint width = p.width, code = (1u << width) - 1u;
+  const uint64_t bits = load8(w, p.offset + 1 + (i0 / PER) * width);
+  uint64_t v = 0;
+  for (uint j = 0; j < PER; ++j) {
+    const uint value = uint(bits >> (j * width)) & code;
+    v |= uint64_t(value) << (8 * j);
+    codes += (j < m && value == code) ? 1u : 0u;
+  }
+  return keep_bytes(v, m);
+}
+
+// Replaces plane p's escape codes among the first m values by escapes
+// from index `k` on (never past the plane's list).
+uint64_t resolve_escapes(Words w, Plane p, uint64_t v, uint m, uint k) {
+  if (p.width == 0) return v;
+  const uint code = (1u << p.width) - 1u;
+  for (uint j = 0; j < m; ++j) {
+    if (uint(v >> (8 * j)) % 256u != code) continue;
+    if (k < p.count) v = (v & ~(uint64_t(0xff) << (8 * j))) | (uint64_t(load_byte(w, p.escapes + k)) << (8 * j));
+    ++k;
+  }
+  return v;
+}
+
+uint field16(uint64_t v, uint f) { return uint(v >> (16 * f)) & 0xffffu; }
+
+void main() {
+  const uint chunk = pc.chunk_base + gl_WorkGroupID.x;
+  const ChunkPlan c = Plans(pc.plans).c[chunk];
+  Words w = Words(pc.encoded);
+  Particles out_particles = Particles(pc.particles);
+  Values out_values = Values(pc.values);
+  const uint t = gl_LocalInvocationID.x;
+  const uint planes = c.with_attribute != 0 ? PLANES : 8;
+
+  uint escapes_before[PLANES];  // escapes used by earlier tiles, per plane
+  for (uint p = 0; p < PLANES; ++p) escapes_before[p] = 0;
+  uint64_t code_before = 0;     // the Morton code before this tile
+  uint value_before = 0;        // the attribute value before this tile
+
+  for (uint base = 0; base < c.count; base += TILE) {
+    const uint i0 = base + t * PER;
+    const uint m = i0 < c.count ? min(PER, c.count - i0) : 0;
+
+    // Raw values and escape codes per plane; counts packed 16 bits apart.
+    uint64_t raw[PLANES];
+    u64vec4 codes = u64vec4(0);
+    for (uint p = 0; p < PLANES; ++p) {
+      uint found = 0;
+      raw[p] = p < planes ? raw_values(w, c.planes[p], i0, m, found) : 0;
+      codes[p / 4] |= uint64_t(found) << (16 * (p % 4));
+    }
+    u64vec4 codes_total;
+    const u64vec4 codes_before = exclusive_scan(codes, codes_total);
+    for (uint p = 0; p < planes; ++p) {
+      const uint k = escapes_before[p] + field16(codes_before[p / 4], p % 4);
+      raw[p] = resolve_escapes(w, c.planes[p], raw[p], m, k);
+      escapes_before[p] += field16(codes_total[p / 4], p % 4);
+    }
+
+    // Local running sums of the 8 deltas, then the workgroup's.
+    uint64_t codes_local[PER];
+    uint values_local[PER];
+    uint64_t code_sum = 0;
+    uint value_sum = 0;
+    for (uint j = 0; j < PER; ++j) {
+      uint64_t delta = 0;
+      for (uint b = 0; b < 6; ++b) delta |= ((raw[b] >> (8 * j)) & 0xffUL) << (8 * b);
+      code_sum += delta;
+      codes_local[j] = code_sum;
+      value_sum += uint((raw[8] >> (8 * j)) & 0xffUL) | (uint((raw[9] >> (8 * j)) & 0xffUL) << 8);
+      values_local[j] = value_sum;
+    }
+    u64vec4 sums_total;
+    const u64vec4 sums_before = exclusive_scan(u64vec4(code_sum, value_sum, 0, 0), sums_total);
+    for (uint j = 0; j < m; ++j) {
+      const uint64_t code = (code_before + sums_before.x + codes_local[j]) & 0xffffffffffffUL;
+      const uint lod = uint((raw[6] >> (8 * j)) & 0xffUL) | (uint((raw[7] >> (8 * j)) & 0xffUL) << 8);
+      const uint x = compact3(code), y = compact3(code >> 1), z = compact3(code >> 2);
+      out_particles.v[c.first + i0 + j] = uvec2(x | (y << 16), z | (lod << 16));
+      if (c.with_attribute != 0) {
+        out_values.v[c.first + i0 + j] = uint16_t((value_before + uint(sums_before.y) + values_local[j]) & 0xffffu);
+      }
+    }
+    code_before += sums_total.x;
+    value_before += uint(sums_total.y);
+  }
+
+  if (t == 0) {
+    bool bad = false;
+    for (uint p = 0; p < planes; ++p) bad = bad || (c.planes[p].width != 0 && escapes_before[p] != c.planes[p].count);
+    if (bad) Errors(pc.errors).v[chunk] = 1;
+  }
+}

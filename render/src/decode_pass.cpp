@@ -1,0 +1,51 @@
+// The GPU decoder's dispatches: one workgroup per chunk, in batches of the
+// guaranteed maximum workgroup count.
+#include "decode_pass.h"
+
+#include <algorithm>
+
+#include "shaders.h"
+
+namespace sluice::render {
+namespace {
+
+using Stage = vk::PipelineStageFlagBits2;
+using Access = vk::AccessFlagBits2;
+
+// Mirrors Push in decode.comp.
+struct DecodePush {
+  uint64_t encoded, plans, particles, attribute, errors;
+  uint32_t chunk_base;
+  uint32_t pad;
+};
+static_assert(sizeof(DecodePush) == 48);
+
+constexpr uint32_t kMaxGroups = 65535;  // the guaranteed maxComputeWorkGroupCount[0]
+
+}  // namespace
+
+DecodePass::DecodePass(Context::Impl& ctx) {
+  const vk::PushConstantRange range(vk::ShaderStageFlagBits::eCompute, 0, sizeof(DecodePush));
+  layout_ = vk::raii::PipelineLayout(ctx.device, vk::PipelineLayoutCreateInfo({}, {}, range));
+  pipeline_ = compute_pipeline(ctx.device, layout_, Shader::Decode);
+}
+
+void DecodePass::barrier(vk::CommandBuffer cmd) {
+  memory_barrier(cmd, Stage::eComputeShader | Stage::eTransfer, Access::eShaderWrite | Access::eTransferWrite,
+                 Stage::eComputeShader | Stage::eTransfer | Stage::eVertexShader | Stage::eDrawIndirect,
+                 Access::eShaderRead | Access::eShaderWrite | Access::eTransferRead | Access::eTransferWrite |
+                     Access::eIndirectCommandRead);
+}
+
+void DecodePass::record(vk::CommandBuffer cmd, const DecodeRun& run) const {
+  if (run.chunks == 0) return;
+  cmd.bindPipeline(vk::PipelineBindPoint::eCompute, *pipeline_);
+  DecodePush push{run.encoded, run.plans, run.particles, run.attribute, run.errors, 0, 0};
+  for (uint32_t base = 0; base < run.chunks; base += kMaxGroups) {
+    push.chunk_base = base;
+    cmd.pushConstants<DecodePush>(*layout_, vk::ShaderStageFlagBits::eCompute, 0, push);
+    cmd.dispatch(std::min(kMaxGroups, run.chunks - base), 1, 1);
+  }
+}
+
+}  // namespace sluice::render

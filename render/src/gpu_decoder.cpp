@@ -1,0 +1,123 @@
+// The GPU decoder for frames on the host: plan and upload, the pass
+// (decode_pass.h), read-back.
+#include "sluice/render/gpu_decoder.h"
+
+#include <cstring>
+
+#include "decode_pass.h"
+
+namespace sluice::render {
+namespace {
+
+using Stage = vk::PipelineStageFlagBits2;
+using Access = vk::AccessFlagBits2;
+
+constexpr auto kDeviceUsage = vk::BufferUsageFlagBits::eStorageBuffer | vk::BufferUsageFlagBits::eShaderDeviceAddress |
+                              vk::BufferUsageFlagBits::eTransferDst | vk::BufferUsageFlagBits::eTransferSrc;
+
+}  // namespace
+
+struct GpuDecoder::Impl {
+  Context::Impl& ctx;
+  DecodePass pass;
+  vk::raii::QueryPool stamps{nullptr};
+  bool timestamps = false;
+  io::GpuDecodePlan plan;
+  uint64_t particles = 0;
+  bool attribute = false;
+  Buffer upload, encoded, plans, decoded, values, errors, readback;  // grown to the largest frame seen
+
+  explicit Impl(Context::Impl& c) : ctx(c), pass(c) {
+    const auto families = ctx.physical.getQueueFamilyProperties();
+    timestamps = ctx.graphics_family < families.size() && families[ctx.graphics_family].timestampValidBits > 0;
+  }
+};
+
+GpuDecoder::GpuDecoder(Context& context) : impl_(std::make_unique<Impl>(context_impl(context))) {}
+GpuDecoder::~GpuDecoder() = default;
+const io::GpuDecodePlan& GpuDecoder::plan() const { return impl_->plan; }
+
+void GpuDecoder::load(std::span<const std::byte> record, const io::FrameHeader& header, const io::FileHeader& file,
+                      const io::GpuPlanOptions& options, const io::ErrorLocation& where) {
+  Impl& r = *impl_;
+  io::plan_gpu_decode(record, header, file, options, r.plan, where);
+  const uint64_t bytes = r.plan.encoded_bytes();
+  const uint64_t plan_bytes = r.plan.chunks.size() * sizeof(io::GpuChunkPlan);
+  r.particles = 0;
+  for (const io::GpuChunkPlan& c : r.plan.chunks) r.particles += c.count;
+  r.attribute = !r.plan.chunks.empty() && r.plan.chunks[0].attribute != 0;
+
+  grow_buffer(r.ctx, r.upload, bytes + plan_bytes, vk::BufferUsageFlagBits::eTransferSrc, MemoryKind::Upload);
+  auto* staging = static_cast<std::byte*>(r.upload.mapped);
+  std::memcpy(staging, record.data(), r.plan.record_bytes);
+  std::memset(staging + r.plan.record_bytes, 0, bytes - r.plan.record_bytes);
+  io::inflate_planes(record, r.plan, {staging, bytes}, where);
+  std::memcpy(staging + bytes, r.plan.chunks.data(), plan_bytes);
+
+  grow_buffer(r.ctx, r.encoded, bytes, kDeviceUsage, MemoryKind::DeviceLocal);
+  grow_buffer(r.ctx, r.plans, std::max<uint64_t>(plan_bytes, 16), kDeviceUsage, MemoryKind::DeviceLocal);
+  grow_buffer(r.ctx, r.decoded, std::max<uint64_t>(r.particles * 8, 16), kDeviceUsage, MemoryKind::DeviceLocal);
+  grow_buffer(r.ctx, r.values, std::max<uint64_t>(r.particles * 2, 16), kDeviceUsage, MemoryKind::DeviceLocal);
+  grow_buffer(r.ctx, r.errors, std::max<uint64_t>(r.plan.chunks.size() * 4, 16), kDeviceUsage, MemoryKind::DeviceLocal);
+  r.ctx.run_once([&](vk::CommandBuffer cmd) {
+    cmd.copyBuffer(*r.upload.buffer, *r.encoded.buffer, vk::BufferCopy(0, 0, bytes));
+    if (plan_bytes > 0) cmd.copyBuffer(*r.upload.buffer, *r.plans.buffer, vk::BufferCopy(bytes, 0, plan_bytes));
+  });
+}
+
+std::vector<double> GpuDecoder::run(int repeats) {
+  Impl& r = *impl_;
+  std::vector<double> ms;
+  const uint32_t stamps = uint32_t(2 * std::max(repeats, 1));
+  if (r.timestamps) r.stamps = vk::raii::QueryPool(r.ctx.device, vk::QueryPoolCreateInfo({}, vk::QueryType::eTimestamp, stamps));
+  const DecodeRun run{r.encoded.address, r.plans.address, r.decoded.address, r.values.address, r.errors.address,
+                      uint32_t(r.plan.chunks.size())};
+  r.ctx.run_once([&](vk::CommandBuffer cmd) {
+    if (r.timestamps) cmd.resetQueryPool(*r.stamps, 0, stamps);
+    for (int k = 0; k < std::max(repeats, 1); ++k) {
+      cmd.fillBuffer(*r.errors.buffer, 0, VK_WHOLE_SIZE, 0);
+      DecodePass::barrier(cmd);
+      if (r.timestamps) cmd.writeTimestamp2(Stage::eAllCommands, *r.stamps, uint32_t(2 * k));
+      r.pass.record(cmd, run);
+      if (r.timestamps) cmd.writeTimestamp2(Stage::eAllCommands, *r.stamps, uint32_t(2 * k + 1));
+      DecodePass::barrier(cmd);
+    }
+  });
+  if (r.timestamps) {
+    std::vector<uint64_t> t(stamps);
+    if ((*r.ctx.device).getQueryPoolResults(*r.stamps, 0, stamps, t.size() * 8, t.data(), 8,
+                                            vk::QueryResultFlagBits::e64) == vk::Result::eSuccess) {
+      const double to_ms = r.ctx.properties.limits.timestampPeriod * 1e-6;
+      for (uint32_t k = 0; k + 1 < stamps; k += 2) ms.push_back(double(t[k + 1] - t[k]) * to_ms);
+    }
+  }
+  return ms;
+}
+
+GpuDecodeOutput GpuDecoder::read() const {
+  Impl& r = *impl_;
+  const uint64_t n = r.particles, chunks = r.plan.chunks.size();
+  const uint64_t bytes = n * 8 + (r.attribute ? n * 2 : 0) + chunks * 4;
+  grow_buffer(r.ctx, r.readback, std::max<uint64_t>(bytes, 16), vk::BufferUsageFlagBits::eTransferDst, MemoryKind::Readback);
+  r.ctx.run_once([&](vk::CommandBuffer cmd) {
+    if (n > 0) cmd.copyBuffer(*r.decoded.buffer, *r.readback.buffer, vk::BufferCopy(0, 0, n * 8));
+    if (n > 0 && r.attribute) cmd.copyBuffer(*r.values.buffer, *r.readback.buffer, vk::BufferCopy(0, n * 8, n * 2));
+    if (chunks > 0) {
+      cmd.copyBuffer(*r.errors.buffer, *r.readback.buffer, vk::BufferCopy(0, n * 8 + (r.attribute ? n * 2 : 0), chunks * 4));
+    }
+    memory_barrier(cmd, Stage::eTransfer, Access::eTransferWrite, Stage::eHost, Access::eHostRead);
+  });
+  GpuDecodeOutput out;
+  const auto* base = static_cast<const std::byte*>(r.readback.mapped);
+  out.particles.resize(n);
+  std::memcpy(out.particles.data(), base, n * 8);
+  if (r.attribute) {
+    out.attribute.resize(n);
+    std::memcpy(out.attribute.data(), base + n * 8, n * 2);
+  }
+  const auto* errors = reinterpret_cast<const uint32_t*>(base + n * 8 + (r.attribute ? n * 2 : 0));
+  for (uint64_t c = 0; c < chunks; ++c) out.chunks_with_errors += errors[c] != 0 ? 1 : 0;
+  return out;
+}
+
+}  // namespace sluice::render
