@@ -55,13 +55,26 @@ void add_bench(CLI::App& app) {
   st->add_flag("--surface", stream->surface,
                "Read the surface and voxel blobs of a file with layers (what players read), not every particle");
   st->add_flag("!--no-storage", stream->storage, "Skip the storage passes (they drop the file from the page cache)");
-  st->callback([stream, stream_memory] {
+  auto stream_gpu = std::make_shared<bool>(false);
+  st->add_flag("--gpu", *stream_gpu,
+               "Frames into the renderer's device memory, decoded by the GPU and, beside it, by the CPU, against\n"
+               "the page-cache read, host-to-device copy and GPU-decode bounds (needs a Vulkan device)");
+  st->add_option("--device", stream->device, "With --gpu: the Vulkan device (index or name; default: the first GPU)");
+  st->callback([stream, stream_memory, stream_gpu] {
     if (!stream_memory->empty()) {
       const auto bytes = runtime::parse_byte_size(*stream_memory);
       if (!bytes) throw std::runtime_error("--memory: cannot read '" + *stream_memory + "' as a size (try 4G or 512M)");
       stream->memory = *bytes;
     }
-    bench::run_stream_bench(*stream);
+    if (*stream_gpu) {
+#if SLUICE_WITH_RENDER
+      bench::run_stream_gpu_bench(*stream);
+#else
+      throw std::runtime_error("--gpu: this build has no renderer (SLUICE_WITH_RENDER=OFF)");
+#endif
+    } else {
+      bench::run_stream_bench(*stream);
+    }
   });
 }
 

@@ -90,6 +90,9 @@ void add_convert(CLI::App& app) {
   cmd->add_flag("--smallest", o->smallest,
                 "zstd on every plane it shrinks most: files 1-3% smaller, decoding up to 1.4x slower "
                 "(default: small-valued planes are bit-packed)");
+  cmd->add_flag("--gpu-decodable", o->gpu_decodable,
+                "No zstd planes (each stored or bit-packed): every chunk decodes on the GPU with no CPU work but\n"
+                "its checksum (`sluice play` decodes on the GPU by default); files some percent larger");
   cmd->add_flag("--no-layers", [o](int64_t) { o->layers = false; },
                 "Do not classify the narrow band: every frame is one layer of all its particles");
   cmd->add_option("--band-voxel", o->band_voxel,

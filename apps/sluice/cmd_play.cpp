@@ -10,6 +10,9 @@
 #include "play.h"
 #include "playable.h"
 #include "human.h"
+#if SLUICE_WITH_RENDER
+#include "decode_option.h"
+#endif
 #include "layers_option.h"
 #include "sluice/io/reader.h"
 #include "sluice/runtime/player.h"
@@ -183,6 +186,9 @@ void add_play(CLI::App& app) {
       ->capture_default_str()
       ->check(CLI::IsMember({"skip", "stop"}));
   add_layers_option(*cmd, o->layers);
+#if SLUICE_WITH_RENDER
+  add_decode_option(*cmd, o->decode);
+#endif
   cmd->add_option("--memory", o->memory, "Cap on the memory the prefetch window uses, e.g. 8G");
   cmd->add_option("--window", o->window, "Cap on the prefetch window, in frames");
   cmd->add_option("-t,--threads", o->threads, "Decode workers (default: all cores but one per 4 kept for reading)");

@@ -15,6 +15,7 @@
 #include "layers_option.h"
 #include "play.h"
 #include "sluice/io/reader.h"
+#include "decode_option.h"
 #include "sluice/render/frame_feed.h"
 #include "sluice/render/offscreen.h"
 #include "sluice/render/renderer.h"
@@ -58,7 +59,7 @@ void run_play_gpu(const PlayOptions& o, const WindowPlayOptions& w) {
   render::StagingAllocator staging(context);
   runtime::PlayerOptions po = player_options(o, false);
   const int color = fluid.scalar_visibility ? fluid.color_attribute : -1;
-  render::FrameFeed::configure(po, staging, color);
+  render::FrameFeed::configure(po, staging, color, reader.header(), decode_site(o.decode));
   const runtime::SteadyClock clock;
   runtime::Player player(reader, staging, clock, po);
   render::FrameFeed feed(renderer, player, &staging, color);
@@ -75,7 +76,7 @@ void run_play_gpu(const PlayOptions& o, const WindowPlayOptions& w) {
   const auto start = Steady::now();
   auto next_tick = start;
   std::optional<Steady::time_point> last_new;
-  std::vector<double> intervals, render_ms, upload_ms;
+  std::vector<double> intervals, render_ms, upload_ms, decode_ms;
   uint64_t last_stats_frame = UINT64_MAX, ticks = 0, new_frames = 0, errors_printed = 0;
   double next_stats = o.stats_every;
   player.play();
@@ -99,12 +100,14 @@ void run_play_gpu(const PlayOptions& o, const WindowPlayOptions& w) {
     if (stats.frame != last_stats_frame && stats.particles > 0 && new_frames > reader.frame_count()) {
       render_ms.push_back(stats.gpu_ms);
       upload_ms.push_back(stats.upload_ms);
+      decode_ms.push_back(stats.decode_ms);
       last_stats_frame = stats.frame;
     }
     const double elapsed = std::chrono::duration<double>(now - start).count();
     if (o.stats && elapsed >= next_stats) {
-      std::fprintf(stderr, "%7.1f s  frame %llu  new frames %llu  render %.2f ms  upload %.2f ms (GPU)\n", elapsed,
-                   (unsigned long long)fed.frame, (unsigned long long)new_frames, stats.gpu_ms, stats.upload_ms);
+      std::fprintf(stderr, "%7.1f s  frame %llu  new frames %llu  render %.2f ms  upload %.2f ms  decode %.2f ms (GPU)\n",
+                   elapsed, (unsigned long long)fed.frame, (unsigned long long)new_frames, stats.gpu_ms, stats.upload_ms,
+                   stats.decode_ms);
       next_stats += o.stats_every;
     }
     const runtime::PlayerState state = player.state();
@@ -121,7 +124,7 @@ void run_play_gpu(const PlayOptions& o, const WindowPlayOptions& w) {
   }
   const double elapsed = std::chrono::duration<double>(Steady::now() - start).count();
   const runtime::PlaybackStats s = player.stats();
-  const double frame = median(intervals), draw = median(render_ms), copy = median(upload_ms);
+  const double frame = median(intervals), draw = median(render_ms), copy = median(upload_ms), decode = median(decode_ms);
   std::printf("played %s through the renderer: %llu new frames in %s (%s frames/s), %llu refreshes; stalls %llu, "
               "drops %llu, errors %llu, frames served from memory %llu\n",
               o.file.c_str(), (unsigned long long)new_frames, human_duration(elapsed).c_str(),
@@ -131,8 +134,10 @@ void run_play_gpu(const PlayOptions& o, const WindowPlayOptions& w) {
     std::printf("  (play more than one pass over the file, e.g. --loop --seconds 10, for per-frame medians)\n");
     return;
   }
-  std::printf("  per new frame after the first pass (medians of %zu): interval %s ms, GPU render %s ms, GPU upload copy %s ms\n",
-              intervals.size(), fixed(frame, 2).c_str(), fixed(draw, 2).c_str(), fixed(copy, 2).c_str());
+  std::printf("  per new frame after the first pass (medians of %zu): interval %s ms, GPU render %s ms, GPU upload copy %s ms, "
+              "GPU decode %s ms (%s)\n",
+              intervals.size(), fixed(frame, 2).c_str(), fixed(draw, 2).c_str(), fixed(copy, 2).c_str(), fixed(decode, 2).c_str(),
+              po.pipeline.keep_encoded ? "frames decoded on the GPU" : "frames decoded on the CPU");
   std::printf("  interval / (render + upload) = %s; interval / max(render, upload) = %s (1.0: the copy is hidden "
               "behind rendering or the other way round)\n",
               fixed(frame / std::max(draw + copy, 1e-9), 2).c_str(), fixed(frame / std::max(std::max(draw, copy), 1e-9), 2).c_str());

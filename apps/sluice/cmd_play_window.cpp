@@ -17,6 +17,7 @@
 #include "layers_option.h"
 #include "play.h"
 #include "sluice/io/reader.h"
+#include "decode_option.h"
 #include "sluice/render/staging_allocator.h"
 #include "sluice/runtime/player.h"
 #include "sluice/render/image_io.h"
@@ -235,6 +236,12 @@ void draw_hud(Player& p, const std::string& file) {
                 st.pipeline.frames_ready, human_bytes(double(st.pipeline.held_bytes)).c_str());
     ImGui::Text("stalls %llu  drops %llu  errors %llu   upload %.2f ms GPU, %.2f ms wall", (unsigned long long)st.stalls,
                 (unsigned long long)st.drops, (unsigned long long)st.errors, p.stats.upload_ms, p.upload_wall_ms);
+    if (p.stats.decode_ms > 0) {
+      ImGui::Text("decoded on the GPU: %.2f ms%s", p.stats.decode_ms,
+                  p.stats.decode_errors > 0 ? "  (chunks with corrupt planes!)" : "");
+    } else {
+      ImGui::Text("decoded on the CPU");
+    }
     ImGui::TextDisabled("%s", p.device.c_str());
   }
   if (ImGui::CollapsingHeader("View")) {
@@ -323,7 +330,7 @@ void run_play_window(const PlayOptions& o, const WindowPlayOptions& wo) {
   po.start_frame = p.frame;
   po.display_rate = o.display_hz > 0 ? o.display_hz : display_refresh_hz();
   const int color = p.fluid.scalar_visibility ? p.fluid.color_attribute : -1;
-  render::FrameFeed::configure(po, staging, color);
+  render::FrameFeed::configure(po, staging, color, reader.header(), decode_site(o.decode));
   const runtime::SteadyClock clock;
   runtime::Player playback(reader, staging, clock, po);
   p.playback = &playback;

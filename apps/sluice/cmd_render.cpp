@@ -7,6 +7,7 @@
 #include "commands.h"
 #include "frame_range.h"
 #include "human.h"
+#include "decode_option.h"
 #include "layers_option.h"
 #include "playable.h"
 #include "view_options.h"
@@ -33,6 +34,7 @@ struct RenderCommand {
   double fps = 0;
   bool quiet = false, stats = false, no_cache = false;
   std::string layers = "surface";
+  std::string decode = "auto";
 };
 
 std::string frame_path(const std::string& out, uint64_t frame, bool single) {
@@ -99,7 +101,7 @@ void run_render(const RenderCommand& o, const ViewSettings& v) {
   po.on_error = runtime::ErrorPolicy::Stop;
   po.pipeline.layers = layer_set(o.layers);
   const int color = fluid.scalar_visibility ? fluid.color_attribute : -1;
-  render::FrameFeed::configure(po, staging, color);
+  render::FrameFeed::configure(po, staging, color, reader.header(), decode_site(o.decode));
   const runtime::SteadyClock clock;
   runtime::Player player(reader, staging, clock, po);
   render::FrameFeed feed(renderer, player, &staging, color);
@@ -167,6 +169,7 @@ void add_render(CLI::App& app) {
   cmd->add_flag("--stats", o->stats, "Print particles drawn and GPU ms per pass for every frame");
   cmd->add_flag("-q,--quiet", o->quiet, "No progress bar or notes");
   add_layers_option(*cmd, o->layers);
+  add_decode_option(*cmd, o->decode);
   add_view_options(*cmd, *v);
   cmd->callback([o, v] { run_render(*o, *v); });
 }

@@ -65,6 +65,9 @@ void add_synth(CLI::App& app) {
                 "Do not classify the narrow band: every frame one layer of all its particles");
   cmd->add_flag("--smallest", [o](int64_t) { o->pack_planes = false; },
                 "zstd on every plane it shrinks most (smaller, slower to decode)");
+  cmd->add_flag("--gpu-decodable", [o](int64_t) { o->zstd_planes = false; },
+                "No zstd planes (each stored or bit-packed): every chunk decodes on the GPU with no CPU work\n"
+                "but its checksum; files some percent larger (docs/format.md)");
   cmd->add_option("-j,--jobs", o->jobs, "Frames encoded at once (default: one per core)");
   cmd->add_option("--seed", o->seed, "Seed of the particles' jitter")->capture_default_str();
   cmd->add_flag("-f,--force", *force, "Overwrite the output");

@@ -14,6 +14,7 @@
 #include "play.h"
 #include "playable.h"
 #include "sluice/io/reader.h"
+#include "decode_option.h"
 #include "sluice/render/frame_feed.h"
 #include "sluice/render/renderer.h"
 #include "sluice/render/staging_allocator.h"
@@ -98,7 +99,7 @@ void run_xr(const XrOptions& o) {
   render::StagingAllocator staging(session.context());
   runtime::PlayerOptions po = player_options(p, true);
   const int color = fluid.scalar_visibility ? fluid.color_attribute : -1;
-  render::FrameFeed::configure(po, staging, color);
+  render::FrameFeed::configure(po, staging, color, reader.header(), decode_site(p.decode));
   DisplayClock clock;
   runtime::Player player(reader, staging, clock, po);
   render::FrameFeed feed(renderer, player, &staging, color);
@@ -208,6 +209,7 @@ void add_xr(CLI::App& app) {
   cmd->add_flag("--paused", o->play.paused, "Start paused");
   cmd->add_option("--start", o->play.start, "First frame")->capture_default_str();
   add_layers_option(*cmd, o->play.layers);
+  add_decode_option(*cmd, o->play.decode);
   cmd->add_option("--memory", o->play.memory, "Cap on the memory the prefetch window uses, e.g. 8G");
   cmd->add_flag("-q,--quiet", o->play.quiet, "Only the summary");
   add_view_options(*cmd, o->view);

@@ -179,6 +179,7 @@ ConversionSummary convert_input(const ConversionOptions& o, const std::string& o
   settings.encode.chunk_particles = o.chunk;
   settings.encode.zstd_level = o.level;
   settings.encode.pack_planes = !o.smallest;
+  settings.encode.zstd_planes = !o.gpu_decodable;
   settings.encode.layers = o.layers;
   settings.encode.band_voxel = o.band_voxel;
   settings.max_in_flight = size_t(jobs) + 1;

@@ -23,6 +23,7 @@ struct PlayOptions {
   double fps = 0, rate = 1, seconds = 0, display_hz = 0, stats_every = 1;
   std::string memory, policy = "hold", on_error = "skip";
   std::string layers = "surface";  // --layers: surface (narrow band + blobs) or all
+  std::string decode = "auto";     // --decode: auto, cpu or gpu (decode_option.h)
   uint32_t window = 0;
   int threads = 0, read_threads = 0;
   uint64_t start = 0;

@@ -14,6 +14,7 @@
 #include <limits>
 
 #include "bounds.h"
+#include "stream_slice.h"
 #include "machine.h"
 #include "sluice/io/codec.h"
 #include "sluice/io/reader.h"
@@ -21,25 +22,6 @@
 #include "table.h"
 
 namespace sluice::bench {
-namespace {
-
-using Clock = std::chrono::steady_clock;
-using runtime::EndMode;
-using runtime::PipelineStats;
-
-double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
-
-// The frames a run streams: a prefix of the file.
-struct Slice {
-  uint64_t frames = 0;
-  uint64_t offset = 0, bytes = 0;  // their records in the file
-  uint64_t particles = 0;          // in all of them
-  uint64_t decoded = 0;            // decoded bytes of all of them
-  io::LayerSet layers = io::LayerSet::particles();  // what is read of them
-  uint64_t read = 0;               // bytes of the records the layers take (the read prefix of each)
-  double in_per_frame() const { return double(read) / double(frames); }
-  double out_per_frame() const { return double(decoded) / double(frames); }
-};
 
 Slice slice_of(const io::ContainerReader& reader, uint64_t wanted, uint64_t page_cache_room, io::LayerSet layers) {
   const auto& index = reader.index().frames;
@@ -58,6 +40,15 @@ Slice slice_of(const io::ContainerReader& reader, uint64_t wanted, uint64_t page
   }
   return s;
 }
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+using runtime::EndMode;
+using runtime::PipelineStats;
+
+double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
 
 struct Pass {
   double seconds = 0;

@@ -84,6 +84,7 @@ void plan_gpu_decode(std::span<const std::byte> record, const FrameHeader& heade
   const bool attribute = options.color_attribute >= 0 && size_t(options.color_attribute) < attributes;
   plan.chunks.resize(header.chunks.size());
   plan.inflate.clear();
+  plan.chunk_inflate.assign(header.chunks.size() + 1, 0);
   plan.record_bytes = 0;
   plan.inflated_bytes = 0;
   plan.stored_planes = plan.packed_planes = plan.zstd_planes = 0;
@@ -100,15 +101,13 @@ void plan_gpu_decode(std::span<const std::byte> record, const FrameHeader& heade
     const ChunkDesc& chunk = header.chunks[c];
     const uint64_t n = chunk.particle_count;
     const std::span<const std::byte> payload = record.subspan(chunk.offset, chunk.compressed_size);
-    if (options.verify_checksums && checksum(payload) != chunk.checksum) {
-      throw Error(at, "chunk checksum mismatch (the chunk's bytes are corrupt)");
-    }
+    plan.chunk_inflate[c] = uint32_t(plan.inflate.size());
     locate(payload, chunk.offset, chunk.codec, n, planes, sources, at);
     GpuChunkPlan& g = plan.chunks[c];
     g = GpuChunkPlan{};
     g.first = uint32_t(first);
     g.count = uint32_t(n);
-    g.attribute = attribute ? 1 : 0;
+    g.with_attribute = attribute ? 1 : 0;
     const size_t colour = 8 + 2 * size_t(attribute ? options.color_attribute : 0);
     for (int k = 0; k < kGpuPlanes; ++k) {
       if (k >= 8 && !attribute) break;
@@ -134,6 +133,7 @@ void plan_gpu_decode(std::span<const std::byte> record, const FrameHeader& heade
         }
       }
     }
+    plan.chunk_inflate[c + 1] = uint32_t(plan.inflate.size());
     first += n;
     if (first > kMax32) throw Error(at, "the frame has 2^32 particles or more");
   }
@@ -143,27 +143,44 @@ void plan_gpu_decode(std::span<const std::byte> record, const FrameHeader& heade
   }
 }
 
-void inflate_planes(std::span<const std::byte> record, const GpuDecodePlan& plan, std::span<std::byte> encoded,
-                    const ErrorLocation& where) {
-  if (encoded.size() < plan.encoded_bytes()) throw Error(where, "inflate_planes: the encoded area is too small");
-  tbb::parallel_for(size_t(0), plan.inflate.size(), [&](size_t j) {
-    struct Holder {
-      ZSTD_DCtx* ctx = ZSTD_createDCtx();
-      ~Holder() { ZSTD_freeDCtx(ctx); }
-    };
-    thread_local Holder zstd;
+void stage_chunk(std::span<const std::byte> record, const FrameHeader& header, const GpuDecodePlan& plan, size_t c,
+                 std::span<std::byte> encoded, bool verify, const ErrorLocation& where) {
+  struct Holder {
+    ZSTD_DCtx* ctx = ZSTD_createDCtx();
+    ~Holder() { ZSTD_freeDCtx(ctx); }
+  };
+  const auto fail = [&](const std::string& why) {
+    ErrorLocation at = where;
+    at.chunk = c;
+    throw Error(at, why);
+  };
+  if (encoded.size() < plan.encoded_bytes() || c >= plan.chunks.size() || c >= header.chunks.size()) {
+    fail("stage_chunk: the encoded area or the plan does not match the frame");
+  }
+  const ChunkDesc& chunk = header.chunks[c];
+  const std::span<const std::byte> payload = record.subspan(chunk.offset, chunk.compressed_size);
+  if (verify && checksum(payload) != chunk.checksum) fail("chunk checksum mismatch (the chunk's bytes are corrupt)");
+  if (record.data() != encoded.data()) std::memcpy(encoded.data() + chunk.offset, payload.data(), payload.size());
+  thread_local Holder zstd;
+  for (uint32_t j = plan.chunk_inflate[c]; j < plan.chunk_inflate[c + 1]; ++j) {
     const InflateJob& job = plan.inflate[j];
     const size_t got = ZSTD_decompressDCtx(zstd.ctx, encoded.data() + job.target, job.plane_bytes,
                                            record.data() + job.source, job.size);
-    if (ZSTD_isError(got) || got != job.plane_bytes) {
-      ErrorLocation at = where;
-      at.chunk = job.chunk;
-      const std::string why = ZSTD_isError(got) ? std::string("zstd: ") + ZSTD_getErrorName(got)
-                                                : "decompressed to " + std::to_string(got) + " bytes, expected " +
-                                                      std::to_string(job.plane_bytes);
-      throw Error(at, "plane " + std::to_string(job.plane) + ": " + why);
+    if (ZSTD_isError(got)) fail("plane " + std::to_string(job.plane) + ": zstd: " + ZSTD_getErrorName(got));
+    if (got != job.plane_bytes) {
+      fail("plane " + std::to_string(job.plane) + " decompressed to " + std::to_string(got) + " bytes, expected " +
+           std::to_string(job.plane_bytes));
     }
-  });
+  }
+}
+
+void stage_frame(std::span<const std::byte> record, const FrameHeader& header, const GpuDecodePlan& plan,
+                 std::span<std::byte> encoded, bool verify, const ErrorLocation& where) {
+  tbb::parallel_for(size_t(0), plan.chunks.size(),
+                    [&](size_t c) { stage_chunk(record, header, plan, c, encoded, verify, where); });
+  if (encoded.size() >= plan.staged_bytes()) {
+    std::memcpy(encoded.data() + plan.plans_offset(), plan.chunks.data(), plan.chunks.size() * sizeof(GpuChunkPlan));
+  }
 }
 
 namespace {
@@ -201,7 +218,7 @@ void decode_plan_on_cpu(std::span<const std::byte> encoded, const GpuDecodePlan&
       const uint64_t lod = planes[6].next(i) | uint64_t(planes[7].next(i)) << 8;
       code += delta;
       particles[c.first + i] = morton_to_packed16(code) | lod << 48;
-      if (c.attribute != 0) {
+      if (c.with_attribute != 0) {
         value = uint16_t(value + (planes[8].next(i) | planes[9].next(i) << 8));
         attribute[c.first + i] = value;
       }

@@ -1,15 +1,22 @@
 #include "sluice/render/frame_feed.h"
 
 #include <chrono>
+#include <stdexcept>
 
 namespace sluice::render {
 
 FrameFeed::FrameFeed(Renderer& renderer, runtime::Player& player, const StagingAllocator* staging, int color_attribute)
     : renderer_(renderer), player_(player), staging_(staging), color_attribute_(color_attribute) {}
 
-void FrameFeed::configure(runtime::PlayerOptions& options, const StagingAllocator& staging, int color_attribute) {
+void FrameFeed::configure(runtime::PlayerOptions& options, const StagingAllocator& staging, int color_attribute,
+                          const io::FileHeader& file, DecodeSite decode) {
   options.pipeline.attributes = color_attribute >= 0 ? std::vector<uint32_t>{uint32_t(color_attribute)} : std::vector<uint32_t>{};
   options.pipeline.device_budget = staging.device_budget();
+  if (decode == DecodeSite::Gpu && !io::gpu_decodable(file)) {
+    throw std::invalid_argument("frames with float32 positions are decoded on the CPU only");
+  }
+  options.pipeline.keep_encoded = decode != DecodeSite::Cpu && io::gpu_decodable(file);
+  options.pipeline.encoded_color_attribute = color_attribute;
 }
 
 FeedUpdate FrameFeed::update() {
@@ -19,8 +26,12 @@ FeedUpdate FrameFeed::update() {
   if (tick.changed && tick.frame) {
     const runtime::FrameHandle& f = *tick.frame;
     const auto t0 = std::chrono::steady_clock::now();
-    const int stream = color_attribute_ >= 0 ? 0 : -1;
-    pending_ = renderer_.commit_decoded({&f.header(), f.chunk_first(), &f.buffers(), stream, color_attribute_}, staging_);
+    if (const io::GpuDecodePlan* plan = f.gpu_plan()) {
+      pending_ = renderer_.commit_encoded({&f.header(), f.chunk_first(), &f.buffers(), plan, color_attribute_}, staging_);
+    } else {
+      const int stream = color_attribute_ >= 0 ? 0 : -1;
+      pending_ = renderer_.commit_decoded({&f.header(), f.chunk_first(), &f.buffers(), stream, color_attribute_}, staging_);
+    }
     last_.commit_wall_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     last_.changed = true;
     last_.has_frame = true;

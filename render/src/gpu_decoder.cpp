@@ -25,7 +25,7 @@ struct GpuDecoder::Impl {
   io::GpuDecodePlan plan;
   uint64_t particles = 0;
   bool attribute = false;
-  Buffer upload, encoded, plans, decoded, values, errors, readback;  // grown to the largest frame seen
+  Buffer upload, encoded, decoded, values, errors, readback;  // grown to the largest frame seen
 
   explicit Impl(Context::Impl& c) : ctx(c), pass(c) {
     const auto families = ctx.physical.getQueueFamilyProperties();
@@ -38,31 +38,24 @@ GpuDecoder::~GpuDecoder() = default;
 const io::GpuDecodePlan& GpuDecoder::plan() const { return impl_->plan; }
 
 void GpuDecoder::load(std::span<const std::byte> record, const io::FrameHeader& header, const io::FileHeader& file,
-                      const io::GpuPlanOptions& options, const io::ErrorLocation& where) {
+                      const io::GpuPlanOptions& options, bool verify, const io::ErrorLocation& where) {
   Impl& r = *impl_;
   io::plan_gpu_decode(record, header, file, options, r.plan, where);
-  const uint64_t bytes = r.plan.encoded_bytes();
-  const uint64_t plan_bytes = r.plan.chunks.size() * sizeof(io::GpuChunkPlan);
+  const uint64_t bytes = r.plan.staged_bytes();
   r.particles = 0;
   for (const io::GpuChunkPlan& c : r.plan.chunks) r.particles += c.count;
-  r.attribute = !r.plan.chunks.empty() && r.plan.chunks[0].attribute != 0;
+  r.attribute = !r.plan.chunks.empty() && r.plan.chunks[0].with_attribute != 0;
 
-  grow_buffer(r.ctx, r.upload, bytes + plan_bytes, vk::BufferUsageFlagBits::eTransferSrc, MemoryKind::Upload);
-  auto* staging = static_cast<std::byte*>(r.upload.mapped);
-  std::memcpy(staging, record.data(), r.plan.record_bytes);
-  std::memset(staging + r.plan.record_bytes, 0, bytes - r.plan.record_bytes);
-  io::inflate_planes(record, r.plan, {staging, bytes}, where);
-  std::memcpy(staging + bytes, r.plan.chunks.data(), plan_bytes);
+  grow_buffer(r.ctx, r.upload, bytes, vk::BufferUsageFlagBits::eTransferSrc, MemoryKind::Upload);
+  const std::span<std::byte> staging(static_cast<std::byte*>(r.upload.mapped), bytes);
+  std::memset(staging.data(), 0, bytes);  // the gaps the GPU reads past plane ends: no stale bytes
+  io::stage_frame(record, header, r.plan, staging, verify, where);
 
   grow_buffer(r.ctx, r.encoded, bytes, kDeviceUsage, MemoryKind::DeviceLocal);
-  grow_buffer(r.ctx, r.plans, std::max<uint64_t>(plan_bytes, 16), kDeviceUsage, MemoryKind::DeviceLocal);
   grow_buffer(r.ctx, r.decoded, std::max<uint64_t>(r.particles * 8, 16), kDeviceUsage, MemoryKind::DeviceLocal);
   grow_buffer(r.ctx, r.values, std::max<uint64_t>(r.particles * 2, 16), kDeviceUsage, MemoryKind::DeviceLocal);
   grow_buffer(r.ctx, r.errors, std::max<uint64_t>(r.plan.chunks.size() * 4, 16), kDeviceUsage, MemoryKind::DeviceLocal);
-  r.ctx.run_once([&](vk::CommandBuffer cmd) {
-    cmd.copyBuffer(*r.upload.buffer, *r.encoded.buffer, vk::BufferCopy(0, 0, bytes));
-    if (plan_bytes > 0) cmd.copyBuffer(*r.upload.buffer, *r.plans.buffer, vk::BufferCopy(bytes, 0, plan_bytes));
-  });
+  r.ctx.run_once([&](vk::CommandBuffer cmd) { cmd.copyBuffer(*r.upload.buffer, *r.encoded.buffer, vk::BufferCopy(0, 0, bytes)); });
 }
 
 std::vector<double> GpuDecoder::run(int repeats) {
@@ -70,7 +63,7 @@ std::vector<double> GpuDecoder::run(int repeats) {
   std::vector<double> ms;
   const uint32_t stamps = uint32_t(2 * std::max(repeats, 1));
   if (r.timestamps) r.stamps = vk::raii::QueryPool(r.ctx.device, vk::QueryPoolCreateInfo({}, vk::QueryType::eTimestamp, stamps));
-  const DecodeRun run{r.encoded.address, r.plans.address, r.decoded.address, r.values.address, r.errors.address,
+  const DecodeRun run{r.encoded.address, r.encoded.address + r.plan.plans_offset(), r.decoded.address, r.values.address, r.errors.address,
                       uint32_t(r.plan.chunks.size())};
   r.ctx.run_once([&](vk::CommandBuffer cmd) {
     if (r.timestamps) cmd.resetQueryPool(*r.stamps, 0, stamps);

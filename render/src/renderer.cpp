@@ -341,6 +341,8 @@ void Renderer::Impl::collect_slot(FrameSlot& slot, uint32_t slot_index, bool fin
     s.gpu_ms = double(stamps[count - 1] - stamps[0]) * ns * 1e-6;
   }
   s.upload_ms = slot.upload_ms;
+  s.decode_ms = slot.decode_ms;
+  s.decode_errors = slot.decode_errors;
   if (slot.classified) {
     BandParams p;
     std::memcpy(&p, static_cast<const std::byte*>(slot.readback.mapped) + sizeof(GpuArgs), sizeof p);
@@ -427,6 +429,8 @@ FrameSync Renderer::record(VkCommandBuffer command_buffer, const RenderTarget& t
   slot.classified = false;
   slot.particles = frame ? frame->particle_count : 0;
   slot.upload_ms = frame ? std::max(frame->upload_ms, 0.0) : 0;
+  slot.decode_ms = frame && frame->decoded_on_gpu ? std::max(frame->decode_ms, 0.0) : 0;
+  slot.decode_errors = frame && frame->decoded_on_gpu ? frame->decode_errors_found : 0;
 
   PassRecorder pass(r, vk::CommandBuffer(command_buffer), slot, slot_index);
   pass.begin_frame(target, direct);

@@ -8,6 +8,7 @@
 #include <functional>
 
 #include "gpu_types.h"
+#include "decode_pass.h"
 #include "frame_band.h"
 #include "sluice/render/renderer.h"
 #include "vk_common.h"
@@ -55,6 +56,14 @@ struct FrameSet {
   bool band_eligible = false;      // uploaded with room for blobs: to be classified when first drawn
   bool classified = false;         // its classification is recorded: draw surface + blobs
   Buffer surface;                  // frame_band.h: validity word, a bit per particle
+  // Frames committed encoded (commit_encoded): the staged area, the decode's
+  // error words (host-visible), its command buffer and timestamps.
+  Buffer encoded, decode_errors;
+  vk::raii::CommandBuffer decode{nullptr};
+  vk::raii::QueryPool decode_stamps{nullptr};
+  bool decoded_on_gpu = false;
+  double decode_ms = -1;           // read once the decode is done
+  uint32_t decode_errors_found = 0;
 };
 
 // Host-written and host-read resources of one frame in flight.
@@ -66,6 +75,8 @@ struct FrameSlot {
   std::vector<const char*> stamp_names;   // per timestamp after the first
   uint64_t particles = 0;
   double upload_ms = 0;
+  double decode_ms = 0;
+  uint32_t decode_errors = 0;
   bool classified = false;                // its frame classified one: BandParams after the GpuArgs
   uint64_t blob_room = 0;
   bool collected = true;
@@ -111,6 +122,8 @@ struct Renderer::Impl {
   FrameStats stats;  // the newest collected
 
   vk::raii::CommandPool transfer_pool{nullptr};  // before the sets: their command buffers come from it
+  vk::raii::CommandPool decode_pool{nullptr};    // graphics family: the sets' decode command buffers
+  std::unique_ptr<DecodePass> decode_pass;       // made at the first commit_encoded
   std::vector<FrameSet> sets;  // frames_in_flight + 1
   int shown = -1;              // set record() draws
   int staged = -1;             // set stage_frame() filled

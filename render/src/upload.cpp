@@ -109,6 +109,15 @@ void Renderer::Impl::pick_shown_set() {
   shown = newest;
   if (shown < 0) return;
   FrameSet& s = sets[size_t(shown)];
+  if (s.decoded_on_gpu && s.decode_ms < 0) {
+    std::array<uint64_t, 2> stamps{};
+    s.decode_ms = (*ctx.device).getQueryPoolResults(*s.decode_stamps, 0, 2, sizeof stamps, stamps.data(), sizeof(uint64_t),
+                                                    vk::QueryResultFlagBits::e64) == vk::Result::eSuccess
+                      ? double(stamps[1] - stamps[0]) * ctx.properties.limits.timestampPeriod * 1e-6
+                      : 0;
+    const auto* errors = static_cast<const uint32_t*>(s.decode_errors.mapped);
+    s.decode_errors_found = uint32_t(std::count_if(errors, errors + s.chunk_count, [](uint32_t e) { return e != 0; }));
+  }
   if (s.upload_ms < 0) {
     std::array<uint64_t, 2> stamps{};
     if ((*ctx.device).getQueryPoolResults(*s.stamps, 0, 2, sizeof stamps, stamps.data(), sizeof(uint64_t),
@@ -149,12 +158,57 @@ struct UploadSource {  // where upload_frame() copies a part of a frame from
   vk::DeviceSize offset = 0;
 };
 
+// A frame committed encoded: its staged area, decoded on the GPU after the copy.
+struct EncodedSource {
+  UploadSource area;
+  const io::GpuDecodePlan* plan = nullptr;
+};
+
+// Records and submits the decode of `set`'s staged area into its particle
+// and attribute buffers on the graphics queue, after the copy (timeline
+// value `copied`); returns the value the decode signals.
+uint64_t submit_decode(Renderer::Impl& r, FrameSet& set, const io::GpuDecodePlan& plan, uint64_t copied) {
+  using Stage = vk::PipelineStageFlagBits2;
+  if (!r.decode_pass) {
+    r.decode_pass = std::make_unique<DecodePass>(r.ctx);
+    r.decode_pool = vk::raii::CommandPool(
+        r.ctx.device, vk::CommandPoolCreateInfo(vk::CommandPoolCreateFlagBits::eResetCommandBuffer, r.ctx.graphics_family));
+  }
+  if (!*set.decode) {
+    set.decode = std::move(vk::raii::CommandBuffers(
+        r.ctx.device, vk::CommandBufferAllocateInfo(*r.decode_pool, vk::CommandBufferLevel::ePrimary, 1))[0]);
+    set.decode_stamps = vk::raii::QueryPool(r.ctx.device, vk::QueryPoolCreateInfo({}, vk::QueryType::eTimestamp, 2));
+  }
+  const uint32_t chunks = uint32_t(plan.chunks.size());
+  (*r.ctx.device).resetQueryPool(*set.decode_stamps, 0, 2);
+  vk::CommandBuffer cmd = *set.decode;
+  cmd.reset();
+  cmd.begin(vk::CommandBufferBeginInfo(vk::CommandBufferUsageFlagBits::eOneTimeSubmit));
+  cmd.writeTimestamp2(Stage::eAllCommands, *set.decode_stamps, 0);
+  DecodePass::barrier(cmd);
+  const DecodeRun run{set.encoded.address, set.encoded.address + plan.plans_offset(), set.particles.address,
+                      set.attributes.address, set.decode_errors.address, chunks};
+  r.decode_pass->record(cmd, run);
+  DecodePass::barrier(cmd);
+  cmd.writeTimestamp2(Stage::eAllCommands, *set.decode_stamps, 1);
+  cmd.end();
+  std::memset(set.decode_errors.mapped, 0, size_t(chunks) * 4);  // the set is not in use: no GPU work reads it
+  const vk::CommandBufferSubmitInfo cb(cmd);
+  const vk::SemaphoreSubmitInfo wait(*r.upload_done, copied, Stage::eComputeShader);
+  const vk::SemaphoreSubmitInfo signal(*r.upload_done, copied + 1, Stage::eAllCommands);
+  r.ctx.graphics_queue.submit2(vk::SubmitInfo2({}, wait, cb, signal));
+  set.decoded_on_gpu = true;
+  set.decode_ms = -1;
+  set.decode_errors_found = 0;
+  return copied + 1;
+}
+
 // Submits the copy of `set`'s frame (particle_count, chunk_count,
 // has_attribute) from the sources into its device buffers, which grow to
 // fit. The chunk table source must be set.staging at `chunks_offset` (it is
 // validated there). Returns the ticket the copy signals.
 uint64_t upload_frame(Renderer::Impl& r, FrameSet& set, UploadSource particles_src, vk::DeviceSize chunks_offset,
-                      UploadSource attribute_src) {
+                      UploadSource attribute_src, const EncodedSource* encoded = nullptr) {
   const uint64_t n = set.particle_count;
   const uint32_t chunks = set.chunk_count;
   // Device buffers sized for this frame; the work lists for its worst case.
@@ -195,7 +249,15 @@ uint64_t upload_frame(Renderer::Impl& r, FrameSet& set, UploadSource particles_s
   cmd.reset();
   cmd.begin(vk::CommandBufferBeginInfo(vk::CommandBufferUsageFlagBits::eOneTimeSubmit));
   cmd.writeTimestamp2(vk::PipelineStageFlagBits2::eAllCommands, *set.stamps, 0);
-  if (n > 0) cmd.copyBuffer(particles_src.buffer, *set.particles.buffer, vk::BufferCopy(particles_src.offset, 0, n * r.stride));
+  if (encoded) {
+    const uint64_t bytes = encoded->plan->staged_bytes();
+    r.ensure(set.encoded, bytes, kDeviceUsage, MemoryKind::DeviceLocal);
+    r.ensure(set.decode_errors, std::max<uint64_t>(uint64_t(chunks) * 4, 16),
+             vk::BufferUsageFlagBits::eStorageBuffer | vk::BufferUsageFlagBits::eShaderDeviceAddress, MemoryKind::Readback);
+    cmd.copyBuffer(encoded->area.buffer, *set.encoded.buffer, vk::BufferCopy(encoded->area.offset, 0, bytes));
+  } else if (n > 0) {
+    cmd.copyBuffer(particles_src.buffer, *set.particles.buffer, vk::BufferCopy(particles_src.offset, 0, n * r.stride));
+  }
   if (chunks > 0) {
     cmd.copyBuffer(*set.staging.buffer, *set.chunks.buffer, vk::BufferCopy(chunks_offset, 0, chunks * sizeof(GpuChunk)));
   }
@@ -207,7 +269,7 @@ uint64_t upload_frame(Renderer::Impl& r, FrameSet& set, UploadSource particles_s
     cmd.updateBuffer<GpuChunk>(*set.chunks.buffer, chunks * sizeof(GpuChunk), row);
     cmd.fillBuffer(*set.surface.buffer, 0, 4, 0);
   }
-  if (set.has_attribute && n > 0) {
+  if (set.has_attribute && n > 0 && !encoded) {
     // Rounded up to 4 bytes: every source has room (streams are padded).
     cmd.copyBuffer(attribute_src.buffer, *set.attributes.buffer,
                    vk::BufferCopy(attribute_src.offset, 0, (n * 2 + 3) & ~uint64_t(3)));
@@ -218,6 +280,8 @@ uint64_t upload_frame(Renderer::Impl& r, FrameSet& set, UploadSource particles_s
   const vk::CommandBufferSubmitInfo cb(cmd);
   const vk::SemaphoreSubmitInfo signal(*r.upload_done, r.upload_value, vk::PipelineStageFlagBits2::eAllCommands);
   r.ctx.transfer_queue.submit2(vk::SubmitInfo2({}, {}, cb, signal));
+  set.decoded_on_gpu = false;
+  if (encoded) r.upload_value = submit_decode(r, set, *encoded->plan, r.upload_value);
   set.ticket = r.upload_value;
   set.upload_ms = -1;
   return set.ticket;
@@ -323,6 +387,40 @@ uint64_t Renderer::commit_decoded(const DecodedFrameView& frame, const StagingAl
   const uint64_t attribute_offset =
       block->attribute_offset + uint64_t(std::max(frame.color_stream, 0)) * block->attribute_stride;
   return upload_frame(r, set, {src, 0}, 0, {src, attribute ? attribute_offset : 0});
+}
+
+uint64_t Renderer::commit_encoded(const EncodedFrameView& frame, const StagingAllocator* from) {
+  Impl& r = *impl_;
+  const io::FrameHeader& header = *frame.header;
+  const io::GpuDecodePlan& plan = *frame.plan;
+  const uint32_t chunks = uint32_t(header.chunks.size());
+  if (frame.chunk_first.size() != chunks || plan.chunks.size() != chunks) {
+    throw std::invalid_argument("commit_encoded: one first index and one plan per chunk");
+  }
+  if (r.scene.coding != io::PositionCoding::Quantized16) throw std::invalid_argument("commit_encoded: a float32 scene");
+  const uint64_t staged = plan.staged_bytes();
+  if (frame.buffers->particles.size() < staged) throw std::invalid_argument("commit_encoded: the staged area is too small");
+  const bool attribute = frame.color_attribute >= 0 && chunks > 0 && plan.chunks[0].with_attribute != 0;
+  const StagingAllocator::Memory* block = from ? &staging_memory(*frame.buffers) : nullptr;
+  const bool own = !block || block->host;  // not in Vulkan memory: through the renderer's staging
+
+  const int index = r.free_set();
+  FrameSet& set = r.sets[size_t(index)];
+  r.stride = 8;
+  const uint64_t table = (uint64_t(chunks) * sizeof(GpuChunk) + 15) & ~uint64_t(15);
+  r.ensure(set.staging, std::max<uint64_t>(table + (own ? staged : 0), 16), vk::BufferUsageFlagBits::eTransferSrc,
+           MemoryKind::Upload);
+  set.ticket = 0;
+  auto* base = static_cast<std::byte*>(set.staging.mapped);
+  fill_chunk_table(header, frame.chunk_first, attribute ? frame.color_attribute : -1,
+                   {reinterpret_cast<GpuChunk*>(base), chunks}, io::ErrorLocation{{}, header.frame_number, {}});
+  if (own) std::memcpy(base + table, frame.buffers->particles.data(), staged);
+  mark_layers(set, header);
+  set.particle_count = header.particle_count;
+  set.chunk_count = chunks;
+  set.has_attribute = attribute;
+  const EncodedSource source{own ? UploadSource{*set.staging.buffer, table} : UploadSource{*block->staging.buffer, 0}, &plan};
+  return upload_frame(r, set, {}, 0, {}, &source);
 }
 
 uint64_t Renderer::commit_record(std::span<const std::byte> record, const io::FrameHeader& header, const io::FileHeader& file,

@@ -9,6 +9,7 @@
 
 #include "pipeline_core.h"
 #include "sluice/io/codec.h"
+#include "sluice/io/gpu_decode_plan.h"
 
 namespace sluice::runtime::detail {
 namespace {
@@ -56,14 +57,6 @@ void PipelineCore::decode_chunk(Slot& slot, size_t c) noexcept {
   const io::ChunkDesc& chunk = slot.header.chunks[c];
   const uint64_t first = slot.chunk_first[c];
   const size_t stride = slot.layout.particle_stride;
-  std::array<uint16_t*, io::kMaxAttributes> targets{};
-  for (size_t a = 0; a < slot.attribute_targets.size(); ++a) {
-    if (slot.attribute_targets[a]) targets[a] = slot.attribute_targets[a] + first;
-  }
-  const io::ChunkDestination destination{
-      slot.buffers.particles.subspan(first * stride, size_t(chunk.particle_count) * stride),
-      std::span<uint16_t* const>(targets.data(), slot.attribute_targets.size())};
-
   const auto t0 = std::chrono::steady_clock::now();
   try {
     if (options_.before_decode_chunk) options_.before_decode_chunk(slot.frame, c);
@@ -73,7 +66,18 @@ void PipelineCore::decode_chunk(Slot& slot, size_t c) noexcept {
     io::DecodeScratch& scratch = worker >= 0 && uint32_t(worker) < worker_slots() ? scratch_[uint32_t(worker)] : outside_scratch();
     // The slot's location names the file and frame without an allocation per
     // chunk; the chunk is added to the error below.
-    io::decode_chunk(slot.record_bytes, chunk, reader_.header(), destination, scratch, slot.where);
+    if (slot.layout.encoded_bytes > 0) {  // kept encoded: the GPU decodes it
+      io::stage_chunk(slot.record_bytes, slot.header, slot.plan, c, slot.buffers.particles, true, slot.where);
+    } else {
+      std::array<uint16_t*, io::kMaxAttributes> targets{};
+      for (size_t a = 0; a < slot.attribute_targets.size(); ++a) {
+        if (slot.attribute_targets[a]) targets[a] = slot.attribute_targets[a] + first;
+      }
+      const io::ChunkDestination destination{
+          slot.buffers.particles.subspan(first * stride, size_t(chunk.particle_count) * stride),
+          std::span<uint16_t* const>(targets.data(), slot.attribute_targets.size())};
+      io::decode_chunk(slot.record_bytes, chunk, reader_.header(), destination, scratch, slot.where);
+    }
   } catch (const io::Error& e) {
     claim_error(slot, [&] {
       FrameError error = FrameError::from(e);
@@ -89,7 +93,8 @@ void PipelineCore::decode_chunk(Slot& slot, size_t c) noexcept {
     return;
   }
   const auto ns = std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - t0).count();
-  const uint64_t bytes = uint64_t(chunk.particle_count) * (stride + 2 * uint64_t(attribute_streams_));
+  const uint64_t bytes = slot.layout.encoded_bytes > 0 ? chunk.compressed_size
+                                                      : uint64_t(chunk.particle_count) * (stride + 2 * uint64_t(attribute_streams_));
   const int worker = tbb::this_task_arena::current_thread_index();
   if (worker >= 0 && uint32_t(worker) < worker_slots()) {
     WorkerCounters& w = workers_[uint32_t(worker)];

@@ -55,8 +55,14 @@ PipelineCore::PipelineCore(const io::ContainerReader& reader, FrameAllocator& al
       returns_(std::max<uint32_t>(2, options_.budget.ring_capacity)),
       record_returns_(size_t(decode_threads_) + 1),
       records_(size_t(decode_threads_) + 1) {
-  stream_of_attribute_ = stream_map(reader_, options_.attributes, attribute_streams_);
-  footprint_ = largest_frame(reader_, attribute_streams_, &allocator_, options_.layers);
+  if (options_.keep_encoded) {
+    if (!io::gpu_decodable(reader_.header())) {
+      throw io::Error({reader_.path()}, "frames cannot stay encoded for the GPU: its positions are float32");
+    }
+  }
+  const std::optional<std::vector<uint32_t>> none = std::vector<uint32_t>{};  // encoded: nothing decoded on the CPU
+  stream_of_attribute_ = stream_map(reader_, options_.keep_encoded ? none : options_.attributes, attribute_streams_);
+  footprint_ = largest_frame(reader_, attribute_streams_, &allocator_, options_.layers, options_.keep_encoded);
   record_where_.file = reader_.path();
   source_ = options_.source ? options_.source
                             : std::make_shared<FileRecordSource>(reader_.path(), reader_.descriptor(), options_.direct_io);
@@ -305,6 +311,10 @@ const io::FrameHeader& FrameHandle::header() const { return owner_->slot(slot_).
 std::span<const uint64_t> FrameHandle::chunk_first() const { return owner_->slot(slot_).chunk_first; }
 const FrameLayout& FrameHandle::layout() const { return owner_->slot(slot_).layout; }
 const FrameBuffers& FrameHandle::buffers() const { return owner_->slot(slot_).buffers; }
+const io::GpuDecodePlan* FrameHandle::gpu_plan() const {
+  const Slot& s = owner_->slot(slot_);
+  return s.layout.encoded_bytes > 0 ? &s.plan : nullptr;
+}
 
 // --- Pipeline ---
 

@@ -4,6 +4,7 @@
 // no synchronisation; everything it learns from other threads arrives
 // through the return rings, slot states and the generation number.
 #include <algorithm>
+#include <cstring>
 #include <exception>
 
 #include "pipeline_core.h"
@@ -357,6 +358,12 @@ void PipelineCore::prepare_decode(ReaderState& rs, Slot& slot) {
   slot.layout.particles = h.particle_count;
   slot.layout.particle_stride = static_cast<uint32_t>(io::decoded_particle_bytes(reader_.header().position_coding));
   slot.layout.attribute_streams = attribute_streams_;
+  slot.layout.encoded_bytes = 0;
+  if (options_.keep_encoded) {  // the tables are read here; the workers stage the payloads
+    io::plan_gpu_decode(slot.record_bytes, h, reader_.header(), {.color_attribute = options_.encoded_color_attribute},
+                        slot.plan, slot.where);
+    slot.layout.encoded_bytes = slot.plan.staged_bytes();
+  }
   slot.buffers = allocator_.allocate(slot.layout);
   slot.has_buffers = true;
   rs.decoded_held += allocator_.bytes_for(slot.layout);
@@ -366,6 +373,10 @@ void PipelineCore::prepare_decode(ReaderState& rs, Slot& slot) {
               slot.buffers.attributes.size() >= attribute_streams_;
   for (uint32_t a = 0; fits && a < attribute_streams_; ++a) fits = slot.buffers.attributes[a].size() >= h.particle_count;
   if (!fits) throw io::Error(reader_.location(slot.frame), "the frame allocator returned buffers smaller than the frame");
+  if (options_.keep_encoded) {
+    std::memcpy(slot.buffers.particles.data() + slot.plan.plans_offset(), slot.plan.chunks.data(),
+                slot.plan.chunks.size() * sizeof(io::GpuChunkPlan));
+  }
   slot.attribute_targets.assign(stream_of_attribute_.size(), nullptr);
   for (size_t a = 0; a < stream_of_attribute_.size(); ++a) {
     if (stream_of_attribute_[a] != ~0u) slot.attribute_targets[a] = slot.buffers.attributes[stream_of_attribute_[a]].data();

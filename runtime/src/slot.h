@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "sluice/io/format.h"
+#include "sluice/io/gpu_decode_plan.h"
 #include "sluice/runtime/frame_allocator.h"
 #include "sluice/runtime/frame_error.h"
 
@@ -58,6 +59,7 @@ struct Slot {
   uint32_t record = kNoRecord;                   // record buffer in use while decoding
   std::span<const std::byte> record_bytes;       // the frame record inside it (a prefix: see `partial`)
   bool partial = false;                          // only the wanted layers were read; the table is parsed
+  io::GpuDecodePlan plan;                        // PipelineOptions::keep_encoded: what the workers stage
 
   // Written by the reader (read errors) or the chunk that won error_claimed.
   FrameError error;

@@ -22,13 +22,15 @@ uint32_t clamp_frames(uint64_t frames) {
 }  // namespace
 
 FrameFootprint largest_frame(const io::ContainerReader& reader, size_t attribute_streams,
-                             const FrameAllocator* allocator, io::LayerSet layers) {
+                             const FrameAllocator* allocator, io::LayerSet layers, bool encoded) {
   FrameLayout layout;
   layout.particle_stride = static_cast<uint32_t>(io::decoded_particle_bytes(reader.header().position_coding));
   layout.attribute_streams = static_cast<uint32_t>(attribute_streams);
   FrameFootprint f;
   for (const io::FrameIndexEntry& e : reader.index().frames) {
     layout.particles = e.count_in(layers);
+    // An estimate: the real plan is known once the record's tables are read.
+    if (encoded) layout.encoded_bytes = e.bytes + 2 * layout.particles + 176 * uint64_t(e.chunk_count) + 64;
     const uint64_t bytes = allocator ? allocator->bytes_for(layout) : layout.total_bytes();
     if (bytes > f.decoded_bytes) f.chunks = std::max<uint32_t>(1, e.chunk_count);
     f.decoded_bytes = std::max(f.decoded_bytes, bytes);

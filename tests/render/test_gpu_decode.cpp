@@ -67,7 +67,7 @@ io::EncodedFrame encode(const io::ParticleFrame& frame, const io::FileHeader& h,
 // Decodes `f` on the GPU and expects exactly the CPU's output; returns the plan.
 io::GpuDecodePlan expect_same_decode(const io::EncodedFrame& f, const io::FileHeader& h, int color, const char* what) {
   const CpuFrame cpu = decode_on_cpu(f, h, color);
-  decoder().load(f.record, f.header, h, {.color_attribute = color}, {});
+  decoder().load(f.record, f.header, h, {.color_attribute = color}, true, {});
   decoder().run();
   const GpuDecodeOutput gpu = decoder().read();
   EXPECT_EQ(gpu.chunks_with_errors, 0u) << what;
@@ -81,8 +81,7 @@ io::GpuDecodePlan expect_same_decode(const io::EncodedFrame& f, const io::FileHe
   // The plan's own CPU reading agrees too.
   io::GpuDecodePlan plan = decoder().plan();
   std::vector<std::byte> encoded(plan.encoded_bytes());
-  std::copy_n(f.record.begin(), plan.record_bytes, encoded.begin());
-  io::inflate_planes(f.record, plan, encoded, {});
+  io::stage_frame(f.record, f.header, plan, encoded, true, {});
   std::vector<uint64_t> particles(cpu.particles.size());
   std::vector<uint16_t> attribute(cpu.attribute.size());
   io::decode_plan_on_cpu(encoded, plan, particles, attribute);
@@ -294,7 +293,7 @@ TEST(GpuDecode, CorruptPlanesAreCaughtAndNamed) {
   io::EncodedFrame bad = f;
   bad.record[at + 3] ^= std::byte{0x10};
   try {
-    decoder().load(bad.record, bad.header, h, {}, {"x.sluice", 4, {}});
+    decoder().load(bad.record, bad.header, h, {}, true, {"x.sluice", 4, {}});
     ADD_FAILURE() << "a corrupt chunk was accepted";
   } catch (const io::Error& e) {
     EXPECT_EQ(e.where().chunk, 0u);
@@ -303,18 +302,18 @@ TEST(GpuDecode, CorruptPlanesAreCaughtAndNamed) {
   // Unchecked, the GPU finds escape codes that disagree with the list, or
   // the values differ; it never reads outside the record either way.
   bad.record[at + 1] = std::byte{0xff};  // every value of group 0 an escape code
-  decoder().load(bad.record, bad.header, h, {.verify_checksums = false}, {});
+  decoder().load(bad.record, bad.header, h, {}, false, {});
   decoder().run();
   EXPECT_EQ(decoder().read().chunks_with_errors, 1u);
 
   // A width outside 1..7 is refused on the CPU, before the GPU sees it.
   io::EncodedFrame wide = f;
   wide.record[at] = std::byte{9};
-  EXPECT_THROW(decoder().load(wide.record, wide.header, h, {.verify_checksums = false}, {}), io::Error);
+  EXPECT_THROW(decoder().load(wide.record, wide.header, h, {}, false, {}), io::Error);
   // A chunk whose payload is cut short.
   io::EncodedFrame cut = f;
   cut.header.chunks[0].compressed_size -= 1;
-  EXPECT_THROW(decoder().load(cut.record, cut.header, h, {.verify_checksums = false}, {}), io::Error);
+  EXPECT_THROW(decoder().load(cut.record, cut.header, h, {}, false, {}), io::Error);
   // And it decodes good frames afterwards.
   expect_same_decode(f, h, 0, "after corrupt frames");
 }

@@ -22,9 +22,18 @@ struct StreamBenchOptions {
   uint64_t frames = 0;       // frames to stream (from frame 0); 0: as many as fit in the page cache
   bool storage = true;       // also measure from storage (drops the file from the page cache)
   bool surface = false;      // the pipeline reads the surface and blobs of a file with layers (format 1.3)
+  std::string device;        // --gpu: the Vulkan device (render::ContextOptions::device; "": the first GPU)
 };
 
 // Throws io::Error on a bad file.
 void run_stream_bench(const StreamBenchOptions& options);
+
+// `sluice bench stream --gpu` (builds with the renderer): frames arriving
+// decoded in device memory. Prints the bounds measured in the same run
+// (page-cache read, host-to-device copy, GPU decode alone with the frame
+// resident), then the pipeline into the renderer's device buffers with the
+// GPU decoding (frames kept encoded) and, beside it, with the CPU decoding,
+// each as frames/s, a share of the slower bound, and the CPU time per frame.
+void run_stream_gpu_bench(const StreamBenchOptions& options);
 
 }  // namespace sluice::bench

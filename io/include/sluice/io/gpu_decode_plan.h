@@ -46,7 +46,7 @@ struct GpuPlane {
 struct GpuChunkPlan {
   uint32_t first = 0;      // index of the chunk's first particle in the frame
   uint32_t count = 0;      // particles
-  uint32_t attribute = 0;  // 1: planes 8 and 9 hold the colour attribute; 0: none is written
+  uint32_t with_attribute = 0;  // 1: planes 8 and 9 hold the colour attribute; 0: none is written
   uint32_t pad = 0;
   GpuPlane planes[kGpuPlanes];
 };
@@ -64,40 +64,50 @@ struct InflateJob {
 
 struct GpuDecodePlan {
   std::vector<GpuChunkPlan> chunks;  // one per chunk of the header, in order
-  std::vector<InflateJob> inflate;   // zstd planes, for inflate_planes()
+  std::vector<InflateJob> inflate;   // zstd planes, chunk by chunk
+  std::vector<uint32_t> chunk_inflate;  // chunks + 1: chunk c's jobs are inflate[chunk_inflate[c], chunk_inflate[c + 1])
   uint64_t record_bytes = 0;         // bytes of the record the plan reads (a prefix of it)
   uint64_t inflated_offset = 0;      // record_bytes rounded up to 16
   uint64_t inflated_bytes = 0;       // the CPU-inflated planes
   uint64_t encoded_bytes() const { return inflated_offset + inflated_bytes + kGpuReadPadding; }
+  // Where the chunk plans go when they travel with the encoded area (one
+  // buffer: the area, then the plans), and that buffer's size.
+  uint64_t plans_offset() const { return (encoded_bytes() + 15) & ~uint64_t(15); }
+  uint64_t staged_bytes() const { return plans_offset() + chunks.size() * sizeof(GpuChunkPlan); }
   // Planes by how they reach the GPU (statistics, bench).
   uint64_t stored_planes = 0, packed_planes = 0, zstd_planes = 0;
 };
 
 struct GpuPlanOptions {
   int color_attribute = -1;  // attribute index decoded into planes 8-9; < 0: none
-  bool verify_checksums = true;  // XXH3 of each chunk's payload, as decode_chunk does
 };
 
 // Whether files with this header can be decoded on the GPU (Quantized16
 // positions; Float32 positions are decoded on the CPU).
 bool gpu_decodable(const FileHeader& file);
 
-// Checks every chunk of `header` (parsed from `record`, possibly cut to some
-// layers) and builds its plan into `plan` (reusing its memory). Throws
-// io::Error at `where` (chunk filled in) on any inconsistency: a plane
-// beyond its payload, a packed width outside 1..7, a packed plane shorter
-// than its values, a checksum that differs, trailing bytes, offsets that
-// do not fit 32 bits (records of 4 GiB or more are decoded on the CPU).
+// Reads the plane tables of `header`'s chunks in `record` (possibly cut to
+// some layers) and builds the plan into `plan` (reusing its memory): a few
+// bytes per plane, no checksums (stage_chunk checks them). Throws io::Error
+// at `where` (chunk filled in) on any inconsistency: a plane beyond its
+// payload, a packed width outside 1..7, a packed plane shorter than its
+// values, trailing bytes, a record of 4 GiB or more (the GPU's offsets are
+// 32-bit: such frames are decoded on the CPU).
 void plan_gpu_decode(std::span<const std::byte> record, const FrameHeader& header, const FileHeader& file,
                      const GpuPlanOptions& options, GpuDecodePlan& plan, const ErrorLocation& where);
 
-// Inflates the plan's zstd planes (TBB, in parallel) into
-// encoded[inflated_offset, + inflated_bytes). `encoded` holds at least
-// plan.encoded_bytes() bytes; `record` is the one the plan was made from
-// (it may be encoded's own prefix). Throws io::Error at `where` (chunk
-// filled in) when a plane does not inflate to its size.
-void inflate_planes(std::span<const std::byte> record, const GpuDecodePlan& plan, std::span<std::byte> encoded,
-                    const ErrorLocation& where);
+// The CPU's share of chunk `c`: checks its checksum (when `verify`), copies
+// its payload to the same offset of `encoded` (unless `record` already is
+// encoded's prefix) and inflates its zstd planes there. `encoded` holds at
+// least plan.encoded_bytes() bytes. Throws io::Error at `where` (chunk
+// filled in). Chunks may be staged from different threads at once.
+void stage_chunk(std::span<const std::byte> record, const FrameHeader& header, const GpuDecodePlan& plan, size_t c,
+                 std::span<std::byte> encoded, bool verify, const ErrorLocation& where);
+
+// Every chunk (TBB, in parallel), then the plans at plans_offset() when
+// `encoded` has room for them (staged_bytes()).
+void stage_frame(std::span<const std::byte> record, const FrameHeader& header, const GpuDecodePlan& plan,
+                 std::span<std::byte> encoded, bool verify, const ErrorLocation& where);
 
 // The CPU's reference for what the GPU decodes from a plan: particles
 // (8 bytes each) and the colour attribute, bit for bit what decode_chunk

@@ -22,6 +22,9 @@
 
 namespace sluice::render {
 
+// Where frames are decoded: Auto is the GPU where the file allows it.
+enum class DecodeSite { Auto, Cpu, Gpu };
+
 struct FeedUpdate {
   bool changed = false;      // a new frame was committed by this update()
   bool has_frame = false;    // some frame has been committed
@@ -34,7 +37,11 @@ class FrameFeed {
  public:
   // What a player that feeds a renderer decodes: only the colour attribute
   // (`color_attribute` < 0: none), into `staging` within its device budget.
-  static void configure(runtime::PlayerOptions& options, const StagingAllocator& staging, int color_attribute);
+  // Frames of a file the GPU decodes (io::gpu_decodable: 16-bit positions)
+  // stay encoded and are decoded by the GPU (Renderer::commit_encoded),
+  // unless `decode` says Cpu.
+  static void configure(runtime::PlayerOptions& options, const StagingAllocator& staging, int color_attribute,
+                        const io::FileHeader& file, DecodeSite decode = DecodeSite::Auto);
 
   // `color_attribute`: the attribute's index in the file header (-1: none);
   // the player must decode only that attribute (PipelineOptions::attributes).

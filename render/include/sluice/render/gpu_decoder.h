@@ -39,10 +39,11 @@ class GpuDecoder {
   GpuDecoder(const GpuDecoder&) = delete;
   GpuDecoder& operator=(const GpuDecoder&) = delete;
 
-  // Plans `header`'s chunks of `record` (see io::plan_gpu_decode: throws
-  // io::Error at `where`) and uploads the encoded area and the plan.
+  // Plans `header`'s chunks of `record` (io::plan_gpu_decode), stages them
+  // (io::stage_frame: checksums when `verify`, zstd planes inflated) and
+  // uploads the encoded area and the plan. Throws io::Error at `where`.
   void load(std::span<const std::byte> record, const io::FrameHeader& header, const io::FileHeader& file,
-            const io::GpuPlanOptions& options, const io::ErrorLocation& where);
+            const io::GpuPlanOptions& options, bool verify, const io::ErrorLocation& where);
   const io::GpuDecodePlan& plan() const;
 
   // Decodes the loaded frame `repeats` times; the GPU milliseconds of each

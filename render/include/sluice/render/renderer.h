@@ -42,6 +42,7 @@
 #include <vector>
 
 #include "sluice/io/error.h"
+#include "sluice/io/gpu_decode_plan.h"
 #include "sluice/render/camera.h"
 #include "sluice/render/context.h"
 #include "sluice/render/frame.h"
@@ -64,6 +65,8 @@ struct FrameStats {
   std::vector<PassTime> passes;
   double gpu_ms = 0;           // first to last timestamp of the frame
   double upload_ms = 0;        // GPU time of the copy of the frame drawn
+  double decode_ms = 0;        // GPU time of its decode (frames committed encoded; 0 otherwise)
+  uint32_t decode_errors = 0;  // its chunks whose packed planes the GPU found inconsistent
   // RendererOptions::classify_unlayered: what the classification this frame
   // ran (if it ran one: the first draw of a frame without layers) made of it.
   struct Classification {
@@ -89,6 +92,17 @@ struct DecodedFrameView {
   const runtime::FrameBuffers* buffers = nullptr;
   int color_stream = -1;     // index into buffers->attributes of the colour attribute; -1: none
   int color_attribute = -1;  // that attribute's index in the file header (for the chunk ranges)
+};
+
+// A frame the runtime kept encoded for the GPU decoder
+// (runtime::PipelineOptions::keep_encoded; runtime::FrameHandle has every
+// field). Borrowed for the call.
+struct EncodedFrameView {
+  const io::FrameHeader* header = nullptr;        // chunk table: counts, AABBs, attribute ranges
+  std::span<const uint64_t> chunk_first;          // first particle of each chunk
+  const runtime::FrameBuffers* buffers = nullptr; // particles: the staged area (io/gpu_decode_plan.h)
+  const io::GpuDecodePlan* plan = nullptr;
+  int color_attribute = -1;  // the attribute the plan decodes (file header index); -1: none
 };
 
 // A rectangle of the target in pixels (origin top left).
@@ -208,6 +222,15 @@ class Renderer {
   // untouched until upload_complete(ticket); otherwise they are copied through
   // the renderer's staging and may be reused when this returns.
   uint64_t commit_decoded(const DecodedFrameView& frame, const StagingAllocator* from);
+  // Submits the copy of a frame kept encoded (with `from`, the
+  // StagingAllocator that handed out frame.buffers, straight from them,
+  // which then stay untouched until upload_complete(ticket); otherwise
+  // through the renderer's staging) and its decode on the GPU
+  // (shaders/decode.comp): a compute submission to the graphics queue that
+  // waits for the copy. The ticket is the decode's. The one queue
+  // submission the renderer makes per frame on its own: the host must not
+  // use the graphics queue from another thread meanwhile.
+  uint64_t commit_encoded(const EncodedFrameView& frame, const StagingAllocator* from);
   // Whether the copy with this ticket has finished (no wait).
   bool upload_complete(uint64_t ticket) const;
   // Waits for the copy with this ticket (the transfer queue only).

@@ -28,8 +28,13 @@ struct FrameLayout {
   uint64_t particles = 0;
   uint32_t particle_stride = 8;    // decoded bytes per particle (io::decoded_particle_bytes)
   uint32_t attribute_streams = 0;  // uint16 streams of `particles` values each
+  // > 0: the frame stays encoded for a GPU decoder (PipelineOptions::
+  // keep_encoded): FrameBuffers::particles then holds these bytes, the
+  // staged area of io/gpu_decode_plan.h (payloads, inflated planes, chunk
+  // plans), and there are no attribute streams.
+  uint64_t encoded_bytes = 0;
 
-  uint64_t particle_bytes() const { return particles * particle_stride; }
+  uint64_t particle_bytes() const { return encoded_bytes > 0 ? encoded_bytes : particles * particle_stride; }
   uint64_t attribute_bytes() const { return particles * 2; }  // per stream
   uint64_t total_bytes() const { return particle_bytes() + attribute_streams * attribute_bytes(); }
 };

@@ -33,6 +33,7 @@
 #include <span>
 #include <vector>
 
+#include "sluice/io/gpu_decode_plan.h"
 #include "sluice/io/reader.h"
 #include "sluice/runtime/budget.h"
 #include "sluice/runtime/frame_allocator.h"
@@ -61,6 +62,15 @@ struct PipelineOptions {
   // skipped on disk (its payloads come last in the record). Frames without
   // layers are read whole whatever the set.
   io::LayerSet layers = io::LayerSet::particles();
+  // Keep frames encoded for a GPU decoder (io/gpu_decode_plan.h, the
+  // renderer's commit_encoded) instead of decoding them: the workers check
+  // each chunk's checksum, copy its payload into the frame's buffer and
+  // inflate its zstd planes there (nothing for files written for the GPU);
+  // the buffer ends with the chunk plans. Needs io::gpu_decodable(file)
+  // (the constructor throws io::Error otherwise). `attributes` is ignored:
+  // the plan decodes `encoded_color_attribute` (file index; -1: none).
+  bool keep_encoded = false;
+  int encoded_color_attribute = -1;
   BudgetOptions budget;
   const DeviceMemoryBudget* device_budget = nullptr;  // borrowed; null: no device limit
   uint32_t reevaluate_every = 32;                     // frames started between budget re-readings
@@ -140,6 +150,9 @@ class FrameHandle {
   std::span<const uint64_t> chunk_first() const;   // first particle of each chunk
   const FrameLayout& layout() const;
   const FrameBuffers& buffers() const;             // particles (io::decoded_particle_bytes each), attributes
+  // Frames kept encoded (PipelineOptions::keep_encoded): the plan of the
+  // staged area in buffers().particles; null otherwise.
+  const io::GpuDecodePlan* gpu_plan() const;
 
   void reset();
 

@@ -37,10 +37,12 @@ struct FrameFootprint {
 // `attribute_streams`: how many attribute streams are decoded per frame;
 // `allocator`, if given, says what its buffers really take (bytes_for);
 // `layers`: the layers read (a record's size counts whole: the index does not
-// say where its layers' payloads end).
+// say where its layers' payloads end); `encoded`: frames stay encoded for a
+// GPU decoder (their record, plus 2 bytes a particle for planes inflated on
+// the CPU and the chunk plans).
 FrameFootprint largest_frame(const io::ContainerReader& reader, size_t attribute_streams,
                              const FrameAllocator* allocator = nullptr,
-                             io::LayerSet layers = io::LayerSet::particles());
+                             io::LayerSet layers = io::LayerSet::particles(), bool encoded = false);
 
 struct BudgetOptions {
   uint64_t memory_cap = 0;       // user cap on host bytes (`--memory 8G`); 0: none

@@ -1,0 +1,20 @@
+#include "decode_option.h"
+
+namespace sluice::app {
+
+void add_decode_option(CLI::App& cmd, std::string& value) {
+  cmd.add_option("--decode", value,
+                 "Where frames are decoded: gpu (the file's bytes go to the GPU as they lie on disk and a compute\n"
+                 "pass decodes them; the CPU only checks checksums and inflates zstd planes), cpu (the CPU's\n"
+                 "decoders write particles into staging), or auto (gpu for files with 16-bit positions)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"auto", "cpu", "gpu"}));
+}
+
+render::DecodeSite decode_site(const std::string& value) {
+  if (value == "cpu") return render::DecodeSite::Cpu;
+  if (value == "gpu") return render::DecodeSite::Gpu;
+  return render::DecodeSite::Auto;
+}
+
+}  // namespace sluice::app

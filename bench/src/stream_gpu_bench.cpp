@@ -1,0 +1,204 @@
+// `sluice bench stream --gpu`: frames from the page cache into the
+// renderer's device buffers, decoded by the GPU (the pipeline keeps them
+// encoded) and, beside it, by the CPU's workers; the bounds measured in the
+// same run: reading the file from the page cache, copying host memory to
+// the device, and the GPU decoding a resident frame.
+#include <sys/resource.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <deque>
+#include <stdexcept>
+
+#include "bounds.h"
+#include "machine.h"
+#include "sluice/bench/stream_bench.h"
+#include "sluice/render/gpu_decoder.h"
+#include "sluice/render/renderer.h"
+#include "sluice/render/staging_allocator.h"
+#include "sluice/render/transfer_bound.h"
+#include "sluice/runtime/pipeline.h"
+#include "stream_slice.h"
+#include "table.h"
+
+namespace sluice::bench {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+// User + system CPU time of this process.
+double cpu_seconds() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return double(u.ru_utime.tv_sec + u.ru_stime.tv_sec) + 1e-6 * double(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
+}
+
+struct DevicePass {
+  double seconds = 0, cpu = 0;
+  uint64_t frames = 0;
+  uint64_t staged_bytes = 0;  // bytes copied to the device over the timed frames
+  std::string window;
+};
+
+struct DeviceSetup {
+  int decode_threads = 1, read_threads = 1;
+  uint64_t memory = 0;
+  int color = -1;  // attribute decoded with the positions (-1: none)
+};
+
+// Streams the slice round and round through a pipeline into a renderer's
+// device frame buffers for `min_seconds` (after a window of warm-up). Two
+// frames in flight on the GPU: a frame goes back to the pipeline once its
+// copy (and decode) is done.
+DevicePass stream_to_device(const io::ContainerReader& reader, const Slice& slice, render::Context& context,
+                            const DeviceSetup& setup, bool gpu_decode, double min_seconds) {
+  render::StagingAllocator staging(context);
+  render::Renderer renderer(context, render::scene_info(reader));
+  runtime::PipelineOptions o;
+  o.decode_threads = setup.decode_threads;
+  o.read_threads = setup.read_threads;
+  o.budget.memory_cap = setup.memory;
+  o.budget.max_frames = static_cast<uint32_t>(std::max<uint64_t>(2, slice.frames / 2));  // every frame comes through again
+  o.device_budget = staging.device_budget();
+  o.layers = slice.layers;
+  o.attributes = setup.color >= 0 ? std::vector<uint32_t>{uint32_t(setup.color)} : std::vector<uint32_t>{};
+  o.keep_encoded = gpu_decode;
+  o.encoded_color_attribute = setup.color;
+  runtime::Pipeline pipeline(reader, staging, o);
+  pipeline.restart({slice.frames, 0, 1, 1, runtime::EndMode::Loop});
+
+  std::deque<std::pair<runtime::FrameHandle, uint64_t>> flight;
+  uint64_t staged = 0;
+  auto consume = [&](uint64_t most, double seconds) {
+    const auto start = Clock::now();
+    uint64_t n = 0;
+    for (; n < most && (seconds <= 0 || seconds_since(start) < seconds); ++n) {
+      if (pipeline.wait_next().end) break;
+      runtime::FrameHandle h = pipeline.take();
+      if (h.failed()) throw io::Error(h.error()->where, h.error()->message);
+      uint64_t ticket = 0;
+      if (const io::GpuDecodePlan* plan = h.gpu_plan()) {
+        ticket = renderer.commit_encoded({&h.header(), h.chunk_first(), &h.buffers(), plan, setup.color}, &staging);
+        staged += plan->staged_bytes();
+      } else {
+        const int stream = setup.color >= 0 ? 0 : -1;
+        ticket = renderer.commit_decoded({&h.header(), h.chunk_first(), &h.buffers(), stream, setup.color}, &staging);
+        staged += h.header().particle_count * (8 + (setup.color >= 0 ? 2 : 0));
+      }
+      flight.emplace_back(std::move(h), ticket);
+      while (flight.size() > 2) {
+        renderer.wait_upload(flight.front().second);
+        flight.pop_front();
+      }
+    }
+    return n;
+  };
+  consume(pipeline.window(), 0);
+  DevicePass p;
+  staged = 0;
+  const double cpu0 = cpu_seconds();
+  const auto start = Clock::now();
+  p.frames = consume(UINT64_MAX, min_seconds);
+  for (auto& [handle, ticket] : flight) renderer.wait_upload(ticket);  // the last frames arrive too
+  p.seconds = seconds_since(start);
+  p.cpu = cpu_seconds() - cpu0;
+  p.staged_bytes = staged;
+  const runtime::PipelineStats stats = pipeline.stats();
+  p.window = std::to_string(stats.active_frames) + "/" + std::to_string(stats.window_frames);
+  flight.clear();
+  return p;
+}
+
+// The GPU decoding frame 0 of the slice, already resident: median ms of 7.
+struct DecodeAlone {
+  double ms = 0;
+  uint64_t particles = 0;
+  io::GpuDecodePlan plan;
+};
+DecodeAlone gpu_decode_alone(render::Context& context, const io::ContainerReader& reader, const Slice& slice, int color) {
+  const std::vector<std::byte> record = reader.read_record(0);
+  io::FrameHeader header = reader.parse_record(0, record);
+  io::keep_layers(header, slice.layers);
+  render::GpuDecoder decoder(context);
+  decoder.load(record, header, reader.header(), {.color_attribute = color}, true, reader.location(0));
+  (void)decoder.run(3);  // warm-up
+  std::vector<double> ms = decoder.run(7);
+  if (ms.empty()) throw std::runtime_error("the device has no timestamps: GPU decode alone cannot be timed");
+  std::sort(ms.begin(), ms.end());
+  return {ms[ms.size() / 2], header.particle_count, decoder.plan()};
+}
+
+std::string percent(double share) { return num(100 * share, 0) + "%"; }
+
+}  // namespace
+
+void run_stream_gpu_bench(const StreamBenchOptions& o) {
+  const io::ContainerReader reader(o.file);
+  if (reader.frame_count() == 0) throw io::Error({o.file}, "has no frames to stream");
+  if (!io::gpu_decodable(reader.header())) throw io::Error({o.file}, "has float32 positions: the GPU does not decode them");
+  render::ContextOptions co;
+  co.device = o.device;
+  render::Context context(co);
+  const runtime::ThreadSplit split = runtime::default_thread_split(core_count());
+  DeviceSetup setup;
+  setup.decode_threads = o.max_threads > 0 ? o.max_threads : split.decode;
+  setup.read_threads = o.read_threads > 0 ? o.read_threads : split.read;
+  setup.memory = o.memory ? o.memory : uint64_t(2) << 30;
+  setup.color = reader.header().attributes.empty() ? -1 : 0;
+  const io::LayerSet layers = o.surface ? io::LayerSet::surface() : io::LayerSet::particles();
+  const Slice slice = slice_of(reader, o.frames, static_cast<uint64_t>(0.4 * double(runtime::read_host_memory().available())), layers);
+  const double in = slice.in_per_frame();
+  const double particles = double(slice.particles) / double(slice.frames);
+
+  std::printf("sluice bench stream --gpu: %s%s\n", o.file.c_str(), o.surface ? " (surface and blobs)" : "");
+  std::printf("  %llu of %llu frames, %.2f M particles/frame, %.1f MB/frame read%s\n", (unsigned long long)slice.frames,
+              (unsigned long long)reader.frame_count(), particles / 1e6, in / 1e6,
+              setup.color >= 0 ? (", colour attribute '" + reader.header().attributes[0].name + "'").c_str() : "");
+  std::printf("machine: %s, %d cores; GPU: %s (%s); pipeline: %d workers, %d reading, memory cap %s GB\n", cpu_model().c_str(),
+              core_count(), context.device().name.c_str(), context.device().driver.c_str(), setup.decode_threads,
+              setup.read_threads, num(double(setup.memory) / (1 << 30), 1).c_str());
+
+  // 1. Bounds.
+  (void)sequential_read_gbps(o.file, slice.offset, slice.bytes, ReadMode::PageCache, 0, setup.read_threads);  // bring it in
+  const double cached =
+      *sequential_read_gbps(o.file, slice.offset, slice.bytes, ReadMode::PageCache, o.min_seconds, setup.read_threads) * 1e9;
+  const uint64_t copy_bytes = std::clamp<uint64_t>(uint64_t(4 * in), 64 << 20, 1024 << 20);
+  const double h2d = render::host_to_device_gbps(context, copy_bytes, 7) * 1e9;
+  const DecodeAlone alone = gpu_decode_alone(context, reader, slice, setup.color);
+  const double staged = double(alone.plan.staged_bytes());  // frame 0's, as the GPU path copies it
+  const double decoded = particles * (8 + (setup.color >= 0 ? 2 : 0));
+  Table bounds({"bound", "GB/s", "frames/s of this file", "what"});
+  bounds.row({"pread, page cache, " + std::to_string(setup.read_threads) + " threads", num(cached / 1e9, 2),
+              num(cached / in, 1), "file bytes read"});
+  bounds.row({"host -> device copy (transfer queue)", num(h2d / 1e9, 2), num(h2d / staged, 1) + " encoded, " +
+              num(h2d / decoded, 1) + " decoded", "bytes copied: encoded area, or decoded particles"});
+  bounds.row({"GPU decode alone, frame resident", num((staged / (alone.ms * 1e-3)) / 1e9, 1), num(1e3 / alone.ms, 1),
+              num(double(alone.particles) / (alone.ms * 1e-3) / 1e9, 1) + " G particles/s (" + num(alone.ms, 3) + " ms a frame)"});
+  bounds.print("Bounds, measured now");
+  std::printf("  frame 0's planes: %llu stored, %llu bit-packed, %llu zstd (inflated on the CPU)\n",
+              (unsigned long long)alone.plan.stored_planes, (unsigned long long)alone.plan.packed_planes,
+              (unsigned long long)alone.plan.zstd_planes);
+
+  // 2. The pipeline into device memory, GPU decode and CPU decode.
+  const double read_fps = cached / in;
+  Table passes({"decoded by", "frames/s", "M particles/s", "MB/frame copied", "window", "bound frames/s", "vs bound",
+                "limited by", "CPU ms/frame", "cores busy"});
+  for (const bool gpu : {true, false}) {
+    const DevicePass p = stream_to_device(reader, slice, context, setup, gpu, o.min_seconds);
+    const double fps = double(p.frames) / p.seconds;
+    const double per_frame = double(p.staged_bytes) / double(std::max<uint64_t>(p.frames, 1));
+    const double copy_fps = h2d / per_frame;
+    const double bound = std::min(read_fps, copy_fps);
+    passes.row({gpu ? "GPU (kept encoded)" : "CPU workers", num(fps, 1), num(fps * particles / 1e6, 1),
+                num(per_frame / 1e6, 1), p.window, num(bound, 1), percent(fps / bound),
+                read_fps < copy_fps ? "page-cache read" : "host -> device copy", num(1e3 * p.cpu / double(p.frames), 2),
+                num(p.cpu / p.seconds, 1)});
+  }
+  passes.print("Pipeline -> renderer device buffers, page cache, two frames in flight (bound: the slower of reading the "
+               "file and copying it to the device)");
+}
+
+}  // namespace sluice::bench
