@@ -29,6 +29,9 @@ using Clock = std::chrono::steady_clock;
 
 double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
+// What is being measured, on stderr (the tables go to stdout).
+void step(const char* what) { std::fprintf(stderr, "  measuring %s ...\n", what); }
+
 // User + system CPU time of this process.
 double cpu_seconds() {
   rusage u{};
@@ -162,11 +165,15 @@ void run_stream_gpu_bench(const StreamBenchOptions& o) {
               setup.read_threads, num(double(setup.memory) / (1 << 30), 1).c_str());
 
   // 1. Bounds.
+  std::fflush(stdout);
+  step("the page-cache read");
   (void)sequential_read_gbps(o.file, slice.offset, slice.bytes, ReadMode::PageCache, 0, setup.read_threads);  // bring it in
   const double cached =
       *sequential_read_gbps(o.file, slice.offset, slice.bytes, ReadMode::PageCache, o.min_seconds, setup.read_threads) * 1e9;
+  step("the host -> device copy");
   const uint64_t copy_bytes = std::clamp<uint64_t>(uint64_t(4 * in), 64 << 20, 1024 << 20);
   const double h2d = render::host_to_device_gbps(context, copy_bytes, 7) * 1e9;
+  step("the GPU decoding a resident frame");
   const DecodeAlone alone = gpu_decode_alone(context, reader, slice, setup.color);
   const double staged = double(alone.plan.staged_bytes());  // frame 0's, as the GPU path copies it
   const double decoded = particles * (8 + (setup.color >= 0 ? 2 : 0));
@@ -181,12 +188,14 @@ void run_stream_gpu_bench(const StreamBenchOptions& o) {
   std::printf("  frame 0's planes: %llu stored, %llu bit-packed, %llu zstd (inflated on the CPU)\n",
               (unsigned long long)alone.plan.stored_planes, (unsigned long long)alone.plan.packed_planes,
               (unsigned long long)alone.plan.zstd_planes);
+  std::fflush(stdout);
 
   // 2. The pipeline into device memory, GPU decode and CPU decode.
   const double read_fps = cached / in;
   Table passes({"decoded by", "frames/s", "M particles/s", "MB/frame copied", "window", "bound frames/s", "vs bound",
                 "limited by", "CPU ms/frame", "cores busy"});
   for (const bool gpu : {true, false}) {
+    step(gpu ? "the pipeline, GPU decoding" : "the pipeline, CPU decoding");
     const DevicePass p = stream_to_device(reader, slice, context, setup, gpu, o.min_seconds);
     const double fps = double(p.frames) / p.seconds;
     const double per_frame = double(p.staged_bytes) / double(std::max<uint64_t>(p.frames, 1));

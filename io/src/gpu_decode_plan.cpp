@@ -6,6 +6,7 @@
 #include <zstd.h>
 
 #include <cstring>
+#include <stdexcept>
 #include <string>
 
 #include "bytes.h"
@@ -62,6 +63,7 @@ GpuPlane packed_plane(std::span<const std::byte> record, const PlaneSource& s, u
   }
   const uint64_t packed_bytes = groups_of(n) * width;
   if (s.size - 1 < packed_bytes) throw Error(where, what + ": packed plane is shorter than its values");
+  if (n == 0 && s.size != 1) throw Error(where, what + ": an empty packed plane stores escapes");
   GpuPlane g;
   g.offset = uint32_t(s.at);
   g.width = width;
@@ -85,6 +87,7 @@ void plan_gpu_decode(std::span<const std::byte> record, const FrameHeader& heade
   plan.chunks.resize(header.chunks.size());
   plan.inflate.clear();
   plan.chunk_inflate.assign(header.chunks.size() + 1, 0);
+  plan.tile_chunk.clear();
   plan.record_bytes = 0;
   plan.inflated_bytes = 0;
   plan.stored_planes = plan.packed_planes = plan.zstd_planes = 0;
@@ -108,6 +111,8 @@ void plan_gpu_decode(std::span<const std::byte> record, const FrameHeader& heade
     g.first = uint32_t(first);
     g.count = uint32_t(n);
     g.with_attribute = attribute ? 1 : 0;
+    g.first_tile = uint32_t(plan.tile_chunk.size());
+    plan.tile_chunk.insert(plan.tile_chunk.end(), (n + kGpuTile - 1) / kGpuTile, uint32_t(c));
     const size_t colour = 8 + 2 * size_t(attribute ? options.color_attribute : 0);
     for (int k = 0; k < kGpuPlanes; ++k) {
       if (k >= 8 && !attribute) break;
@@ -178,9 +183,13 @@ void stage_frame(std::span<const std::byte> record, const FrameHeader& header, c
                  std::span<std::byte> encoded, bool verify, const ErrorLocation& where) {
   tbb::parallel_for(size_t(0), plan.chunks.size(),
                     [&](size_t c) { stage_chunk(record, header, plan, c, encoded, verify, where); });
-  if (encoded.size() >= plan.staged_bytes()) {
-    std::memcpy(encoded.data() + plan.plans_offset(), plan.chunks.data(), plan.chunks.size() * sizeof(GpuChunkPlan));
-  }
+  if (encoded.size() >= plan.staged_bytes()) write_tables(plan, encoded);
+}
+
+void write_tables(const GpuDecodePlan& plan, std::span<std::byte> staged) {
+  if (staged.size() < plan.staged_bytes()) throw std::invalid_argument("write_tables: the staged area is too small");
+  std::memcpy(staged.data() + plan.plans_offset(), plan.chunks.data(), plan.chunks.size() * sizeof(GpuChunkPlan));
+  std::memcpy(staged.data() + plan.tiles_offset(), plan.tile_chunk.data(), plan.tile_chunk.size() * 4);
 }
 
 namespace {

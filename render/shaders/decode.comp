@@ -1,11 +1,18 @@
 #version 460
 // GPU decode of Quantized16 chunks (io/gpu_decode_plan.h has the plan, io
-// codec.h the planes): one workgroup per chunk, in tiles of 8 particles per
-// thread. Per tile, each thread reads its 8 values of every plane (stored:
-// 8 bytes; packed: one group of `width` bytes, spread), a workgroup scan of
-// the escape codes found gives each thread its place in the planes' escape
-// lists, and a second scan of the Morton deltas' and attribute deltas' sums
-// gives each particle its code and value. Writes what io::decode_chunk
+// codec.h the planes): one workgroup per tile of 2048 particles of a chunk,
+// 8 per thread, in two passes.
+//
+// Pass 0 sums each tile's planes: the escape codes it holds and the sum of
+// its other bytes, per plane. Pass 1 gives each tile what came before it in
+// its chunk: the escapes used earlier (the earlier tiles' codes) and each
+// plane's byte sum so far (their other bytes, plus the first escapes of the
+// list), hence the Morton code and the attribute value before the tile: a
+// delta is the sum of its bytes shifted, so sums of deltas are sums of
+// plane sums. Then each thread reads its 8 values of every plane (stored: 8
+// bytes; packed: one group of `width` bytes, spread), a workgroup scan of
+// the escape codes found gives it its place in the escape lists, and a scan
+// of the deltas' sums gives each particle its code and value. Writes what io::decode_chunk
 // writes, bit for bit: x | y << 16 | z << 32 | lod << 48 per particle and
 // the colour attribute's 16-bit values.
 //
@@ -17,6 +24,8 @@
 #extension GL_EXT_buffer_reference_uvec2 : require
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 #extension GL_EXT_shader_16bit_storage : require
+#extension GL_KHR_shader_subgroup_basic : require
+#extension GL_KHR_shader_subgroup_arithmetic : require
 
 const uint T = 256;        // threads
 const uint PER = 8;        // particles per thread: one packed group
@@ -35,7 +44,7 @@ struct ChunkPlan {
   uint first;
   uint count;
   uint with_attribute;
-  uint pad;
+  uint first_tile;
   Plane planes[PLANES];
 };
 
@@ -44,6 +53,9 @@ layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer Pl
 layout(buffer_reference, std430, buffer_reference_align = 8) writeonly buffer Particles { uvec2 v[]; };
 layout(buffer_reference, std430, buffer_reference_align = 2) writeonly buffer Values { uint16_t v[]; };
 layout(buffer_reference, std430, buffer_reference_align = 4) writeonly buffer Errors { uint v[]; };
+layout(buffer_reference, std430, buffer_reference_align = 4) readonly buffer TileChunks { uint v[]; };
+// Per tile (pass 0): escape codes per plane, then the sum of the other bytes per plane.
+layout(buffer_reference, std430, buffer_reference_align = 4) buffer TileSums { uint v[]; };
 
 layout(push_constant) uniform Push {
   uvec2 encoded;    // Words: the encoded area (record, inflated planes, padding)
@@ -51,8 +63,40 @@ layout(push_constant) uniform Push {
   uvec2 particles;  // Particles: the frame's decoded particles
   uvec2 values;     // Values: the colour attribute (chunks with attribute = 1)
   uvec2 errors;     // Errors: one word per chunk, written only on error
-  uint chunk_base;  // the plan of workgroup g is chunk_base + g
+  uvec2 tile_chunks;  // TileChunks: each tile's chunk
+  uvec2 tile_sums;    // TileSums: 2 x PLANES words per tile
+  uint tile_base;   // workgroup g decodes tile tile_base + g
+  uint pass;        // 0: sum the tiles; 1: decode them
 } pc;
+
+shared uint shared_counts[PLANES];
+shared uint shared_sums[PLANES];
+shared uint shared_escapes[PLANES];
+
+// Adds v over the workgroup into *slot (zeroed and read by the caller
+// around barriers).
+void add_counts(uint p, uint v) {
+  const uint s = subgroupAdd(v);
+  if (subgroupElect()) atomicAdd(shared_counts[p], s);
+}
+void add_sums(uint p, uint v) {
+  const uint s = subgroupAdd(v);
+  if (subgroupElect()) atomicAdd(shared_sums[p], s);
+}
+void add_escapes(uint p, uint v) {
+  const uint s = subgroupAdd(v);
+  if (subgroupElect()) atomicAdd(shared_escapes[p], s);
+}
+
+void clear_shared() {
+  const uint t = gl_LocalInvocationID.x;
+  if (t < PLANES) {
+    shared_counts[t] = 0;
+    shared_sums[t] = 0;
+    shared_escapes[t] = 0;
+  }
+  barrier();
+}
 
 shared u64vec4 scan_ping[T];
 shared u64vec4 scan_pong[T];
@@ -131,69 +175,119 @@ uint64_t resolve_escapes(Words w, Plane p, uint64_t v, uint m, uint k) {
 
 uint field16(uint64_t v, uint f) { return uint(v >> (16 * f)) & 0xffffu; }
 
+// The sum of the first m bytes of v that are not `code` (code > 255: all).
+uint byte_sum(uint64_t v, uint m, uint code) {
+  uint sum = 0;
+  for (uint j = 0; j < m; ++j) {
+    const uint b = uint(v >> (8 * j)) & 0xffu;
+    sum += b != code ? b : 0u;
+  }
+  return sum;
+}
+
+uint escape_code(Plane p) { return p.width == 0 ? 256u : (1u << p.width) - 1u; }
+
 void main() {
-  const uint chunk = pc.chunk_base + gl_WorkGroupID.x;
+  const uint tile = pc.tile_base + gl_WorkGroupID.x;
+  const uint chunk = TileChunks(pc.tile_chunks).v[tile];
   const ChunkPlan c = Plans(pc.plans).c[chunk];
   Words w = Words(pc.encoded);
-  Particles out_particles = Particles(pc.particles);
-  Values out_values = Values(pc.values);
+  TileSums sums = TileSums(pc.tile_sums);
   const uint t = gl_LocalInvocationID.x;
   const uint planes = c.with_attribute != 0 ? PLANES : 8;
+  const uint base = (tile - c.first_tile) * TILE;
+  const uint i0 = base + t * PER;
+  const uint m = i0 < c.count ? min(PER, c.count - i0) : 0;
+  clear_shared();
 
-  uint escapes_before[PLANES];  // escapes used by earlier tiles, per plane
-  for (uint p = 0; p < PLANES; ++p) escapes_before[p] = 0;
-  uint64_t code_before = 0;     // the Morton code before this tile
-  uint value_before = 0;        // the attribute value before this tile
-
-  for (uint base = 0; base < c.count; base += TILE) {
-    const uint i0 = base + t * PER;
-    const uint m = i0 < c.count ? min(PER, c.count - i0) : 0;
-
-    // Raw values and escape codes per plane; counts packed 16 bits apart.
-    uint64_t raw[PLANES];
-    u64vec4 codes = u64vec4(0);
-    for (uint p = 0; p < PLANES; ++p) {
-      uint found = 0;
-      raw[p] = p < planes ? raw_values(w, c.planes[p], i0, m, found) : 0;
-      codes[p / 4] |= uint64_t(found) << (16 * (p % 4));
-    }
-    u64vec4 codes_total;
-    const u64vec4 codes_before = exclusive_scan(codes, codes_total);
+  if (pc.pass == 0) {
     for (uint p = 0; p < planes; ++p) {
-      const uint k = escapes_before[p] + field16(codes_before[p / 4], p % 4);
-      raw[p] = resolve_escapes(w, c.planes[p], raw[p], m, k);
-      escapes_before[p] += field16(codes_total[p / 4], p % 4);
+      uint found = 0;
+      const uint64_t v = raw_values(w, c.planes[p], i0, m, found);
+      add_counts(p, found);
+      add_sums(p, byte_sum(v, m, escape_code(c.planes[p])));
     }
-
-    // Local running sums of the 8 deltas, then the workgroup's.
-    uint64_t codes_local[PER];
-    uint values_local[PER];
-    uint64_t code_sum = 0;
-    uint value_sum = 0;
-    for (uint j = 0; j < PER; ++j) {
-      uint64_t delta = 0;
-      for (uint b = 0; b < 6; ++b) delta |= ((raw[b] >> (8 * j)) & 0xffUL) << (8 * b);
-      code_sum += delta;
-      codes_local[j] = code_sum;
-      value_sum += uint((raw[8] >> (8 * j)) & 0xffUL) | (uint((raw[9] >> (8 * j)) & 0xffUL) << 8);
-      values_local[j] = value_sum;
+    barrier();
+    if (t < PLANES) {
+      sums.v[tile * 2 * PLANES + t] = shared_counts[t];
+      sums.v[tile * 2 * PLANES + PLANES + t] = shared_sums[t];
     }
-    u64vec4 sums_total;
-    const u64vec4 sums_before = exclusive_scan(u64vec4(code_sum, value_sum, 0, 0), sums_total);
-    for (uint j = 0; j < m; ++j) {
-      const uint64_t code = (code_before + sums_before.x + codes_local[j]) & 0xffffffffffffUL;
-      const uint lod = uint((raw[6] >> (8 * j)) & 0xffUL) | (uint((raw[7] >> (8 * j)) & 0xffUL) << 8);
-      const uint x = compact3(code), y = compact3(code >> 1), z = compact3(code >> 2);
-      out_particles.v[c.first + i0 + j] = uvec2(x | (y << 16), z | (lod << 16));
-      if (c.with_attribute != 0) {
-        out_values.v[c.first + i0 + j] = uint16_t((value_before + uint(sums_before.y) + values_local[j]) & 0xffffu);
-      }
-    }
-    code_before += sums_total.x;
-    value_before += uint(sums_total.y);
+    return;
   }
 
-  if (t == 0) {
+  // What the chunk's earlier tiles hold: escape codes and other bytes.
+  for (uint s = c.first_tile + t; s < tile; s += T) {
+    for (uint p = 0; p < planes; ++p) {
+      add_counts(p, sums.v[s * 2 * PLANES + p]);
+      add_sums(p, sums.v[s * 2 * PLANES + PLANES + p]);
+    }
+  }
+  barrier();
+  uint escapes_before[PLANES];  // escapes used by earlier tiles, per plane
+  for (uint p = 0; p < PLANES; ++p) escapes_before[p] = shared_counts[p];
+  // ... and the bytes of those escapes: the first escapes_before of each list.
+  for (uint p = 0; p < planes; ++p) {
+    const Plane plane = c.planes[p];
+    if (plane.width == 0) continue;
+    uint sum = 0;
+    for (uint i = t; i < min(escapes_before[p], plane.count); i += T) sum += load_byte(w, plane.escapes + i);
+    add_escapes(p, sum);
+  }
+  barrier();
+  uint64_t code_before = 0;  // the Morton code before this tile
+  uint value_before = 0;     // the attribute value before this tile
+  for (uint p = 0; p < planes; ++p) {
+    const uint bytes = shared_sums[p] + shared_escapes[p];
+    if (p < 6) code_before += uint64_t(bytes) << (8 * p);
+    if (p >= 8) value_before += bytes << (8 * (p - 8));
+  }
+
+  Particles out_particles = Particles(pc.particles);
+  Values out_values = Values(pc.values);
+
+  // Raw values and escape codes per plane; counts packed 16 bits apart.
+  uint64_t raw[PLANES];
+  u64vec4 codes = u64vec4(0);
+  for (uint p = 0; p < PLANES; ++p) {
+    uint found = 0;
+    raw[p] = p < planes ? raw_values(w, c.planes[p], i0, m, found) : 0;
+    codes[p / 4] |= uint64_t(found) << (16 * (p % 4));
+  }
+  u64vec4 codes_total;
+  const u64vec4 codes_before = exclusive_scan(codes, codes_total);
+  for (uint p = 0; p < planes; ++p) {
+    const uint k = escapes_before[p] + field16(codes_before[p / 4], p % 4);
+    raw[p] = resolve_escapes(w, c.planes[p], raw[p], m, k);
+    escapes_before[p] += field16(codes_total[p / 4], p % 4);
+  }
+
+  // Local running sums of the 8 deltas, then the workgroup's.
+  uint64_t codes_local[PER];
+  uint values_local[PER];
+  uint64_t code_sum = 0;
+  uint value_sum = 0;
+  for (uint j = 0; j < PER; ++j) {
+    uint64_t delta = 0;
+    for (uint b = 0; b < 6; ++b) delta |= ((raw[b] >> (8 * j)) & 0xffUL) << (8 * b);
+    code_sum += delta;
+    codes_local[j] = code_sum;
+    value_sum += uint((raw[8] >> (8 * j)) & 0xffUL) | (uint((raw[9] >> (8 * j)) & 0xffUL) << 8);
+    values_local[j] = value_sum;
+  }
+  u64vec4 sums_total;
+  const u64vec4 sums_before = exclusive_scan(u64vec4(code_sum, value_sum, 0, 0), sums_total);
+  for (uint j = 0; j < m; ++j) {
+    const uint64_t code = (code_before + sums_before.x + codes_local[j]) & 0xffffffffffffUL;
+    const uint lod = uint((raw[6] >> (8 * j)) & 0xffUL) | (uint((raw[7] >> (8 * j)) & 0xffUL) << 8);
+    const uint x = compact3(code), y = compact3(code >> 1), z = compact3(code >> 2);
+    out_particles.v[c.first + i0 + j] = uvec2(x | (y << 16), z | (lod << 16));
+    if (c.with_attribute != 0) {
+      out_values.v[c.first + i0 + j] = uint16_t((value_before + uint(sums_before.y) + values_local[j]) & 0xffffu);
+    }
+  }
+
+  // The chunk's last tile: every escape code must have had its escape.
+  if (t == 0 && base + TILE >= c.count) {
     bool bad = false;
     for (uint p = 0; p < planes; ++p) bad = bad || (c.planes[p].width != 0 && escapes_before[p] != c.planes[p].count);
     if (bad) Errors(pc.errors).v[chunk] = 1;

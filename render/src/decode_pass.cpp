@@ -14,11 +14,11 @@ using Access = vk::AccessFlagBits2;
 
 // Mirrors Push in decode.comp.
 struct DecodePush {
-  uint64_t encoded, plans, particles, attribute, errors;
-  uint32_t chunk_base;
-  uint32_t pad;
+  uint64_t encoded, plans, particles, attribute, errors, tile_chunks, tile_sums;
+  uint32_t tile_base;
+  uint32_t pass;
 };
-static_assert(sizeof(DecodePush) == 48);
+static_assert(sizeof(DecodePush) == 64);
 
 constexpr uint32_t kMaxGroups = 65535;  // the guaranteed maxComputeWorkGroupCount[0]
 
@@ -38,13 +38,17 @@ void DecodePass::barrier(vk::CommandBuffer cmd) {
 }
 
 void DecodePass::record(vk::CommandBuffer cmd, const DecodeRun& run) const {
-  if (run.chunks == 0) return;
+  if (run.tiles == 0) return;
   cmd.bindPipeline(vk::PipelineBindPoint::eCompute, *pipeline_);
-  DecodePush push{run.encoded, run.plans, run.particles, run.attribute, run.errors, 0, 0};
-  for (uint32_t base = 0; base < run.chunks; base += kMaxGroups) {
-    push.chunk_base = base;
-    cmd.pushConstants<DecodePush>(*layout_, vk::ShaderStageFlagBits::eCompute, 0, push);
-    cmd.dispatch(std::min(kMaxGroups, run.chunks - base), 1, 1);
+  DecodePush push{run.encoded, run.plans, run.particles, run.attribute, run.errors, run.tile_chunks, run.tile_sums, 0, 0};
+  for (uint32_t pass = 0; pass < 2; ++pass) {  // sum the tiles, then decode them
+    if (pass == 1) barrier(cmd);
+    push.pass = pass;
+    for (uint32_t base = 0; base < run.tiles; base += kMaxGroups) {
+      push.tile_base = base;
+      cmd.pushConstants<DecodePush>(*layout_, vk::ShaderStageFlagBits::eCompute, 0, push);
+      cmd.dispatch(std::min(kMaxGroups, run.tiles - base), 1, 1);
+    }
   }
 }
 

@@ -14,11 +14,15 @@ struct DecodeRun {
   vk::DeviceAddress particles = 0;  // 8 bytes per particle of the frame
   vk::DeviceAddress attribute = 0;  // 2 bytes per particle (chunks whose plan has attribute = 1)
   vk::DeviceAddress errors = 0;     // a word per chunk, set to 1 on error (the caller zeroes it)
-  uint32_t chunks = 0;
+  vk::DeviceAddress tile_chunks = 0;  // each tile's chunk (io::GpuDecodePlan::tile_chunk)
+  vk::DeviceAddress tile_sums = 0;    // scratch: kTileSumBytes per tile
+  uint32_t tiles = 0;
 };
 
 class DecodePass {
  public:
+  static constexpr uint64_t kTileSumBytes = 2 * 10 * 4;  // per tile: codes and byte sums of 10 planes
+
   explicit DecodePass(Context::Impl& ctx);
   // Records the dispatches; the caller orders the inputs' writes before and
   // the outputs' reads after (barrier()).

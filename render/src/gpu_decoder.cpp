@@ -25,7 +25,7 @@ struct GpuDecoder::Impl {
   io::GpuDecodePlan plan;
   uint64_t particles = 0;
   bool attribute = false;
-  Buffer upload, encoded, decoded, values, errors, readback;  // grown to the largest frame seen
+  Buffer upload, encoded, tile_sums, decoded, values, errors, readback;  // grown to the largest frame seen
 
   explicit Impl(Context::Impl& c) : ctx(c), pass(c) {
     const auto families = ctx.physical.getQueueFamilyProperties();
@@ -54,6 +54,8 @@ void GpuDecoder::load(std::span<const std::byte> record, const io::FrameHeader& 
   grow_buffer(r.ctx, r.encoded, bytes, kDeviceUsage, MemoryKind::DeviceLocal);
   grow_buffer(r.ctx, r.decoded, std::max<uint64_t>(r.particles * 8, 16), kDeviceUsage, MemoryKind::DeviceLocal);
   grow_buffer(r.ctx, r.values, std::max<uint64_t>(r.particles * 2, 16), kDeviceUsage, MemoryKind::DeviceLocal);
+  grow_buffer(r.ctx, r.tile_sums, std::max<uint64_t>(r.plan.tile_chunk.size() * DecodePass::kTileSumBytes, 16), kDeviceUsage,
+              MemoryKind::DeviceLocal);
   grow_buffer(r.ctx, r.errors, std::max<uint64_t>(r.plan.chunks.size() * 4, 16), kDeviceUsage, MemoryKind::DeviceLocal);
   r.ctx.run_once([&](vk::CommandBuffer cmd) { cmd.copyBuffer(*r.upload.buffer, *r.encoded.buffer, vk::BufferCopy(0, 0, bytes)); });
 }
@@ -63,8 +65,14 @@ std::vector<double> GpuDecoder::run(int repeats) {
   std::vector<double> ms;
   const uint32_t stamps = uint32_t(2 * std::max(repeats, 1));
   if (r.timestamps) r.stamps = vk::raii::QueryPool(r.ctx.device, vk::QueryPoolCreateInfo({}, vk::QueryType::eTimestamp, stamps));
-  const DecodeRun run{r.encoded.address, r.encoded.address + r.plan.plans_offset(), r.decoded.address, r.values.address, r.errors.address,
-                      uint32_t(r.plan.chunks.size())};
+  const DecodeRun run{r.encoded.address,
+                      r.encoded.address + r.plan.plans_offset(),
+                      r.decoded.address,
+                      r.values.address,
+                      r.errors.address,
+                      r.encoded.address + r.plan.tiles_offset(),
+                      r.tile_sums.address,
+                      uint32_t(r.plan.tile_chunk.size())};
   r.ctx.run_once([&](vk::CommandBuffer cmd) {
     if (r.timestamps) cmd.resetQueryPool(*r.stamps, 0, stamps);
     for (int k = 0; k < std::max(repeats, 1); ++k) {

@@ -58,7 +58,7 @@ struct FrameSet {
   Buffer surface;                  // frame_band.h: validity word, a bit per particle
   // Frames committed encoded (commit_encoded): the staged area, the decode's
   // error words (host-visible), its command buffer and timestamps.
-  Buffer encoded, decode_errors;
+  Buffer encoded, decode_errors, decode_tiles;
   vk::raii::CommandBuffer decode{nullptr};
   vk::raii::QueryPool decode_stamps{nullptr};
   bool decoded_on_gpu = false;

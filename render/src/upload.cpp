@@ -186,8 +186,16 @@ uint64_t submit_decode(Renderer::Impl& r, FrameSet& set, const io::GpuDecodePlan
   cmd.begin(vk::CommandBufferBeginInfo(vk::CommandBufferUsageFlagBits::eOneTimeSubmit));
   cmd.writeTimestamp2(Stage::eAllCommands, *set.decode_stamps, 0);
   DecodePass::barrier(cmd);
-  const DecodeRun run{set.encoded.address, set.encoded.address + plan.plans_offset(), set.particles.address,
-                      set.attributes.address, set.decode_errors.address, chunks};
+  r.ensure(set.decode_tiles, std::max<uint64_t>(plan.tile_chunk.size() * DecodePass::kTileSumBytes, 16), kDeviceUsage,
+           MemoryKind::DeviceLocal);
+  const DecodeRun run{set.encoded.address,
+                      set.encoded.address + plan.plans_offset(),
+                      set.particles.address,
+                      set.attributes.address,
+                      set.decode_errors.address,
+                      set.encoded.address + plan.tiles_offset(),
+                      set.decode_tiles.address,
+                      uint32_t(plan.tile_chunk.size())};
   r.decode_pass->record(cmd, run);
   DecodePass::barrier(cmd);
   cmd.writeTimestamp2(Stage::eAllCommands, *set.decode_stamps, 1);

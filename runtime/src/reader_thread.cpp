@@ -373,10 +373,7 @@ void PipelineCore::prepare_decode(ReaderState& rs, Slot& slot) {
               slot.buffers.attributes.size() >= attribute_streams_;
   for (uint32_t a = 0; fits && a < attribute_streams_; ++a) fits = slot.buffers.attributes[a].size() >= h.particle_count;
   if (!fits) throw io::Error(reader_.location(slot.frame), "the frame allocator returned buffers smaller than the frame");
-  if (options_.keep_encoded) {
-    std::memcpy(slot.buffers.particles.data() + slot.plan.plans_offset(), slot.plan.chunks.data(),
-                slot.plan.chunks.size() * sizeof(io::GpuChunkPlan));
-  }
+  if (options_.keep_encoded) io::write_tables(slot.plan, slot.buffers.particles);
   slot.attribute_targets.assign(stream_of_attribute_.size(), nullptr);
   for (size_t a = 0; a < stream_of_attribute_.size(); ++a) {
     if (stream_of_attribute_[a] != ~0u) slot.attribute_targets[a] = slot.buffers.attributes[stream_of_attribute_[a]].data();

@@ -33,6 +33,8 @@ namespace sluice::io {
 // LOD value's 2 bytes, the colour attribute's 2 delta bytes.
 inline constexpr int kGpuPlanes = 10;
 inline constexpr uint64_t kGpuReadPadding = 16;
+// Particles per workgroup of the decoder (its tiles: 256 threads x 8).
+inline constexpr uint32_t kGpuTile = 2048;
 
 // One plane as the GPU reads it (std430, 16 bytes). Mirrored in decode.comp.
 struct GpuPlane {
@@ -47,7 +49,7 @@ struct GpuChunkPlan {
   uint32_t first = 0;      // index of the chunk's first particle in the frame
   uint32_t count = 0;      // particles
   uint32_t with_attribute = 0;  // 1: planes 8 and 9 hold the colour attribute; 0: none is written
-  uint32_t pad = 0;
+  uint32_t first_tile = 0;      // the chunk's tiles (kGpuTile particles each) are first_tile, first_tile + 1, ...
   GpuPlane planes[kGpuPlanes];
 };
 static_assert(sizeof(GpuChunkPlan) == 176);
@@ -70,10 +72,13 @@ struct GpuDecodePlan {
   uint64_t inflated_offset = 0;      // record_bytes rounded up to 16
   uint64_t inflated_bytes = 0;       // the CPU-inflated planes
   uint64_t encoded_bytes() const { return inflated_offset + inflated_bytes + kGpuReadPadding; }
-  // Where the chunk plans go when they travel with the encoded area (one
-  // buffer: the area, then the plans), and that buffer's size.
+  std::vector<uint32_t> tile_chunk;  // per tile of the frame: its chunk
+  // Where the chunk plans and the tiles' chunks go when they travel with
+  // the encoded area (one buffer: the area, the plans, the tile table), and
+  // that buffer's size.
   uint64_t plans_offset() const { return (encoded_bytes() + 15) & ~uint64_t(15); }
-  uint64_t staged_bytes() const { return plans_offset() + chunks.size() * sizeof(GpuChunkPlan); }
+  uint64_t tiles_offset() const { return plans_offset() + chunks.size() * sizeof(GpuChunkPlan); }
+  uint64_t staged_bytes() const { return tiles_offset() + tile_chunk.size() * 4; }
   // Planes by how they reach the GPU (statistics, bench).
   uint64_t stored_planes = 0, packed_planes = 0, zstd_planes = 0;
 };
@@ -104,10 +109,14 @@ void plan_gpu_decode(std::span<const std::byte> record, const FrameHeader& heade
 void stage_chunk(std::span<const std::byte> record, const FrameHeader& header, const GpuDecodePlan& plan, size_t c,
                  std::span<std::byte> encoded, bool verify, const ErrorLocation& where);
 
-// Every chunk (TBB, in parallel), then the plans at plans_offset() when
-// `encoded` has room for them (staged_bytes()).
+// Every chunk (TBB, in parallel), then the plans and the tile table
+// (write_tables) when `encoded` has room for them (staged_bytes()).
 void stage_frame(std::span<const std::byte> record, const FrameHeader& header, const GpuDecodePlan& plan,
                  std::span<std::byte> encoded, bool verify, const ErrorLocation& where);
+
+// Writes the chunk plans and the tile table at their offsets of `staged`
+// (staged_bytes() bytes).
+void write_tables(const GpuDecodePlan& plan, std::span<std::byte> staged);
 
 // The CPU's reference for what the GPU decodes from a plan: particles
 // (8 bytes each) and the colour attribute, bit for bit what decode_chunk
