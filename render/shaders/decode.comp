@@ -4,12 +4,12 @@
 // 8 per thread, in two passes.
 //
 // Pass 0 sums each tile's planes: the escape codes it holds and the sum of
-// its other bytes, per plane. Pass 1 gives each tile what came before it in
-// its chunk: the escapes used earlier (the earlier tiles' codes) and each
-// plane's byte sum so far (their other bytes, plus the first escapes of the
-// list), hence the Morton code and the attribute value before the tile: a
-// delta is the sum of its bytes shifted, so sums of deltas are sums of
-// plane sums. Then each thread reads its 8 values of every plane (stored: 8
+// its other bytes, per plane. Pass 1 sums each tile's own escapes: the
+// codes of the chunk's earlier tiles say where they start in the list.
+// Pass 2 gives each tile what came before it in its chunk: the escapes used
+// earlier and each plane's byte sum so far, hence the Morton code and the
+// attribute value before the tile (a delta is the sum of its bytes
+// shifted, so sums of deltas are sums of plane sums). Then each thread reads its 8 values of every plane (stored: 8
 // bytes; packed: one group of `width` bytes, spread), a workgroup scan of
 // the escape codes found gives it its place in the escape lists, and a scan
 // of the deltas' sums gives each particle its code and value. Writes what io::decode_chunk
@@ -54,7 +54,8 @@ layout(buffer_reference, std430, buffer_reference_align = 8) writeonly buffer Pa
 layout(buffer_reference, std430, buffer_reference_align = 2) writeonly buffer Values { uint16_t v[]; };
 layout(buffer_reference, std430, buffer_reference_align = 4) writeonly buffer Errors { uint v[]; };
 layout(buffer_reference, std430, buffer_reference_align = 4) readonly buffer TileChunks { uint v[]; };
-// Per tile (pass 0): escape codes per plane, then the sum of the other bytes per plane.
+// Per tile, PLANES words each: escape codes, the sum of the other bytes
+// (pass 0), the sum of its escapes (pass 1).
 layout(buffer_reference, std430, buffer_reference_align = 4) buffer TileSums { uint v[]; };
 
 layout(push_constant) uniform Push {
@@ -66,7 +67,7 @@ layout(push_constant) uniform Push {
   uvec2 tile_chunks;  // TileChunks: each tile's chunk
   uvec2 tile_sums;    // TileSums: 2 x PLANES words per tile
   uint tile_base;   // workgroup g decodes tile tile_base + g
-  uint pass;        // 0: sum the tiles; 1: decode them
+  uint pass;        // 0: sum the tiles; 1: sum their escapes; 2: decode them
 } pc;
 
 shared uint shared_counts[PLANES];
@@ -209,31 +210,44 @@ void main() {
     }
     barrier();
     if (t < PLANES) {
-      sums.v[tile * 2 * PLANES + t] = shared_counts[t];
-      sums.v[tile * 2 * PLANES + PLANES + t] = shared_sums[t];
+      sums.v[tile * 3 * PLANES + t] = shared_counts[t];
+      sums.v[tile * 3 * PLANES + PLANES + t] = shared_sums[t];
     }
     return;
   }
 
-  // What the chunk's earlier tiles hold: escape codes and other bytes.
+  // What the chunk's earlier tiles hold: escape codes, other bytes and
+  // (after pass 1) their escapes' bytes.
   for (uint s = c.first_tile + t; s < tile; s += T) {
     for (uint p = 0; p < planes; ++p) {
-      add_counts(p, sums.v[s * 2 * PLANES + p]);
-      add_sums(p, sums.v[s * 2 * PLANES + PLANES + p]);
+      add_counts(p, sums.v[s * 3 * PLANES + p]);
+      if (pc.pass == 2) {
+        add_sums(p, sums.v[s * 3 * PLANES + PLANES + p]);
+        add_escapes(p, sums.v[s * 3 * PLANES + 2 * PLANES + p]);
+      }
     }
   }
   barrier();
   uint escapes_before[PLANES];  // escapes used by earlier tiles, per plane
   for (uint p = 0; p < PLANES; ++p) escapes_before[p] = shared_counts[p];
-  // ... and the bytes of those escapes: the first escapes_before of each list.
-  for (uint p = 0; p < planes; ++p) {
-    const Plane plane = c.planes[p];
-    if (plane.width == 0) continue;
-    uint sum = 0;
-    for (uint i = t; i < min(escapes_before[p], plane.count); i += T) sum += load_byte(w, plane.escapes + i);
-    add_escapes(p, sum);
+
+  if (pc.pass == 1) {  // this tile's escapes: the next `codes` of each list
+    barrier();
+    if (t < PLANES) shared_escapes[t] = 0;
+    barrier();
+    for (uint p = 0; p < planes; ++p) {
+      const Plane plane = c.planes[p];
+      if (plane.width == 0) continue;
+      const uint end = min(escapes_before[p] + sums.v[tile * 3 * PLANES + p], plane.count);
+      uint sum = 0;
+      for (uint i = escapes_before[p] + t; i < end; i += T) sum += load_byte(w, plane.escapes + i);
+      add_escapes(p, sum);
+    }
+    barrier();
+    if (t < PLANES) sums.v[tile * 3 * PLANES + 2 * PLANES + t] = shared_escapes[t];
+    return;
   }
-  barrier();
+
   uint64_t code_before = 0;  // the Morton code before this tile
   uint value_before = 0;     // the attribute value before this tile
   for (uint p = 0; p < planes; ++p) {

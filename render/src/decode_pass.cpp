@@ -41,8 +41,8 @@ void DecodePass::record(vk::CommandBuffer cmd, const DecodeRun& run) const {
   if (run.tiles == 0) return;
   cmd.bindPipeline(vk::PipelineBindPoint::eCompute, *pipeline_);
   DecodePush push{run.encoded, run.plans, run.particles, run.attribute, run.errors, run.tile_chunks, run.tile_sums, 0, 0};
-  for (uint32_t pass = 0; pass < 2; ++pass) {  // sum the tiles, then decode them
-    if (pass == 1) barrier(cmd);
+  for (uint32_t pass = 0; pass < 3; ++pass) {  // sum the tiles, sum their escapes, decode them
+    if (pass > 0) barrier(cmd);
     push.pass = pass;
     for (uint32_t base = 0; base < run.tiles; base += kMaxGroups) {
       push.tile_base = base;

@@ -21,7 +21,7 @@ struct DecodeRun {
 
 class DecodePass {
  public:
-  static constexpr uint64_t kTileSumBytes = 2 * 10 * 4;  // per tile: codes and byte sums of 10 planes
+  static constexpr uint64_t kTileSumBytes = 3 * 10 * 4;  // per tile: codes, byte sums, escape sums of 10 planes
 
   explicit DecodePass(Context::Impl& ctx);
   // Records the dispatches; the caller orders the inputs' writes before and

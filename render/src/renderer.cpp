@@ -290,6 +290,7 @@ Renderer::Renderer(Context& context, const SceneInfo& scene, const RendererOptio
   vk::SemaphoreCreateInfo sem;
   sem.pNext = &timeline;
   r.upload_done = vk::raii::Semaphore(device, sem);
+  r.copy_done = vk::raii::Semaphore(device, sem);
   const auto families = r.ctx.physical.getQueueFamilyProperties();
   r.timestamps_valid = r.ctx.graphics_family < families.size() && families[r.ctx.graphics_family].timestampValidBits > 0;
   r.timestamps = vk::raii::QueryPool(device, vk::QueryPoolCreateInfo({}, vk::QueryType::eTimestamp, n * kStampsPerSlot));

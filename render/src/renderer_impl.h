@@ -129,8 +129,11 @@ struct Renderer::Impl {
   int staged = -1;             // set stage_frame() filled
   size_t stride = 8;
   std::unique_ptr<FrameBand> band;  // with options.classify_unlayered and a known particle size
-  vk::raii::Semaphore upload_done{nullptr};  // timeline: value = uploads submitted
+  vk::raii::Semaphore upload_done{nullptr};  // timeline: value = uploads submitted (copies, or decodes after them)
   uint64_t upload_value = 0;
+  uint64_t last_decode_ticket = 0;           // the upload value the last decode signals (graphics queue)
+  vk::raii::Semaphore copy_done{nullptr};    // timeline of the copies of frames committed encoded
+  uint64_t copy_value = 0;
 
   // Objects the GPU may still use, destroyed frames_in_flight record() calls later.
   struct Retired {

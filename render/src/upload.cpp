@@ -167,7 +167,7 @@ struct EncodedSource {
 // Records and submits the decode of `set`'s staged area into its particle
 // and attribute buffers on the graphics queue, after the copy (timeline
 // value `copied`); returns the value the decode signals.
-uint64_t submit_decode(Renderer::Impl& r, FrameSet& set, const io::GpuDecodePlan& plan, uint64_t copied) {
+uint64_t submit_decode(Renderer::Impl& r, FrameSet& set, const io::GpuDecodePlan& plan, uint64_t copy_value) {
   using Stage = vk::PipelineStageFlagBits2;
   if (!r.decode_pass) {
     r.decode_pass = std::make_unique<DecodePass>(r.ctx);
@@ -202,13 +202,13 @@ uint64_t submit_decode(Renderer::Impl& r, FrameSet& set, const io::GpuDecodePlan
   cmd.end();
   std::memset(set.decode_errors.mapped, 0, size_t(chunks) * 4);  // the set is not in use: no GPU work reads it
   const vk::CommandBufferSubmitInfo cb(cmd);
-  const vk::SemaphoreSubmitInfo wait(*r.upload_done, copied, Stage::eComputeShader);
-  const vk::SemaphoreSubmitInfo signal(*r.upload_done, copied + 1, Stage::eAllCommands);
+  const vk::SemaphoreSubmitInfo wait(*r.copy_done, copy_value, Stage::eComputeShader);
+  const vk::SemaphoreSubmitInfo signal(*r.upload_done, r.upload_value + 1, Stage::eAllCommands);
   r.ctx.graphics_queue.submit2(vk::SubmitInfo2({}, wait, cb, signal));
   set.decoded_on_gpu = true;
   set.decode_ms = -1;
   set.decode_errors_found = 0;
-  return copied + 1;
+  return r.upload_value + 1;
 }
 
 // Submits the copy of `set`'s frame (particle_count, chunk_count,
@@ -284,12 +284,29 @@ uint64_t upload_frame(Renderer::Impl& r, FrameSet& set, UploadSource particles_s
   }
   cmd.writeTimestamp2(vk::PipelineStageFlagBits2::eAllCommands, *set.stamps, 1);
   cmd.end();
-  ++r.upload_value;
   const vk::CommandBufferSubmitInfo cb(cmd);
-  const vk::SemaphoreSubmitInfo signal(*r.upload_done, r.upload_value, vk::PipelineStageFlagBits2::eAllCommands);
-  r.ctx.transfer_queue.submit2(vk::SubmitInfo2({}, {}, cb, signal));
   set.decoded_on_gpu = false;
-  if (encoded) r.upload_value = submit_decode(r, set, *encoded->plan, r.upload_value);
+  if (encoded) {
+    // The copy signals its own timeline; the decode, on the graphics
+    // queue, waits for it and signals the upload timeline (in order).
+    ++r.copy_value;
+    const vk::SemaphoreSubmitInfo copied(*r.copy_done, r.copy_value, vk::PipelineStageFlagBits2::eAllCommands);
+    r.ctx.transfer_queue.submit2(vk::SubmitInfo2({}, {}, cb, copied));
+    r.upload_value = submit_decode(r, set, *encoded->plan, r.copy_value);
+    r.last_decode_ticket = r.upload_value;
+  } else {
+    // A timeline's values must rise in the order they are signalled: after
+    // a decode's signal on the graphics queue, the transfer queue's waits
+    // for it first.
+    const vk::SemaphoreSubmitInfo after_decode(*r.upload_done, r.last_decode_ticket, vk::PipelineStageFlagBits2::eAllCommands);
+    const bool order = r.last_decode_ticket > 0 && r.last_decode_ticket == r.upload_value;
+    ++r.upload_value;
+    const vk::SemaphoreSubmitInfo signal(*r.upload_done, r.upload_value, vk::PipelineStageFlagBits2::eAllCommands);
+    r.ctx.transfer_queue.submit2(
+        vk::SubmitInfo2({}, order ? vk::ArrayProxyNoTemporaries<const vk::SemaphoreSubmitInfo>(after_decode)
+                                  : vk::ArrayProxyNoTemporaries<const vk::SemaphoreSubmitInfo>(),
+                        cb, signal));
+  }
   set.ticket = r.upload_value;
   set.upload_ms = -1;
   return set.ticket;
