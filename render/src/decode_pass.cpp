@@ -37,7 +37,7 @@ void DecodePass::barrier(vk::CommandBuffer cmd) {
                      Access::eIndirectCommandRead);
 }
 
-void DecodePass::record(vk::CommandBuffer cmd, const DecodeRun& run) const {
+void DecodePass::record(vk::CommandBuffer cmd, const DecodeRun& run, const std::function<void(uint32_t)>& after) const {
   if (run.tiles == 0) return;
   cmd.bindPipeline(vk::PipelineBindPoint::eCompute, *pipeline_);
   DecodePush push{run.encoded, run.plans, run.particles, run.attribute, run.errors, run.tile_chunks, run.tile_sums, 0, 0};
@@ -49,6 +49,7 @@ void DecodePass::record(vk::CommandBuffer cmd, const DecodeRun& run) const {
       cmd.pushConstants<DecodePush>(*layout_, vk::ShaderStageFlagBits::eCompute, 0, push);
       cmd.dispatch(std::min(kMaxGroups, run.tiles - base), 1, 1);
     }
+    if (after) after(pass);
   }
 }
 

@@ -4,6 +4,8 @@
 // and benchmarks; the renderer feeds it frames committed encoded.
 #pragma once
 
+#include <functional>
+
 #include "vk_common.h"
 
 namespace sluice::render {
@@ -26,7 +28,8 @@ class DecodePass {
   explicit DecodePass(Context::Impl& ctx);
   // Records the dispatches; the caller orders the inputs' writes before and
   // the outputs' reads after (barrier()).
-  void record(vk::CommandBuffer cmd, const DecodeRun& run) const;
+  // `after(pass)` runs after each pass's dispatches (0, 1, 2), for timestamps.
+  void record(vk::CommandBuffer cmd, const DecodeRun& run, const std::function<void(uint32_t)>& after = {}) const;
   // Orders transfers and compute before later compute, transfers, vertex reads.
   static void barrier(vk::CommandBuffer cmd);
 

@@ -25,6 +25,7 @@ struct GpuDecoder::Impl {
   io::GpuDecodePlan plan;
   uint64_t particles = 0;
   bool attribute = false;
+  std::vector<double> pass_ms;  // the last run's passes, mean over its repeats
   Buffer upload, encoded, tile_sums, decoded, values, errors, readback;  // grown to the largest frame seen
 
   explicit Impl(Context::Impl& c) : ctx(c), pass(c) {
@@ -36,6 +37,7 @@ struct GpuDecoder::Impl {
 GpuDecoder::GpuDecoder(Context& context) : impl_(std::make_unique<Impl>(context_impl(context))) {}
 GpuDecoder::~GpuDecoder() = default;
 const io::GpuDecodePlan& GpuDecoder::plan() const { return impl_->plan; }
+std::vector<double> GpuDecoder::last_pass_ms() const { return impl_->pass_ms; }
 
 void GpuDecoder::load(std::span<const std::byte> record, const io::FrameHeader& header, const io::FileHeader& file,
                       const io::GpuPlanOptions& options, bool verify, const io::ErrorLocation& where) {
@@ -63,7 +65,7 @@ void GpuDecoder::load(std::span<const std::byte> record, const io::FrameHeader& 
 std::vector<double> GpuDecoder::run(int repeats) {
   Impl& r = *impl_;
   std::vector<double> ms;
-  const uint32_t stamps = uint32_t(2 * std::max(repeats, 1));
+  const uint32_t stamps = uint32_t(4 * std::max(repeats, 1));
   if (r.timestamps) r.stamps = vk::raii::QueryPool(r.ctx.device, vk::QueryPoolCreateInfo({}, vk::QueryType::eTimestamp, stamps));
   const DecodeRun run{r.encoded.address,
                       r.encoded.address + r.plan.plans_offset(),
@@ -78,9 +80,10 @@ std::vector<double> GpuDecoder::run(int repeats) {
     for (int k = 0; k < std::max(repeats, 1); ++k) {
       cmd.fillBuffer(*r.errors.buffer, 0, VK_WHOLE_SIZE, 0);
       DecodePass::barrier(cmd);
-      if (r.timestamps) cmd.writeTimestamp2(Stage::eAllCommands, *r.stamps, uint32_t(2 * k));
-      r.pass.record(cmd, run);
-      if (r.timestamps) cmd.writeTimestamp2(Stage::eAllCommands, *r.stamps, uint32_t(2 * k + 1));
+      if (r.timestamps) cmd.writeTimestamp2(Stage::eAllCommands, *r.stamps, uint32_t(4 * k));
+      r.pass.record(cmd, run, [&](uint32_t pass) {
+        if (r.timestamps) cmd.writeTimestamp2(Stage::eAllCommands, *r.stamps, uint32_t(4 * k + 1 + pass));
+      });
       DecodePass::barrier(cmd);
     }
   });
@@ -89,7 +92,11 @@ std::vector<double> GpuDecoder::run(int repeats) {
     if ((*r.ctx.device).getQueryPoolResults(*r.stamps, 0, stamps, t.size() * 8, t.data(), 8,
                                             vk::QueryResultFlagBits::e64) == vk::Result::eSuccess) {
       const double to_ms = r.ctx.properties.limits.timestampPeriod * 1e-6;
-      for (uint32_t k = 0; k + 1 < stamps; k += 2) ms.push_back(double(t[k + 1] - t[k]) * to_ms);
+      r.pass_ms.assign(3, 0.0);
+      for (uint32_t k = 0; k + 3 < stamps; k += 4) {
+        ms.push_back(double(t[k + 3] - t[k]) * to_ms);
+        for (uint32_t p = 0; p < 3; ++p) r.pass_ms[p] += double(t[k + 1 + p] - t[k + p]) * to_ms / (stamps / 4);
+      }
     }
   }
   return ms;

@@ -362,7 +362,7 @@ void PipelineCore::prepare_decode(ReaderState& rs, Slot& slot) {
   if (options_.keep_encoded) {  // the tables are read here; the workers stage the payloads
     io::plan_gpu_decode(slot.record_bytes, h, reader_.header(), {.color_attribute = options_.encoded_color_attribute},
                         slot.plan, slot.where);
-    slot.layout.encoded_bytes = slot.plan.staged_bytes();
+    slot.layout.encoded_bytes = encoded_block_bytes(slot.plan.staged_bytes());
   }
   slot.buffers = allocator_.allocate(slot.layout);
   slot.has_buffers = true;

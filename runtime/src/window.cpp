@@ -30,7 +30,7 @@ FrameFootprint largest_frame(const io::ContainerReader& reader, size_t attribute
   for (const io::FrameIndexEntry& e : reader.index().frames) {
     layout.particles = e.count_in(layers);
     // An estimate: the real plan is known once the record's tables are read.
-    if (encoded) layout.encoded_bytes = e.bytes + 2 * layout.particles + 176 * uint64_t(e.chunk_count) + 64;
+    if (encoded) layout.encoded_bytes = encoded_block_bytes(e.bytes + 2 * layout.particles + 176 * uint64_t(e.chunk_count) + 64);
     const uint64_t bytes = allocator ? allocator->bytes_for(layout) : layout.total_bytes();
     if (bytes > f.decoded_bytes) f.chunks = std::max<uint32_t>(1, e.chunk_count);
     f.decoded_bytes = std::max(f.decoded_bytes, bytes);

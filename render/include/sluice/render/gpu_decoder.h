@@ -50,6 +50,10 @@ class GpuDecoder {
   // run (timestamps; empty without them).
   std::vector<double> run(int repeats = 1);
 
+  // The last run's three passes (tile sums, escape sums, decode), mean
+  // milliseconds over its repeats; empty without timestamps.
+  std::vector<double> last_pass_ms() const;
+
   // The last run's output.
   GpuDecodeOutput read() const;
 

@@ -44,17 +44,12 @@ class BlockPool {
       if ((*it)->capacity >= need && (fits == kept_.end() || (*it)->capacity < (*fits)->capacity)) fits = it;
     }
     Block* block = nullptr;
-    uint64_t capacity = need;
     if (fits != kept_.end()) {
       block = *fits;
       kept_.erase(fits);
       kept_bytes_.fetch_sub(block->capacity, std::memory_order_relaxed);
     } else {
       if (!kept_.empty()) {  // give one kept block back first: the count does not grow
-        // Frames of varying size (encoded frames, sequences whose particle
-        // count changes): with headroom the next slightly larger frame
-        // still fits, instead of a fresh allocation per frame.
-        capacity = need + need / 8;
         block = kept_.back();
         kept_.pop_back();
         kept_bytes_.fetch_sub(block->capacity, std::memory_order_relaxed);
@@ -66,13 +61,13 @@ class BlockPool {
         block = blocks_.back().get();
       }
       try {
-        block->memory = make(capacity);
+        block->memory = make(need);
       } catch (...) {
         kept_.push_back(block);
         throw;
       }
-      block->capacity = capacity;
-      account(static_cast<int64_t>(capacity));
+      block->capacity = need;
+      account(static_cast<int64_t>(need));
       allocations_.fetch_add(1, std::memory_order_relaxed);
     }
     block->in_use = true;

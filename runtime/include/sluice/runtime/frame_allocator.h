@@ -39,6 +39,16 @@ struct FrameLayout {
   uint64_t total_bytes() const { return particle_bytes() + attribute_streams * attribute_bytes(); }
 };
 
+// The bytes to ask for an encoded frame of `staged` bytes: rounded up to a
+// step of at most 1/16 of it, so frames of slightly different sizes share a
+// kept block instead of each replacing it (the allocator keeps its rule of
+// never holding more than the blocks asked for).
+inline uint64_t encoded_block_bytes(uint64_t staged) {
+  uint64_t step = 4096;
+  while (step * 16 <= staged) step *= 2;
+  return (staged + step - 1) / step * step;
+}
+
 // The buffers of one frame. Memory is owned by the allocator.
 struct FrameBuffers {
   std::span<std::byte> particles;               // >= layout.particle_bytes(), 16-byte aligned
