@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Runs on the GPU machine (see bench/device/README.md): every benchmark the
 # issues ask GPU-machine figures for, in one call. Results go to $OUT.
-#   bash bench/device/run.sh [io] [import] [layers] [band] [render] [stream] [split] [codec] [huge] [embed] [compare] [live] [stereo] [xrsize] [firsthour] [streamcmp] [gpudecode]   (default: io render stream)
+#   bash bench/device/run.sh [io] [import] [layers] [band] [render] [stream] [split] [codec] [huge] [embed] [compare] [live] [stereo] [xrsize] [firsthour] [streamcmp] [gpudecode] [gpuquick]   (default: io render stream)
 set -uo pipefail
 OUT=${OUT:-/tmp/out}
 mkdir -p "$OUT" /tmp/s
@@ -190,6 +190,13 @@ for stage in $stages; do
         --window 32 --memory 48G --size 1920x1080
       run $S play --headless --gpu /tmp/synth10m_24.sluice --loop --seconds 12 --fps 1000 --display-hz 1000 \
         --window 32 --memory 48G --size 3840x2160
+      ;;
+    gpuquick)  # the GPU decoder alone and per pass, on a few frames (quick iterations on the kernel)
+      [[ -x .gpu/sluice_gpu_decode_tests ]] && run ./.gpu/sluice_gpu_decode_tests --gtest_brief=1 --gtest_filter=-*Bundled*
+      run $S synth -n 10M --frames 4 -o /tmp/q10m.sluice --force -q --gpu-decodable
+      run $S bench stream --gpu /tmp/q10m.sluice --memory 16G
+      run $S synth -n 100M --frames 2 -o /tmp/q100m.sluice --force -q --gpu-decodable
+      run $S bench stream --gpu /tmp/q100m.sluice --memory 32G
       ;;
     gpudecode)  # frames decoded on the GPU (issue 13): the decoder's tests, the pipeline into device memory
       [[ -x .gpu/sluice_gpu_decode_tests ]] && run ./.gpu/sluice_gpu_decode_tests --gtest_brief=1 --gtest_filter=-*Bundled*
