@@ -56,6 +56,8 @@ struct DeviceSetup {
 // device frame buffers for `min_seconds` (after a window of warm-up). Two
 // frames in flight on the GPU: a frame goes back to the pipeline once its
 // copy (and decode) is done.
+constexpr size_t kInFlight = 2;  // frames handed to the renderer and not yet waited for
+
 DevicePass stream_to_device(const io::ContainerReader& reader, const Slice& slice, render::Context& context,
                             const DeviceSetup& setup, bool gpu_decode, double min_seconds) {
   render::StagingAllocator staging(context);
@@ -64,7 +66,9 @@ DevicePass stream_to_device(const io::ContainerReader& reader, const Slice& slic
   o.decode_threads = setup.decode_threads;
   o.read_threads = setup.read_threads;
   o.budget.memory_cap = setup.memory;
-  o.budget.max_frames = static_cast<uint32_t>(std::max<uint64_t>(2, slice.frames / 2));  // every frame comes through again
+  // Every frame comes through again; at least one more than the frames in
+  // flight, or the pipeline has no slot left for the frame awaited.
+  o.budget.max_frames = static_cast<uint32_t>(std::max<uint64_t>(kInFlight + 1, slice.frames / 2));
   o.device_budget = staging.device_budget();
   o.layers = slice.layers;
   o.attributes = setup.color >= 0 ? std::vector<uint32_t>{uint32_t(setup.color)} : std::vector<uint32_t>{};
@@ -92,7 +96,7 @@ DevicePass stream_to_device(const io::ContainerReader& reader, const Slice& slic
         staged += h.header().particle_count * (8 + (setup.color >= 0 ? 2 : 0));
       }
       flight.emplace_back(std::move(h), ticket);
-      while (flight.size() > 2) {
+      while (flight.size() > kInFlight) {
         renderer.wait_upload(flight.front().second);
         flight.pop_front();
       }
