@@ -1,14 +1,20 @@
 // Fuzzes one chunk's payload through decode_chunk: the plane table, zstd
 // frames, bit-packed planes with their escapes, stored planes, and the
-// unfilters. Any io::Error is a correct answer; a crash, a sanitizer report
-// or a read or write outside the chunk's buffers is a bug.
+// unfilters; then through the GPU decoder's CPU side (plan_gpu_decode,
+// stage_frame) and its reference decode (decode_plan_on_cpu, what the
+// kernel computes). Any io::Error is a correct answer; a crash, a sanitizer
+// report or a read or write outside the chunk's buffers is a bug, and so is
+// a plan the CPU accepts whose decode differs from decode_chunk's.
 #include <cstdint>
+#include <cstdlib>
+#include <cstring>
 #include <vector>
 
 #include "bytes.h"
 #include "fuzz_chunk.h"
 #include "sluice/io/codec.h"
 #include "sluice/io/error.h"
+#include "sluice/io/gpu_decode_plan.h"
 
 using namespace sluice;
 
@@ -35,8 +41,29 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   std::vector<uint16_t*> attribute_ptrs;
   for (auto& a : attributes) attribute_ptrs.push_back(a.data());
   thread_local io::DecodeScratch scratch;
+  bool decoded = false;
   try {
     io::decode_chunk(record, chunk, header, {particles, attribute_ptrs}, scratch, {"fuzz.sluice", 0, 0});
+    decoded = true;
+  } catch (const io::Error&) {
+  }
+
+  io::FrameHeader frame;
+  frame.particle_count = setup.particles;
+  frame.frame_bytes = record.size();
+  frame.chunks.push_back(chunk);
+  const int color = setup.attributes > 0 ? 0 : -1;
+  io::GpuDecodePlan plan;
+  try {
+    io::plan_gpu_decode(record, frame, header, {.color_attribute = color}, plan, {"fuzz.sluice", 0, 0});
+    std::vector<std::byte> staged(plan.staged_bytes());
+    io::stage_frame(record, frame, plan, staged, true, {"fuzz.sluice", 0, 0});
+    std::vector<uint64_t> gpu_particles(setup.particles);
+    std::vector<uint16_t> gpu_attribute(setup.particles);
+    io::decode_plan_on_cpu(staged, plan, gpu_particles, gpu_attribute);
+    // A chunk both decoders accept decodes to the same particles.
+    if (decoded && std::memcmp(gpu_particles.data(), particles.data(), particles.size()) != 0) std::abort();
+    if (decoded && color == 0 && gpu_attribute != attributes[0]) std::abort();
   } catch (const io::Error&) {
   }
   return 0;

@@ -79,6 +79,9 @@ class OffscreenRenderer {
   void commit_decoded(const DecodedFrameView& frame, const StagingAllocator* from) {
     renderer.wait_upload(renderer.commit_decoded(frame, from));
   }
+  void commit_encoded(const EncodedFrameView& frame, const StagingAllocator* from) {
+    renderer.wait_upload(renderer.commit_encoded(frame, from));
+  }
   FrameStaging stage_frame(uint64_t particles, uint32_t chunks) { return renderer.stage_frame(particles, chunks); }
   void commit_frame() { renderer.wait_upload(renderer.commit_frame()); }
   void set_environment(const Image& image) { renderer.set_environment(image); }

@@ -77,14 +77,17 @@ Rendered draw(testing::OffscreenRenderer& r, const SceneInfo& scene) {
 }
 
 // Renders every frame through a pipeline over `allocator`, handing
-// `from` (the allocator again when it is a StagingAllocator) to commit_decoded.
+// `from` (the allocator again when it is a StagingAllocator) to
+// commit_decoded, or with `encoded` to commit_encoded (the GPU decodes).
 std::vector<Rendered> streamed(const io::ContainerReader& reader, runtime::FrameAllocator& allocator,
-                               const StagingAllocator* from) {
+                               const StagingAllocator* from, bool encoded = false) {
   const SceneInfo scene = scene_info(reader);
   testing::OffscreenRenderer r(context(), scene, 160, 120);
   runtime::PipelineOptions po;
   po.decode_threads = 2;
   po.attributes = std::vector<uint32_t>{0};
+  po.keep_encoded = encoded;
+  po.encoded_color_attribute = 0;
   runtime::Pipeline pipeline(reader, allocator, po);
   pipeline.restart({reader.frame_count(), 0, 1, 1, runtime::EndMode::Stop});
   std::vector<Rendered> out;
@@ -94,7 +97,12 @@ std::vector<Rendered> streamed(const io::ContainerReader& reader, runtime::Frame
     runtime::FrameHandle h = pipeline.take();
     EXPECT_FALSE(h.failed()) << (h.failed() ? h.error()->text() : "");
     if (h.failed()) break;
-    r.commit_decoded({&h.header(), h.chunk_first(), &h.buffers(), 0, 0}, from);
+    EXPECT_EQ(h.gpu_plan() != nullptr, encoded);
+    if (encoded && h.gpu_plan() != nullptr) {
+      r.commit_encoded({&h.header(), h.chunk_first(), &h.buffers(), h.gpu_plan(), 0}, from);
+    } else {
+      r.commit_decoded({&h.header(), h.chunk_first(), &h.buffers(), 0, 0}, from);
+    }
     out.push_back(draw(r, scene));
   }
   return out;
@@ -150,6 +158,25 @@ TEST_F(StreamedUpload, FromHostMemoryMatchesLoadFrame) {
   const std::vector<Rendered> expected = reference(reader);
   runtime::HostFrameAllocator host;
   expect_same(streamed(reader, host, nullptr), expected);
+}
+
+// Kept encoded (the file's zstd planes inflated by the workers, the rest
+// as read) and decoded on the GPU: the same pictures.
+TEST_F(StreamedUpload, EncodedFromStagingMatchesLoadFrame) {
+  ValidationGuard guard;
+  const io::ContainerReader reader(path_);
+  const std::vector<Rendered> expected = reference(reader);
+  StagingAllocator staging(context());
+  expect_same(streamed(reader, staging, &staging, true), expected);
+  EXPECT_EQ(staging.fallback_allocations(), 0u);
+}
+
+TEST_F(StreamedUpload, EncodedFromHostMemoryMatchesLoadFrame) {
+  ValidationGuard guard;
+  const io::ContainerReader reader(path_);
+  const std::vector<Rendered> expected = reference(reader);
+  runtime::HostFrameAllocator host;
+  expect_same(streamed(reader, host, nullptr, true), expected);
 }
 
 }  // namespace

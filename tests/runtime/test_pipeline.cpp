@@ -5,10 +5,12 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <cstring>
 #include <memory>
 #include <random>
 
 #include "runtime_test_util.h"
+#include "sluice/io/gpu_decode_plan.h"
 #include "sluice/io/lod.h"
 #include "sluice/io/writer.h"
 #include "sluice/runtime/pipeline.h"
@@ -226,6 +228,42 @@ TEST_F(PipelineTest, DecodesOnlyTheAttributesAskedFor) {
 
   o.attributes = std::vector<uint32_t>{1};
   EXPECT_THROW(Pipeline(reader, allocator, o), io::Error);
+}
+
+// Kept encoded for a GPU decoder: the staged area, decoded from its plan
+// (io::decode_plan_on_cpu, the kernels' reference), is the frame the
+// workers decode otherwise, bit for bit.
+TEST_F(PipelineTest, KeptEncodedFramesDecodeToTheSameParticles) {
+  const io::ContainerReader reader(*path_);
+  ASSERT_TRUE(io::gpu_decodable(reader.header()));
+  HostFrameAllocator decoded_memory, encoded_memory;
+  PipelineOptions o = options();
+  o.attributes = std::vector<uint32_t>{0};
+  Pipeline decoded(reader, decoded_memory, o);
+  o.keep_encoded = true;
+  o.encoded_color_attribute = 0;
+  Pipeline encoded(reader, encoded_memory, o);
+  const PlaybackSchedule s{reader.frame_count(), 0, 1, 1, EndMode::Stop};
+  decoded.restart(s);
+  encoded.restart(s);
+  for (uint64_t f = 0; f < reader.frame_count(); ++f) {
+    ASSERT_EQ(decoded.wait_next().status, EntryStatus::Ready);
+    ASSERT_EQ(encoded.wait_next().status, EntryStatus::Ready);
+    const FrameHandle d = decoded.take(), e = encoded.take();
+    ASSERT_EQ(d.gpu_plan(), nullptr);
+    const io::GpuDecodePlan* plan = e.gpu_plan();
+    ASSERT_NE(plan, nullptr) << "frame " << f;
+    EXPECT_TRUE(e.buffers().attributes.empty());
+    ASSERT_GE(e.buffers().particles.size(), plan->staged_bytes());
+    const uint64_t n = d.layout().particles;
+    std::vector<uint64_t> particles(n);
+    std::vector<uint16_t> attribute(n);
+    io::decode_plan_on_cpu(e.buffers().particles.first(plan->staged_bytes()), *plan, particles, attribute);
+    EXPECT_EQ(std::memcmp(particles.data(), d.buffers().particles.data(), n * 8), 0) << "frame " << f;
+    EXPECT_EQ(std::memcmp(attribute.data(), d.buffers().attributes[0].data(), n * 2), 0) << "frame " << f;
+  }
+  EXPECT_TRUE(encoded.wait_next().end);
+  EXPECT_EQ(encoded.stats().frames_failed, 0u);
 }
 
 TEST_F(PipelineTest, ReadsPiecesOfARecordInParallel) {
