@@ -66,6 +66,14 @@ std::string missing_features(const vk::raii::PhysicalDevice& pd, bool presentati
   if (!f13.maintenance4) return "no maintenance4";
   if (!f12.hostQueryReset) return "no hostQueryReset";
   if (!props.limits.timestampComputeAndGraphics) return "no timestamps on graphics/compute queues";
+  {  // the GPU decoder's workgroup sums (decode.comp); Vulkan 1.1 guarantees only basic subgroup operations
+    const auto subgroup = pd.getProperties2<vk::PhysicalDeviceProperties2, vk::PhysicalDeviceSubgroupProperties>()
+                              .get<vk::PhysicalDeviceSubgroupProperties>();
+    if (!(subgroup.supportedStages & vk::ShaderStageFlagBits::eCompute) ||
+        !(subgroup.supportedOperations & vk::SubgroupFeatureFlagBits::eArithmetic)) {
+      return "no subgroup arithmetic in compute shaders";
+    }
+  }
   if (presentation && !has_extension(pd.enumerateDeviceExtensionProperties(), VK_KHR_SWAPCHAIN_EXTENSION_NAME)) {
     return "no VK_KHR_swapchain";
   }
