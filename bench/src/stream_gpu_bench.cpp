@@ -3,7 +3,10 @@
 // encoded) and, beside it, by the CPU's workers; the bounds measured in the
 // same run: reading the file from the page cache, copying host memory to
 // the device, and the GPU decoding a resident frame.
+#include <fcntl.h>
+#include <sys/mman.h>
 #include <sys/resource.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
@@ -143,6 +146,29 @@ DecodeAlone gpu_decode_alone(render::Context& context, const io::ContainerReader
   return {ms[ms.size() / 2], decoder.last_pass_ms(), header.particle_count, decoder.plan()};
 }
 
+// The host -> device copy straight from the file's page-cache pages: a
+// read-only mapping of its first `bytes` imported as device-readable memory.
+render::ImportedCopy copy_from_mapping(render::Context& context, const std::string& path, uint64_t bytes) {
+  const uint64_t alignment = render::import_alignment(context);
+  if (alignment == 0) return {false, "the device has no VK_EXT_external_memory_host", 0};
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) return {false, "cannot open the file", 0};
+  const off_t size = ::lseek(fd, 0, SEEK_END);
+  bytes = std::min<uint64_t>(bytes, uint64_t(std::max<off_t>(size, 0))) / alignment * alignment;
+  render::ImportedCopy out{false, "the file is smaller than one import granule", 0};
+  if (bytes > 0) {
+    void* mapped = ::mmap(nullptr, bytes, PROT_READ, MAP_SHARED | MAP_POPULATE, fd, 0);
+    if (mapped == MAP_FAILED) {
+      out.refusal = "mmap failed";
+    } else {
+      out = render::imported_host_copy_gbps(context, mapped, bytes, 7);
+      ::munmap(mapped, bytes);
+    }
+  }
+  ::close(fd);
+  return out;
+}
+
 std::string percent(double share) { return num(100 * share, 0) + "%"; }
 
 }  // namespace
@@ -182,6 +208,8 @@ void run_stream_gpu_bench(const StreamBenchOptions& o) {
   step("the host -> device copy");
   const uint64_t copy_bytes = std::clamp<uint64_t>(uint64_t(4 * in), 64 << 20, 1024 << 20);
   const double h2d = render::host_to_device_gbps(context, copy_bytes, 7) * 1e9;
+  step("the copy from the file's mapping, imported");
+  const render::ImportedCopy imported = copy_from_mapping(context, o.file, copy_bytes);
   step("the GPU decoding a resident frame");
   const DecodeAlone alone = gpu_decode_alone(context, reader, slice, setup.color);
   const double staged = double(alone.plan.staged_bytes());  // frame 0's, as the GPU path copies it
@@ -191,6 +219,10 @@ void run_stream_gpu_bench(const StreamBenchOptions& o) {
               num(cached / in, 1), "file bytes read"});
   bounds.row({"host -> device copy (transfer queue)", num(h2d / 1e9, 2), num(h2d / staged, 1) + " encoded, " +
               num(h2d / decoded, 1) + " decoded", "bytes copied: encoded area, or decoded particles"});
+  bounds.row({"host -> device copy from the file's mapping", imported.imported ? num(imported.gbps, 2) : "-",
+              imported.imported ? num(imported.gbps * 1e9 / staged, 1) + " encoded" : "-",
+              imported.imported ? "page-cache pages imported (VK_EXT_external_memory_host): no CPU copy"
+                                : "not imported: " + imported.refusal});
   bounds.row({"GPU decode alone, frame resident", num((staged / (alone.ms * 1e-3)) / 1e9, 1), num(1e3 / alone.ms, 1),
               num(double(alone.particles) / (alone.ms * 1e-3) / 1e9, 1) + " G particles/s (" + num(alone.ms, 3) + " ms a frame)"});
   bounds.print("Bounds, measured now");

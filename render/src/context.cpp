@@ -244,6 +244,10 @@ Context::Context(const ContextOptions& options) : impl_(std::make_unique<Impl>()
   if (options.presentation) extensions.push_back(VK_KHR_SWAPCHAIN_EXTENSION_NAME);
   c.memory_budget = has_extension(device_extensions, VK_EXT_MEMORY_BUDGET_EXTENSION_NAME);
   if (c.memory_budget) extensions.push_back(VK_EXT_MEMORY_BUDGET_EXTENSION_NAME);
+  // Optional: importing a file's mapping as memory the GPU copies from
+  // (render/transfer_bound.h measures whether the driver accepts it).
+  c.external_memory_host = has_extension(device_extensions, VK_EXT_EXTERNAL_MEMORY_HOST_EXTENSION_NAME);
+  if (c.external_memory_host) extensions.push_back(VK_EXT_EXTERNAL_MEMORY_HOST_EXTENSION_NAME);
 
   // The same features a host is asked to enable (required_device_features).
   DeviceFeatures features = required_device_features();

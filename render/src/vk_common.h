@@ -36,6 +36,7 @@ struct Context::Impl {
   vk::PhysicalDeviceProperties properties;
   vk::PhysicalDeviceMemoryProperties memory;
   bool memory_budget = false;  // VK_EXT_memory_budget enabled
+  bool external_memory_host = false;  // VK_EXT_external_memory_host enabled (devices sluice creates, where offered)
   DeviceInfo info;
   bool validation = false;
 

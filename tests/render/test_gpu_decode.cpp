@@ -5,10 +5,15 @@
 // lengths around the 2048-particle tiles, every packed width 1..7, the
 // synthetic pool and the bundled PySPH frames; corrupt planes give an error
 // naming the chunk; no validation error.
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <sys/mman.h>
+#include <unistd.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <random>
 #include <set>
 #include <vector>
@@ -23,6 +28,7 @@
 #include "sluice/io/import.h"
 #include "sluice/io/lod.h"
 #include "sluice/render/gpu_decoder.h"
+#include "sluice/render/transfer_bound.h"
 
 namespace sluice::render {
 namespace {
@@ -316,6 +322,39 @@ TEST(GpuDecode, CorruptPlanesAreCaughtAndNamed) {
   EXPECT_THROW(decoder().load(cut.record, cut.header, h, {}, false, {}), io::Error);
   // And it decodes good frames afterwards.
   expect_same_decode(f, h, 0, "after corrupt frames");
+}
+
+
+// The copy straight from a file's page-cache pages (what the pipeline could
+// use instead of the workers' copy): the driver's answer is the figure, so
+// the test checks only that it is asked properly: a mapping of a file at
+// the device's granularity is imported, a misaligned pointer is refused.
+TEST(ImportedCopy, AFilesMappingIsImportedAndMisalignmentRefused) {
+  ValidationGuard guard;
+  const uint64_t alignment = import_alignment(context());
+  if (alignment == 0) GTEST_SKIP() << "the device has no VK_EXT_external_memory_host";
+  const std::filesystem::path path = std::filesystem::temp_directory_path() / "sluice_import_test.bin";
+  const uint64_t bytes = std::max<uint64_t>(alignment, 1 << 20) / alignment * alignment;
+  {
+    std::vector<char> data(bytes, 7);
+    std::FILE* f = std::fopen(path.c_str(), "wb");
+    ASSERT_NE(f, nullptr);
+    ASSERT_EQ(std::fwrite(data.data(), 1, data.size(), f), data.size());
+    std::fclose(f);
+  }
+  const int fd = ::open(path.c_str(), O_RDONLY);
+  ASSERT_GE(fd, 0);
+  void* mapped = ::mmap(nullptr, bytes, PROT_READ, MAP_SHARED | MAP_POPULATE, fd, 0);
+  ASSERT_NE(mapped, MAP_FAILED);
+  const ImportedCopy good = imported_host_copy_gbps(context(), mapped, bytes, 1);
+  EXPECT_TRUE(good.imported) << good.refusal;
+  EXPECT_GT(good.gbps, 0.0);
+  const ImportedCopy bad = imported_host_copy_gbps(context(), static_cast<char*>(mapped) + 1, bytes - alignment, 1);
+  EXPECT_FALSE(bad.imported);
+  EXPECT_NE(bad.refusal.find("multiple"), std::string::npos) << bad.refusal;
+  ::munmap(mapped, bytes);
+  ::close(fd);
+  std::filesystem::remove(path);
 }
 
 }  // namespace
