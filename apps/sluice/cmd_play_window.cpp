@@ -236,7 +236,7 @@ void draw_hud(Player& p, const std::string& file) {
                 st.pipeline.frames_ready, human_bytes(double(st.pipeline.held_bytes)).c_str());
     ImGui::Text("stalls %llu  drops %llu  errors %llu   upload %.2f ms GPU, %.2f ms wall", (unsigned long long)st.stalls,
                 (unsigned long long)st.drops, (unsigned long long)st.errors, p.stats.upload_ms, p.upload_wall_ms);
-    if (p.stats.decode_ms > 0) {
+    if (p.stats.decoded_on_gpu) {
       ImGui::Text("decoded on the GPU: %.2f ms%s", p.stats.decode_ms,
                   p.stats.decode_errors > 0 ? "  (chunks with corrupt planes!)" : "");
     } else {

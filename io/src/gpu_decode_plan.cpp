@@ -14,6 +14,9 @@
 #include "packed_plane.h"
 
 namespace sluice::io {
+
+// decode.comp sums a plane's bytes over a chunk in 32 bits.
+static_assert(uint64_t(kMaxChunkParticles) * 255 < (uint64_t(1) << 32));
 namespace {
 
 constexpr uint64_t kMax32 = UINT32_MAX;

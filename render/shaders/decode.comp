@@ -1,7 +1,7 @@
 #version 460
 // GPU decode of Quantized16 chunks (io/gpu_decode_plan.h has the plan, io
 // codec.h the planes): one workgroup per tile of 2048 particles of a chunk,
-// 8 per thread, in two passes.
+// 8 per thread, in three passes.
 //
 // Pass 0 sums each tile's planes: the escape codes it holds and the sum of
 // its other bytes, per plane. Pass 1 sums each tile's own escapes: the
@@ -9,10 +9,11 @@
 // Pass 2 gives each tile what came before it in its chunk: the escapes used
 // earlier and each plane's byte sum so far, hence the Morton code and the
 // attribute value before the tile (a delta is the sum of its bytes
-// shifted, so sums of deltas are sums of plane sums). Then each thread reads its 8 values of every plane (stored: 8
-// bytes; packed: one group of `width` bytes, spread), a workgroup scan of
-// the escape codes found gives it its place in the escape lists, and a scan
-// of the deltas' sums gives each particle its code and value. Writes what io::decode_chunk
+// shifted, so sums of deltas are sums of plane sums). Then each thread
+// reads its 8 values of every plane (stored: 8 bytes; packed: one group of
+// `width` bytes, spread), a workgroup scan of the escape codes found gives
+// it its place in the escape lists, and a scan of the deltas' sums gives
+// each particle its code and value. Writes what io::decode_chunk
 // writes, bit for bit: x | y << 16 | z << 32 | lod << 48 per particle and
 // the colour attribute's 16-bit values.
 //
@@ -65,36 +66,28 @@ layout(push_constant) uniform Push {
   uvec2 values;     // Values: the colour attribute (chunks with attribute = 1)
   uvec2 errors;     // Errors: one word per chunk, written only on error
   uvec2 tile_chunks;  // TileChunks: each tile's chunk
-  uvec2 tile_sums;    // TileSums: 2 x PLANES words per tile
+  uvec2 tile_sums;    // TileSums: 3 x PLANES words per tile
   uint tile_base;   // workgroup g decodes tile tile_base + g
   uint pass;        // 0: sum the tiles; 1: sum their escapes; 2: decode them
 } pc;
 
-shared uint shared_counts[PLANES];
-shared uint shared_sums[PLANES];
-shared uint shared_escapes[PLANES];
+// Workgroup totals per plane: escape codes, other bytes, escapes' bytes.
+const uint COUNTS = 0, SUMS = 1, ESCAPES = 2;
+shared uint totals[3][PLANES];
 
-// Adds v over the workgroup into *slot (zeroed and read by the caller
-// around barriers).
-void add_counts(uint p, uint v) {
+// Adds v over the workgroup into totals[which][p] (zeroed by clear_totals,
+// read after a barrier).
+void add(uint which, uint p, uint v) {
   const uint s = subgroupAdd(v);
-  if (subgroupElect()) atomicAdd(shared_counts[p], s);
-}
-void add_sums(uint p, uint v) {
-  const uint s = subgroupAdd(v);
-  if (subgroupElect()) atomicAdd(shared_sums[p], s);
-}
-void add_escapes(uint p, uint v) {
-  const uint s = subgroupAdd(v);
-  if (subgroupElect()) atomicAdd(shared_escapes[p], s);
+  if (subgroupElect()) atomicAdd(totals[which][p], s);
 }
 
-void clear_shared() {
+void clear_totals() {
   const uint t = gl_LocalInvocationID.x;
   if (t < PLANES) {
-    shared_counts[t] = 0;
-    shared_sums[t] = 0;
-    shared_escapes[t] = 0;
+    totals[COUNTS][t] = 0;
+    totals[SUMS][t] = 0;
+    totals[ESCAPES][t] = 0;
   }
   barrier();
 }
@@ -199,19 +192,19 @@ void main() {
   const uint base = (tile - c.first_tile) * TILE;
   const uint i0 = base + t * PER;
   const uint m = i0 < c.count ? min(PER, c.count - i0) : 0;
-  clear_shared();
+  clear_totals();
 
   if (pc.pass == 0) {
     for (uint p = 0; p < planes; ++p) {
       uint found = 0;
       const uint64_t v = raw_values(w, c.planes[p], i0, m, found);
-      add_counts(p, found);
-      add_sums(p, byte_sum(v, m, escape_code(c.planes[p])));
+      add(COUNTS, p, found);
+      add(SUMS, p, byte_sum(v, m, escape_code(c.planes[p])));
     }
     barrier();
     if (t < PLANES) {
-      sums.v[tile * 3 * PLANES + t] = shared_counts[t];
-      sums.v[tile * 3 * PLANES + PLANES + t] = shared_sums[t];
+      sums.v[tile * 3 * PLANES + t] = totals[COUNTS][t];
+      sums.v[tile * 3 * PLANES + PLANES + t] = totals[SUMS][t];
     }
     return;
   }
@@ -220,38 +213,35 @@ void main() {
   // (after pass 1) their escapes' bytes.
   for (uint s = c.first_tile + t; s < tile; s += T) {
     for (uint p = 0; p < planes; ++p) {
-      add_counts(p, sums.v[s * 3 * PLANES + p]);
+      add(COUNTS, p, sums.v[s * 3 * PLANES + p]);
       if (pc.pass == 2) {
-        add_sums(p, sums.v[s * 3 * PLANES + PLANES + p]);
-        add_escapes(p, sums.v[s * 3 * PLANES + 2 * PLANES + p]);
+        add(SUMS, p, sums.v[s * 3 * PLANES + PLANES + p]);
+        add(ESCAPES, p, sums.v[s * 3 * PLANES + 2 * PLANES + p]);
       }
     }
   }
   barrier();
   uint escapes_before[PLANES];  // escapes used by earlier tiles, per plane
-  for (uint p = 0; p < PLANES; ++p) escapes_before[p] = shared_counts[p];
+  for (uint p = 0; p < PLANES; ++p) escapes_before[p] = totals[COUNTS][p];
 
-  if (pc.pass == 1) {  // this tile's escapes: the next `codes` of each list
-    barrier();
-    if (t < PLANES) shared_escapes[t] = 0;
-    barrier();
+  if (pc.pass == 1) {  // this tile's escapes: the next `codes` of each list (ESCAPES is still zero)
     for (uint p = 0; p < planes; ++p) {
       const Plane plane = c.planes[p];
       if (plane.width == 0) continue;
       const uint end = min(escapes_before[p] + sums.v[tile * 3 * PLANES + p], plane.count);
       uint sum = 0;
       for (uint i = escapes_before[p] + t; i < end; i += T) sum += load_byte(w, plane.escapes + i);
-      add_escapes(p, sum);
+      add(ESCAPES, p, sum);
     }
     barrier();
-    if (t < PLANES) sums.v[tile * 3 * PLANES + 2 * PLANES + t] = shared_escapes[t];
+    if (t < PLANES) sums.v[tile * 3 * PLANES + 2 * PLANES + t] = totals[ESCAPES][t];
     return;
   }
 
   uint64_t code_before = 0;  // the Morton code before this tile
   uint value_before = 0;     // the attribute value before this tile
   for (uint p = 0; p < planes; ++p) {
-    const uint bytes = shared_sums[p] + shared_escapes[p];
+    const uint bytes = totals[SUMS][p] + totals[ESCAPES][p];
     if (p < 6) code_before += uint64_t(bytes) << (8 * p);
     if (p >= 8) value_before += bytes << (8 * (p - 8));
   }

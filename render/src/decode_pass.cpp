@@ -1,4 +1,4 @@
-// The GPU decoder's dispatches: one workgroup per chunk, in batches of the
+// The GPU decoder's dispatches: three passes of one workgroup per tile, in batches of the
 // guaranteed maximum workgroup count.
 #include "decode_pass.h"
 

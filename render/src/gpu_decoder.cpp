@@ -42,24 +42,29 @@ std::vector<double> GpuDecoder::last_pass_ms() const { return impl_->pass_ms; }
 void GpuDecoder::load(std::span<const std::byte> record, const io::FrameHeader& header, const io::FileHeader& file,
                       const io::GpuPlanOptions& options, bool verify, const io::ErrorLocation& where) {
   Impl& r = *impl_;
-  io::plan_gpu_decode(record, header, file, options, r.plan, where);
-  const uint64_t bytes = r.plan.staged_bytes();
-  r.particles = 0;
-  for (const io::GpuChunkPlan& c : r.plan.chunks) r.particles += c.count;
-  r.attribute = !r.plan.chunks.empty() && r.plan.chunks[0].with_attribute != 0;
+  // The new frame replaces the loaded one only once it is planned, staged
+  // and uploaded: a frame that throws leaves the last one runnable.
+  io::GpuDecodePlan plan;
+  io::plan_gpu_decode(record, header, file, options, plan, where);
+  const uint64_t bytes = plan.staged_bytes();
+  uint64_t particles = 0;
+  for (const io::GpuChunkPlan& c : plan.chunks) particles += c.count;
 
   grow_buffer(r.ctx, r.upload, bytes, vk::BufferUsageFlagBits::eTransferSrc, MemoryKind::Upload);
   const std::span<std::byte> staging(static_cast<std::byte*>(r.upload.mapped), bytes);
   std::memset(staging.data(), 0, bytes);  // the gaps the GPU reads past plane ends: no stale bytes
-  io::stage_frame(record, header, r.plan, staging, verify, where);
+  io::stage_frame(record, header, plan, staging, verify, where);
 
   grow_buffer(r.ctx, r.encoded, bytes, kDeviceUsage, MemoryKind::DeviceLocal);
-  grow_buffer(r.ctx, r.decoded, std::max<uint64_t>(r.particles * 8, 16), kDeviceUsage, MemoryKind::DeviceLocal);
-  grow_buffer(r.ctx, r.values, std::max<uint64_t>(r.particles * 2, 16), kDeviceUsage, MemoryKind::DeviceLocal);
-  grow_buffer(r.ctx, r.tile_sums, std::max<uint64_t>(r.plan.tile_chunk.size() * DecodePass::kTileSumBytes, 16), kDeviceUsage,
+  grow_buffer(r.ctx, r.decoded, std::max<uint64_t>(particles * 8, 16), kDeviceUsage, MemoryKind::DeviceLocal);
+  grow_buffer(r.ctx, r.values, std::max<uint64_t>(particles * 2, 16), kDeviceUsage, MemoryKind::DeviceLocal);
+  grow_buffer(r.ctx, r.tile_sums, std::max<uint64_t>(plan.tile_chunk.size() * DecodePass::kTileSumBytes, 16), kDeviceUsage,
               MemoryKind::DeviceLocal);
-  grow_buffer(r.ctx, r.errors, std::max<uint64_t>(r.plan.chunks.size() * 4, 16), kDeviceUsage, MemoryKind::DeviceLocal);
+  grow_buffer(r.ctx, r.errors, std::max<uint64_t>(plan.chunks.size() * 4, 16), kDeviceUsage, MemoryKind::DeviceLocal);
   r.ctx.run_once([&](vk::CommandBuffer cmd) { cmd.copyBuffer(*r.upload.buffer, *r.encoded.buffer, vk::BufferCopy(0, 0, bytes)); });
+  r.particles = particles;
+  r.attribute = !plan.chunks.empty() && plan.chunks[0].with_attribute != 0;
+  r.plan = std::move(plan);
 }
 
 std::vector<double> GpuDecoder::run(int repeats) {
@@ -123,8 +128,12 @@ GpuDecodeOutput GpuDecoder::read() const {
     out.attribute.resize(n);
     std::memcpy(out.attribute.data(), base + n * 8, n * 2);
   }
-  const auto* errors = reinterpret_cast<const uint32_t*>(base + n * 8 + (r.attribute ? n * 2 : 0));
-  for (uint64_t c = 0; c < chunks; ++c) out.chunks_with_errors += errors[c] != 0 ? 1 : 0;
+  const std::byte* errors = base + n * 8 + (r.attribute ? n * 2 : 0);  // not 4-aligned when n is odd
+  for (uint64_t c = 0; c < chunks; ++c) {
+    uint32_t word = 0;
+    std::memcpy(&word, errors + 4 * c, 4);
+    out.chunks_with_errors += word != 0 ? 1 : 0;
+  }
   return out;
 }
 

@@ -342,6 +342,7 @@ void Renderer::Impl::collect_slot(FrameSlot& slot, uint32_t slot_index, bool fin
     s.gpu_ms = double(stamps[count - 1] - stamps[0]) * ns * 1e-6;
   }
   s.upload_ms = slot.upload_ms;
+  s.decoded_on_gpu = slot.decoded_on_gpu;
   s.decode_ms = slot.decode_ms;
   s.decode_errors = slot.decode_errors;
   if (slot.classified) {
@@ -430,7 +431,8 @@ FrameSync Renderer::record(VkCommandBuffer command_buffer, const RenderTarget& t
   slot.classified = false;
   slot.particles = frame ? frame->particle_count : 0;
   slot.upload_ms = frame ? std::max(frame->upload_ms, 0.0) : 0;
-  slot.decode_ms = frame && frame->decoded_on_gpu ? std::max(frame->decode_ms, 0.0) : 0;
+  slot.decoded_on_gpu = frame && frame->decoded_on_gpu;
+  slot.decode_ms = slot.decoded_on_gpu ? std::max(frame->decode_ms, 0.0) : 0;
   slot.decode_errors = frame && frame->decoded_on_gpu ? frame->decode_errors_found : 0;
 
   PassRecorder pass(r, vk::CommandBuffer(command_buffer), slot, slot_index);

@@ -75,6 +75,7 @@ struct FrameSlot {
   std::vector<const char*> stamp_names;   // per timestamp after the first
   uint64_t particles = 0;
   double upload_ms = 0;
+  bool decoded_on_gpu = false;
   double decode_ms = 0;
   uint32_t decode_errors = 0;
   bool classified = false;                // its frame classified one: BandParams after the GpuArgs

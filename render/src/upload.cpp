@@ -1,7 +1,9 @@
 // Frames to the GPU: persistently mapped staging that decoders write into,
 // then one copy per buffer on the transfer queue (where there is one) into
 // one of the renderer's device frame sets, signalling a timeline semaphore;
-// record() draws the newest set whose copy is done.
+// frames kept encoded are copied as they are and decoded by a compute
+// submission on the graphics queue (decode_pass.h), which signals instead.
+// record() draws the newest set whose upload is done.
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
@@ -164,11 +166,13 @@ struct EncodedSource {
   const io::GpuDecodePlan* plan = nullptr;
 };
 
-// Records and submits the decode of `set`'s staged area into its particle
-// and attribute buffers on the graphics queue, after the copy (timeline
-// value `copied`); returns the value the decode signals.
-uint64_t submit_decode(Renderer::Impl& r, FrameSet& set, const io::GpuDecodePlan& plan, uint64_t copy_value) {
+// Records the decode of `set`'s staged area into its particle and
+// attribute buffers, creating what it needs first (the pass, a command
+// buffer, the tile sums sized for `plan`); submits nothing, so a failure
+// here leaves no copy in flight.
+void record_decode(Renderer::Impl& r, FrameSet& set, const io::GpuDecodePlan& plan) {
   using Stage = vk::PipelineStageFlagBits2;
+  using Access = vk::AccessFlagBits2;
   if (!r.decode_pass) {
     r.decode_pass = std::make_unique<DecodePass>(r.ctx);
     r.decode_pool = vk::raii::CommandPool(
@@ -179,15 +183,14 @@ uint64_t submit_decode(Renderer::Impl& r, FrameSet& set, const io::GpuDecodePlan
         r.ctx.device, vk::CommandBufferAllocateInfo(*r.decode_pool, vk::CommandBufferLevel::ePrimary, 1))[0]);
     set.decode_stamps = vk::raii::QueryPool(r.ctx.device, vk::QueryPoolCreateInfo({}, vk::QueryType::eTimestamp, 2));
   }
-  const uint32_t chunks = uint32_t(plan.chunks.size());
+  r.ensure(set.decode_tiles, std::max<uint64_t>(plan.tile_chunk.size() * DecodePass::kTileSumBytes, 16), kDeviceUsage,
+           MemoryKind::DeviceLocal);
   (*r.ctx.device).resetQueryPool(*set.decode_stamps, 0, 2);
   vk::CommandBuffer cmd = *set.decode;
   cmd.reset();
   cmd.begin(vk::CommandBufferBeginInfo(vk::CommandBufferUsageFlagBits::eOneTimeSubmit));
   cmd.writeTimestamp2(Stage::eAllCommands, *set.decode_stamps, 0);
   DecodePass::barrier(cmd);
-  r.ensure(set.decode_tiles, std::max<uint64_t>(plan.tile_chunk.size() * DecodePass::kTileSumBytes, 16), kDeviceUsage,
-           MemoryKind::DeviceLocal);
   const DecodeRun run{set.encoded.address,
                       set.encoded.address + plan.plans_offset(),
                       set.particles.address,
@@ -198,11 +201,21 @@ uint64_t submit_decode(Renderer::Impl& r, FrameSet& set, const io::GpuDecodePlan
                       uint32_t(plan.tile_chunk.size())};
   r.decode_pass->record(cmd, run);
   DecodePass::barrier(cmd);
+  // The error words are read on the host (pick_shown_set).
+  memory_barrier(cmd, Stage::eComputeShader, Access::eShaderWrite, Stage::eHost, Access::eHostRead);
   cmd.writeTimestamp2(Stage::eAllCommands, *set.decode_stamps, 1);
   cmd.end();
-  std::memset(set.decode_errors.mapped, 0, size_t(chunks) * 4);  // the set is not in use: no GPU work reads it
-  const vk::CommandBufferSubmitInfo cb(cmd);
-  const vk::SemaphoreSubmitInfo wait(*r.copy_done, copy_value, Stage::eComputeShader);
+  std::memset(set.decode_errors.mapped, 0, plan.chunks.size() * 4);  // the set is not in use: no GPU work reads it
+}
+
+// Submits the decode record_decode() recorded to the graphics queue, after
+// the copy that signals `copy_value` on copy_done; returns the upload
+// timeline value the decode signals.
+uint64_t submit_decode(Renderer::Impl& r, FrameSet& set, uint64_t copy_value) {
+  using Stage = vk::PipelineStageFlagBits2;
+  const vk::CommandBufferSubmitInfo cb(*set.decode);
+  // Every stage waits (the first timestamp too, so decode_ms is the decode's).
+  const vk::SemaphoreSubmitInfo wait(*r.copy_done, copy_value, Stage::eAllCommands);
   const vk::SemaphoreSubmitInfo signal(*r.upload_done, r.upload_value + 1, Stage::eAllCommands);
   r.ctx.graphics_queue.submit2(vk::SubmitInfo2({}, wait, cb, signal));
   set.decoded_on_gpu = true;
@@ -213,8 +226,10 @@ uint64_t submit_decode(Renderer::Impl& r, FrameSet& set, const io::GpuDecodePlan
 
 // Submits the copy of `set`'s frame (particle_count, chunk_count,
 // has_attribute) from the sources into its device buffers, which grow to
-// fit. The chunk table source must be set.staging at `chunks_offset` (it is
-// validated there). Returns the ticket the copy signals.
+// fit; with `encoded`, the copy of its staged area and then its decode.
+// The chunk table source must be set.staging at `chunks_offset` (it is
+// validated there). Returns the frame's ticket: the value the copy, or for
+// an encoded frame the decode, signals on the upload timeline.
 uint64_t upload_frame(Renderer::Impl& r, FrameSet& set, UploadSource particles_src, vk::DeviceSize chunks_offset,
                       UploadSource attribute_src, const EncodedSource* encoded = nullptr) {
   const uint64_t n = set.particle_count;
@@ -252,17 +267,21 @@ uint64_t upload_frame(Renderer::Impl& r, FrameSet& set, UploadSource particles_s
   // Large splats: up to one entry per drawn item and eye (two eyes in one pass).
   r.ensure(r.big, std::max<uint64_t>((n + room) * 4 * 2, 16), kDeviceUsage, MemoryKind::DeviceLocal);
 
+  if (encoded) {
+    r.ensure(set.encoded, encoded->plan->staged_bytes(), kDeviceUsage, MemoryKind::DeviceLocal);
+    r.ensure(set.decode_errors, std::max<uint64_t>(uint64_t(chunks) * 4, 16),
+             vk::BufferUsageFlagBits::eStorageBuffer | vk::BufferUsageFlagBits::eShaderDeviceAddress, MemoryKind::Readback);
+    record_decode(r, set, *encoded->plan);
+  }
+
   (*r.ctx.device).resetQueryPool(*set.stamps, 0, 2);
   vk::CommandBuffer cmd = *set.copy;
   cmd.reset();
   cmd.begin(vk::CommandBufferBeginInfo(vk::CommandBufferUsageFlagBits::eOneTimeSubmit));
   cmd.writeTimestamp2(vk::PipelineStageFlagBits2::eAllCommands, *set.stamps, 0);
   if (encoded) {
-    const uint64_t bytes = encoded->plan->staged_bytes();
-    r.ensure(set.encoded, bytes, kDeviceUsage, MemoryKind::DeviceLocal);
-    r.ensure(set.decode_errors, std::max<uint64_t>(uint64_t(chunks) * 4, 16),
-             vk::BufferUsageFlagBits::eStorageBuffer | vk::BufferUsageFlagBits::eShaderDeviceAddress, MemoryKind::Readback);
-    cmd.copyBuffer(encoded->area.buffer, *set.encoded.buffer, vk::BufferCopy(encoded->area.offset, 0, bytes));
+    cmd.copyBuffer(encoded->area.buffer, *set.encoded.buffer,
+                   vk::BufferCopy(encoded->area.offset, 0, encoded->plan->staged_bytes()));
   } else if (n > 0) {
     cmd.copyBuffer(particles_src.buffer, *set.particles.buffer, vk::BufferCopy(particles_src.offset, 0, n * r.stride));
   }
@@ -292,7 +311,7 @@ uint64_t upload_frame(Renderer::Impl& r, FrameSet& set, UploadSource particles_s
     ++r.copy_value;
     const vk::SemaphoreSubmitInfo copied(*r.copy_done, r.copy_value, vk::PipelineStageFlagBits2::eAllCommands);
     r.ctx.transfer_queue.submit2(vk::SubmitInfo2({}, {}, cb, copied));
-    r.upload_value = submit_decode(r, set, *encoded->plan, r.copy_value);
+    r.upload_value = submit_decode(r, set, r.copy_value);
     r.last_decode_ticket = r.upload_value;
   } else {
     // A timeline's values must rise in the order they are signalled: after

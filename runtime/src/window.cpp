@@ -4,6 +4,7 @@
 #include <limits>
 #include <vector>
 
+#include "sluice/io/gpu_decode_plan.h"
 #include "sluice/io/reader.h"
 
 namespace sluice::runtime {
@@ -29,8 +30,15 @@ FrameFootprint largest_frame(const io::ContainerReader& reader, size_t attribute
   FrameFootprint f;
   for (const io::FrameIndexEntry& e : reader.index().frames) {
     layout.particles = e.count_in(layers);
-    // An estimate: the real plan is known once the record's tables are read.
-    if (encoded) layout.encoded_bytes = encoded_block_bytes(e.bytes + 2 * layout.particles + 176 * uint64_t(e.chunk_count) + 64);
+    // The real plan is known once the record's tables are read; before, a
+    // bound: every plane inflated on the CPU (n bytes each, rounded to 16),
+    // the chunk plans and the tile table, the roundings and the padding.
+    if (encoded) {
+      const uint64_t n = layout.particles, chunks = e.chunk_count, planes = io::kGpuPlanes;
+      const uint64_t inflated = planes * (n + 15 * chunks);
+      const uint64_t tables = chunks * sizeof(io::GpuChunkPlan) + 4 * (n / io::kGpuTile + chunks);
+      layout.encoded_bytes = encoded_block_bytes(e.bytes + inflated + tables + 15 + io::kGpuReadPadding + 15);
+    }
     const uint64_t bytes = allocator ? allocator->bytes_for(layout) : layout.total_bytes();
     if (bytes > f.decoded_bytes) f.chunks = std::max<uint32_t>(1, e.chunk_count);
     f.decoded_bytes = std::max(f.decoded_bytes, bytes);

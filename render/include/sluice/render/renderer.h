@@ -65,7 +65,8 @@ struct FrameStats {
   std::vector<PassTime> passes;
   double gpu_ms = 0;           // first to last timestamp of the frame
   double upload_ms = 0;        // GPU time of the copy of the frame drawn
-  double decode_ms = 0;        // GPU time of its decode (frames committed encoded; 0 otherwise)
+  bool decoded_on_gpu = false; // the frame drawn was committed encoded (commit_encoded)
+  double decode_ms = 0;        // GPU time of its decode (0 when not decoded on the GPU, or no timestamps)
   uint32_t decode_errors = 0;  // its chunks whose packed planes the GPU found inconsistent
   // RendererOptions::classify_unlayered: what the classification this frame
   // ran (if it ran one: the first draw of a frame without layers) made of it.

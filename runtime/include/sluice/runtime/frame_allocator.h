@@ -31,7 +31,8 @@ struct FrameLayout {
   // > 0: the frame stays encoded for a GPU decoder (PipelineOptions::
   // keep_encoded): FrameBuffers::particles then holds these bytes, the
   // staged area of io/gpu_decode_plan.h (payloads, inflated planes, chunk
-  // plans), and there are no attribute streams.
+  // plans, tile table; staged_bytes() of them, the rest unused), and there
+  // are no attribute streams.
   uint64_t encoded_bytes = 0;
 
   uint64_t particle_bytes() const { return encoded_bytes > 0 ? encoded_bytes : particles * particle_stride; }

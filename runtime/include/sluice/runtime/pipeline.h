@@ -149,7 +149,7 @@ class FrameHandle {
   const io::FrameHeader& header() const;           // chunk table: counts, AABBs (to dequantize), layers
   std::span<const uint64_t> chunk_first() const;   // first particle of each chunk
   const FrameLayout& layout() const;
-  const FrameBuffers& buffers() const;             // particles (io::decoded_particle_bytes each), attributes
+  const FrameBuffers& buffers() const;             // particles (io::decoded_particle_bytes each; kept encoded: the staged area), attributes
   // Frames kept encoded (PipelineOptions::keep_encoded): the plan of the
   // staged area in buffers().particles; null otherwise.
   const io::GpuDecodePlan* gpu_plan() const;

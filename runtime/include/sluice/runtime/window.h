@@ -38,8 +38,8 @@ struct FrameFootprint {
 // `allocator`, if given, says what its buffers really take (bytes_for);
 // `layers`: the layers read (a record's size counts whole: the index does not
 // say where its layers' payloads end); `encoded`: frames stay encoded for a
-// GPU decoder (their record, plus 2 bytes a particle for planes inflated on
-// the CPU and the chunk plans).
+// GPU decoder (their record, plus a bound on what the CPU adds: every
+// plane inflated, the chunk plans and the tile table).
 FrameFootprint largest_frame(const io::ContainerReader& reader, size_t attribute_streams,
                              const FrameAllocator* allocator = nullptr,
                              io::LayerSet layers = io::LayerSet::particles(), bool encoded = false);
