@@ -6,6 +6,7 @@
 
 #include "commands.h"
 #include "human.h"
+#include "sluice/io/gpu_decode_plan.h"
 #include "sluice/io/reader.h"
 
 namespace sluice::app {
@@ -30,6 +31,27 @@ const char* evidence_text(io::UpEvidence e) {
     case io::UpEvidence::Default: return "assumed: the data did not show it";
     default: return "not stated (a file older than format 1.2)";
   }
+}
+
+// Where players decode the file's frames, from frame 0's plane tables:
+// what the GPU decodes as it lies on disk and what the CPU inflates first.
+std::string decoding_text(const io::ContainerReader& r) {
+  if (!io::gpu_decodable(r.header())) return "on the CPU (float32 positions)";
+  io::GpuDecodePlan plan;
+  try {
+    const std::vector<std::byte> record = r.read_record(0);
+    const io::FrameHeader header = r.parse_record(0, record);
+    io::plan_gpu_decode(record, header, r.header(), {.color_attribute = r.header().attributes.empty() ? -1 : 0}, plan,
+                        r.location(0));
+  } catch (const io::Error& e) {
+    return std::string("on the CPU (frame 0 cannot be planned for the GPU: ") + e.what() + ")";
+  }
+  const uint64_t planes = plan.stored_planes + plan.packed_planes + plan.zstd_planes;
+  std::string text = "on the GPU by default (--decode); frame 0's planes: " + std::to_string(plan.stored_planes) +
+                     " stored, " + std::to_string(plan.packed_planes) + " bit-packed";
+  if (plan.zstd_planes == 0) return text + ", none to inflate on the CPU";
+  return text + ", " + std::to_string(plan.zstd_planes) + " zstd (" + percent(double(plan.zstd_planes) / double(planes)) +
+         ", inflated on the CPU first; `sluice convert --gpu-decodable` writes none)";
 }
 
 // Median seconds of simulation between frames (0 with fewer than 2 frames).
@@ -183,6 +205,7 @@ void print_text(const io::ContainerReader& r, bool all_frames) {
   std::printf("  compression   %s bytes/particle on disk; %sx smaller than raw float32 xyz, %sx smaller than decoded (%zu B)\n",
               fixed(per, 2).c_str(), fixed(per > 0 ? 12.0 / per : 0, 2).c_str(),
               fixed(per > 0 ? double(decoded) / per : 0, 2).c_str(), decoded);
+  std::printf("  decoding      %s\n", decoding_text(r).c_str());
   if (layered) {
     std::printf("\n  %6s %10s %12s %10s %8s %7s %10s %10s  %s\n", "frame", "time", "particles", "surface", "blobs", "chunks",
                 "bytes", "read", "bounds");
