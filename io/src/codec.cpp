@@ -117,11 +117,12 @@ void compress_planes(std::vector<std::byte>& raw, size_t n, const EncodeOptions&
       continue;
     }
     const size_t size = use_zstd ? zstd_size : packed.bytes;
+    if (double(size) > double(n) * (1.0 - kMinPlaneGain)) {  // too little gain: stored
+      entry_stored(payload, plane, n, p);
+      continue;
+    }
     uint32_t entry = static_cast<uint32_t>(size);
-    if (double(size) > double(n) * (1.0 - kMinPlaneGain)) {
-      entry = static_cast<uint32_t>(n);
-      payload.insert(payload.end(), plane, plane + n);
-    } else if (use_zstd) {
+    if (use_zstd) {
       payload.insert(payload.end(), frame.data(), frame.data() + zstd_size);
     } else {
       pack_plane(values, packed.width, payload);
