@@ -65,10 +65,12 @@ void run_play_gpu(const PlayOptions& o, const WindowPlayOptions& w) {
   render::FrameFeed feed(renderer, player, &staging, color);
   const double display_hz = o.display_hz > 0 ? o.display_hz : player.frame_rate() * std::max(std::abs(po.rate), 1e-3);
   if (!o.quiet) {
-    std::fprintf(stderr, "playing %s through the renderer on %s (%s) at %ux%u: %llu frames at %.4g fps, display %.4g Hz, %s\n",
+    std::fprintf(stderr,
+                 "playing %s through the renderer on %s (%s) at %ux%u: %llu frames at %.4g fps, display %.4g Hz, %s; "
+                 "frames decoded on the %s\n",
                  o.file.c_str(), context.device().name.c_str(), context.device().type.c_str(), width, height,
                  (unsigned long long)reader.frame_count(), player.frame_rate(), display_hz,
-                 runtime::end_mode_name(po.end));
+                 runtime::end_mode_name(po.end), po.pipeline.keep_encoded ? "GPU" : "CPU");
   }
 
   using Steady = std::chrono::steady_clock;
