@@ -37,6 +37,9 @@ const char* evidence_text(io::UpEvidence e) {
 // what the GPU decodes as it lies on disk and what the CPU inflates first.
 std::string decoding_text(const io::ContainerReader& r) {
   if (!io::gpu_decodable(r.header())) return "on the CPU (float32 positions)";
+  // The census reads the whole record: skipped where that is a lot to read for a summary.
+  constexpr uint64_t kMostCensusBytes = uint64_t(64) << 20;
+  if (r.index().frames.empty() || r.index().frames[0].bytes > kMostCensusBytes) return "on the GPU by default (--decode)";
   io::GpuDecodePlan plan;
   try {
     const std::vector<std::byte> record = r.read_record(0);
