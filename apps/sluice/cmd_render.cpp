@@ -209,10 +209,12 @@ void add_bench_render(CLI::App& bench) {
   cmd->footer(
       "Synthetic frames are generated in memory (a pool with waves and a collapsing column on a jittered\n"
       "grid, 32^3-particle chunks). --real adds the last frame of a .sluice file; --vtk runs VTK 9's\n"
-      "vtkOpenGLFluidMapper on the same frames (python3-vtk9 and xvfb-run; slow on llvmpipe).\n\n"
+      "vtkOpenGLFluidMapper on the same frames (python3-vtk9 and xvfb-run; slow on llvmpipe), or with\n"
+      "--vtk-peer, the native peer built by bench/vtk_peer/build.sh (VTK with EGL: a GPU, no X server).\n\n"
       "Examples:\n"
       "  sluice bench render\n"
-      "  sluice bench render --sizes 100k,1M --real dam.sluice --vtk --images bench_images\n");
+      "  sluice bench render --sizes 100k,1M --real dam.sluice --vtk --images bench_images\n"
+      "  sluice bench render --sizes 1M,10M --vtk-peer vtk/bin/vtk_fluid_peer --vtk-max 100M\n");
   cmd->add_option("--sizes", *sizes, "Synthetic particle counts (k, M suffixes; empty for none)")->capture_default_str();
   cmd->add_option("--size", *size, "Image size WIDTHxHEIGHT")->capture_default_str();
   cmd->add_option("--repeats", o->repeats, "Renders per case (median)")->capture_default_str();
@@ -220,6 +222,7 @@ void add_bench_render(CLI::App& bench) {
   cmd->add_option("--real", o->real, "A .sluice file whose last frame is measured too")->check(CLI::ExistingFile);
   cmd->add_flag("--vtk", o->vtk, "Also time VTK's vtkOpenGLFluidMapper on the same frames");
   cmd->add_option("--vtk-max", o->vtk_max, "Largest frame handed to VTK")->capture_default_str();
+  cmd->add_option("--vtk-peer", o->vtk_peer, "The native VTK peer to run (implies --vtk)")->check(CLI::ExistingFile);
   cmd->add_option("--device", o->device, "Vulkan device: index or part of its name");
   cmd->add_option("--images", o->images, "Save every case's image (and VTK's) in this directory");
   cmd->add_option("--splat", o->splat, "Sphere splatting: auto, compute or raster")->capture_default_str();
@@ -234,6 +237,7 @@ void add_bench_render(CLI::App& bench) {
                 "Two eyes of --size each (as a headset: e.g. --size 2064x2208), both in one pass into a 2-layer target,\n"
                 "against the same two views as two mono passes");
   cmd->callback([o, sizes, size] {
+    if (!o->vtk_peer.empty()) o->vtk = true;
     o->sizes = sizes->empty() ? std::vector<uint64_t>{} : bench::parse_counts(*sizes);
     const auto [w, h] = parse_size(*size);
     o->width = w;

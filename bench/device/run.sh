@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Runs on the GPU machine (see bench/device/README.md): every benchmark the
 # issues ask GPU-machine figures for, in one call. Results go to $OUT.
-#   bash bench/device/run.sh [io] [import] [layers] [band] [render] [stream] [split] [codec] [huge] [embed] [compare] [live] [stereo] [xrsize] [firsthour] [streamcmp] [gpudecode] [gpuquick]   (default: io render stream)
+#   bash bench/device/run.sh [io] [import] [layers] [band] [render] [stream] [split] [codec] [huge] [embed] [compare] [live] [stereo] [xrsize] [firsthour] [streamcmp] [gpudecode] [gpuquick] [gpupair] [egl] [vtkpeer]   (default: io render stream)
 set -uo pipefail
 OUT=${OUT:-/tmp/out}
 mkdir -p "$OUT" /tmp/s
@@ -197,6 +197,25 @@ for stage in $stages; do
       run $S bench stream --gpu /tmp/q10m.sluice --memory 16G
       run $S synth -n 100M --frames 2 -o /tmp/q100m.sluice --force -q --gpu-decodable
       run $S bench stream --gpu /tmp/q100m.sluice --memory 32G
+      ;;
+    gpupair)  # the GPU decoder of this build against BASE's (pack.sh BASE=...), same files, same run
+      [[ -x .gpu/sluice_gpu_decode_tests ]] && run ./.gpu/sluice_gpu_decode_tests --gtest_brief=1 --gtest_filter=-*Bundled*
+      run $S synth -n 10M --frames 8 -o /tmp/q10m.sluice --force -q --gpu-decodable
+      run $S synth -n 100M --frames 3 -o /tmp/q100m.sluice --force -q --gpu-decodable
+      for b in ./.gpu/sluice_base $S; do
+        [[ -x $b ]] || continue
+        run $b bench stream --gpu /tmp/q10m.sluice --memory 16G --no-storage --min-time 1
+        run $b bench stream --gpu /tmp/q100m.sluice --memory 40G --no-storage --min-time 1
+      done
+      ;;
+    egl)  # what the machine offers for OpenGL through EGL (the VTK peer's needs)
+      { ls /usr/share/glvnd/egl_vendor.d /etc/glvnd/egl_vendor.d 2>&1; cat /usr/share/glvnd/egl_vendor.d/*.json 2>&1
+        ls /usr/lib/x86_64-linux-gnu /usr/local/nvidia/lib64 2>/dev/null | grep -i -E 'nvidia|libEGL|libOpenGL|libGLdispatch' | sort -u; } 2>&1 | tee -a "$OUT/summary.txt"
+      ;;
+    vtkpeer)  # VTK's fluid mapper on this GPU (bench/vtk_peer, carried as .gpu/vtk_fluid_peer) beside sluice
+      run $S bench render --sizes 1M --repeats 3 >/dev/null  # warm-up
+      mkdir -p "$OUT/peer"
+      run $S bench render --repeats 7 --sizes ${PEER_SIZES:-1M,10M} --vtk-peer ./.gpu/vtk_fluid_peer --vtk-max 100M --images "$OUT/peer"
       ;;
     gpudecode)  # frames decoded on the GPU (issue 13): the decoder's tests, the pipeline into device memory
       [[ -x .gpu/sluice_gpu_decode_tests ]] && run ./.gpu/sluice_gpu_decode_tests --gtest_brief=1 --gtest_filter=-*Bundled*

@@ -13,6 +13,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <sstream>
 #include <memory>
 #include <stdexcept>
 
@@ -137,36 +138,70 @@ std::array<render::View, 2> eye_views(const render::Camera& cam, float separatio
   return v;
 }
 
-// Runs the VTK peer on the positions; seconds per frame, or -1 with a note.
-double run_vtk_peer(const std::vector<float>& xyz, const RenderBenchOptions& o, float radius, const render::Camera& cam,
-                    const std::string& image) {
-  const fs::path dir = fs::temp_directory_path() / ("sluice_vtk_peer_" + std::to_string(::getpid()));
-  fs::create_directories(dir);
-  const fs::path script = dir / "peer.py", data = dir / "xyz.f32", log = dir / "out.txt";
-  std::ofstream(script) << kVtkPeer;
-  {
-    std::ofstream f(data, std::ios::binary);
-    f.write(reinterpret_cast<const char*>(xyz.data()), std::streamsize(xyz.size() * sizeof(float)));
-  }
+// The command line that runs the VTK peer: the native one directly, or the
+// Python script under a virtual X server.
+std::string peer_command(const RenderBenchOptions& o, const fs::path& dir, const fs::path& data, const std::string& raw,
+                         float radius, const render::Camera& cam) {
   char camera[512];
   std::snprintf(camera, sizeof camera, "%g,%g,%g,%g,%g,%g,%g,%g,%g,%g", double(cam.eye.x), double(cam.eye.y),
                 double(cam.eye.z), double(cam.target.x), double(cam.target.y), double(cam.target.z), double(cam.up.x),
                 double(cam.up.y), double(cam.up.z), double(cam.fov_deg));
-  const std::string cmd = "xvfb-run -a -s '-screen 0 " + std::to_string(o.width + 64) + "x" + std::to_string(o.height + 64) +
-                          "x24' /usr/bin/python3 " + script.string() + " " + data.string() + " " + std::to_string(o.width) +
-                          " " + std::to_string(o.height) + " " + std::to_string(radius) + " " +
-                          std::to_string(std::max(1, std::min(o.repeats, 3))) + " '" + image + "' " + camera + " > " +
-                          log.string() + " 2>&1";
+  const std::string args = data.string() + " " + std::to_string(o.width) + " " + std::to_string(o.height) + " " +
+                           std::to_string(radius) + " ";
+  if (!o.vtk_peer.empty()) {
+    return "'" + o.vtk_peer + "' " + args + std::to_string(std::max(1, o.repeats)) + " '" + raw + "' " + camera;
+  }
+  const fs::path script = dir / "peer.py";
+  std::ofstream(script) << kVtkPeer;
+  return "xvfb-run -a -s '-screen 0 " + std::to_string(o.width + 64) + "x" + std::to_string(o.height + 64) +
+         "x24' /usr/bin/python3 " + script.string() + " " + args + std::to_string(std::max(1, std::min(o.repeats, 3))) +
+         " '" + raw + "' " + camera;
+}
+
+// Runs the VTK peer on the positions; seconds per frame, or -1 with a note.
+// The Python peer writes `image` as a PNG itself; the native one writes raw
+// RGBA rows, turned into the PNG here.
+double run_vtk_peer(const std::vector<float>& xyz, const RenderBenchOptions& o, float radius, const render::Camera& cam,
+                    const std::string& image) {
+  const fs::path dir = fs::temp_directory_path() / ("sluice_vtk_peer_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const fs::path data = dir / "xyz.f32", log = dir / "out.txt";
+  {
+    std::ofstream f(data, std::ios::binary);
+    f.write(reinterpret_cast<const char*>(xyz.data()), std::streamsize(xyz.size() * sizeof(float)));
+  }
+  const bool native = !o.vtk_peer.empty();
+  const std::string raw = image.empty() ? "" : native ? (dir / "image.rgba").string() : image;
+  const std::string cmd = peer_command(o, dir, data, raw, radius, cam) + " > " + log.string() + " 2>&1";
   const int rc = std::system(cmd.c_str());
   double seconds = -1;
-  std::ifstream in(log);
-  std::string word;
-  while (in >> word) {
-    if (word == "VTKPEER" && (in >> seconds)) break;
+  std::string version, renderer;
+  {
+    std::ifstream in(log);
+    for (std::string line; std::getline(in, line);) {
+      std::istringstream words(line);
+      std::string word;
+      if (words >> word && word == "VTKPEER" && (words >> seconds >> version)) {
+        std::getline(words >> std::ws, renderer);
+        break;
+      }
+    }
   }
   if (rc != 0 || seconds < 0) {
-    std::fprintf(stderr, "note: the VTK peer failed (needs python3-vtk9, xvfb-run); its output is in %s\n", log.c_str());
+    std::fprintf(stderr, "note: the VTK peer failed (%s); its output is in %s\n",
+                 native ? o.vtk_peer.c_str() : "needs python3-vtk9, xvfb-run", log.c_str());
     return -1;
+  }
+  std::fprintf(stderr, "  VTK %s%s%s: %.2f ms a frame\n", version.c_str(), renderer.empty() ? "" : " on ",
+               renderer.c_str(), seconds * 1e3);
+  if (native && !image.empty()) {
+    render::Image picture{o.width, o.height, std::vector<uint8_t>(size_t(o.width) * o.height * 4)};
+    std::ifstream in(raw, std::ios::binary);
+    if (in.read(reinterpret_cast<char*>(picture.rgba.data()), std::streamsize(picture.rgba.size()))) {
+      render::write_png(image, picture);
+    } else {
+      std::fprintf(stderr, "note: the VTK peer's image %s is short; no PNG written\n", raw.c_str());
+    }
   }
   fs::remove_all(dir);
   return seconds;
@@ -406,12 +441,13 @@ void run_render_bench(const RenderBenchOptions& o) {
   for (const Case& c : cases) {
     if (c.vtk_ms < 0) continue;
     any_vtk = true;
-    peer.row({c.name, count_name(c.particles), num(c.stats.gpu_ms, 1), num(c.wall_ms, 1), num(c.vtk_ms, 0),
+    peer.row({c.name, count_name(c.particles), num(c.stats.gpu_ms, 1), num(c.wall_ms, 1), num(c.vtk_ms, c.vtk_ms < 100 ? 1 : 0),
               num(c.vtk_ms / c.wall_ms, 1) + "x"});
   }
   if (any_vtk) {
     peer.print("Against VTK 9 vtkOpenGLFluidMapper (same frame, camera, radius and size; NarrowRange, "
-               "TransparentFluidVolume; VTK time is a Render() call)");
+               "TransparentFluidVolume; VTK time is " +
+                 std::string(o.vtk_peer.empty() ? "a Render() call under Xvfb)" : "a Render() call and glFinish, EGL)"));
   }
 }
 

@@ -92,26 +92,31 @@ void clear_totals() {
   barrier();
 }
 
-shared u64vec4 scan_ping[T];
-shared u64vec4 scan_pong[T];
+// Exclusive sums over the workgroup: a subgroup scan, then each subgroup's
+// total from shared memory (one barrier pair, where a Hillis-Steele scan
+// over 256 threads takes eight). context.cpp requires subgroups of at
+// least 4 lanes. Called in uniform control flow.
+const uint WORDS = 5;      // the most words one scan carries
+shared uint partial[T / 4][WORDS];
 
-// Exclusive sum over the workgroup's threads; `total` is the sum of all.
-u64vec4 exclusive_scan(u64vec4 v, out u64vec4 total) {
-  const uint t = gl_LocalInvocationID.x;
-  scan_ping[t] = v;
-  barrier();
-  bool ping = true;
-  for (uint d = 1; d < T; d <<= 1) {
-    u64vec4 x = ping ? scan_ping[t] : scan_pong[t];
-    if (t >= d) x += ping ? scan_ping[t - d] : scan_pong[t - d];
-    if (ping) scan_pong[t] = x; else scan_ping[t] = x;
-    ping = !ping;
-    barrier();
+void exclusive_sums(inout uint v[WORDS], uint n, out uint total[WORDS]) {
+  for (uint k = 0; k < n; ++k) {
+    const uint inclusive = subgroupInclusiveAdd(v[k]);
+    if (gl_SubgroupInvocationID == gl_SubgroupSize - 1) partial[gl_SubgroupID][k] = inclusive;
+    v[k] = inclusive - v[k];
   }
-  const u64vec4 inclusive = ping ? scan_ping[t] : scan_pong[t];
-  total = ping ? scan_ping[T - 1] : scan_pong[T - 1];
+  barrier();
+  for (uint k = 0; k < n; ++k) {
+    uint before = 0, all = 0;
+    for (uint g = 0; g < gl_NumSubgroups; ++g) {
+      const uint x = partial[g][k];
+      before += g < gl_SubgroupID ? x : 0u;
+      all += x;
+    }
+    v[k] += before;
+    total[k] = all;
+  }
   barrier();  // everyone has read before the next scan writes
-  return inclusive - v;
 }
 
 // 8 bytes at byte offset `at`, little-endian (the area is padded behind).
@@ -167,7 +172,7 @@ uint64_t resolve_escapes(Words w, Plane p, uint64_t v, uint m, uint k) {
   return v;
 }
 
-uint field16(uint64_t v, uint f) { return uint(v >> (16 * f)) & 0xffffu; }
+uint half16(uint v, uint h) { return (v >> (16 * h)) & 0xffffu; }
 
 // The sum of the first m bytes of v that are not `code` (code > 255: all).
 uint byte_sum(uint64_t v, uint m, uint code) {
@@ -210,15 +215,12 @@ void main() {
   }
 
   // What the chunk's earlier tiles hold: escape codes, other bytes and
-  // (after pass 1) their escapes' bytes.
-  for (uint s = c.first_tile + t; s < tile; s += T) {
-    for (uint p = 0; p < planes; ++p) {
-      add(COUNTS, p, sums.v[s * 3 * PLANES + p]);
-      if (pc.pass == 2) {
-        add(SUMS, p, sums.v[s * 3 * PLANES + PLANES + p]);
-        add(ESCAPES, p, sums.v[s * 3 * PLANES + 2 * PLANES + p]);
-      }
-    }
+  // (after pass 1) their escapes' bytes; a thread per word (a chunk has
+  // few tiles: 16 at the encoder's default of 32768 particles).
+  if (t < 3 * PLANES && (t < PLANES || pc.pass == 2)) {
+    uint sum = 0;
+    for (uint s = c.first_tile; s < tile; ++s) sum += sums.v[s * 3 * PLANES + t];
+    totals[t / PLANES][t % PLANES] = sum;
   }
   barrier();
   uint escapes_before[PLANES];  // escapes used by earlier tiles, per plane
@@ -249,44 +251,56 @@ void main() {
   Particles out_particles = Particles(pc.particles);
   Values out_values = Values(pc.values);
 
-  // Raw values and escape codes per plane; counts packed 16 bits apart.
+  // Raw values and escape codes per plane; counts (at most 2048 a tile)
+  // two to a word.
   uint64_t raw[PLANES];
-  u64vec4 codes = u64vec4(0);
+  uint words[WORDS], totals_of[WORDS];
+  for (uint k = 0; k < WORDS; ++k) words[k] = 0;
   for (uint p = 0; p < PLANES; ++p) {
     uint found = 0;
     raw[p] = p < planes ? raw_values(w, c.planes[p], i0, m, found) : 0;
-    codes[p / 4] |= uint64_t(found) << (16 * (p % 4));
+    words[p / 2] |= found << (16 * (p % 2));
   }
-  u64vec4 codes_total;
-  const u64vec4 codes_before = exclusive_scan(codes, codes_total);
+  exclusive_sums(words, 5, totals_of);
   for (uint p = 0; p < planes; ++p) {
-    const uint k = escapes_before[p] + field16(codes_before[p / 4], p % 4);
+    const uint k = escapes_before[p] + half16(words[p / 2], p % 2);
     raw[p] = resolve_escapes(w, c.planes[p], raw[p], m, k);
-    escapes_before[p] += field16(codes_total[p / 4], p % 4);
+    escapes_before[p] += half16(totals_of[p / 2], p % 2);
   }
 
-  // Local running sums of the 8 deltas, then the workgroup's.
+  // Local running sums of the 8 deltas, then the workgroup's: a Morton
+  // delta's sum is carried as three 16-bit pieces (a tile's sum of each
+  // fits in 32 bits), recombined in 64 bits.
   uint64_t codes_local[PER];
   uint values_local[PER];
   uint64_t code_sum = 0;
   uint value_sum = 0;
+  uint piece[3] = uint[3](0, 0, 0);
   for (uint j = 0; j < PER; ++j) {
     uint64_t delta = 0;
-    for (uint b = 0; b < 6; ++b) delta |= ((raw[b] >> (8 * j)) & 0xffUL) << (8 * b);
+    for (uint q = 0; q < 3; ++q) {
+      const uint d = uint((raw[2 * q] >> (8 * j)) & 0xffUL) | (uint((raw[2 * q + 1] >> (8 * j)) & 0xffUL) << 8);
+      piece[q] += d;
+      delta |= uint64_t(d) << (16 * q);
+    }
     code_sum += delta;
     codes_local[j] = code_sum;
     value_sum += uint((raw[8] >> (8 * j)) & 0xffUL) | (uint((raw[9] >> (8 * j)) & 0xffUL) << 8);
     values_local[j] = value_sum;
   }
-  u64vec4 sums_total;
-  const u64vec4 sums_before = exclusive_scan(u64vec4(code_sum, value_sum, 0, 0), sums_total);
+  words[0] = piece[0];
+  words[1] = piece[1];
+  words[2] = piece[2];
+  words[3] = value_sum;
+  exclusive_sums(words, 4, totals_of);
+  const uint64_t codes_before = uint64_t(words[0]) + (uint64_t(words[1]) << 16) + (uint64_t(words[2]) << 32);
   for (uint j = 0; j < m; ++j) {
-    const uint64_t code = (code_before + sums_before.x + codes_local[j]) & 0xffffffffffffUL;
+    const uint64_t code = (code_before + codes_before + codes_local[j]) & 0xffffffffffffUL;
     const uint lod = uint((raw[6] >> (8 * j)) & 0xffUL) | (uint((raw[7] >> (8 * j)) & 0xffUL) << 8);
     const uint x = compact3(code), y = compact3(code >> 1), z = compact3(code >> 2);
     out_particles.v[c.first + i0 + j] = uvec2(x | (y << 16), z | (lod << 16));
     if (c.with_attribute != 0) {
-      out_values.v[c.first + i0 + j] = uint16_t((value_before + uint(sums_before.y) + values_local[j]) & 0xffffu);
+      out_values.v[c.first + i0 + j] = uint16_t((value_before + words[3] + values_local[j]) & 0xffffu);
     }
   }
 

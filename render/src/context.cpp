@@ -73,6 +73,7 @@ std::string missing_features(const vk::raii::PhysicalDevice& pd, bool presentati
         !(subgroup.supportedOperations & vk::SubgroupFeatureFlagBits::eArithmetic)) {
       return "no subgroup arithmetic in compute shaders";
     }
+    if (subgroup.subgroupSize < 4) return "subgroups narrower than 4 lanes";  // decode.comp's shared sums
   }
   if (presentation && !has_extension(pd.enumerateDeviceExtensionProperties(), VK_KHR_SWAPCHAIN_EXTENSION_NAME)) {
     return "no VK_KHR_swapchain";

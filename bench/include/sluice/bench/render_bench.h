@@ -18,6 +18,9 @@ struct RenderBenchOptions {
   std::string real;             // a .sluice file: its last frame gets rows too
   bool vtk = false;             // run the VTK peer (python3-vtk9 under xvfb-run)
   uint64_t vtk_max = 1'000'000; // largest frame given to the peer (it takes ~30 s per frame per 1M on llvmpipe)
+  // The native peer (bench/vtk_peer: VTK built with EGL, headless on a GPU
+  // driver) instead of python3-vtk9 under xvfb-run; empty: the Python peer.
+  std::string vtk_peer;
   std::string device;           // Vulkan device choice, as --device
   std::string images;           // directory to save each case's image (and the peer's)
   std::string splat = "auto";   // sphere splatting: auto, compute or raster
