@@ -450,13 +450,16 @@ Buffer create_buffer(const Context::Impl& ctx, vk::DeviceSize size, vk::BufferUs
   vk::MemoryPropertyFlags props;
   switch (kind) {
     case MemoryKind::DeviceLocal: props = vk::MemoryPropertyFlagBits::eDeviceLocal; break;
-    case MemoryKind::Upload: props = vk::MemoryPropertyFlagBits::eHostVisible | vk::MemoryPropertyFlagBits::eHostCoherent; break;
+    case MemoryKind::Upload:
+    case MemoryKind::UploadRead:
+      props = vk::MemoryPropertyFlagBits::eHostVisible | vk::MemoryPropertyFlagBits::eHostCoherent;
+      break;
     case MemoryKind::Readback:
       props = vk::MemoryPropertyFlagBits::eHostVisible | vk::MemoryPropertyFlagBits::eHostCoherent;
       break;
   }
   uint32_t type = 0;
-  if (kind == MemoryKind::Readback) {
+  if (kind == MemoryKind::Readback || kind == MemoryKind::UploadRead) {
     // Prefer cached memory for reads; fall back to any host-visible type.
     try {
       type = ctx.memory_type(req.memoryTypeBits, props | vk::MemoryPropertyFlagBits::eHostCached);

@@ -67,7 +67,9 @@ runtime::FrameBuffers StagingAllocator::allocate(const runtime::FrameLayout& lay
   Pool::Block& block = pool_->acquire(at.bytes, [&](uint64_t need) {
     Memory m;
     try {
-      m.staging = create_buffer(context_impl(context_), need, vk::BufferUsageFlagBits::eTransferSrc, MemoryKind::Upload);
+      // Encoded frames are read into the block and their checksums read back.
+      m.staging = create_buffer(context_impl(context_), need, vk::BufferUsageFlagBits::eTransferSrc,
+                                layout.encoded_bytes > 0 ? MemoryKind::UploadRead : MemoryKind::Upload);
     } catch (const vk::SystemError&) {
       // The driver has no more host-visible memory for us: plain host memory,
       // copied through the renderer's staging at upload.

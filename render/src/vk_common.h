@@ -66,7 +66,10 @@ struct Buffer {
   vk::DeviceAddress address = 0;  // when created with eShaderDeviceAddress
 };
 
-enum class MemoryKind { DeviceLocal, Upload, Readback };
+// UploadRead: staging the CPU also reads (encoded frames whose checksums
+// are checked where they were read): cached where the driver offers it, as
+// Readback; plain Upload memory may be write-combined, slow to read.
+enum class MemoryKind { DeviceLocal, Upload, UploadRead, Readback };
 Buffer create_buffer(const Context::Impl& ctx, vk::DeviceSize size, vk::BufferUsageFlags usage, MemoryKind kind);
 // Makes `b` at least `size` bytes (contents lost when it grows). The old
 // buffer goes to `retire` when given (recorded work may still use it), else

@@ -262,6 +262,7 @@ PipelineStats PipelineCore::stats() const {
   s.bytes_read = c.bytes_read.load(kRelaxed);
   s.read_seconds = double(c.read_ns.load(kRelaxed)) * 1e-9;
   s.frames_read = c.frames_read.load(kRelaxed);
+  s.frames_in_place = c.frames_in_place.load(kRelaxed);
   s.cache_hits = c.cache_hits.load(kRelaxed);
   s.frames_decoded = c.frames_decoded.load(kRelaxed);
   s.decoded_bytes = c.decoded_bytes.load(kRelaxed);

@@ -35,7 +35,7 @@ struct alignas(64) WorkerCounters {
 };
 
 struct Counters {
-  std::atomic<uint64_t> bytes_read{0}, read_ns{0}, frames_read{0}, cache_hits{0};
+  std::atomic<uint64_t> bytes_read{0}, read_ns{0}, frames_read{0}, frames_in_place{0}, cache_hits{0};
   std::atomic<uint64_t> frames_decoded{0}, decoded_bytes{0}, frames_cancelled{0};
   std::atomic<uint64_t> frames_delivered{0}, frames_failed{0};
   std::atomic<uint64_t> held_bytes{0}, peak_record_bytes{0};
@@ -104,6 +104,14 @@ class PipelineCore {
   void free_slot(ReaderState& rs, uint32_t s);
   Start start_entry(ReaderState& rs, uint64_t k, uint64_t frame);
   bool read_record(ReaderState& rs, Slot& slot, uint32_t record);
+  // Kept-encoded frames read whole from a buffered source are read straight
+  // into their staged area (the record is its prefix: no worker copies it).
+  bool reads_in_place(const io::FrameIndexEntry& e) const;
+  bool read_in_place(ReaderState& rs, Slot& slot);
+  void set_layout(Slot& slot, uint64_t particles, uint64_t encoded_bytes) const;
+  void allocate_buffers(ReaderState& rs, Slot& slot);
+  void release_buffers(ReaderState& rs, Slot& slot);
+  void move_to_larger_area(ReaderState& rs, Slot& slot, uint64_t staged_bytes);
   // record_read.cpp: reads [0, need) of `dst` from `offset` in pieces, on
   // read_threads_ threads; false if a newer generation (or stop) came first.
   bool read_pieces(std::span<std::byte> dst, uint64_t offset, uint64_t need, uint64_t frame, uint64_t generation);

@@ -131,14 +131,17 @@ void PipelineCore::settle(ReaderState& rs, uint32_t s, SlotState state) {
   }
 }
 
+void PipelineCore::release_buffers(ReaderState& rs, Slot& slot) {
+  if (!slot.has_buffers) return;
+  rs.decoded_held -= allocator_.bytes_for(slot.layout);
+  allocator_.release(slot.buffers);
+  slot.has_buffers = false;
+  counters_.held_bytes.store(held_now(rs), kRelaxed);
+}
+
 void PipelineCore::free_slot(ReaderState& rs, uint32_t s) {
   Slot& slot = slots_[s];
-  if (slot.has_buffers) {
-    rs.decoded_held -= allocator_.bytes_for(slot.layout);
-    allocator_.release(slot.buffers);
-    slot.has_buffers = false;
-    counters_.held_bytes.store(held_now(rs), kRelaxed);
-  }
+  release_buffers(rs, slot);
   slot.state.store(SlotState::Free, kRelaxed);
   rs.free_slots.push_back(s);
 }
@@ -265,7 +268,9 @@ PipelineCore::Start PipelineCore::start_entry(ReaderState& rs, uint64_t k, uint6
       slot.attribute_targets.reserve(reader_.header().attributes.size());
       slot.where.file = reader_.path();
     }
-    if (!read_record(rs, slot, record)) {
+    const bool in_place = reads_in_place(reader_.index().frames[frame]);
+    if (!(in_place ? read_in_place(rs, slot) : read_record(rs, slot, record))) {
+      release_buffers(rs, slot);
       rs.free_records.push_back(record);
       slot.record = kNoRecord;
       slot.state.store(SlotState::Free, kRelaxed);
@@ -350,24 +355,95 @@ bool PipelineCore::read_record(ReaderState& rs, Slot& slot, uint32_t record) {
   return true;
 }
 
-void PipelineCore::prepare_decode(ReaderState& rs, Slot& slot) {
-  const io::FrameHeader& h = slot.header;
-  slot.chunk_first.resize(h.chunks.size());
-  io::chunk_starts(h, slot.chunk_first);  // parse_record checked that the counts add up to the index's
+bool PipelineCore::reads_in_place(const io::FrameIndexEntry&) const {
+  return options_.keep_encoded && source_->alignment() <= 1;
+}
+
+// The area is sized for the record and its tables with no plane inflated
+// (GPU-decodable files); prepare_decode moves a frame with zstd planes to a
+// larger one. The record holds the slot's record buffer as a token only
+// (it bounds the frames being read and staged at once), not its memory.
+// Only some layers wanted: the table first, then the payloads up to the
+// last wanted one, as read_record does.
+bool PipelineCore::read_in_place(ReaderState& rs, Slot& slot) {
+  const io::FrameIndexEntry& e = reader_.index().frames[slot.frame];
+  set_layout(slot, e.count_in(options_.layers),
+             encoded_block_bytes(io::staged_bytes_bound(e.bytes, e.chunk_count, e.particle_count, 0)));
+  allocate_buffers(rs, slot);
+  if (slot.buffers.particles.size() < e.bytes) {
+    throw io::Error(reader_.location(slot.frame), "the frame allocator returned buffers smaller than the frame");
+  }
+  const std::span<std::byte> dst = slot.buffers.particles.first(e.bytes);
+  slot.partial = e.layered() && e.count_in(options_.layers) != e.particle_count;
+  if (!slot.partial) {
+    if (!read_pieces(dst, e.offset, e.bytes, slot.frame, rs.generation)) return false;
+    slot.record_bytes = dst;
+  } else {
+    const uint64_t table = std::min<uint64_t>(e.bytes, io::frame_table_bytes(e.chunk_count, reader_.header().attributes.size()));
+    if (!read_pieces(dst.first(table), e.offset, table, slot.frame, rs.generation)) return false;
+    reader_.parse_table(slot.frame, dst.first(table), slot.header, record_where_);
+    const uint64_t end = io::layers_end(slot.header, options_.layers, reader_.header().attributes.size());
+    if (end > table && !read_pieces(dst.subspan(table, end - table), e.offset + table, end - table, slot.frame, rs.generation)) {
+      return false;
+    }
+    slot.record_bytes = dst.first(end);
+  }
+  counters_.frames_read.fetch_add(1, kRelaxed);
+  return true;
+}
+
+void PipelineCore::set_layout(Slot& slot, uint64_t particles, uint64_t encoded_bytes) const {
   slot.layout.frame = slot.frame;
-  slot.layout.particles = h.particle_count;
+  slot.layout.particles = particles;
   slot.layout.particle_stride = static_cast<uint32_t>(io::decoded_particle_bytes(reader_.header().position_coding));
   slot.layout.attribute_streams = attribute_streams_;
-  slot.layout.encoded_bytes = 0;
-  if (options_.keep_encoded) {  // the tables are read here; the workers stage the payloads
-    io::plan_gpu_decode(slot.record_bytes, h, reader_.header(), {.color_attribute = options_.encoded_color_attribute},
-                        slot.plan, slot.where);
-    slot.layout.encoded_bytes = encoded_block_bytes(slot.plan.staged_bytes());
-  }
+  slot.layout.encoded_bytes = encoded_bytes;
+}
+
+void PipelineCore::allocate_buffers(ReaderState& rs, Slot& slot) {
   slot.buffers = allocator_.allocate(slot.layout);
   slot.has_buffers = true;
   rs.decoded_held += allocator_.bytes_for(slot.layout);
   counters_.held_bytes.store(held_now(rs), kRelaxed);
+}
+
+// A frame read in place whose planes inflate past its area: a larger area,
+// the record copied to its start.
+void PipelineCore::move_to_larger_area(ReaderState& rs, Slot& slot, uint64_t staged_bytes) {
+  FrameLayout larger = slot.layout;
+  larger.encoded_bytes = encoded_block_bytes(staged_bytes);
+  FrameBuffers buffers = allocator_.allocate(larger);  // throws: the frame fails, the slot keeps its area
+  if (buffers.particles.size() < staged_bytes) {
+    allocator_.release(buffers);
+    throw io::Error(reader_.location(slot.frame), "the frame allocator returned buffers smaller than the frame");
+  }
+  std::memcpy(buffers.particles.data(), slot.record_bytes.data(), slot.record_bytes.size());
+  release_buffers(rs, slot);
+  slot.layout = larger;
+  slot.buffers = buffers;
+  slot.has_buffers = true;
+  rs.decoded_held += allocator_.bytes_for(slot.layout);
+  counters_.held_bytes.store(held_now(rs), kRelaxed);
+  slot.record_bytes = buffers.particles.first(slot.record_bytes.size());
+}
+
+void PipelineCore::prepare_decode(ReaderState& rs, Slot& slot) {
+  const io::FrameHeader& h = slot.header;
+  slot.chunk_first.resize(h.chunks.size());
+  io::chunk_starts(h, slot.chunk_first);  // parse_record checked that the counts add up to the index's
+  if (!slot.has_buffers) set_layout(slot, h.particle_count, 0);
+  if (options_.keep_encoded) {  // the tables are read here; the workers stage the payloads
+    io::plan_gpu_decode(slot.record_bytes, h, reader_.header(), {.color_attribute = options_.encoded_color_attribute},
+                        slot.plan, slot.where);
+    if (!slot.has_buffers) {
+      slot.layout.encoded_bytes = encoded_block_bytes(slot.plan.staged_bytes());
+    } else if (slot.buffers.particles.size() < slot.plan.staged_bytes()) {
+      move_to_larger_area(rs, slot, slot.plan.staged_bytes());
+    } else {
+      counters_.frames_in_place.fetch_add(1, kRelaxed);
+    }
+  }
+  if (!slot.has_buffers) allocate_buffers(rs, slot);
 
   bool fits = slot.buffers.particles.size() >= slot.layout.particle_bytes() &&
               slot.buffers.attributes.size() >= attribute_streams_;

@@ -35,9 +35,7 @@ FrameFootprint largest_frame(const io::ContainerReader& reader, size_t attribute
     // the chunk plans and the tile table, the roundings and the padding.
     if (encoded) {
       const uint64_t n = layout.particles, chunks = e.chunk_count, planes = io::kGpuPlanes;
-      const uint64_t inflated = planes * (n + 15 * chunks);
-      const uint64_t tables = chunks * sizeof(io::GpuChunkPlan) + 4 * (n / io::kGpuTile + chunks);
-      layout.encoded_bytes = encoded_block_bytes(e.bytes + inflated + tables + 15 + io::kGpuReadPadding + 15);
+      layout.encoded_bytes = encoded_block_bytes(io::staged_bytes_bound(e.bytes, chunks, n, planes * (n + 15 * chunks)));
     }
     const uint64_t bytes = allocator ? allocator->bytes_for(layout) : layout.total_bytes();
     if (bytes > f.decoded_bytes) f.chunks = std::max<uint32_t>(1, e.chunk_count);

@@ -83,6 +83,15 @@ struct GpuDecodePlan {
   uint64_t stored_planes = 0, packed_planes = 0, zstd_planes = 0;
 };
 
+// An upper bound of GpuDecodePlan::staged_bytes() for a record of
+// `record_bytes` holding `chunks` chunks of `particles` in all, of whose
+// planes `inflated_bytes` are inflated on the CPU (each rounded up to 16):
+// the area can be sized before the record's tables are read.
+inline uint64_t staged_bytes_bound(uint64_t record_bytes, uint64_t chunks, uint64_t particles, uint64_t inflated_bytes) {
+  return record_bytes + 15 + inflated_bytes + kGpuReadPadding + 15 + chunks * sizeof(GpuChunkPlan) +
+         4 * (particles / kGpuTile + chunks);
+}
+
 struct GpuPlanOptions {
   int color_attribute = -1;  // attribute index decoded into planes 8-9; < 0: none
 };

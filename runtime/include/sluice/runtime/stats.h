@@ -29,6 +29,9 @@ struct PipelineStats {
   uint64_t bytes_read = 0;
   double read_seconds = 0;     // time inside read calls
   uint64_t frames_read = 0;
+  // Kept-encoded frames read straight into their staged area and staged
+  // there (no copy on the CPU; PipelineOptions::keep_encoded).
+  uint64_t frames_in_place = 0;
   uint64_t cache_hits = 0;     // entries served from a frame kept in memory, no read or decode
 
   // Decode workers.
