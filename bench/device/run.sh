@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Runs on the GPU machine (see bench/device/README.md): every benchmark the
 # issues ask GPU-machine figures for, in one call. Results go to $OUT.
-#   bash bench/device/run.sh [io] [import] [layers] [band] [render] [stream] [split] [codec] [huge] [embed] [compare] [live] [stereo] [xrsize] [firsthour] [streamcmp] [gpudecode] [gpuquick] [gpupair] [egl] [vtkpeer]   (default: io render stream)
+#   bash bench/device/run.sh [io] [import] [layers] [band] [render] [stream] [split] [codec] [huge] [embed] [compare] [live] [stereo] [xrsize] [firsthour] [streamcmp] [gpudecode] [gpuquick] [gpupair] [gpuab] [gpu100] [egl] [vtkpeer]   (default: io render stream)
 set -uo pipefail
 OUT=${OUT:-/tmp/out}
 mkdir -p "$OUT" /tmp/s
@@ -207,6 +207,22 @@ for stage in $stages; do
         run $b bench stream --gpu /tmp/q10m.sluice --memory 16G --no-storage --min-time 1
         run $b bench stream --gpu /tmp/q100m.sluice --memory 40G --no-storage --min-time 1
       done
+      ;;
+    gpuab)  # the pipeline into device memory, this build against BASE's, alternated 3 times (10M x 24 frames)
+      run $S synth -n 10M --frames 24 -o /tmp/ab10m.sluice --force -q --gpu-decodable
+      for round in 1 2 3; do
+        for b in ./.gpu/sluice_base $S; do
+          [[ -x $b ]] || continue
+          log "round $round: $b"
+          $b bench stream --gpu /tmp/ab10m.sluice --memory 16G --no-storage --min-time 2 2>&1 | grep -E "GPU \(kept|CPU workers|pread|GPU decode alone" | tee -a "$OUT/summary.txt"
+        done
+      done
+      rm -f /tmp/ab10m.sluice
+      ;;
+    gpu100)  # 100M particles a frame through the GPU path, more frames than the window holds
+      run $S synth -n 100M --frames 12 -o /tmp/g100m.sluice --force -q --gpu-decodable
+      run $S bench stream --gpu /tmp/g100m.sluice --memory 48G --no-storage --min-time 3
+      rm -f /tmp/g100m.sluice
       ;;
     egl)  # what the machine offers for OpenGL through EGL (the VTK peer's needs)
       { ls /usr/share/glvnd/egl_vendor.d /etc/glvnd/egl_vendor.d 2>&1; cat /usr/share/glvnd/egl_vendor.d/*.json 2>&1

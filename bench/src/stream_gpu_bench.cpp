@@ -48,6 +48,8 @@ struct DevicePass {
   uint64_t staged_bytes = 0;  // bytes copied to the device over the timed frames
   std::string window;
   double in_place = 0;  // share of the frames read straight into their staged area
+  double reading = 0;   // share of the timed run the reader thread spent in reads
+  uint64_t fresh_blocks = 0;  // staging blocks allocated anew during the timed run
 };
 
 struct DeviceSetup {
@@ -111,6 +113,8 @@ DevicePass stream_to_device(const io::ContainerReader& reader, const Slice& slic
   DevicePass p;
   staged = 0;
   const double cpu0 = cpu_seconds();
+  const double read0 = pipeline.stats().read_seconds;
+  const uint64_t blocks0 = staging.fresh_allocations();
   const auto start = Clock::now();
   p.frames = consume(UINT64_MAX, min_seconds);
   for (auto& [handle, ticket] : flight) renderer.wait_upload(ticket);  // the last frames arrive too
@@ -120,6 +124,8 @@ DevicePass stream_to_device(const io::ContainerReader& reader, const Slice& slic
   const runtime::PipelineStats stats = pipeline.stats();
   p.window = std::to_string(stats.active_frames) + "/" + std::to_string(stats.window_frames);
   p.in_place = double(stats.frames_in_place) / double(std::max<uint64_t>(stats.frames_read, 1));
+  p.reading = (stats.read_seconds - read0) / p.seconds;
+  p.fresh_blocks = staging.fresh_allocations() - blocks0;
   flight.clear();
   return p;
 }
@@ -240,7 +246,7 @@ void run_stream_gpu_bench(const StreamBenchOptions& o) {
   // 2. The pipeline into device memory, GPU decode and CPU decode.
   const double read_fps = cached / in;
   Table passes({"decoded by", "frames/s", "M particles/s", "MB/frame copied", "window", "bound frames/s", "vs bound",
-                "limited by", "CPU ms/frame", "cores busy", "read in place"});
+                "limited by", "CPU ms/frame", "cores busy", "read in place", "reader reading", "new blocks"});
   for (const bool gpu : {true, false}) {
     step(gpu ? "the pipeline, GPU decoding" : "the pipeline, CPU decoding");
     const DevicePass p = stream_to_device(reader, slice, context, setup, gpu, o.min_seconds);
@@ -251,7 +257,8 @@ void run_stream_gpu_bench(const StreamBenchOptions& o) {
     passes.row({gpu ? "GPU (kept encoded)" : "CPU workers", num(fps, 1), num(fps * particles / 1e6, 1),
                 num(per_frame / 1e6, 1), p.window, num(bound, 1), percent(fps / bound),
                 read_fps < copy_fps ? "page-cache read" : "host -> device copy", num(1e3 * p.cpu / double(p.frames), 2),
-                num(p.cpu / p.seconds, 1), gpu ? percent(p.in_place) : "-"});
+                num(p.cpu / p.seconds, 1), gpu ? percent(p.in_place) : "-", percent(p.reading),
+                std::to_string(p.fresh_blocks)});
   }
   passes.print("Pipeline -> renderer device buffers, page cache, two frames in flight (bound: the slower of reading the "
                "file and copying it to the device)");

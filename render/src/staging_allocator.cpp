@@ -57,6 +57,7 @@ uint64_t StagingAllocator::kept_bytes() const { return pool_->kept_bytes(); }
 void StagingAllocator::trim(uint64_t keep) { pool_->trim(keep); }
 uint64_t StagingAllocator::held_bytes() const { return pool_->held_bytes(); }
 uint64_t StagingAllocator::peak_held_bytes() const { return pool_->peak_held_bytes(); }
+uint64_t StagingAllocator::fresh_allocations() const { return pool_->allocations(); }
 
 uint64_t StagingAllocator::bytes_for(const runtime::FrameLayout& layout) const {
   return runtime::block_layout(layout, kAlignment).bytes;

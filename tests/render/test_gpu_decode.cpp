@@ -327,8 +327,11 @@ TEST(GpuDecode, CorruptPlanesAreCaughtAndNamed) {
 
 // The copy straight from a file's page-cache pages (what the pipeline could
 // use instead of the workers' copy): the driver's answer is the figure, so
-// the test checks only that it is asked properly: a mapping of a file at
-// the device's granularity is imported, a misaligned pointer is refused.
+// the test checks that it is asked properly: a mapping of a file at the
+// device's granularity is imported by lavapipe (a GPU driver may refuse
+// file-backed pages: NVIDIA 580 answers vkAllocateMemory with
+// ErrorOutOfDeviceMemory, and the refusal must name the call), and a
+// misaligned pointer is refused before the driver is asked.
 TEST(ImportedCopy, AFilesMappingIsImportedAndMisalignmentRefused) {
   ValidationGuard guard;
   const uint64_t alignment = import_alignment(context());
@@ -347,8 +350,13 @@ TEST(ImportedCopy, AFilesMappingIsImportedAndMisalignmentRefused) {
   void* mapped = ::mmap(nullptr, bytes, PROT_READ, MAP_SHARED | MAP_POPULATE, fd, 0);
   ASSERT_NE(mapped, MAP_FAILED);
   const ImportedCopy good = imported_host_copy_gbps(context(), mapped, bytes, 1);
-  EXPECT_TRUE(good.imported) << good.refusal;
-  EXPECT_GT(good.gbps, 0.0);
+  if (good.imported) {
+    EXPECT_GT(good.gbps, 0.0);
+  } else {
+    EXPECT_NE(context().device().type, "cpu") << "lavapipe imports a file's mapping: " << good.refusal;
+    EXPECT_NE(good.refusal.find("vk"), std::string::npos) << good.refusal;
+    std::printf("the driver refuses a file's mapping: %s\n", good.refusal.c_str());
+  }
   const ImportedCopy bad = imported_host_copy_gbps(context(), static_cast<char*>(mapped) + 1, bytes - alignment, 1);
   EXPECT_FALSE(bad.imported);
   EXPECT_NE(bad.refusal.find("multiple"), std::string::npos) << bad.refusal;

@@ -50,6 +50,7 @@ class StagingAllocator final : public runtime::FrameAllocator {
   uint64_t held_bytes() const;
   uint64_t peak_held_bytes() const;
   uint64_t fallback_allocations() const { return fallbacks_.load(std::memory_order_relaxed); }
+  uint64_t fresh_allocations() const;  // blocks made anew (not reused): each a Vulkan allocation
 
   struct Memory;  // render/src/staging_block.h: a block's staging buffer (or host fallback)
   using Pool = runtime::BlockPool<Memory>;  // FrameBuffers::tag points at one of its blocks
