@@ -1,13 +1,13 @@
 #version 460
 // GPU decode of Quantized16 chunks (io/gpu_decode_plan.h has the plan, io
 // codec.h the planes): one workgroup per tile of 2048 particles of a chunk,
-// 8 per thread, in three passes.
+// 8 per thread, in two passes.
 //
 // Pass 0 sums each tile's planes: the escape codes it holds and the sum of
-// its other bytes, per plane. Pass 1 sums each tile's own escapes: the
-// codes of the chunk's earlier tiles say where they start in the list.
-// Pass 2 gives each tile what came before it in its chunk: the escapes used
-// earlier and each plane's byte sum so far, hence the Morton code and the
+// its other bytes, per plane. Pass 1 gives each tile what came before it in
+// its chunk: the escapes used earlier (the earlier tiles' codes count them,
+// and the workgroup sums their bytes from the list) and each plane's byte
+// sum so far, hence the Morton code and the
 // attribute value before the tile (a delta is the sum of its bytes
 // shifted, so sums of deltas are sums of plane sums). Then each thread
 // reads its 8 values of every plane (stored: 8 bytes; packed: one group of
@@ -56,7 +56,7 @@ layout(buffer_reference, std430, buffer_reference_align = 2) writeonly buffer Va
 layout(buffer_reference, std430, buffer_reference_align = 4) writeonly buffer Errors { uint v[]; };
 layout(buffer_reference, std430, buffer_reference_align = 4) readonly buffer TileChunks { uint v[]; };
 // Per tile, PLANES words each: escape codes, the sum of the other bytes
-// (pass 0), the sum of its escapes (pass 1).
+// (pass 0).
 layout(buffer_reference, std430, buffer_reference_align = 4) buffer TileSums { uint v[]; };
 
 layout(push_constant) uniform Push {
@@ -68,7 +68,7 @@ layout(push_constant) uniform Push {
   uvec2 tile_chunks;  // TileChunks: each tile's chunk
   uvec2 tile_sums;    // TileSums: 3 x PLANES words per tile
   uint tile_base;   // workgroup g decodes tile tile_base + g
-  uint pass;        // 0: sum the tiles; 1: sum their escapes; 2: decode them
+  uint pass;        // 0: sum the tiles; 1: decode them
 } pc;
 
 // Workgroup totals per plane: escape codes, other bytes, escapes' bytes.
@@ -208,37 +208,34 @@ void main() {
     }
     barrier();
     if (t < PLANES) {
-      sums.v[tile * 3 * PLANES + t] = totals[COUNTS][t];
-      sums.v[tile * 3 * PLANES + PLANES + t] = totals[SUMS][t];
+      sums.v[tile * 2 * PLANES + t] = totals[COUNTS][t];
+      sums.v[tile * 2 * PLANES + PLANES + t] = totals[SUMS][t];
     }
     return;
   }
 
-  // What the chunk's earlier tiles hold: escape codes, other bytes and
-  // (after pass 1) their escapes' bytes; a thread per word (a chunk has
-  // few tiles: 16 at the encoder's default of 32768 particles).
-  if (t < 3 * PLANES && (t < PLANES || pc.pass == 2)) {
+  // What the chunk's earlier tiles hold: escape codes and other bytes; a
+  // thread per word (a chunk has few tiles: 16 at the encoder's default of
+  // 32768 particles).
+  if (t < 2 * PLANES) {
     uint sum = 0;
-    for (uint s = c.first_tile; s < tile; ++s) sum += sums.v[s * 3 * PLANES + t];
+    for (uint s = c.first_tile; s < tile; ++s) sum += sums.v[s * 2 * PLANES + t];
     totals[t / PLANES][t % PLANES] = sum;
   }
   barrier();
   uint escapes_before[PLANES];  // escapes used by earlier tiles, per plane
   for (uint p = 0; p < PLANES; ++p) escapes_before[p] = totals[COUNTS][p];
-
-  if (pc.pass == 1) {  // this tile's escapes: the next `codes` of each list (ESCAPES is still zero)
-    for (uint p = 0; p < planes; ++p) {
-      const Plane plane = c.planes[p];
-      if (plane.width == 0) continue;
-      const uint end = min(escapes_before[p] + sums.v[tile * 3 * PLANES + p], plane.count);
-      uint sum = 0;
-      for (uint i = escapes_before[p] + t; i < end; i += T) sum += load_byte(w, plane.escapes + i);
-      add(ESCAPES, p, sum);
-    }
-    barrier();
-    if (t < PLANES) sums.v[tile * 3 * PLANES + 2 * PLANES + t] = totals[ESCAPES][t];
-    return;
+  // Their bytes: the first escapes_before of each list, summed here (a few
+  // loads a thread: escapes are rare) rather than in a pass of their own.
+  for (uint p = 0; p < planes; ++p) {
+    const Plane plane = c.planes[p];
+    if (plane.width == 0) continue;
+    const uint end = min(escapes_before[p], plane.count);
+    uint sum = 0;
+    for (uint i = t; i < end; i += T) sum += load_byte(w, plane.escapes + i);
+    add(ESCAPES, p, sum);
   }
+  barrier();
 
   uint64_t code_before = 0;  // the Morton code before this tile
   uint value_before = 0;     // the attribute value before this tile

@@ -1,4 +1,4 @@
-// The GPU decoder's dispatches: three passes of one workgroup per tile, in batches of the
+// The GPU decoder's dispatches: two passes of one workgroup per tile, in batches of the
 // guaranteed maximum workgroup count.
 #include "decode_pass.h"
 
@@ -41,7 +41,7 @@ void DecodePass::record(vk::CommandBuffer cmd, const DecodeRun& run, const std::
   if (run.tiles == 0) return;
   cmd.bindPipeline(vk::PipelineBindPoint::eCompute, *pipeline_);
   DecodePush push{run.encoded, run.plans, run.particles, run.attribute, run.errors, run.tile_chunks, run.tile_sums, 0, 0};
-  for (uint32_t pass = 0; pass < 3; ++pass) {  // sum the tiles, sum their escapes, decode them
+  for (uint32_t pass = 0; pass < kPasses; ++pass) {
     if (pass > 0) barrier(cmd);
     push.pass = pass;
     for (uint32_t base = 0; base < run.tiles; base += kMaxGroups) {

@@ -23,12 +23,13 @@ struct DecodeRun {
 
 class DecodePass {
  public:
-  static constexpr uint64_t kTileSumBytes = 3 * 10 * 4;  // per tile: codes, byte sums, escape sums of 10 planes
+  static constexpr uint64_t kTileSumBytes = 2 * 10 * 4;  // per tile: codes and byte sums of 10 planes
+  static constexpr uint32_t kPasses = 2;                 // sum the tiles, decode them
 
   explicit DecodePass(Context::Impl& ctx);
   // Records the dispatches; the caller orders the inputs' writes before and
   // the outputs' reads after (barrier()).
-  // `after(pass)` runs after each pass's dispatches (0, 1, 2), for timestamps.
+  // `after(pass)` runs after each pass's dispatches (0 .. kPasses - 1), for timestamps.
   void record(vk::CommandBuffer cmd, const DecodeRun& run, const std::function<void(uint32_t)>& after = {}) const;
   // Orders transfers and compute before later compute, transfers, vertex reads.
   static void barrier(vk::CommandBuffer cmd);

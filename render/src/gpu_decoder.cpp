@@ -70,7 +70,8 @@ void GpuDecoder::load(std::span<const std::byte> record, const io::FrameHeader& 
 std::vector<double> GpuDecoder::run(int repeats) {
   Impl& r = *impl_;
   std::vector<double> ms;
-  const uint32_t stamps = uint32_t(4 * std::max(repeats, 1));
+  constexpr uint32_t per_run = DecodePass::kPasses + 1;  // before, and after each pass
+  const uint32_t stamps = per_run * uint32_t(std::max(repeats, 1));
   if (r.timestamps) r.stamps = vk::raii::QueryPool(r.ctx.device, vk::QueryPoolCreateInfo({}, vk::QueryType::eTimestamp, stamps));
   const DecodeRun run{r.encoded.address,
                       r.encoded.address + r.plan.plans_offset(),
@@ -85,9 +86,9 @@ std::vector<double> GpuDecoder::run(int repeats) {
     for (int k = 0; k < std::max(repeats, 1); ++k) {
       cmd.fillBuffer(*r.errors.buffer, 0, VK_WHOLE_SIZE, 0);
       DecodePass::barrier(cmd);
-      if (r.timestamps) cmd.writeTimestamp2(Stage::eAllCommands, *r.stamps, uint32_t(4 * k));
+      if (r.timestamps) cmd.writeTimestamp2(Stage::eAllCommands, *r.stamps, per_run * uint32_t(k));
       r.pass.record(cmd, run, [&](uint32_t pass) {
-        if (r.timestamps) cmd.writeTimestamp2(Stage::eAllCommands, *r.stamps, uint32_t(4 * k + 1 + pass));
+        if (r.timestamps) cmd.writeTimestamp2(Stage::eAllCommands, *r.stamps, per_run * uint32_t(k) + 1 + pass);
       });
       DecodePass::barrier(cmd);
     }
@@ -97,10 +98,11 @@ std::vector<double> GpuDecoder::run(int repeats) {
     if ((*r.ctx.device).getQueryPoolResults(*r.stamps, 0, stamps, t.size() * 8, t.data(), 8,
                                             vk::QueryResultFlagBits::e64) == vk::Result::eSuccess) {
       const double to_ms = r.ctx.properties.limits.timestampPeriod * 1e-6;
-      r.pass_ms.assign(3, 0.0);
-      for (uint32_t k = 0; k + 3 < stamps; k += 4) {
-        ms.push_back(double(t[k + 3] - t[k]) * to_ms);
-        for (uint32_t p = 0; p < 3; ++p) r.pass_ms[p] += double(t[k + 1 + p] - t[k + p]) * to_ms / (stamps / 4);
+      r.pass_ms.assign(DecodePass::kPasses, 0.0);
+      const double runs = double(stamps / per_run);
+      for (uint32_t k = 0; k + per_run <= stamps; k += per_run) {
+        ms.push_back(double(t[k + DecodePass::kPasses] - t[k]) * to_ms);
+        for (uint32_t p = 0; p < DecodePass::kPasses; ++p) r.pass_ms[p] += double(t[k + 1 + p] - t[k + p]) * to_ms / runs;
       }
     }
   }

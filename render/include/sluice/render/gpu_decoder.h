@@ -50,7 +50,7 @@ class GpuDecoder {
   // run (timestamps; empty without them).
   std::vector<double> run(int repeats = 1);
 
-  // The last run's three passes (tile sums, escape sums, decode), mean
+  // The last run's passes (tile sums, decode), mean
   // milliseconds over its repeats; empty without timestamps.
   std::vector<double> last_pass_ms() const;
 
