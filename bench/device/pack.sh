@@ -3,7 +3,7 @@
 # sluice binary, every shared library it links that is not glibc, a few
 # frames of the larger PySPH run, and the Vulkan loader packages.
 # Output: .gpu/ (ignored by git), carried by the device tool.
-#   bash bench/device/pack.sh [BIG_VTU_DIR]
+#   [BASE=other/sluice] [VTK_PEER=PREFIX/bin/vtk_fluid_peer] bash bench/device/pack.sh [BIG_VTU_DIR]
 set -euo pipefail
 root=$(cd "$(dirname "$0")/../.." && pwd)
 big=${1:-/work/bigdata/dam_break_3d_dx002}
@@ -18,6 +18,8 @@ tar -C "$stage" -cf - lib big | xz -6 -T2 > "$root/.gpu/pack.tar.xz"
 cp "$root/build/apps/sluice/sluice" "$root/.gpu/sluice"
 # A second binary to measure side by side in the same run (e.g. the last release): BASE=path/to/sluice.
 if [[ -n "${BASE:-}" ]]; then cp "$BASE" "$root/.gpu/sluice_base"; else rm -f "$root/.gpu/sluice_base"; fi
+# The native VTK peer (bench/vtk_peer/build.sh), for the vtkpeer stage: VTK_PEER=PREFIX/bin/vtk_fluid_peer.
+if [[ -n "${VTK_PEER:-}" ]]; then cp "$VTK_PEER" "$root/.gpu/vtk_fluid_peer"; else rm -f "$root/.gpu/vtk_fluid_peer"; fi
 rm -rf "$stage"
 # Vulkan loader (the driver is the machine's own).
 mkdir -p "$root/.gl" /tmp/amd64/partial
