@@ -131,15 +131,23 @@ uint load_byte(Words w, uint at) { return (w.v[at >> 2] >> ((at & 3u) * 8u)) & 0
 // The low `m` bytes of v (m in 0..8).
 uint64_t keep_bytes(uint64_t v, uint m) { return m >= 8 ? v : v & ((uint64_t(1) << (8 * m)) - 1); }
 
-// Gathers bits 0, 3, 6, ... of v into the low bits (io/src/morton.h).
-uint compact3(uint64_t v) {
-  v &= 0x1249249249249249UL;
-  v = (v ^ (v >> 2)) & 0x10c30c30c30c30c3UL;
-  v = (v ^ (v >> 4)) & 0x100f00f00f00f00fUL;
-  v = (v ^ (v >> 8)) & 0x1f0000ff0000ffUL;
-  v = (v ^ (v >> 16)) & 0x1f00000000ffffUL;
-  v = (v ^ (v >> 32)) & 0x1fffffUL;
-  return uint(v);
+// Gathers bits 0, 3, ..., 27 of v into bits 0..9.
+uint compact10(uint v) {
+  v &= 0x09249249u;
+  v = (v ^ (v >> 2)) & 0x030c30c3u;
+  v = (v ^ (v >> 4)) & 0x0300f00fu;
+  v = (v ^ (v >> 8)) & 0xff0000ffu;
+  return (v ^ (v >> 16)) & 0x3ffu;
+}
+
+// A 48-bit Morton code's x, y, z (io/src/morton.h) in 32-bit operations:
+// bits 0..29 of the low word hold 10 bits of each axis, bits 30 and 31 the
+// 11th of x and y, the high word the rest.
+uvec3 morton_decode(uint64_t code) {
+  const uint lo = uint(code), hi = uint(code >> 32);
+  return uvec3(compact10(lo) | (((lo >> 30) & 1u) << 10) | (compact10(hi >> 1) << 11),
+               compact10(lo >> 1) | ((lo >> 31) << 10) | (compact10(hi >> 2) << 11),
+               compact10(lo >> 2) | (compact10(hi) << 10));
 }
 
 // This thread's 8 raw values of plane p (escape codes unresolved) and how
@@ -294,8 +302,8 @@ void main() {
   for (uint j = 0; j < m; ++j) {
     const uint64_t code = (code_before + codes_before + codes_local[j]) & 0xffffffffffffUL;
     const uint lod = uint((raw[6] >> (8 * j)) & 0xffUL) | (uint((raw[7] >> (8 * j)) & 0xffUL) << 8);
-    const uint x = compact3(code), y = compact3(code >> 1), z = compact3(code >> 2);
-    out_particles.v[c.first + i0 + j] = uvec2(x | (y << 16), z | (lod << 16));
+    const uvec3 xyz = morton_decode(code);
+    out_particles.v[c.first + i0 + j] = uvec2(xyz.x | (xyz.y << 16), xyz.z | (lod << 16));
     if (c.with_attribute != 0) {
       out_values.v[c.first + i0 + j] = uint16_t((value_before + words[3] + values_local[j]) & 0xffffu);
     }
