@@ -33,7 +33,16 @@ void PipelineCore::read_piece(std::span<std::byte> piece, uint64_t offset, uint6
 bool PipelineCore::read_pieces(std::span<std::byte> dst, uint64_t offset, uint64_t need, uint64_t frame,
                                uint64_t generation) {
   const uint64_t align = std::max<size_t>(1, source_->alignment());
-  const uint64_t piece = round_up(std::max<uint64_t>(options_.read_piece_bytes, 1), align);
+  // Pieces of at most read_piece_bytes, as many as a multiple of the
+  // threads reading them, of equal size: every thread reads the same share
+  // and none waits for a straggler at the end of the record (9 pieces of
+  // 8 MiB on 4 threads take 3 rounds where 12 of 6 MiB take the same 3 with
+  // less in each).
+  const uint64_t most = round_up(std::max<uint64_t>(options_.read_piece_bytes, 1), align);
+  const uint64_t threads = uint64_t(read_crew_.helpers()) + 1;
+  const uint64_t at_most = (dst.size() + most - 1) / most;
+  const uint64_t even = (at_most + threads - 1) / threads * threads;
+  const uint64_t piece = std::max(align, round_up((dst.size() + even - 1) / std::max<uint64_t>(even, 1), align));
   const uint64_t count = (dst.size() + piece - 1) / piece;
   const uint64_t frame_end = offset + need;
   auto stale = [&] { return stopping_.load(kRelaxed) || generation_.load(kRelaxed) != generation; };
