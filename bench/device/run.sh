@@ -210,7 +210,7 @@ for stage in $stages; do
       ;;
     gpuab)  # the pipeline into device memory, this build against BASE's, alternated 3 times (10M x 24 frames)
       run $S synth -n 10M --frames 24 -o /tmp/ab10m.sluice --force -q --gpu-decodable
-      for round in 1 2 3; do
+      for round in $(seq ${AB_ROUNDS:-3}); do
         for b in ./.gpu/sluice_base $S; do
           [[ -x $b ]] || continue
           log "round $round: $b"
