@@ -221,7 +221,8 @@ void add_bench_render(CLI::App& bench) {
   cmd->add_option("--lod-level", o->lod_level, "cLOD level of the 'LOD on' rows")->capture_default_str();
   cmd->add_option("--real", o->real, "A .sluice file whose last frame is measured too")->check(CLI::ExistingFile);
   cmd->add_flag("--vtk", o->vtk, "Also time VTK's vtkOpenGLFluidMapper on the same frames");
-  cmd->add_option("--vtk-max", o->vtk_max, "Largest frame handed to VTK")->capture_default_str();
+  auto vtk_max = std::make_shared<std::string>("1M");
+  cmd->add_option("--vtk-max", *vtk_max, "Largest frame handed to VTK (k, M suffixes)")->capture_default_str();
   cmd->add_option("--vtk-peer", o->vtk_peer, "The native VTK peer to run (implies --vtk)")->check(CLI::ExistingFile);
   cmd->add_option("--device", o->device, "Vulkan device: index or part of its name");
   cmd->add_option("--images", o->images, "Save every case's image (and VTK's) in this directory");
@@ -236,8 +237,11 @@ void add_bench_render(CLI::App& bench) {
   cmd->add_flag("--stereo", o->stereo,
                 "Two eyes of --size each (as a headset: e.g. --size 2064x2208), both in one pass into a 2-layer target,\n"
                 "against the same two views as two mono passes");
-  cmd->callback([o, sizes, size] {
+  cmd->callback([o, sizes, size, vtk_max] {
     if (!o->vtk_peer.empty()) o->vtk = true;
+    const std::vector<uint64_t> most = bench::parse_counts(*vtk_max);
+    if (most.size() != 1) throw CLI::ValidationError("--vtk-max", "one particle count, such as 1M");
+    o->vtk_max = most[0];
     o->sizes = sizes->empty() ? std::vector<uint64_t>{} : bench::parse_counts(*sizes);
     const auto [w, h] = parse_size(*size);
     o->width = w;
