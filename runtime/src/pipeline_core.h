@@ -106,7 +106,7 @@ class PipelineCore {
   bool read_record(ReaderState& rs, Slot& slot, uint32_t record);
   // Kept-encoded frames read whole from a buffered source are read straight
   // into their staged area (the record is its prefix: no worker copies it).
-  bool reads_in_place(const io::FrameIndexEntry& e) const;
+  bool reads_in_place() const;
   bool read_in_place(ReaderState& rs, Slot& slot);
   void set_layout(Slot& slot, uint64_t particles, uint64_t encoded_bytes) const;
   void allocate_buffers(ReaderState& rs, Slot& slot);

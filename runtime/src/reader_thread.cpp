@@ -268,8 +268,7 @@ PipelineCore::Start PipelineCore::start_entry(ReaderState& rs, uint64_t k, uint6
       slot.attribute_targets.reserve(reader_.header().attributes.size());
       slot.where.file = reader_.path();
     }
-    const bool in_place = reads_in_place(reader_.index().frames[frame]);
-    if (!(in_place ? read_in_place(rs, slot) : read_record(rs, slot, record))) {
+    if (!(reads_in_place() ? read_in_place(rs, slot) : read_record(rs, slot, record))) {
       release_buffers(rs, slot);
       rs.free_records.push_back(record);
       slot.record = kNoRecord;
@@ -355,7 +354,7 @@ bool PipelineCore::read_record(ReaderState& rs, Slot& slot, uint32_t record) {
   return true;
 }
 
-bool PipelineCore::reads_in_place(const io::FrameIndexEntry&) const {
+bool PipelineCore::reads_in_place() const {
   return options_.keep_encoded && source_->alignment() <= 1;
 }
 
