@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Runs on the GPU machine (see bench/device/README.md): every benchmark the
 # issues ask GPU-machine figures for, in one call. Results go to $OUT.
-#   bash bench/device/run.sh [io] [import] [layers] [band] [render] [stream] [split] [codec] [huge] [embed] [compare] [live] [stereo] [xrsize] [firsthour] [streamcmp] [gpudecode] [gpuquick] [gpupair] [gpuab] [gpu100] [egl] [vtkpeer]   (default: io render stream)
+#   bash bench/device/run.sh [io] [import] [layers] [band] [render] [stream] [split] [codec] [huge] [embed] [compare] [live] [stereo] [xrsize] [firsthour] [streamcmp] [gpudecode] [gpuquick] [gpupair] [gpuab] [gpu100] [egl] [vtkpeer] [readpath]   (default: io render stream)
 set -uo pipefail
 OUT=${OUT:-/tmp/out}
 mkdir -p "$OUT" /tmp/s
@@ -218,6 +218,13 @@ for stage in $stages; do
         done
       done
       rm -f /tmp/ab10m.sluice
+      ;;
+    readpath)  # ways to move frames from the page cache into a window of staging (.gpu/readpath, a probe)
+      run $S synth -n 10M --frames 24 -o /tmp/rp10m.sluice --force -q --gpu-decodable
+      [[ -x .gpu/readpath ]] && run ./.gpu/readpath /tmp/rp10m.sluice $(( $(stat -c %s /tmp/rp10m.sluice) / 24 )) ${RP_THREADS:-4 8 12 16}
+      for rt in ${RP_READERS:-4 8}; do
+        run $S bench stream --gpu /tmp/rp10m.sluice --memory 16G --no-storage --min-time 2 --read-threads $rt --threads $((16 - rt))
+      done
       ;;
     gpu100)  # 100M particles a frame through the GPU path, more frames than the window holds
       run $S synth -n 100M --frames 12 -o /tmp/g100m.sluice --force -q --gpu-decodable

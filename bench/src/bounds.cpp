@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "sluice/io/error.h"
+#include "sluice/runtime/record_source.h"
 
 namespace sluice::bench {
 namespace {
@@ -120,6 +121,47 @@ std::optional<double> sequential_read_gbps(const std::string& path, uint64_t off
     for (auto& t : pool) t.join();
   } while (mode == ReadMode::PageCache && seconds_since(start) < min_seconds);
   if (refused) return std::nullopt;
+  return double(total.load()) / seconds_since(start) / 1e9;
+}
+
+double window_read_gbps(const std::string& path, uint64_t offset, uint64_t bytes, uint64_t frame_bytes, int threads,
+                        bool mapped, double min_seconds, uint32_t window) {
+  const Fd f{::open(path.c_str(), O_RDONLY | O_CLOEXEC)};
+  if (f.fd < 0) throw io::Error({path}, std::string("cannot open: ") + std::strerror(errno));
+  runtime::FileRecordSource source(path, f.fd, false, mapped);
+  frame_bytes = std::max<uint64_t>(1, std::min(frame_bytes, bytes));
+  const uint64_t frames = std::max<uint64_t>(1, bytes / frame_bytes);
+  std::vector<std::unique_ptr<std::byte[]>> areas;
+  for (uint32_t w = 0; w < window; ++w) {
+    areas.emplace_back(new std::byte[frame_bytes]);
+    std::memset(areas.back().get(), 0, frame_bytes);  // faulted in: only the copy is timed
+  }
+  const uint64_t per_frame = (frame_bytes + kPiece - 1) / kPiece;
+  std::atomic<uint64_t> total{0};
+  uint64_t rounds = 0;
+  const auto start = Clock::now();
+  do {
+    std::atomic<uint64_t> next{0};
+    std::vector<std::thread> pool;
+    for (int t = 0; t < std::max(1, threads); ++t) {
+      pool.emplace_back([&] {
+        for (uint64_t p; (p = next.fetch_add(1)) < frames * per_frame;) {
+          const uint64_t frame = p / per_frame, at = (p % per_frame) * kPiece;
+          const uint64_t n = std::min(kPiece, frame_bytes - at);
+          std::byte* dst = areas[(rounds * frames + frame) % window].get() + at;
+          uint64_t got = 0;
+          while (got < n) {
+            const size_t r = source.read_at({dst + got, n - got}, offset + frame * frame_bytes + at + got);
+            if (r == 0) break;
+            got += r;
+          }
+          total += got;
+        }
+      });
+    }
+    for (auto& t : pool) t.join();
+    ++rounds;
+  } while (seconds_since(start) < min_seconds);
   return double(total.load()) / seconds_since(start) / 1e9;
 }
 

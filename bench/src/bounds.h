@@ -28,4 +28,13 @@ enum class ReadMode { PageCache, BufferedCold, Direct };
 std::optional<double> sequential_read_gbps(const std::string& path, uint64_t offset, uint64_t bytes, ReadMode mode,
                                            double min_seconds, int threads = 1);
 
+// The page-cache range read through the pipeline's own source
+// (runtime::FileRecordSource, mapped or pread) into a window of `window`
+// areas of `frame_bytes`, as frames land in staging: 8 MiB pieces on
+// `threads` threads, consecutive frames' pieces from one queue, GB/s. Unlike
+// sequential_read_gbps (one hot 8 MiB buffer per thread), every destination
+// line is cold, as it is for the pipeline.
+double window_read_gbps(const std::string& path, uint64_t offset, uint64_t bytes, uint64_t frame_bytes, int threads,
+                        bool mapped, double min_seconds, uint32_t window = 12);
+
 }  // namespace sluice::bench

@@ -65,7 +65,7 @@ struct DeviceSetup {
 constexpr size_t kInFlight = 2;  // frames handed to the renderer and not yet waited for
 
 DevicePass stream_to_device(const io::ContainerReader& reader, const Slice& slice, render::Context& context,
-                            const DeviceSetup& setup, bool gpu_decode, double min_seconds) {
+                            const DeviceSetup& setup, bool gpu_decode, bool mapped, double min_seconds) {
   render::StagingAllocator staging(context);
   render::Renderer renderer(context, render::scene_info(reader));
   runtime::PipelineOptions o;
@@ -79,6 +79,7 @@ DevicePass stream_to_device(const io::ContainerReader& reader, const Slice& slic
   o.layers = slice.layers;
   o.attributes = setup.color >= 0 ? std::vector<uint32_t>{uint32_t(setup.color)} : std::vector<uint32_t>{};
   o.keep_encoded = gpu_decode;
+  o.mapped_reads = mapped;
   o.encoded_color_attribute = setup.color;
   runtime::Pipeline pipeline(reader, staging, o);
   pipeline.restart({slice.frames, 0, 1, 1, runtime::EndMode::Loop});
@@ -213,6 +214,12 @@ void run_stream_gpu_bench(const StreamBenchOptions& o) {
   (void)sequential_read_gbps(o.file, slice.offset, slice.bytes, ReadMode::PageCache, 0, setup.read_threads);  // bring it in
   const double cached =
       *sequential_read_gbps(o.file, slice.offset, slice.bytes, ReadMode::PageCache, o.min_seconds, setup.read_threads) * 1e9;
+  step("the page-cache read into a window of frames");
+  const uint64_t frame_bytes = uint64_t(in);
+  const double window_pread =
+      window_read_gbps(o.file, slice.offset, slice.bytes, frame_bytes, setup.read_threads, false, o.min_seconds) * 1e9;
+  const double window_mapped =
+      window_read_gbps(o.file, slice.offset, slice.bytes, frame_bytes, setup.read_threads, true, o.min_seconds) * 1e9;
   step("the host -> device copy");
   const uint64_t copy_bytes = std::clamp<uint64_t>(uint64_t(4 * in), 64 << 20, 1024 << 20);
   const double h2d = render::host_to_device_gbps(context, copy_bytes, 7) * 1e9;
@@ -224,7 +231,11 @@ void run_stream_gpu_bench(const StreamBenchOptions& o) {
   const double decoded = particles * (8 + (setup.color >= 0 ? 2 : 0));
   Table bounds({"bound", "GB/s", "frames/s of this file", "what"});
   bounds.row({"pread, page cache, " + std::to_string(setup.read_threads) + " threads", num(cached / 1e9, 2),
-              num(cached / in, 1), "file bytes read"});
+              num(cached / in, 1), "file bytes read into one hot 8 MiB buffer per thread"});
+  bounds.row({"pread into a window of 12 frame areas", num(window_pread / 1e9, 2), num(window_pread / in, 1),
+              "every destination line cold, as in staging"});
+  bounds.row({"copy from the file's mapping into the window (streaming stores)", num(window_mapped / 1e9, 2),
+              num(window_mapped / in, 1), "the pipeline's default read"});
   bounds.row({"host -> device copy (transfer queue)", num(h2d / 1e9, 2), num(h2d / staged, 1) + " encoded, " +
               num(h2d / decoded, 1) + " decoded", "bytes copied: encoded area, or decoded particles"});
   bounds.row({"host -> device copy from the file's mapping", imported.imported ? num(imported.gbps, 2) : "-",
@@ -247,14 +258,18 @@ void run_stream_gpu_bench(const StreamBenchOptions& o) {
   const double read_fps = cached / in;
   Table passes({"decoded by", "frames/s", "M particles/s", "MB/frame copied", "window", "bound frames/s", "vs bound",
                 "limited by", "CPU ms/frame", "cores busy", "read in place", "reader reading", "new blocks"});
-  for (const bool gpu : {true, false}) {
+  struct Way {
+    bool gpu, mapped;
+  };
+  for (const Way way : {Way{true, true}, Way{true, false}, Way{false, true}}) {
+    const bool gpu = way.gpu;
     step(gpu ? "the pipeline, GPU decoding" : "the pipeline, CPU decoding");
-    const DevicePass p = stream_to_device(reader, slice, context, setup, gpu, o.min_seconds);
+    const DevicePass p = stream_to_device(reader, slice, context, setup, gpu, way.mapped, o.min_seconds);
     const double fps = double(p.frames) / p.seconds;
     const double per_frame = double(p.staged_bytes) / double(std::max<uint64_t>(p.frames, 1));
     const double copy_fps = h2d / per_frame;
     const double bound = std::min(read_fps, copy_fps);
-    passes.row({gpu ? "GPU (kept encoded)" : "CPU workers", num(fps, 1), num(fps * particles / 1e6, 1),
+    passes.row({std::string(gpu ? "GPU (kept encoded)" : "CPU workers") + (way.mapped ? ", mapped" : ", pread"), num(fps, 1), num(fps * particles / 1e6, 1),
                 num(per_frame / 1e6, 1), p.window, num(bound, 1), percent(fps / bound),
                 read_fps < copy_fps ? "page-cache read" : "host -> device copy", num(1e3 * p.cpu / double(p.frames), 2),
                 num(p.cpu / p.seconds, 1), gpu ? percent(p.in_place) : "-", percent(p.reading),

@@ -1,16 +1,21 @@
 #include <fcntl.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 
+#include "mapped_copy.h"
 #include "sluice/io/error.h"
 #include "sluice/runtime/record_source.h"
 
 namespace sluice::runtime {
 
-FileRecordSource::FileRecordSource(std::string path, int buffered_fd, bool direct)
+FileRecordSource::FileRecordSource(std::string path, int buffered_fd, bool direct, bool mapped)
     : path_(std::move(path)), buffered_fd_(buffered_fd) {
+  if (mapped) map_file();
   if (!direct) return;
   owned_fd_ = ::open(path_.c_str(), O_RDONLY | O_DIRECT | O_CLOEXEC);
   if (owned_fd_ < 0) {
@@ -22,6 +27,47 @@ FileRecordSource::FileRecordSource(std::string path, int buffered_fd, bool direc
 
 FileRecordSource::~FileRecordSource() {
   if (owned_fd_ >= 0) ::close(owned_fd_);
+  if (map_) ::munmap(const_cast<std::byte*>(map_), map_bytes_);
+}
+
+void FileRecordSource::map_file() {
+  struct stat st {};
+  if (::fstat(buffered_fd_, &st) != 0 || !S_ISREG(st.st_mode) || st.st_size <= 0) {
+    unmapped_ = "not a regular file with bytes";
+    return;
+  }
+  void* map = ::mmap(nullptr, static_cast<size_t>(st.st_size), PROT_READ, MAP_SHARED, buffered_fd_, 0);
+  if (map == MAP_FAILED) {
+    unmapped_ = std::strerror(errno);
+    return;
+  }
+  map_ = static_cast<const std::byte*>(map);
+  map_bytes_ = static_cast<uint64_t>(st.st_size);
+}
+
+size_t FileRecordSource::copy_mapped(std::span<std::byte> dst, uint64_t offset) {
+  const size_t n = static_cast<size_t>(std::min<uint64_t>(dst.size(), map_bytes_ - offset));
+  // The bytes count only if the file still reaches past them afterwards: a
+  // mapped page the file was cut inside reads as zeros past the cut, and
+  // pages wholly past it raise SIGBUS. Either way pread says where the file
+  // ends now.
+  if (detail::copy_from_mapping(dst.data(), map_ + offset, n) && reaches(offset + n)) return n;
+  return read_buffered(dst.first(n), offset);
+}
+
+bool FileRecordSource::reaches(uint64_t end) const {
+  struct stat st {};
+  return ::fstat(buffered_fd_, &st) == 0 && static_cast<uint64_t>(st.st_size) >= end;
+}
+
+size_t FileRecordSource::read_buffered(std::span<std::byte> dst, uint64_t offset) {
+  while (true) {
+    const ssize_t n = ::pread(buffered_fd_, dst.data(), dst.size(), static_cast<off_t>(offset));
+    if (n >= 0) return static_cast<size_t>(n);
+    if (errno == EINTR) continue;
+    throw io::Error({path_}, "read of " + std::to_string(dst.size()) + " bytes at offset " + std::to_string(offset) +
+                                 " failed: " + std::strerror(errno));
+  }
 }
 
 void FileRecordSource::fall_back(const std::string& why) {
@@ -33,6 +79,7 @@ void FileRecordSource::fall_back(const std::string& why) {
 size_t FileRecordSource::read_at(std::span<std::byte> dst, uint64_t offset) {
   while (true) {
     const int direct = direct_fd_.load(std::memory_order_relaxed);
+    if (direct < 0 && offset < map_bytes_) return copy_mapped(dst, offset);
     const int fd = direct >= 0 ? direct : buffered_fd_;
     const ssize_t n = ::pread(fd, dst.data(), dst.size(), static_cast<off_t>(offset));
     if (n >= 0) return static_cast<size_t>(n);
@@ -64,8 +111,9 @@ void FileRecordSource::set_access(AccessPattern pattern) {
 
 std::string FileRecordSource::describe() const {
   if (direct_fd_.load(std::memory_order_acquire) >= 0) return "pread, O_DIRECT";
-  if (!refused_.empty() || owned_fd_ >= 0) return "pread (O_DIRECT refused: " + refused_ + ")";
-  return "pread";
+  const std::string buffered = map_ ? "mapped" : unmapped_.empty() ? "pread" : "pread (not mapped: " + unmapped_ + ")";
+  if (!refused_.empty() || owned_fd_ >= 0) return buffered + " (O_DIRECT refused: " + refused_ + ")";
+  return buffered;
 }
 
 }  // namespace sluice::runtime

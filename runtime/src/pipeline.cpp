@@ -65,7 +65,8 @@ PipelineCore::PipelineCore(const io::ContainerReader& reader, FrameAllocator& al
   footprint_ = largest_frame(reader_, attribute_streams_, &allocator_, options_.layers, options_.keep_encoded);
   record_where_.file = reader_.path();
   source_ = options_.source ? options_.source
-                            : std::make_shared<FileRecordSource>(reader_.path(), reader_.descriptor(), options_.direct_io);
+                            : std::make_shared<FileRecordSource>(reader_.path(), reader_.descriptor(), options_.direct_io,
+                                                                 options_.mapped_reads);
   slot_count_ = std::max<uint32_t>(2, options_.budget.ring_capacity);
   slots_ = std::make_unique<Slot[]>(slot_count_);
   for (const io::FrameIndexEntry& e : reader_.index().frames) most_chunks_ = std::max(most_chunks_, e.chunk_count);

@@ -456,3 +456,73 @@ TEST_F(FaultTest, SteadyPlaybackAllocatesNothingPerFrame) {
   EXPECT_EQ(test::allocations_so_far() - before, 0u) << "allocations while delivering " << 2 * reader.frame_count()
                                                      << " frames";
 }
+
+// The default source copies out of a mapping of the file: a file cut while
+// mapped must read as ending at the cut (as pread does), never crash, and
+// bytes past the mapping (a file that grew) still come.
+TEST(MappedSource, ReadsTheFileAndSaysItIsMapped) {
+  test::TempDir dir;
+  const auto path = test::write_tiny_file(dir / "mapped.sluice", {6, 40, 8, true});
+  const io::ContainerReader reader(path);
+  FileRecordSource mapped(reader.path(), reader.descriptor(), false, true);
+  FileRecordSource plain(reader.path(), reader.descriptor(), false, false);
+  EXPECT_EQ(mapped.describe(), "mapped");
+  EXPECT_EQ(plain.describe(), "pread");
+  const uint64_t size = std::filesystem::file_size(path);
+  std::vector<std::byte> a(size + 100), b(size + 100);
+  for (uint64_t offset : {uint64_t(0), uint64_t(1), size / 3, size - 7}) {  // odd offsets: unaligned copies
+    const size_t na = mapped.read_at(a, offset), nb = plain.read_at(b, offset);
+    EXPECT_EQ(na, size - offset);
+    ASSERT_EQ(na, nb);
+    EXPECT_EQ(std::memcmp(a.data(), b.data(), na), 0) << "offset " << offset;
+  }
+  EXPECT_EQ(mapped.read_at(a, size), 0u);
+}
+
+TEST(MappedSource, AFileCutWhileMappedReadsAsEndingAtTheCut) {
+  test::TempDir dir;
+  const auto path = test::write_tiny_file(dir / "cut.sluice", {6, 4000, 8, true});
+  const io::ContainerReader reader(path);
+  FileRecordSource source(reader.path(), reader.descriptor(), false, true);
+  const uint64_t size = std::filesystem::file_size(path);
+  ASSERT_GT(size, 3 * 4096u);
+  const uint64_t cut = 4096 + 100;  // inside a page: the rest of that page reads as zeros through the mapping
+  std::filesystem::resize_file(path, cut);
+  std::vector<std::byte> buffer(size);
+  EXPECT_EQ(source.read_at(buffer, 0), cut);                      // pages wholly past the cut: SIGBUS, caught
+  EXPECT_EQ(source.read_at(std::span(buffer).first(50), 4096 + 200), 0u);  // past the cut, inside its page
+  EXPECT_EQ(source.read_at(std::span(buffer).first(50), 3 * 4096), 0u);    // a page wholly past it
+  // The file grows back past its old end: bytes beyond the mapping by pread.
+  std::filesystem::resize_file(path, size + 10);
+  EXPECT_EQ(source.read_at(std::span(buffer).first(20), size), 10u);
+}
+
+TEST(MappedSource, AFileCutWhilePlayingNamesEachMissingFrame) {
+  test::TempDir dir;
+  const test::TinySpec spec{30, 80, 24, true};
+  const auto path = test::write_tiny_file(dir / "cut.sluice", spec);
+  const io::ContainerReader reader(path);
+  std::filesystem::resize_file(path, reader.index().frames[kBad].offset + 10);  // after the index was read
+  HostFrameAllocator allocator;
+  VirtualClock clock;
+  PlayerOptions o;
+  o.on_error = ErrorPolicy::SkipFrame;
+  o.pipeline.decode_threads = 2;
+  o.pipeline.budget.max_frames = 8;
+  Player player(reader, allocator, clock, o);
+  player.wait_for_due();
+  (void)player.update();
+  player.play();
+  for (int i = 0; i < 200 && player.state() == PlayerState::Playing; ++i) {
+    clock.advance(1 / 30.0);
+    player.wait_for_due();
+    (void)player.update();
+  }
+  EXPECT_EQ(player.state(), PlayerState::Ended);
+  for (uint64_t f = kBad; f < 30; ++f) {
+    const auto error = player.pop_error();
+    ASSERT_TRUE(error) << "frame " << f;
+    EXPECT_EQ(error->where.frame, f);
+    EXPECT_NE(error->message.find("short read"), std::string::npos) << error->text();
+  }
+}

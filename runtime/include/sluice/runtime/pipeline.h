@@ -55,6 +55,9 @@ struct PipelineOptions {
   int read_threads = 0;     // threads reading a record's pieces at once; 0: default_thread_split(), or
                             // a quarter of decode_threads (1 to 4) when that is given
   bool direct_io = false;   // read with O_DIRECT where the filesystem allows it (else buffered, said in stats)
+  // Buffered reads copy out of the file's mapping with streaming stores
+  // (FileRecordSource); false: pread. Stats say which is in use.
+  bool mapped_reads = true;
   // Attribute streams to decode (indices into the file header's list); nullopt: all of them.
   std::optional<std::vector<uint32_t>> attributes;
   // Layers to read and decode (format 1.3). A frame's chunks of other layers

@@ -1,8 +1,11 @@
 // sluice/runtime/record_source.h: where the reader thread gets its bytes.
 //
-// FileRecordSource reads the container with pread, gives the kernel
-// readahead hints (posix_fadvise), and can bypass the page cache with
-// O_DIRECT, falling back to buffered reads when the filesystem refuses it.
+// FileRecordSource reads the container out of the page cache, either by
+// copying from a read-only mapping of the file with streaming stores (the
+// default: no destination line is read before it is written) or with pread;
+// gives the kernel readahead hints (posix_fadvise); and can bypass the page
+// cache with O_DIRECT, falling back to buffered reads when the filesystem
+// refuses it.
 // The interface exists so tests can wrap the real source and inject faults.
 #pragma once
 
@@ -33,7 +36,7 @@ class RecordSource {
   // Hints; they may do nothing.
   virtual void will_need(uint64_t /*offset*/, uint64_t /*bytes*/) {}
   virtual void set_access(AccessPattern /*pattern*/) {}
-  // "pread", "pread, O_DIRECT", "pread (O_DIRECT refused: ...)".
+  // "mapped", "pread", "pread, O_DIRECT", "pread (O_DIRECT refused: ...)".
   virtual std::string describe() const = 0;
 };
 
@@ -41,7 +44,12 @@ class FileRecordSource final : public RecordSource {
  public:
   // Reads `path` through `buffered_fd` (borrowed: the ContainerReader's
   // descriptor) or, with `direct`, through its own O_DIRECT descriptor.
-  FileRecordSource(std::string path, int buffered_fd, bool direct);
+  // With `mapped`, buffered reads copy out of a mapping of the file as it
+  // was at construction (bytes past that end, if the file grows, come by
+  // pread); a file cut shorter while mapped reads as ending at its new end,
+  // as pread would (mapped_copy.h says how), never as a crash. Where the
+  // file cannot be mapped, pread, and describe() says why.
+  FileRecordSource(std::string path, int buffered_fd, bool direct, bool mapped = true);
   ~FileRecordSource() override;
   FileRecordSource(const FileRecordSource&) = delete;
   FileRecordSource& operator=(const FileRecordSource&) = delete;
@@ -57,6 +65,10 @@ class FileRecordSource final : public RecordSource {
 
  private:
   void fall_back(const std::string& why);
+  void map_file();
+  size_t copy_mapped(std::span<std::byte> dst, uint64_t offset);
+  bool reaches(uint64_t end) const;  // the file is at least `end` bytes long now
+  size_t read_buffered(std::span<std::byte> dst, uint64_t offset);
 
   std::string path_;
   int buffered_fd_;
@@ -64,6 +76,9 @@ class FileRecordSource final : public RecordSource {
   std::atomic<bool> falling_back_{false};  // the first thread to see a refusal records why
   int owned_fd_ = -1;
   std::string refused_;  // why O_DIRECT is not in use, once it was asked for
+  const std::byte* map_ = nullptr;  // the whole file as it was at construction, read-only
+  uint64_t map_bytes_ = 0;
+  std::string unmapped_;  // why a mapping was asked for and not made
 };
 
 }  // namespace sluice::runtime
