@@ -42,6 +42,30 @@ struct Counters {
   std::atomic<uint32_t> window_frames{0}, active_frames{0}, record_buffers{0}, frames_ready{0};
 };
 
+class PipelineCore;
+
+// One read of a byte range in pieces on the read crew (record_read.cpp): the
+// crew calls it once per piece until the round is joined, so it lives until
+// then (on the caller's stack, or in ReaderState::pending).
+struct PieceRound {
+  PipelineCore* core = nullptr;
+  std::span<std::byte> dst;  // [0, need) comes from the file at `offset`; the rest is alignment padding
+  uint64_t offset = 0, need = 0, piece = 0, count = 0, frame = 0, generation = 0;
+  mutable std::atomic<bool> gave_up{false};  // a newer schedule (or stop) came first: the pieces left are skipped
+  std::chrono::steady_clock::time_point started;
+  void operator()(uint64_t p) const;
+};
+
+// A whole record the crew reads while the reader thread finishes the frame
+// before it (reader_thread.cpp: start_entry).
+struct PendingRead {
+  bool active = false;
+  uint32_t slot = 0;
+  uint64_t k = 0;             // its schedule entry
+  uint64_t record_offset = 0; // where the record starts in the round's dst
+  PieceRound round;
+};
+
 // What only the reader thread touches.
 struct ReaderState {
   uint64_t generation = ~uint64_t(0);
@@ -58,6 +82,7 @@ struct ReaderState {
   uint64_t next_evaluation = 0;
   uint64_t decoded_held = 0;            // bytes of allocator buffers held
   uint64_t record_held = 0;             // bytes of record buffers held
+  PendingRead pending;                  // at most one record read in the background
 };
 
 class PipelineCore {
@@ -103,11 +128,32 @@ class PipelineCore {
   bool evict_oldest(ReaderState& rs);
   void free_slot(ReaderState& rs, uint32_t s);
   Start start_entry(ReaderState& rs, uint64_t k, uint64_t frame);
-  bool read_record(ReaderState& rs, Slot& slot, uint32_t record);
-  // Kept-encoded frames read whole from a buffered source are read straight
-  // into their staged area (the record is its prefix: no worker copies it).
+  // Where a frame's bytes go: its record buffer, or (kept-encoded frames from
+  // a buffered source) straight into its staged area, the record being its
+  // prefix so that no worker copies it. Allocates; sets slot.partial.
+  struct ReadTarget {
+    std::span<std::byte> dst;  // the read lands here
+    uint64_t offset = 0;       // the file offset of dst[0]
+    uint64_t need = 0;         // bytes of dst the whole record needs
+    uint64_t record_offset = 0;// where the record starts in dst
+  };
+  ReadTarget record_target(ReaderState& rs, Slot& slot, uint32_t record);
+  ReadTarget staged_target(ReaderState& rs, Slot& slot);
   bool reads_in_place() const;
-  bool read_in_place(ReaderState& rs, Slot& slot);
+  // Only some layers wanted: the table first, then the payloads up to the
+  // last wanted one (the interior comes last). Synchronous.
+  bool read_layers(Slot& slot, const ReadTarget& target, uint64_t generation);
+  // The whole record in the background: the frame before it (if pending) is
+  // joined first, this read begins, then that frame is finished.
+  void begin_background_read(ReaderState& rs, uint32_t s, uint64_t k, const ReadTarget& target);
+  // Joins the pending read and finishes its frame; false if none was pending.
+  bool settle_pending(ReaderState& rs);
+  enum class ReadOutcome { Read, Cancelled, Failed };
+  ReadOutcome join_pending(ReaderState& rs, FrameError& error);
+  void finish_read(ReaderState& rs, uint32_t s, uint64_t k, ReadOutcome outcome, FrameError error);
+  // Parses the record and hands the frame to the decode workers (or fails it).
+  void finish_entry(ReaderState& rs, uint32_t s, uint64_t k);
+  void abandon_read(ReaderState& rs, uint32_t s);
   void set_layout(Slot& slot, uint64_t particles, uint64_t encoded_bytes) const;
   void allocate_buffers(ReaderState& rs, Slot& slot);
   void release_buffers(ReaderState& rs, Slot& slot);
@@ -115,6 +161,11 @@ class PipelineCore {
   // record_read.cpp: reads [0, need) of `dst` from `offset` in pieces, on
   // read_threads_ threads; false if a newer generation (or stop) came first.
   bool read_pieces(std::span<std::byte> dst, uint64_t offset, uint64_t need, uint64_t frame, uint64_t generation);
+  // The same in two halves (read_crew.h): begin, other work, join.
+  void begin_pieces(PieceRound& round, std::span<std::byte> dst, uint64_t offset, uint64_t need, uint64_t frame,
+                    uint64_t generation);
+  bool join_pieces(PieceRound& round);
+  friend struct PieceRound;
   void read_piece(std::span<std::byte> piece, uint64_t offset, uint64_t required, uint64_t frame, uint64_t frame_end);
   void prepare_decode(ReaderState& rs, Slot& slot);
   void publish(ReaderState& rs, uint32_t s, uint64_t k);

@@ -7,6 +7,12 @@ void ReadCrew::start(int helpers) {
 }
 
 ReadCrew::~ReadCrew() {
+  if (running_) {
+    try {
+      join();
+    } catch (...) {  // nobody is left to tell
+    }
+  }
   stopping_.store(true, std::memory_order_release);
   round_.fetch_add(1, std::memory_order_release);
   round_.notify_all();
@@ -17,7 +23,7 @@ void ReadCrew::work() {
   for (uint64_t p; (p = next_.fetch_add(1, std::memory_order_relaxed)) < count_;) {
     if (failed_.load(std::memory_order_relaxed)) return;
     try {
-      (*body_)(p);
+      body_(p);
     } catch (...) {
       if (!failed_.exchange(true, std::memory_order_acq_rel)) error_ = std::current_exception();
       return;
@@ -37,16 +43,26 @@ void ReadCrew::helper_main() {
 }
 
 void ReadCrew::run(uint64_t count, PieceBody body) {
+  begin(count, body);
+  join();
+}
+
+void ReadCrew::begin(uint64_t count, PieceBody body) {
   count_ = count;
-  body_ = &body;
+  body_ = body;
   next_.store(0, std::memory_order_relaxed);
   failed_.store(false, std::memory_order_relaxed);
   error_ = nullptr;
   working_.store(helpers(), std::memory_order_relaxed);
+  running_ = true;
   round_.fetch_add(1, std::memory_order_release);
   round_.notify_all();
+}
+
+void ReadCrew::join() {
   work();
   for (int left; (left = working_.load(std::memory_order_acquire)) != 0;) working_.wait(left, std::memory_order_acquire);
+  running_ = false;
   if (error_) std::rethrow_exception(error_);
 }
 

@@ -45,8 +45,17 @@ class ReadCrew {
   // thread and the helpers; returns when all are done. If a body throws, the
   // pieces not yet started are skipped and the first exception is rethrown
   // here. One caller at a time (the reader thread). Waiting is on futex words
-  // (std::atomic::wait): no mutex.
+  // (std::atomic::wait): no mutex. run() is begin() then join().
   void run(uint64_t count, PieceBody body);
+  // A round in two halves, so the caller can do other work while the
+  // helpers read: begin() hands the pieces to the helpers and returns at
+  // once; join() takes the pieces left on the calling thread, waits for the
+  // helpers and rethrows the first exception. The callable behind `body`
+  // must live until join() returns. A begin() is always joined before the
+  // next begin() (and before the crew is destroyed).
+  void begin(uint64_t count, PieceBody body);
+  void join();
+  bool running() const { return running_; }
 
   int helpers() const { return static_cast<int>(threads_.size()); }
 
@@ -62,7 +71,9 @@ class ReadCrew {
   std::atomic<bool> failed_{false};
   // Written by run() before round_ is bumped (release), read by helpers after.
   uint64_t count_ = 0;
-  const PieceBody* body_ = nullptr;
+  PieceBody body_{kNothing};
+  bool running_ = false;  // a begin() not yet joined (the caller's only)
+  static constexpr auto kNothing = [](uint64_t) {};
   std::exception_ptr error_;  // written by whoever sets failed_ first
 };
 

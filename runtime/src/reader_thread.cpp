@@ -49,6 +49,14 @@ void PipelineCore::reader_main() {
     reader_failed_.store(true, std::memory_order_release);
     wake_consumer();
   }
+  // A read still running writes into buffers this thread accounts for, and
+  // its round lives in `rs`: it ends here (stopping: its pieces are skipped).
+  if (read_crew_.running()) {
+    try {
+      read_crew_.join();
+    } catch (...) {  // the frame is dropped with the pipeline
+    }
+  }
 }
 
 bool PipelineCore::reader_iteration(ReaderState& rs) {
@@ -57,13 +65,15 @@ bool PipelineCore::reader_iteration(ReaderState& rs) {
   adopt_schedule(rs);
   if (rs.frames_started >= rs.next_evaluation) reevaluate(rs);
   shrink_to_window(rs);
+  // Nothing more to start: the record read in the background is finished
+  // now, not when the next one begins.
   const auto frame = rs.schedule.frame_at(rs.next_k);
-  if (!frame) return false;
-  if (rs.out >= ahead_limit(rs) && !grow(rs)) return false;
+  if (!frame) return settle_pending(rs);
+  if (rs.out + rs.pending.active >= ahead_limit(rs) && !grow(rs)) return settle_pending(rs);
   switch (start_entry(rs, rs.next_k, *frame)) {
     case Start::Pushed: ++rs.next_k; return true;
     case Start::Cancelled: return true;  // a newer schedule is waiting
-    case Start::Blocked: return false;
+    case Start::Blocked: return settle_pending(rs);
   }
   return false;
 }
@@ -88,11 +98,15 @@ uint32_t PipelineCore::initial_active(const WindowPlan& plan) const {
 }
 
 uint32_t PipelineCore::occupied(const ReaderState& rs) const {
-  return rs.out + static_cast<uint32_t>(rs.cached.size() + rs.draining.size());
+  return rs.out + rs.pending.active + static_cast<uint32_t>(rs.cached.size() + rs.draining.size());
 }
 
 void PipelineCore::adopt_schedule(ReaderState& rs) {
   if (generation_.load(std::memory_order_acquire) == rs.generation) return;
+  // A read of the old schedule still running ends first (its pieces see the
+  // new generation and stop), so that what it publishes, if anything, is
+  // told apart as stale.
+  settle_pending(rs);
   {
     const std::lock_guard lock(control_mutex_);
     rs.schedule = requested_;
@@ -159,7 +173,10 @@ void PipelineCore::shrink_to_window(ReaderState& rs) {
   }
   // Memory held follows the window: kept buffers beyond the free slots'
   // worth go back (steady playback never has more, so nothing is freed).
-  const uint64_t free_slots = rs.active > occupied(rs) ? rs.active - occupied(rs) : 0;
+  // A record read in the background whose buffers come after it is parsed
+  // (CPU decoding) will take one of the kept ones: it counts as free here.
+  const bool unbuffered = rs.pending.active && !slots_[rs.pending.slot].has_buffers;
+  const uint64_t free_slots = (rs.active > occupied(rs) ? rs.active - occupied(rs) : 0) + unbuffered;
   if (allocator_.kept_bytes() > free_slots * footprint_.decoded_bytes) {
     allocator_.trim(free_slots * footprint_.decoded_bytes);
     counters_.held_bytes.store(held_now(rs), kRelaxed);
@@ -222,6 +239,7 @@ PipelineCore::Start PipelineCore::start_entry(ReaderState& rs, uint64_t k, uint6
   if (hit != rs.cached.rend()) {
     const uint32_t s = *hit;
     rs.cached.erase(std::next(hit).base());
+    settle_pending(rs);  // entries go out in schedule order
     slots_[s].generation = rs.generation;
     slots_[s].state.store(SlotState::Ready, std::memory_order_release);
     counters_.cache_hits.fetch_add(1, kRelaxed);
@@ -260,22 +278,123 @@ PipelineCore::Start PipelineCore::start_entry(ReaderState& rs, uint64_t k, uint6
     source_->will_need(e.offset, e.bytes);
   }
 
+  ReadTarget target;
   try {
-    record_where_.frame = frame;
     if (slot.header.chunks.capacity() < most_chunks_) {  // a slot's first use: room for any frame of the file
       slot.header.chunks.reserve(most_chunks_);
       slot.chunk_first.reserve(most_chunks_);
       slot.attribute_targets.reserve(reader_.header().attributes.size());
       slot.where.file = reader_.path();
     }
-    if (!(reads_in_place() ? read_in_place(rs, slot) : read_record(rs, slot, record))) {
-      release_buffers(rs, slot);
-      rs.free_records.push_back(record);
-      slot.record = kNoRecord;
-      slot.state.store(SlotState::Free, kRelaxed);
-      rs.free_slots.push_back(s);
-      return Start::Cancelled;
-    }
+    target = reads_in_place() ? staged_target(rs, slot) : record_target(rs, slot, record);
+  } catch (const io::Error& e) {
+    settle_pending(rs);  // entries go out in schedule order
+    finish_read(rs, s, k, ReadOutcome::Failed, FrameError::from(e));
+    return Start::Pushed;
+  } catch (const std::exception& e) {
+    settle_pending(rs);
+    finish_read(rs, s, k, ReadOutcome::Failed, FrameError{reader_.location(frame), e.what()});
+    return Start::Pushed;
+  }
+  if (!slot.partial) {
+    begin_background_read(rs, s, k, target);
+    return Start::Pushed;
+  }
+  settle_pending(rs);
+  FrameError error;
+  ReadOutcome outcome = ReadOutcome::Read;
+  try {
+    if (!read_layers(slot, target, rs.generation)) outcome = ReadOutcome::Cancelled;
+  } catch (const io::Error& e) {
+    error = FrameError::from(e);
+    outcome = ReadOutcome::Failed;
+  } catch (const std::exception& e) {
+    error = {reader_.location(frame), e.what()};
+    outcome = ReadOutcome::Failed;
+  }
+  if (outcome == ReadOutcome::Cancelled) {
+    abandon_read(rs, s);
+    return Start::Cancelled;  // a newer schedule is waiting
+  }
+  finish_read(rs, s, k, outcome, std::move(error));
+  return Start::Pushed;
+}
+
+void PipelineCore::begin_background_read(ReaderState& rs, uint32_t s, uint64_t k, const ReadTarget& target) {
+  // The crew reads one round at a time: the frame before is joined first,
+  // and finished (parsed, handed to the workers, published) while this one
+  // is read.
+  FrameError error;
+  const bool previous = rs.pending.active;
+  const uint32_t previous_slot = rs.pending.slot;
+  const uint64_t previous_k = rs.pending.k;
+  const ReadOutcome outcome = previous ? join_pending(rs, error) : ReadOutcome::Read;
+
+  rs.pending.active = true;
+  rs.pending.slot = s;
+  rs.pending.k = k;
+  rs.pending.record_offset = target.record_offset;
+  begin_pieces(rs.pending.round, target.dst, target.offset, target.need, slots_[s].frame, rs.generation);
+
+  if (previous) finish_read(rs, previous_slot, previous_k, outcome, std::move(error));
+}
+
+PipelineCore::ReadOutcome PipelineCore::join_pending(ReaderState& rs, FrameError& error) {
+  rs.pending.active = false;
+  const uint64_t frame = slots_[rs.pending.slot].frame;
+  try {
+    if (!join_pieces(rs.pending.round)) return ReadOutcome::Cancelled;
+  } catch (const io::Error& e) {
+    error = FrameError::from(e);
+    return ReadOutcome::Failed;
+  } catch (const std::exception& e) {
+    error = {reader_.location(frame), e.what()};
+    return ReadOutcome::Failed;
+  }
+  Slot& slot = slots_[rs.pending.slot];
+  const io::FrameIndexEntry& e = reader_.index().frames[frame];
+  slot.record_bytes = rs.pending.round.dst.subspan(rs.pending.record_offset, e.bytes);
+  counters_.frames_read.fetch_add(1, kRelaxed);
+  return ReadOutcome::Read;
+}
+
+bool PipelineCore::settle_pending(ReaderState& rs) {
+  if (!rs.pending.active) return false;
+  FrameError error;
+  const uint32_t s = rs.pending.slot;
+  const uint64_t k = rs.pending.k;
+  const ReadOutcome outcome = join_pending(rs, error);
+  finish_read(rs, s, k, outcome, std::move(error));
+  return true;
+}
+
+void PipelineCore::finish_read(ReaderState& rs, uint32_t s, uint64_t k, ReadOutcome outcome, FrameError error) {
+  switch (outcome) {
+    case ReadOutcome::Read: finish_entry(rs, s, k); return;
+    case ReadOutcome::Cancelled: abandon_read(rs, s); return;
+    case ReadOutcome::Failed:
+      if (!error.where.frame) error.where = reader_.location(slots_[s].frame);  // the source knows only the file
+      fail(rs, s, k, std::move(error));
+      return;
+  }
+}
+
+// A read a newer schedule (or stop) cut short: its slot, buffers and record
+// go back; nothing is published.
+void PipelineCore::abandon_read(ReaderState& rs, uint32_t s) {
+  Slot& slot = slots_[s];
+  release_buffers(rs, slot);
+  rs.free_records.push_back(slot.record);
+  slot.record = kNoRecord;
+  slot.state.store(SlotState::Free, kRelaxed);
+  rs.free_slots.push_back(s);
+}
+
+void PipelineCore::finish_entry(ReaderState& rs, uint32_t s, uint64_t k) {
+  Slot& slot = slots_[s];
+  const uint64_t frame = slot.frame;
+  try {
+    record_where_.frame = frame;
     if (!slot.partial) reader_.parse_record(frame, slot.record_bytes, slot.header, record_where_);  // no allocation per frame
     io::keep_layers(slot.header, options_.layers);  // the chunks read (decode checks their payloads lie in the prefix)
     slot.where.frame = frame;  // its file was set with its chunk table
@@ -284,20 +403,20 @@ PipelineCore::Start PipelineCore::start_entry(ReaderState& rs, uint64_t k, uint6
     FrameError error = FrameError::from(e);
     if (!error.where.frame) error.where = reader_.location(frame);  // the source knows only the file
     fail(rs, s, k, std::move(error));
-    return Start::Pushed;
+    return;
   } catch (const std::exception& e) {
     fail(rs, s, k, {reader_.location(frame), e.what()});
-    return Start::Pushed;
+    return;
   }
 
   const size_t chunks = slot.header.chunks.size();
   if (chunks == 0) {  // an empty frame: nothing to decode
-    rs.free_records.push_back(record);
+    rs.free_records.push_back(slot.record);
     slot.record = kNoRecord;
     counters_.frames_decoded.fetch_add(1, kRelaxed);
     slot.state.store(SlotState::Ready, std::memory_order_release);
     publish(rs, s, k);
-    return Start::Pushed;
+    return;
   }
   slot.chunks_left.store(static_cast<uint32_t>(chunks), kRelaxed);
   frames_decoding_.fetch_add(1, kRelaxed);
@@ -313,10 +432,9 @@ PipelineCore::Start PipelineCore::start_entry(ReaderState& rs, uint64_t k, uint6
     slot.chunks_left.store(0, kRelaxed);
     finish_decode(s);
   }
-  return Start::Pushed;
 }
 
-bool PipelineCore::read_record(ReaderState& rs, Slot& slot, uint32_t record) {
+PipelineCore::ReadTarget PipelineCore::record_target(ReaderState& rs, Slot& slot, uint32_t record) {
   const io::FrameIndexEntry& e = reader_.index().frames[slot.frame];
   const uint64_t align = std::max<size_t>(1, source_->alignment());
   const uint64_t begin = e.offset / align * align;
@@ -330,28 +448,8 @@ bool PipelineCore::read_record(ReaderState& rs, Slot& slot, uint32_t record) {
     counters_.held_bytes.store(held_now(rs), kRelaxed);
     if (rs.record_held > counters_.peak_record_bytes.load(kRelaxed)) counters_.peak_record_bytes.store(rs.record_held, kRelaxed);
   }
-  const std::span<std::byte> dst = buffer.span().first(span);
-  // Some of a layered frame's layers are not wanted: the table first, then
-  // the payloads up to the last wanted one (the interior comes last).
   slot.partial = e.layered() && e.count_in(options_.layers) != e.particle_count;
-  if (!slot.partial) {
-    if (!read_pieces(dst, begin, need, slot.frame, rs.generation)) return false;
-    slot.record_bytes = dst.subspan(e.offset - begin, e.bytes);
-  } else {
-    const uint64_t table = std::min<uint64_t>(e.bytes, io::frame_table_bytes(e.chunk_count, reader_.header().attributes.size()));
-    const uint64_t first = round_up(e.offset + table - begin, align);
-    if (!read_pieces(dst.first(first), begin, e.offset + table - begin, slot.frame, rs.generation)) return false;
-    reader_.parse_table(slot.frame, dst.subspan(e.offset - begin, table), slot.header, record_where_);
-    const uint64_t end = io::layers_end(slot.header, options_.layers, reader_.header().attributes.size());
-    const uint64_t wanted = e.offset + end - begin;
-    if (wanted > first && !read_pieces(dst.subspan(first, round_up(wanted, align) - first), begin + first, wanted - first,
-                                       slot.frame, rs.generation)) {
-      return false;
-    }
-    slot.record_bytes = dst.subspan(e.offset - begin, end);
-  }
-  counters_.frames_read.fetch_add(1, kRelaxed);
-  return true;
+  return {buffer.span().first(span), begin, need, e.offset - begin};
 }
 
 bool PipelineCore::reads_in_place() const {
@@ -362,9 +460,7 @@ bool PipelineCore::reads_in_place() const {
 // (GPU-decodable files); prepare_decode moves a frame with zstd planes to a
 // larger one. The record holds the slot's record buffer as a token only
 // (it bounds the frames being read and staged at once), not its memory.
-// Only some layers wanted: the table first, then the payloads up to the
-// last wanted one, as read_record does.
-bool PipelineCore::read_in_place(ReaderState& rs, Slot& slot) {
+PipelineCore::ReadTarget PipelineCore::staged_target(ReaderState& rs, Slot& slot) {
   const io::FrameIndexEntry& e = reader_.index().frames[slot.frame];
   set_layout(slot, e.count_in(options_.layers),
              encoded_block_bytes(io::staged_bytes_bound(e.bytes, e.chunk_count, e.particle_count, 0)));
@@ -372,21 +468,28 @@ bool PipelineCore::read_in_place(ReaderState& rs, Slot& slot) {
   if (slot.buffers.particles.size() < e.bytes) {
     throw io::Error(reader_.location(slot.frame), "the frame allocator returned buffers smaller than the frame");
   }
-  const std::span<std::byte> dst = slot.buffers.particles.first(e.bytes);
   slot.partial = e.layered() && e.count_in(options_.layers) != e.particle_count;
-  if (!slot.partial) {
-    if (!read_pieces(dst, e.offset, e.bytes, slot.frame, rs.generation)) return false;
-    slot.record_bytes = dst;
-  } else {
-    const uint64_t table = std::min<uint64_t>(e.bytes, io::frame_table_bytes(e.chunk_count, reader_.header().attributes.size()));
-    if (!read_pieces(dst.first(table), e.offset, table, slot.frame, rs.generation)) return false;
-    reader_.parse_table(slot.frame, dst.first(table), slot.header, record_where_);
-    const uint64_t end = io::layers_end(slot.header, options_.layers, reader_.header().attributes.size());
-    if (end > table && !read_pieces(dst.subspan(table, end - table), e.offset + table, end - table, slot.frame, rs.generation)) {
-      return false;
-    }
-    slot.record_bytes = dst.first(end);
+  return {slot.buffers.particles.first(e.bytes), e.offset, e.bytes, 0};
+}
+
+// The table first, then the payloads up to the last wanted layer; offsets
+// in the target stay aligned for O_DIRECT (record buffers only).
+bool PipelineCore::read_layers(Slot& slot, const ReadTarget& target, uint64_t generation) {
+  const io::FrameIndexEntry& e = reader_.index().frames[slot.frame];
+  const uint64_t align = std::max<size_t>(1, source_->alignment());
+  const uint64_t table = std::min<uint64_t>(e.bytes, io::frame_table_bytes(e.chunk_count, reader_.header().attributes.size()));
+  const uint64_t into = target.record_offset;  // where the record starts in dst
+  const uint64_t first = round_up(into + table, align);
+  if (!read_pieces(target.dst.first(first), target.offset, into + table, slot.frame, generation)) return false;
+  record_where_.frame = slot.frame;
+  reader_.parse_table(slot.frame, target.dst.subspan(into, table), slot.header, record_where_);
+  const uint64_t end = io::layers_end(slot.header, options_.layers, reader_.header().attributes.size());
+  const uint64_t wanted = into + end;
+  if (wanted > first && !read_pieces(target.dst.subspan(first, round_up(wanted, align) - first), target.offset + first,
+                                     wanted - first, slot.frame, generation)) {
+    return false;
   }
+  slot.record_bytes = target.dst.subspan(into, end);
   counters_.frames_read.fetch_add(1, kRelaxed);
   return true;
 }
@@ -469,7 +572,7 @@ void PipelineCore::fail(ReaderState& rs, uint32_t s, uint64_t k, FrameError erro
 
 void PipelineCore::publish(ReaderState& rs, uint32_t s, uint64_t k) {
   // The window never holds more entries than the ring: a push cannot fail.
-  if (!delivery_.try_push({s, rs.generation, k, slots_[s].frame})) std::terminate();
+  if (!delivery_.try_push({s, slots_[s].generation, k, slots_[s].frame})) std::terminate();
   ++rs.out;
   wake_consumer();
 }

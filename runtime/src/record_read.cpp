@@ -30,8 +30,8 @@ void PipelineCore::read_piece(std::span<std::byte> piece, uint64_t offset, uint6
   }
 }
 
-bool PipelineCore::read_pieces(std::span<std::byte> dst, uint64_t offset, uint64_t need, uint64_t frame,
-                               uint64_t generation) {
+void PipelineCore::begin_pieces(PieceRound& round, std::span<std::byte> dst, uint64_t offset, uint64_t need,
+                                uint64_t frame, uint64_t generation) {
   const uint64_t align = std::max<size_t>(1, source_->alignment());
   // Pieces of at most read_piece_bytes, as many as a multiple of the
   // threads reading them, of equal size: every thread reads the same share
@@ -42,33 +42,54 @@ bool PipelineCore::read_pieces(std::span<std::byte> dst, uint64_t offset, uint64
   const uint64_t threads = uint64_t(read_crew_.helpers()) + 1;
   const uint64_t at_most = (dst.size() + most - 1) / most;
   const uint64_t even = (at_most + threads - 1) / threads * threads;
-  const uint64_t piece = std::max(align, round_up((dst.size() + even - 1) / std::max<uint64_t>(even, 1), align));
-  const uint64_t count = (dst.size() + piece - 1) / piece;
-  const uint64_t frame_end = offset + need;
-  auto stale = [&] { return stopping_.load(kRelaxed) || generation_.load(kRelaxed) != generation; };
-  // Piece p covers [p * piece, +piece) of dst; bytes past `need` are only
-  // alignment padding and may lie beyond the end of the file.
-  auto read_one = [&](uint64_t p) {
-    const uint64_t at = p * piece;
-    const uint64_t length = std::min(piece, dst.size() - at);
-    read_piece(dst.subspan(at, length), offset + at, std::min(length, need - at), frame, frame_end);
-  };
+  round.core = this;
+  round.dst = dst;
+  round.offset = offset;
+  round.need = need;
+  round.frame = frame;
+  round.generation = generation;
+  round.piece = std::max(align, round_up((dst.size() + even - 1) / std::max<uint64_t>(even, 1), align));
+  round.count = (dst.size() + round.piece - 1) / round.piece;
+  round.gave_up.store(false, kRelaxed);
+  round.started = std::chrono::steady_clock::now();
+  read_crew_.begin(round.count, round);
+}
 
-  const auto t0 = std::chrono::steady_clock::now();
-  std::atomic<bool> gave_up{false};  // with no helpers the crew runs the pieces in order on this thread
-  read_crew_.run(count, [&](uint64_t p) {
-    if (gave_up.load(kRelaxed) || stale()) {
-      gave_up.store(true, kRelaxed);
-      return;
-    }
-    read_one(p);
-  });
-  const bool cancelled = gave_up.load(kRelaxed);
-  counters_.read_ns.fetch_add(static_cast<uint64_t>(std::chrono::duration_cast<std::chrono::nanoseconds>(
-                                                        std::chrono::steady_clock::now() - t0)
-                                                        .count()),
-                              kRelaxed);
-  return !cancelled;
+// Piece p covers [p * piece, +piece) of dst; bytes past `need` are only
+// alignment padding and may lie beyond the end of the file. With no helpers
+// the crew runs the pieces in order on the joining thread.
+void PieceRound::operator()(uint64_t p) const {
+  if (gave_up.load(kRelaxed) || core->stopping_.load(kRelaxed) || core->generation_.load(kRelaxed) != generation) {
+    gave_up.store(true, kRelaxed);
+    return;
+  }
+  const uint64_t at = p * piece;
+  const uint64_t length = std::min(piece, dst.size() - at);
+  core->read_piece(dst.subspan(at, length), offset + at, std::min(length, need - at), frame, offset + need);
+}
+
+bool PipelineCore::join_pieces(PieceRound& round) {
+  auto count_time = [&] {
+    counters_.read_ns.fetch_add(static_cast<uint64_t>(std::chrono::duration_cast<std::chrono::nanoseconds>(
+                                                          std::chrono::steady_clock::now() - round.started)
+                                                          .count()),
+                                kRelaxed);
+  };
+  try {
+    read_crew_.join();
+  } catch (...) {
+    count_time();
+    throw;
+  }
+  count_time();
+  return !round.gave_up.load(kRelaxed);
+}
+
+bool PipelineCore::read_pieces(std::span<std::byte> dst, uint64_t offset, uint64_t need, uint64_t frame,
+                               uint64_t generation) {
+  PieceRound round;
+  begin_pieces(round, dst, offset, need, frame, generation);
+  return join_pieces(round);
 }
 
 }  // namespace sluice::runtime::detail

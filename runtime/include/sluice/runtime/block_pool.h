@@ -59,6 +59,9 @@ class BlockPool {
       } else {
         blocks_.push_back(std::make_unique<Block>());
         block = blocks_.back().get();
+        // Every block may be kept at once: release() then never allocates,
+        // however the frames in flight come back.
+        kept_.reserve(blocks_.size());
       }
       try {
         block->memory = make(need);
