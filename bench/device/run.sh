@@ -225,6 +225,7 @@ for stage in $stages; do
       for rt in ${RP_READERS:-4 8}; do
         run $S bench stream --gpu /tmp/rp10m.sluice --memory 16G --no-storage --min-time 2 --read-threads $rt --threads $((16 - rt))
       done
+      [[ -x ./.gpu/sluice_base ]] && run ./.gpu/sluice_base bench stream --gpu /tmp/rp10m.sluice --memory 16G --no-storage --min-time 2
       ;;
     gpu100)  # 100M particles a frame through the GPU path, more frames than the window holds
       run $S synth -n 100M --frames 12 -o /tmp/g100m.sluice --force -q --gpu-decodable
