@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Runs on the GPU machine (see bench/device/README.md): every benchmark the
 # issues ask GPU-machine figures for, in one call. Results go to $OUT.
-#   bash bench/device/run.sh [io] [import] [layers] [band] [render] [stream] [split] [codec] [huge] [embed] [compare] [live] [stereo] [xrsize] [firsthour] [streamcmp] [gpudecode] [gpuquick] [gpupair] [gpuab] [gpu100] [egl] [vtkpeer] [readpath]   (default: io render stream)
+#   bash bench/device/run.sh [io] [import] [layers] [band] [render] [stream] [split] [codec] [huge] [embed] [compare] [live] [stereo] [xrsize] [firsthour] [streamcmp] [gpudecode] [gpuquick] [gpupair] [gpuab] [gpu100] [egl] [vtkpeer] [readpath] [gpusplit]   (default: io render stream)
 set -uo pipefail
 OUT=${OUT:-/tmp/out}
 mkdir -p "$OUT" /tmp/s
@@ -226,6 +226,15 @@ for stage in $stages; do
         run $S bench stream --gpu /tmp/rp10m.sluice --memory 16G --no-storage --min-time 2 --read-threads $rt --threads $((16 - rt))
       done
       [[ -x ./.gpu/sluice_base ]] && run ./.gpu/sluice_base bench stream --gpu /tmp/rp10m.sluice --memory 16G --no-storage --min-time 2
+      ;;
+    gpusplit)  # the GPU path with the default split (8 + 8 on 16 cores) and 12 readers, 10M and 100M
+      run $S synth -n 10M --frames 24 -o /tmp/rp10m.sluice --force -q --gpu-decodable
+      run $S bench stream --gpu /tmp/rp10m.sluice --memory 16G --no-storage --min-time 2
+      run $S bench stream --gpu /tmp/rp10m.sluice --memory 16G --no-storage --min-time 2 --read-threads 12 --threads 4
+      rm -f /tmp/rp10m.sluice
+      run $S synth -n 100M --frames 12 -o /tmp/g100m.sluice --force -q --gpu-decodable
+      run $S bench stream --gpu /tmp/g100m.sluice --memory 48G --no-storage --min-time 3
+      rm -f /tmp/g100m.sluice
       ;;
     gpu100)  # 100M particles a frame through the GPU path, more frames than the window holds
       run $S synth -n 100M --frames 12 -o /tmp/g100m.sluice --force -q --gpu-decodable

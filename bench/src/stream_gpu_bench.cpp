@@ -189,7 +189,10 @@ void run_stream_gpu_bench(const StreamBenchOptions& o) {
   render::ContextOptions co;
   co.device = o.device;
   render::Context context(co);
-  const runtime::ThreadSplit split = runtime::default_thread_split(core_count());
+  // The GPU rows run with the pipeline's split for frames kept encoded;
+  // the CPU row with its split for decoding (unless either is given).
+  const runtime::ThreadSplit split = runtime::default_thread_split(core_count(), true);
+  const runtime::ThreadSplit cpu_split = runtime::default_thread_split(core_count());
   DeviceSetup setup;
   setup.decode_threads = o.max_threads > 0 ? o.max_threads : split.decode;
   setup.read_threads = o.read_threads > 0 ? o.read_threads : split.read;
@@ -204,9 +207,14 @@ void run_stream_gpu_bench(const StreamBenchOptions& o) {
   std::printf("  %llu of %llu frames, %.2f M particles/frame, %.1f MB/frame read%s\n", (unsigned long long)slice.frames,
               (unsigned long long)reader.frame_count(), particles / 1e6, in / 1e6,
               setup.color >= 0 ? (", colour attribute '" + reader.header().attributes[0].name + "'").c_str() : "");
-  std::printf("machine: %s, %d cores; GPU: %s (%s); pipeline: %d workers, %d reading, memory cap %s GB\n", cpu_model().c_str(),
-              core_count(), context.device().name.c_str(), context.device().driver.c_str(), setup.decode_threads,
-              setup.read_threads, num(double(setup.memory) / (1 << 30), 1).c_str());
+  DeviceSetup cpu_setup = setup;
+  cpu_setup.decode_threads = o.max_threads > 0 ? o.max_threads : cpu_split.decode;
+  cpu_setup.read_threads = o.read_threads > 0 ? o.read_threads : cpu_split.read;
+  std::printf("machine: %s, %d cores; GPU: %s (%s); pipeline: %d workers + %d reading (GPU decoding), %d + %d (CPU "
+              "decoding), memory cap %s GB\n",
+              cpu_model().c_str(), core_count(), context.device().name.c_str(), context.device().driver.c_str(),
+              setup.decode_threads, setup.read_threads, cpu_setup.decode_threads, cpu_setup.read_threads,
+              num(double(setup.memory) / (1 << 30), 1).c_str());
 
   // 1. Bounds.
   std::fflush(stdout);
@@ -232,6 +240,16 @@ void run_stream_gpu_bench(const StreamBenchOptions& o) {
   Table bounds({"bound", "GB/s", "frames/s of this file", "what"});
   bounds.row({"pread, page cache, " + std::to_string(setup.read_threads) + " threads", num(cached / 1e9, 2),
               num(cached / in, 1), "file bytes read into one hot 8 MiB buffer per thread"});
+  // The CPU row's own readers, when they differ: its bound.
+  const double cached_cpu =
+      cpu_setup.read_threads == setup.read_threads
+          ? cached
+          : *sequential_read_gbps(o.file, slice.offset, slice.bytes, ReadMode::PageCache, o.min_seconds,
+                                  cpu_setup.read_threads) * 1e9;
+  if (cpu_setup.read_threads != setup.read_threads) {
+    bounds.row({"pread, page cache, " + std::to_string(cpu_setup.read_threads) + " threads (the CPU row's)",
+                num(cached_cpu / 1e9, 2), num(cached_cpu / in, 1), "file bytes read into one hot 8 MiB buffer per thread"});
+  }
   bounds.row({"pread into a window of 12 frame areas", num(window_pread / 1e9, 2), num(window_pread / in, 1),
               "every destination line cold, as in staging"});
   bounds.row({"copy from the file's mapping into the window (streaming stores)", num(window_mapped / 1e9, 2),
@@ -255,7 +273,6 @@ void run_stream_gpu_bench(const StreamBenchOptions& o) {
   std::fflush(stdout);
 
   // 2. The pipeline into device memory, GPU decode and CPU decode.
-  const double read_fps = cached / in;
   Table passes({"decoded by", "frames/s", "M particles/s", "MB/frame copied", "window", "bound frames/s", "vs bound",
                 "limited by", "CPU ms/frame", "cores busy", "read in place", "reader reading", "new blocks"});
   struct Way {
@@ -264,12 +281,16 @@ void run_stream_gpu_bench(const StreamBenchOptions& o) {
   for (const Way way : {Way{true, true}, Way{true, false}, Way{false, true}}) {
     const bool gpu = way.gpu;
     step(gpu ? "the pipeline, GPU decoding" : "the pipeline, CPU decoding");
-    const DevicePass p = stream_to_device(reader, slice, context, setup, gpu, way.mapped, o.min_seconds);
+    const DevicePass p = stream_to_device(reader, slice, context, gpu ? setup : cpu_setup, gpu, way.mapped, o.min_seconds);
+    const double read_fps = (gpu ? cached : cached_cpu) / in;
     const double fps = double(p.frames) / p.seconds;
     const double per_frame = double(p.staged_bytes) / double(std::max<uint64_t>(p.frames, 1));
     const double copy_fps = h2d / per_frame;
     const double bound = std::min(read_fps, copy_fps);
-    passes.row({std::string(gpu ? "GPU (kept encoded)" : "CPU workers") + (way.mapped ? ", mapped" : ", pread"), num(fps, 1), num(fps * particles / 1e6, 1),
+    const DeviceSetup& used = gpu ? setup : cpu_setup;
+    passes.row({std::string(gpu ? "GPU (kept encoded)" : "CPU workers") + (way.mapped ? ", mapped" : ", pread") + ", " +
+                    std::to_string(used.decode_threads) + " + " + std::to_string(used.read_threads),
+                num(fps, 1), num(fps * particles / 1e6, 1),
                 num(per_frame / 1e6, 1), p.window, num(bound, 1), percent(fps / bound),
                 read_fps < copy_fps ? "page-cache read" : "host -> device copy", num(1e3 * p.cpu / double(p.frames), 2),
                 num(p.cpu / p.seconds, 1), gpu ? percent(p.in_place) : "-", percent(p.reading),

@@ -10,9 +10,14 @@
 
 namespace sluice::runtime {
 
-ThreadSplit default_thread_split(int cores) {
+ThreadSplit default_thread_split(int cores, bool kept_encoded) {
   cores = std::max(cores, 1);
   ThreadSplit split;
+  if (kept_encoded) {
+    split.read = std::clamp(cores / 2, 1, 8);
+    split.decode = std::max(1, cores - split.read);
+    return split;
+  }
   split.read = std::clamp(cores / 4, 1, 4);
   split.decode = cores >= 8 ? cores - split.read : cores;
   return split;
@@ -50,7 +55,7 @@ PipelineCore::PipelineCore(const io::ContainerReader& reader, FrameAllocator& al
       allocator_(allocator),
       options_(std::move(options)),
       decode_threads_(options_.decode_threads > 0 ? options_.decode_threads
-                                                  : default_thread_split(tbb::info::default_concurrency()).decode),
+                                                  : default_thread_split(tbb::info::default_concurrency(), options_.keep_encoded).decode),
       delivery_(std::max<uint32_t>(2, options_.budget.ring_capacity)),
       returns_(std::max<uint32_t>(2, options_.budget.ring_capacity)),
       record_returns_(size_t(decode_threads_) + 1),
@@ -77,7 +82,7 @@ PipelineCore::PipelineCore(const io::ContainerReader& reader, FrameAllocator& al
   // come on top of it: a quarter as many (1 to 4).
   read_threads_ = options_.read_threads > 0    ? options_.read_threads
                   : options_.decode_threads > 0 ? std::clamp(decode_threads_ / 4, 1, 4)
-                                                : default_thread_split(tbb::info::default_concurrency()).read;
+                                                : default_thread_split(tbb::info::default_concurrency(), options_.keep_encoded).read;
   // TBB workers wanted: every decode slot (the read helpers are threads of
   // their own, read_crew.h).
   if (decode_threads_ + 1 > tbb::info::default_concurrency()) {

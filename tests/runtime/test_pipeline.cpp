@@ -453,6 +453,18 @@ TEST(ThreadSplit, OneReaderPerFourCoresFromEightCoresOn) {
   EXPECT_EQ(default_thread_split(64).read, 4);
 }
 
+TEST(ThreadSplit, FramesKeptEncodedReadOnHalfTheCores) {
+  // The workers only check checksums: half the cores read, 1 to 8.
+  EXPECT_EQ(default_thread_split(1, true).read, 1);
+  EXPECT_EQ(default_thread_split(1, true).decode, 1);
+  EXPECT_EQ(default_thread_split(2, true).read, 1);
+  EXPECT_EQ(default_thread_split(2, true).decode, 1);
+  EXPECT_EQ(default_thread_split(16, true).read, 8);
+  EXPECT_EQ(default_thread_split(16, true).decode, 8);
+  EXPECT_EQ(default_thread_split(64, true).read, 8);
+  EXPECT_EQ(default_thread_split(64, true).decode, 56);
+}
+
 // A file with the narrow band's layers: with the surface set the pipeline
 // reads each record only up to its last blob payload, and delivers exactly
 // the surface and blob chunks, decoded as decode_frame decodes them.

@@ -52,7 +52,7 @@ struct WindowChange {
 
 struct PipelineOptions {
   int decode_threads = 0;   // TBB workers decoding chunks; 0: default_thread_split()
-  int read_threads = 0;     // threads reading a record's pieces at once; 0: default_thread_split(), or
+  int read_threads = 0;     // threads reading a record's pieces at once; 0: default_thread_split(cores, keep_encoded), or
                             // a quarter of decode_threads (1 to 4) when that is given
   bool direct_io = false;   // read with O_DIRECT where the filesystem allows it (else buffered, said in stats)
   // Buffered reads copy out of the file's mapping with streaming stores
@@ -105,11 +105,17 @@ struct PipelineOptions {
 // frames/s with 12 workers + 4 readers, 200 with 13 + 3, 120 with 14 + 2:
 // copying out of the page cache slows to under 4 GB/s per thread while the
 // workers load memory (docs/measurements.md).
+//
+// Frames kept encoded for the GPU (`keep_encoded`) leave the workers only
+// checksums (and any zstd planes) to do, so reading takes half the cores,
+// 1 to 8, and the rest check: on the same machine 10M-particle frames reach
+// device memory at 352 frames/s with 8 + 8 against 239 with 4 + 12
+// (docs/measurements.md, "Reading out of the file's mapping").
 struct ThreadSplit {
   int decode = 1;
   int read = 1;
 };
-ThreadSplit default_thread_split(int cores);
+ThreadSplit default_thread_split(int cores, bool kept_encoded = false);
 
 enum class EntryStatus : uint8_t {
   None,     // not fetched yet (or the schedule has ended: see NextEntry::end)
