@@ -1,7 +1,7 @@
 // A probe, not part of the build: ways to move a file's frames from the page
 // cache into a window of frame-sized areas on T threads (GB/s, frames/s).
-// It chose the pipeline's read (runtime/src/mapped_copy.h); docs/pipeline.md
-// has its figures. Build and run (run.sh's readpath stage carries it):
+// It chose the pipeline's read (runtime/src/mapped_copy.h); its figures are
+// in docs/measurements.md ("Reading out of the file's mapping"). Build and run (run.sh's readpath stage carries it):
 //   g++ -O2 -mavx2 -std=c++20 bench/device/readpath.cpp -o .gpu/readpath -lxxhash -pthread
 //   readpath FILE FRAME_BYTES THREADS...
 #include <fcntl.h>

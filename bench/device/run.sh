@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Runs on the GPU machine (see bench/device/README.md): every benchmark the
 # issues ask GPU-machine figures for, in one call. Results go to $OUT.
-#   bash bench/device/run.sh [io] [import] [layers] [band] [render] [stream] [split] [codec] [huge] [embed] [compare] [live] [stereo] [xrsize] [firsthour] [streamcmp] [gpudecode] [gpuquick] [gpupair] [gpuab] [gpu100] [egl] [vtkpeer] [readpath] [gpusplit]   (default: io render stream)
+#   bash bench/device/run.sh [io] [import] [layers] [band] [render] [stream] [split] [codec] [huge] [embed] [compare] [live] [stereo] [xrsize] [firsthour] [streamcmp] [gpudecode] [gpuquick] [gpupair] [gpuab] [gpu100] [egl] [vtkpeer] [readpath] [gpusplit] [gpuplay]   (default: io render stream)
 set -uo pipefail
 OUT=${OUT:-/tmp/out}
 mkdir -p "$OUT" /tmp/s
@@ -235,6 +235,14 @@ for stage in $stages; do
       run $S synth -n 100M --frames 12 -o /tmp/g100m.sluice --force -q --gpu-decodable
       run $S bench stream --gpu /tmp/g100m.sluice --memory 48G --no-storage --min-time 3
       rm -f /tmp/g100m.sluice
+      ;;
+    gpuplay)  # playback through the GPU path as fast as it goes, 10M and 100M (issue 13, item 5)
+      run $S bench render --sizes 1M --repeats 3 >/dev/null  # warm-up
+      run $S synth -n 10M --frames 24 -o /tmp/p10m.sluice --force -q --gpu-decodable
+      run $S play --headless --gpu --stats /tmp/p10m.sluice --loop --seconds 8 --fps 1000 --display-hz 1000 --memory 16G
+      rm -f /tmp/p10m.sluice
+      run $S synth -n 100M --frames 12 -o /tmp/p100m.sluice --force -q --gpu-decodable
+      run $S play --headless --gpu --stats /tmp/p100m.sluice --loop --seconds 8 --fps 1000 --display-hz 1000 --memory 48G
       ;;
     gpu100)  # 100M particles a frame through the GPU path, more frames than the window holds
       run $S synth -n 100M --frames 12 -o /tmp/g100m.sluice --force -q --gpu-decodable

@@ -5,7 +5,8 @@
 // a window of frame-sized areas that no cache holds, so ordinary stores (and
 // pread's kernel copy) first read every destination line into the cache and
 // then write it back. Streaming stores write the line once. Measured by
-// bench/device/readpath.cpp (docs/pipeline.md).
+// bench/device/readpath.cpp (docs/measurements.md, "Reading out of the
+// file's mapping").
 //
 // Why a truncated file needs care: touching a mapped page past the file's
 // current end raises SIGBUS. copy_from_mapping() catches that on the calling
