@@ -12,6 +12,15 @@
 #include "sluice/runtime/record_source.h"
 
 namespace sluice::runtime {
+namespace {
+
+// Names the file, the range and errno.
+io::Error read_failed(const std::string& path, size_t bytes, uint64_t offset, int error) {
+  return io::Error({path}, "read of " + std::to_string(bytes) + " bytes at offset " + std::to_string(offset) +
+                               " failed: " + std::strerror(error));
+}
+
+}  // namespace
 
 FileRecordSource::FileRecordSource(std::string path, int buffered_fd, bool direct, bool mapped)
     : path_(std::move(path)), buffered_fd_(buffered_fd) {
@@ -65,8 +74,7 @@ size_t FileRecordSource::read_buffered(std::span<std::byte> dst, uint64_t offset
     const ssize_t n = ::pread(buffered_fd_, dst.data(), dst.size(), static_cast<off_t>(offset));
     if (n >= 0) return static_cast<size_t>(n);
     if (errno == EINTR) continue;
-    throw io::Error({path_}, "read of " + std::to_string(dst.size()) + " bytes at offset " + std::to_string(offset) +
-                                 " failed: " + std::strerror(errno));
+    throw read_failed(path_, dst.size(), offset, errno);
   }
 }
 
@@ -79,18 +87,16 @@ void FileRecordSource::fall_back(const std::string& why) {
 size_t FileRecordSource::read_at(std::span<std::byte> dst, uint64_t offset) {
   while (true) {
     const int direct = direct_fd_.load(std::memory_order_relaxed);
-    if (direct < 0 && offset < map_bytes_) return copy_mapped(dst, offset);
-    const int fd = direct >= 0 ? direct : buffered_fd_;
-    const ssize_t n = ::pread(fd, dst.data(), dst.size(), static_cast<off_t>(offset));
+    if (direct < 0) return offset < map_bytes_ ? copy_mapped(dst, offset) : read_buffered(dst, offset);
+    const ssize_t n = ::pread(direct, dst.data(), dst.size(), static_cast<off_t>(offset));
     if (n >= 0) return static_cast<size_t>(n);
     if (errno == EINTR) continue;
     // Some filesystems accept O_DIRECT at open and refuse the reads.
-    if (direct >= 0 && errno == EINVAL) {
+    if (errno == EINVAL) {
       fall_back(std::string(std::strerror(EINVAL)) + " on read");
       continue;
     }
-    throw io::Error({path_}, "read of " + std::to_string(dst.size()) + " bytes at offset " + std::to_string(offset) +
-                                 " failed: " + std::strerror(errno));
+    throw read_failed(path_, dst.size(), offset, errno);
   }
 }
 

@@ -68,7 +68,7 @@ class FileRecordSource final : public RecordSource {
   void map_file();
   size_t copy_mapped(std::span<std::byte> dst, uint64_t offset);
   bool reaches(uint64_t end) const;  // the file is at least `end` bytes long now
-  size_t read_buffered(std::span<std::byte> dst, uint64_t offset);
+  size_t read_buffered(std::span<std::byte> dst, uint64_t offset);  // pread on buffered_fd_, EINTR retried
 
   std::string path_;
   int buffered_fd_;
