@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Runs on the GPU machine (see bench/device/README.md): every benchmark the
 # issues ask GPU-machine figures for, in one call. Results go to $OUT.
-#   bash bench/device/run.sh [io] [import] [layers] [band] [render] [stream] [split] [codec] [huge] [embed] [compare] [live] [stereo] [xrsize] [firsthour] [streamcmp] [gpudecode] [gpuquick] [gpupair] [gpuab] [gpu100] [egl] [vtkpeer] [readpath] [gpusplit] [gpuplay]   (default: io render stream)
+#   bash bench/device/run.sh [io] [import] [layers] [band] [render] [stream] [split] [codec] [huge] [embed] [compare] [live] [stereo] [xrsize] [firsthour] [streamcmp] [gpudecode] [gpuquick] [gpupair] [gpuab] [gpu100] [egl] [vtkpeer] [readpath] [gpusplit] [gpuplay] [gpuflight] [gpu100ab]   (default: io render stream)
 set -uo pipefail
 OUT=${OUT:-/tmp/out}
 mkdir -p "$OUT" /tmp/s
@@ -218,6 +218,27 @@ for stage in $stages; do
         done
       done
       rm -f /tmp/ab10m.sluice
+      ;;
+    gpuflight)  # two records in flight: this build against BASE's alternated twice, then other splits (10M x 24 frames)
+      run $S synth -n 10M --frames 24 -o /tmp/fl10m.sluice --force -q --gpu-decodable
+      for round in 1 2; do
+        for b in ./.gpu/sluice_base $S; do
+          [[ -x $b ]] || continue
+          log "round $round: $b"
+          $b bench stream --gpu /tmp/fl10m.sluice --memory 16G --no-storage --min-time 2 2>&1 | grep -E "decoded by|GPU \(kept|CPU workers|pread|mapping|GPU decode alone" | tee -a "$OUT/summary.txt"
+        done
+      done
+      for rt in 10 6; do
+        run $S bench stream --gpu /tmp/fl10m.sluice --memory 16G --no-storage --min-time 2 --read-threads $rt --threads $((16 - rt))
+      done
+      rm -f /tmp/fl10m.sluice
+      ;;
+    gpu100ab)  # 100M particles a frame through the GPU path, this build and BASE's
+      run $S synth -n 100M --frames 12 -o /tmp/ab100m.sluice --force -q --gpu-decodable
+      for b in $S ./.gpu/sluice_base; do
+        [[ -x $b ]] && run $b bench stream --gpu /tmp/ab100m.sluice --memory 48G --no-storage --min-time 3
+      done
+      rm -f /tmp/ab100m.sluice
       ;;
     readpath)  # ways to move frames from the page cache into a window of staging (.gpu/readpath, a probe)
       run $S synth -n 10M --frames 24 -o /tmp/rp10m.sluice --force -q --gpu-decodable

@@ -48,7 +48,8 @@ struct DevicePass {
   uint64_t staged_bytes = 0;  // bytes copied to the device over the timed frames
   std::string window;
   double in_place = 0;  // share of the frames read straight into their staged area
-  double reading = 0;   // share of the timed run the reader thread spent in reads
+  double reading = 0;   // share of the timed run with a read in progress
+  double read_busy = 0; // share of the read threads' time spent copying
   uint64_t fresh_blocks = 0;  // staging blocks allocated anew during the timed run
 };
 
@@ -114,7 +115,7 @@ DevicePass stream_to_device(const io::ContainerReader& reader, const Slice& slic
   DevicePass p;
   staged = 0;
   const double cpu0 = cpu_seconds();
-  const double read0 = pipeline.stats().read_seconds;
+  const runtime::PipelineStats stats0 = pipeline.stats();
   const uint64_t blocks0 = staging.fresh_allocations();
   const auto start = Clock::now();
   p.frames = consume(UINT64_MAX, min_seconds);
@@ -125,7 +126,8 @@ DevicePass stream_to_device(const io::ContainerReader& reader, const Slice& slic
   const runtime::PipelineStats stats = pipeline.stats();
   p.window = std::to_string(stats.active_frames) + "/" + std::to_string(stats.window_frames);
   p.in_place = double(stats.frames_in_place) / double(std::max<uint64_t>(stats.frames_read, 1));
-  p.reading = (stats.read_seconds - read0) / p.seconds;
+  p.reading = (stats.read_seconds - stats0.read_seconds) / p.seconds;
+  p.read_busy = (stats.read_thread_seconds - stats0.read_thread_seconds) / (std::max(1u, stats.read_threads) * p.seconds);
   p.fresh_blocks = staging.fresh_allocations() - blocks0;
   flight.clear();
   return p;
@@ -274,7 +276,8 @@ void run_stream_gpu_bench(const StreamBenchOptions& o) {
 
   // 2. The pipeline into device memory, GPU decode and CPU decode.
   Table passes({"decoded by", "frames/s", "M particles/s", "MB/frame copied", "window", "bound frames/s", "vs bound",
-                "limited by", "CPU ms/frame", "cores busy", "read in place", "reader reading", "new blocks"});
+                "limited by", "CPU ms/frame", "cores busy", "read in place", "reading", "read threads copying",
+                "new blocks"});
   struct Way {
     bool gpu, mapped;
   };
@@ -294,7 +297,7 @@ void run_stream_gpu_bench(const StreamBenchOptions& o) {
                 num(per_frame / 1e6, 1), p.window, num(bound, 1), percent(fps / bound),
                 read_fps < copy_fps ? "page-cache read" : "host -> device copy", num(1e3 * p.cpu / double(p.frames), 2),
                 num(p.cpu / p.seconds, 1), gpu ? percent(p.in_place) : "-", percent(p.reading),
-                std::to_string(p.fresh_blocks)});
+                percent(p.read_busy), std::to_string(p.fresh_blocks)});
   }
   passes.print("Pipeline -> renderer device buffers, page cache, two frames in flight (bound: the slower of reading the "
                "file and copying it to the device)");

@@ -267,6 +267,8 @@ PipelineStats PipelineCore::stats() const {
   const Counters& c = counters_;
   s.bytes_read = c.bytes_read.load(kRelaxed);
   s.read_seconds = double(c.read_ns.load(kRelaxed)) * 1e-9;
+  s.read_thread_seconds = double(read_crew_.busy_ns()) * 1e-9;
+  s.read_threads = static_cast<uint32_t>(read_threads_);
   s.frames_read = c.frames_read.load(kRelaxed);
   s.frames_in_place = c.frames_in_place.load(kRelaxed);
   s.cache_hits = c.cache_hits.load(kRelaxed);

@@ -10,6 +10,7 @@
 
 #include "read_crew.h"
 
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <deque>
@@ -52,18 +53,36 @@ struct PieceRound {
   std::span<std::byte> dst;  // [0, need) comes from the file at `offset`; the rest is alignment padding
   uint64_t offset = 0, need = 0, piece = 0, count = 0, frame = 0, generation = 0;
   mutable std::atomic<bool> gave_up{false};  // a newer schedule (or stop) came first: the pieces left are skipped
-  std::chrono::steady_clock::time_point started;
   void operator()(uint64_t p) const;
 };
 
-// A whole record the crew reads while the reader thread finishes the frame
+// A whole record the crew reads while the reader thread finishes the frames
 // before it (reader_thread.cpp: start_entry).
 struct PendingRead {
-  bool active = false;
   uint32_t slot = 0;
   uint64_t k = 0;             // its schedule entry
   uint64_t record_offset = 0; // where the record starts in the round's dst
   PieceRound round;
+};
+
+// The records read in the background, oldest first: as many as the crew
+// has rounds. In place, because the crew holds their rounds by address.
+class PendingReads {
+ public:
+  uint32_t size() const { return size_; }
+  bool full() const { return size_ == kCapacity; }
+  PendingRead& oldest() { return reads_[first_]; }
+  const PendingRead& at(uint32_t i) const { return reads_[(first_ + i) % kCapacity]; }
+  PendingRead& push() { return reads_[(first_ + size_++) % kCapacity]; }  // not full()
+  void pop() {  // size() > 0
+    first_ = (first_ + 1) % kCapacity;
+    --size_;
+  }
+
+ private:
+  static constexpr uint32_t kCapacity = ReadCrew::kRounds;
+  std::array<PendingRead, kCapacity> reads_;
+  uint32_t first_ = 0, size_ = 0;
 };
 
 // What only the reader thread touches.
@@ -82,7 +101,7 @@ struct ReaderState {
   uint64_t next_evaluation = 0;
   uint64_t decoded_held = 0;            // bytes of allocator buffers held
   uint64_t record_held = 0;             // bytes of record buffers held
-  PendingRead pending;                  // at most one record read in the background
+  PendingReads pending;                 // records read in the background
 };
 
 class PipelineCore {
@@ -143,11 +162,16 @@ class PipelineCore {
   // Only some layers wanted: the table first, then the payloads up to the
   // last wanted one (the interior comes last). Synchronous.
   bool read_layers(Slot& slot, const ReadTarget& target, uint64_t generation);
-  // The whole record in the background: the frame before it (if pending) is
-  // joined first, this read begins, then that frame is finished.
+  // The whole record in the background: with the crew's rounds all in
+  // flight the oldest is joined first, this read begins, then that frame is
+  // finished.
   void begin_background_read(ReaderState& rs, uint32_t s, uint64_t k, const ReadTarget& target);
-  // Joins the pending read and finishes its frame; false if none was pending.
+  // Joins the oldest pending read and finishes its frame; false if none was
+  // pending.
   bool settle_pending(ReaderState& rs);
+  // The same for every pending read, oldest first: before anything that
+  // publishes an entry or reads on this thread.
+  void settle_all_pending(ReaderState& rs);
   enum class ReadOutcome { Read, Cancelled, Failed };
   ReadOutcome join_pending(ReaderState& rs, FrameError& error);
   void finish_read(ReaderState& rs, uint32_t s, uint64_t k, ReadOutcome outcome, FrameError error);
@@ -243,6 +267,7 @@ class PipelineCore {
   // pieces of one record at once (page-cache copies and O_DIRECT requests
   // both scale with it).
   ReadCrew read_crew_;
+  std::chrono::steady_clock::time_point reading_since_;  // the reader thread's: when the crew last went from idle to reading
 
   std::thread reader_thread_;  // last: started once everything above exists
 };

@@ -1,4 +1,4 @@
-// The threads that copy one record's pieces at once: the reader thread and
+// The threads that copy records' pieces at once: the reader thread and
 // `helpers` threads of their own. Dedicated threads rather than TBB workers
 // in a second arena: a read never waits for TBB to move a worker over from
 // the decode arena, the hand-off is plain atomics that ThreadSanitizer sees
@@ -6,12 +6,16 @@
 // asked. Throughput was the same within run-to-run variation (16 cores, 14
 // decode + 2 read: 135.8 frames/s with TBB helpers, 120.4 with these, on two
 // boxes that vary by about 15%).
+//
+// Two rounds may be in flight: a helper done with the older round's pieces
+// goes on with the younger one's instead of waiting for the round's
+// slowest piece (docs/runtime.md, "Two records in flight").
 #pragma once
 
+#include <array>
 #include <atomic>
 #include <cstdint>
 #include <exception>
-#include <functional>
 #include <thread>
 #include <vector>
 
@@ -34,47 +38,63 @@ class PieceBody {
 
 class ReadCrew {
  public:
+  static constexpr int kRounds = 2;  // rounds begun and not yet joined, at most
+
   ReadCrew() = default;
-  ~ReadCrew();  // stops and joins the helpers
-  // Starts the helper threads; once, before the first run().
+  ~ReadCrew();  // joins the rounds in flight, stops and joins the helpers
+  // Starts the helper threads; once, before the first begin().
   void start(int helpers);
   ReadCrew(const ReadCrew&) = delete;
   ReadCrew& operator=(const ReadCrew&) = delete;
 
-  // Runs body(p) for every p in [0, count), each exactly once, on the calling
-  // thread and the helpers; returns when all are done. If a body throws, the
-  // pieces not yet started are skipped and the first exception is rethrown
-  // here. One caller at a time (the reader thread). Waiting is on futex words
-  // (std::atomic::wait): no mutex. run() is begin() then join().
-  void run(uint64_t count, PieceBody body);
-  // A round in two halves, so the caller can do other work while the
-  // helpers read: begin() hands the pieces to the helpers and returns at
-  // once; join() takes the pieces left on the calling thread, waits for the
-  // helpers and rethrows the first exception. The callable behind `body`
-  // must live until join() returns. A begin() is always joined before the
-  // next begin() (and before the crew is destroyed).
+  // A round runs body(p) for every p in [0, count), each exactly once, on the
+  // helpers and on the thread that joins it. begin() hands the pieces to the
+  // helpers and returns at once; join() takes the pieces of the oldest round
+  // in flight left on the calling thread, waits for the helpers' pieces of it
+  // and rethrows the round's first exception (after which its pieces not yet
+  // started are skipped). Helpers take pieces of the oldest round first.
+  // Rounds are joined in the order they began; the callable behind `body`
+  // must live until its round is joined. One caller (the reader thread)
+  // makes every call. Waiting is on futex words (std::atomic::wait): no
+  // mutex. begin() throws std::logic_error with kRounds in flight and
+  // std::length_error for 2^32 pieces or more; join() throws
+  // std::logic_error with none in flight.
   void begin(uint64_t count, PieceBody body);
   void join();
-  bool running() const { return running_; }
+  // begin() then join(), with no other round in flight (std::logic_error).
+  void run(uint64_t count, PieceBody body);
+  int in_flight() const { return static_cast<int>(begun_ - joined_); }
 
   int helpers() const { return static_cast<int>(threads_.size()); }
+  // Time spent inside bodies, summed over the threads (nanoseconds; any thread).
+  uint64_t busy_ns() const { return busy_ns_.load(std::memory_order_relaxed); }
 
  private:
+  struct alignas(64) Round {
+    // count << 32 | next piece to take: one word, so that a piece is taken
+    // by one compare-and-swap that also says which round it belongs to.
+    std::atomic<uint64_t> claim{0};
+    std::atomic<uint64_t> order{0};   // when it began: helpers take the oldest round's pieces first
+    std::atomic<uint32_t> done{0};    // pieces finished (run or skipped)
+    std::atomic<bool> failed{false};
+    // Written by begin() before `claim` (release); read after taking a piece.
+    PieceBody body{kNothing};
+    std::exception_ptr error;  // written by whoever sets `failed` first
+    uint32_t count = 0;        // the caller's copy
+  };
+
   void helper_main();
-  void work();
+  bool take_oldest();               // one piece of any round; false if none is left
+  bool take(Round& round);          // one piece of this round; false if none is left
+  void run_piece(Round& round, uint32_t piece, uint32_t count);
 
   std::vector<std::thread> threads_;
-  std::atomic<uint64_t> round_{0};   // bumped for every run(); helpers wait on it
-  std::atomic<uint64_t> next_{0};    // next piece to take
-  std::atomic<int> working_{0};      // helpers not yet done with this round
+  std::array<Round, kRounds> rounds_;
+  std::atomic<uint64_t> posted_{0};  // bumped for every begin(); idle helpers wait on it
   std::atomic<bool> stopping_{false};
-  std::atomic<bool> failed_{false};
-  // Written by run() before round_ is bumped (release), read by helpers after.
-  uint64_t count_ = 0;
-  PieceBody body_{kNothing};
-  bool running_ = false;  // a begin() not yet joined (the caller's only)
+  alignas(64) std::atomic<uint64_t> busy_ns_{0};
+  uint64_t begun_ = 0, joined_ = 0;  // the caller's only
   static constexpr auto kNothing = [](uint64_t) {};
-  std::exception_ptr error_;  // written by whoever sets failed_ first
 };
 
 }  // namespace sluice::runtime::detail

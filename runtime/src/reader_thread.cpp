@@ -49,9 +49,10 @@ void PipelineCore::reader_main() {
     reader_failed_.store(true, std::memory_order_release);
     wake_consumer();
   }
-  // A read still running writes into buffers this thread accounts for, and
-  // its round lives in `rs`: it ends here (stopping: its pieces are skipped).
-  if (read_crew_.running()) {
+  // Reads still running write into buffers this thread accounts for, and
+  // their rounds live in `rs`: they end here (stopping: their pieces are
+  // skipped).
+  while (read_crew_.in_flight() > 0) {
     try {
       read_crew_.join();
     } catch (...) {  // the frame is dropped with the pipeline
@@ -69,7 +70,7 @@ bool PipelineCore::reader_iteration(ReaderState& rs) {
   // now, not when the next one begins.
   const auto frame = rs.schedule.frame_at(rs.next_k);
   if (!frame) return settle_pending(rs);
-  if (rs.out + rs.pending.active >= ahead_limit(rs) && !grow(rs)) return settle_pending(rs);
+  if (rs.out + rs.pending.size() >= ahead_limit(rs) && !grow(rs)) return settle_pending(rs);
   switch (start_entry(rs, rs.next_k, *frame)) {
     case Start::Pushed: ++rs.next_k; return true;
     case Start::Cancelled: return true;  // a newer schedule is waiting
@@ -98,15 +99,15 @@ uint32_t PipelineCore::initial_active(const WindowPlan& plan) const {
 }
 
 uint32_t PipelineCore::occupied(const ReaderState& rs) const {
-  return rs.out + rs.pending.active + static_cast<uint32_t>(rs.cached.size() + rs.draining.size());
+  return rs.out + rs.pending.size() + static_cast<uint32_t>(rs.cached.size() + rs.draining.size());
 }
 
 void PipelineCore::adopt_schedule(ReaderState& rs) {
   if (generation_.load(std::memory_order_acquire) == rs.generation) return;
-  // A read of the old schedule still running ends first (its pieces see the
-  // new generation and stop), so that what it publishes, if anything, is
+  // Reads of the old schedule still running end first (their pieces see the
+  // new generation and stop), so that what they publish, if anything, is
   // told apart as stale.
-  settle_pending(rs);
+  settle_all_pending(rs);
   {
     const std::lock_guard lock(control_mutex_);
     rs.schedule = requested_;
@@ -175,7 +176,8 @@ void PipelineCore::shrink_to_window(ReaderState& rs) {
   // worth go back (steady playback never has more, so nothing is freed).
   // A record read in the background whose buffers come after it is parsed
   // (CPU decoding) will take one of the kept ones: it counts as free here.
-  const bool unbuffered = rs.pending.active && !slots_[rs.pending.slot].has_buffers;
+  uint64_t unbuffered = 0;
+  for (uint32_t i = 0; i < rs.pending.size(); ++i) unbuffered += !slots_[rs.pending.at(i).slot].has_buffers;
   const uint64_t free_slots = (rs.active > occupied(rs) ? rs.active - occupied(rs) : 0) + unbuffered;
   if (allocator_.kept_bytes() > free_slots * footprint_.decoded_bytes) {
     allocator_.trim(free_slots * footprint_.decoded_bytes);
@@ -239,7 +241,7 @@ PipelineCore::Start PipelineCore::start_entry(ReaderState& rs, uint64_t k, uint6
   if (hit != rs.cached.rend()) {
     const uint32_t s = *hit;
     rs.cached.erase(std::next(hit).base());
-    settle_pending(rs);  // entries go out in schedule order
+    settle_all_pending(rs);  // entries go out in schedule order
     slots_[s].generation = rs.generation;
     slots_[s].state.store(SlotState::Ready, std::memory_order_release);
     counters_.cache_hits.fetch_add(1, kRelaxed);
@@ -288,11 +290,11 @@ PipelineCore::Start PipelineCore::start_entry(ReaderState& rs, uint64_t k, uint6
     }
     target = reads_in_place() ? staged_target(rs, slot) : record_target(rs, slot, record);
   } catch (const io::Error& e) {
-    settle_pending(rs);  // entries go out in schedule order
+    settle_all_pending(rs);  // entries go out in schedule order
     finish_read(rs, s, k, ReadOutcome::Failed, FrameError::from(e));
     return Start::Pushed;
   } catch (const std::exception& e) {
-    settle_pending(rs);
+    settle_all_pending(rs);
     finish_read(rs, s, k, ReadOutcome::Failed, FrameError{reader_.location(frame), e.what()});
     return Start::Pushed;
   }
@@ -300,7 +302,7 @@ PipelineCore::Start PipelineCore::start_entry(ReaderState& rs, uint64_t k, uint6
     begin_background_read(rs, s, k, target);
     return Start::Pushed;
   }
-  settle_pending(rs);
+  settle_all_pending(rs);
   FrameError error;
   ReadOutcome outcome = ReadOutcome::Read;
   try {
@@ -321,51 +323,65 @@ PipelineCore::Start PipelineCore::start_entry(ReaderState& rs, uint64_t k, uint6
 }
 
 void PipelineCore::begin_background_read(ReaderState& rs, uint32_t s, uint64_t k, const ReadTarget& target) {
-  // The crew reads one round at a time: the frame before is joined first,
-  // and finished (parsed, handed to the workers, published) while this one
-  // is read.
+  // With every crew round in flight the oldest is joined first; it is
+  // finished (parsed, handed to the workers, published) while this one and
+  // the others are read.
   FrameError error;
-  const bool previous = rs.pending.active;
-  const uint32_t previous_slot = rs.pending.slot;
-  const uint64_t previous_k = rs.pending.k;
-  const ReadOutcome outcome = previous ? join_pending(rs, error) : ReadOutcome::Read;
+  const bool joined = rs.pending.full();
+  const uint32_t joined_slot = rs.pending.oldest().slot;
+  const uint64_t joined_k = rs.pending.oldest().k;
+  const ReadOutcome outcome = joined ? join_pending(rs, error) : ReadOutcome::Read;
 
-  rs.pending.active = true;
-  rs.pending.slot = s;
-  rs.pending.k = k;
-  rs.pending.record_offset = target.record_offset;
-  begin_pieces(rs.pending.round, target.dst, target.offset, target.need, slots_[s].frame, rs.generation);
+  PendingRead& read = rs.pending.push();
+  read.slot = s;
+  read.k = k;
+  read.record_offset = target.record_offset;
+  begin_pieces(read.round, target.dst, target.offset, target.need, slots_[s].frame, rs.generation);
 
-  if (previous) finish_read(rs, previous_slot, previous_k, outcome, std::move(error));
+  if (joined) finish_read(rs, joined_slot, joined_k, outcome, std::move(error));
 }
 
+// Joins the oldest pending read (the crew's oldest round) and takes it off
+// the list.
 PipelineCore::ReadOutcome PipelineCore::join_pending(ReaderState& rs, FrameError& error) {
-  rs.pending.active = false;
-  const uint64_t frame = slots_[rs.pending.slot].frame;
+  PendingRead& read = rs.pending.oldest();
+  Slot& slot = slots_[read.slot];
+  const uint64_t frame = slot.frame;
+  bool completed = false;
   try {
-    if (!join_pieces(rs.pending.round)) return ReadOutcome::Cancelled;
+    completed = join_pieces(read.round);
   } catch (const io::Error& e) {
+    rs.pending.pop();
     error = FrameError::from(e);
     return ReadOutcome::Failed;
   } catch (const std::exception& e) {
+    rs.pending.pop();
     error = {reader_.location(frame), e.what()};
     return ReadOutcome::Failed;
   }
-  Slot& slot = slots_[rs.pending.slot];
+  const std::span<std::byte> dst = read.round.dst;
+  const uint64_t record_offset = read.record_offset;
+  rs.pending.pop();
+  if (!completed) return ReadOutcome::Cancelled;
   const io::FrameIndexEntry& e = reader_.index().frames[frame];
-  slot.record_bytes = rs.pending.round.dst.subspan(rs.pending.record_offset, e.bytes);
+  slot.record_bytes = dst.subspan(record_offset, e.bytes);
   counters_.frames_read.fetch_add(1, kRelaxed);
   return ReadOutcome::Read;
 }
 
 bool PipelineCore::settle_pending(ReaderState& rs) {
-  if (!rs.pending.active) return false;
+  if (rs.pending.size() == 0) return false;
   FrameError error;
-  const uint32_t s = rs.pending.slot;
-  const uint64_t k = rs.pending.k;
+  const uint32_t s = rs.pending.oldest().slot;
+  const uint64_t k = rs.pending.oldest().k;
   const ReadOutcome outcome = join_pending(rs, error);
   finish_read(rs, s, k, outcome, std::move(error));
   return true;
+}
+
+void PipelineCore::settle_all_pending(ReaderState& rs) {
+  while (settle_pending(rs)) {
+  }
 }
 
 void PipelineCore::finish_read(ReaderState& rs, uint32_t s, uint64_t k, ReadOutcome outcome, FrameError error) {

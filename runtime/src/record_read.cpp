@@ -51,7 +51,7 @@ void PipelineCore::begin_pieces(PieceRound& round, std::span<std::byte> dst, uin
   round.piece = std::max(align, round_up((dst.size() + even - 1) / std::max<uint64_t>(even, 1), align));
   round.count = (dst.size() + round.piece - 1) / round.piece;
   round.gave_up.store(false, kRelaxed);
-  round.started = std::chrono::steady_clock::now();
+  if (read_crew_.in_flight() == 0) reading_since_ = std::chrono::steady_clock::now();
   read_crew_.begin(round.count, round);
 }
 
@@ -68,12 +68,13 @@ void PieceRound::operator()(uint64_t p) const {
   core->read_piece(dst.subspan(at, length), offset + at, std::min(length, need - at), frame, offset + need);
 }
 
+// Read time is wall time with a round in flight: two rounds at once count
+// once.
 bool PipelineCore::join_pieces(PieceRound& round) {
   auto count_time = [&] {
-    counters_.read_ns.fetch_add(static_cast<uint64_t>(std::chrono::duration_cast<std::chrono::nanoseconds>(
-                                                          std::chrono::steady_clock::now() - round.started)
-                                                          .count()),
-                                kRelaxed);
+    if (read_crew_.in_flight() > 0) return;
+    const auto ns = std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - reading_since_);
+    counters_.read_ns.fetch_add(static_cast<uint64_t>(ns.count()), kRelaxed);
   };
   try {
     read_crew_.join();

@@ -78,11 +78,11 @@ WindowPlan plan_window(const FrameFootprint& frame, const BudgetReading& reading
   plan.host_budget = host.bytes;
 
   // Record buffers: enough frames decoding at once to keep every worker busy
-  // (a big frame's chunks alone may do it), one being read, one to spare;
-  // fewer if that is what it takes to fit two frames.
+  // (a big frame's chunks alone may do it), two being read (the read crew's
+  // rounds), one to spare; fewer if that is what it takes to fit two frames.
   auto frames_with = [&](uint32_t r) { return host.bytes >= r * record ? (host.bytes - r * record) / decoded : 0; };
   const auto workers = static_cast<uint32_t>(std::max(1, decode_threads));
-  uint32_t records = std::min(workers + 1, (workers + frame.chunks - 1) / frame.chunks + 2);
+  uint32_t records = std::min(workers + 2, (workers + frame.chunks - 1) / frame.chunks + 3);
   uint64_t host_frames = frames_with(records);
   while (host_frames < 2 && records > 1) host_frames = frames_with(--records);
 

@@ -241,8 +241,8 @@ TEST(PlanWindow, HostMemoryBoundsTheWindow) {
   const FrameFootprint frame{100 * kMiB, 40 * kMiB};
   BudgetOptions o;  // half of what is available
   const WindowPlan p = plan_window(frame, host_reading(4 * kGiB), o, 3);
-  // 2 GiB - 4 records x 40 MiB = 1888 MiB -> 18 frames of 100 MiB
-  EXPECT_EQ(p.record_buffers, 4u);
+  // 2 GiB - 5 records x 40 MiB = 1848 MiB -> 18 frames of 100 MiB
+  EXPECT_EQ(p.record_buffers, 5u);
   EXPECT_EQ(p.frames, 18u);
   EXPECT_EQ(p.host_budget, 2 * kGiB);
   EXPECT_EQ(p.limited_by, "host memory");
@@ -302,15 +302,15 @@ TEST(PlanWindow, NeverBelowTwoFramesAndFewerRecordsToFit) {
 
 TEST(PlanWindow, BigFramesNeedFewRecordBuffers) {
   // One frame of 150 chunks keeps 16 workers busy: records for it, the next
-  // being read and one to spare; the rest of the budget goes to frames.
+  // two being read and one to spare; the rest of the budget goes to frames.
   const FrameFootprint frame{100 * kMiB, 40 * kMiB, 150};
   BudgetOptions o;
   o.memory_cap = 2 * kGiB;
   const WindowPlan p = plan_window(frame, host_reading(64 * kGiB), o, 16);
-  EXPECT_EQ(p.record_buffers, 3u);
-  EXPECT_EQ(p.frames, (2 * kGiB - 3 * 40 * kMiB) / (100 * kMiB));
+  EXPECT_EQ(p.record_buffers, 4u);
+  EXPECT_EQ(p.frames, (2 * kGiB - 4 * 40 * kMiB) / (100 * kMiB));
   const WindowPlan small = plan_window({kMiB, kMiB, 2}, host_reading(64 * kGiB), o, 16);
-  EXPECT_EQ(small.record_buffers, 10u) << "two-chunk frames: eight decoding at once, one read, one spare";
+  EXPECT_EQ(small.record_buffers, 11u) << "two-chunk frames: eight decoding at once, two read, one spare";
 }
 
 TEST(PlanWindow, CgroupTighterThanHostIsNamed) {

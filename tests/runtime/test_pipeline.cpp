@@ -365,7 +365,7 @@ TEST_F(PipelineTest, WindowFollowsAvailableMemoryWhilePlaying) {
   test::TempDir fake;
   PipelineOptions o = budget_from_fake_meminfo(fake);
   const FrameFootprint f = largest_frame(reader, 1, &allocator);
-  const uint64_t plenty = 2 * (40 * f.decoded_bytes + 3 * f.record_bytes);  // host fraction 0.5 -> ~40 frames
+  const uint64_t plenty = 2 * (40 * f.decoded_bytes + 4 * f.record_bytes);  // host fraction 0.5 -> ~40 frames
   test::write_text_file(fake / "meminfo", "MemAvailable: " + std::to_string(plenty / 1024) + " kB\n");
   // The fake MemAvailable does not drop as the pipeline allocates, so the
   // window may first grow a little; what matters is that it follows the drop.
@@ -393,7 +393,7 @@ TEST_F(PipelineTest, HeldMemoryFollowsTheWindowDownAndUp) {
   PipelineOptions o = budget_from_fake_meminfo(fake);
   o.slow_start = false;  // the whole window at once: held memory is the window
   const FrameFootprint f = largest_frame(reader, 1, &allocator);
-  const uint64_t plenty = 2 * (40 * f.decoded_bytes + 3 * f.record_bytes);  // ~40 frames
+  const uint64_t plenty = 2 * (40 * f.decoded_bytes + 4 * f.record_bytes);  // ~40 frames
   const auto set_available = [&](uint64_t bytes) {
     test::write_text_file(fake / "meminfo", "MemAvailable: " + std::to_string(bytes / 1024) + " kB\n");
   };

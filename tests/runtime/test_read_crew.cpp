@@ -1,8 +1,11 @@
 // The read crew: every piece exactly once per run, across many runs and
-// helper counts; a throwing piece ends the run and reaches the caller.
+// helper counts; a throwing piece ends the run and reaches the caller; with
+// two rounds in flight, helpers go on to the younger one while the older
+// waits for a straggler, and each round keeps its own error.
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <chrono>
 #include <set>
 #include <stdexcept>
 #include <thread>
@@ -34,7 +37,9 @@ TEST(ReadCrew, RunsEveryPieceExactlyOnceOnSeveralThreads) {
     }
     distinct_threads_seen = int(threads.size());
     EXPECT_LE(distinct_threads_seen.load(), helpers + 1);
-    if (helpers == 0) EXPECT_EQ(distinct_threads_seen.load(), 1);
+    if (helpers == 0) {
+      EXPECT_EQ(distinct_threads_seen.load(), 1);
+    }
   }
 }
 
@@ -51,4 +56,61 @@ TEST(ReadCrew, FirstErrorReachesTheCallerAndLaterRunsStillWork) {
   std::atomic<uint64_t> sum{0};
   crew.run(100, [&](uint64_t p) { sum.fetch_add(p); });
   EXPECT_EQ(sum.load(), 4950u);
+}
+
+TEST(ReadCrew, HelpersGoOnToTheYoungerRoundWhileTheOlderWaitsForAStraggler) {
+  ReadCrew crew;
+  crew.start(3);
+  std::atomic<bool> release{false};
+  std::atomic<int> older_done{0}, younger_done{0};
+  const auto older = [&](uint64_t p) {
+    if (p == 0) {
+      while (!release.load()) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+    older_done.fetch_add(1);
+  };
+  const auto younger = [&](uint64_t) { younger_done.fetch_add(1); };
+  crew.begin(4, older);
+  crew.begin(64, younger);
+  EXPECT_EQ(crew.in_flight(), 2);
+  // Nobody joins yet: the helpers alone must finish the younger round while
+  // piece 0 of the older one holds a helper.
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  while (younger_done.load() < 64 && std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  EXPECT_EQ(younger_done.load(), 64) << "the helpers waited for the older round's straggler";
+  EXPECT_EQ(older_done.load(), 3);
+  release = true;
+  crew.join();
+  EXPECT_EQ(older_done.load(), 4);
+  crew.join();
+  EXPECT_EQ(crew.in_flight(), 0);
+}
+
+TEST(ReadCrew, EachRoundKeepsItsOwnErrorAndRoundsAreBounded) {
+  ReadCrew crew;
+  crew.start(2);
+  std::atomic<uint64_t> sum{0};
+  const auto failing = [&](uint64_t p) {
+    if (p == 3) throw std::runtime_error("short read at piece 3");
+  };
+  const auto adding = [&](uint64_t p) { sum.fetch_add(p); };
+  crew.begin(50, failing);
+  crew.begin(100, adding);
+  EXPECT_THROW(crew.begin(1, adding), std::logic_error) << "a third round in flight";
+  EXPECT_THROW(crew.run(1, adding), std::logic_error) << "run() with rounds in flight";
+  EXPECT_THROW(crew.join(), std::runtime_error);
+  crew.join();  // the younger round ran whole, its error slot untouched
+  EXPECT_EQ(sum.load(), 4950u);
+  EXPECT_THROW(crew.join(), std::logic_error) << "nothing left to join";
+  EXPECT_THROW(crew.begin(uint64_t(1) << 32, adding), std::length_error);
+  EXPECT_EQ(crew.in_flight(), 0);
+}
+
+TEST(ReadCrew, CountsTheTimeSpentInPieces) {
+  ReadCrew crew;
+  crew.start(1);
+  crew.run(4, [](uint64_t) { std::this_thread::sleep_for(std::chrono::milliseconds(5)); });
+  EXPECT_GE(crew.busy_ns(), 4u * 5'000'000u);
 }

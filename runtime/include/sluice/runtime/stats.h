@@ -27,7 +27,9 @@ struct PipelineStats {
 
   // Reader thread.
   uint64_t bytes_read = 0;
-  double read_seconds = 0;     // time inside read calls
+  double read_seconds = 0;     // time with a read in progress (wall time, however many threads read)
+  double read_thread_seconds = 0;  // time the read threads spent copying, summed over them
+  uint32_t read_threads = 0;       // threads that read (the reader thread and its helpers)
   uint64_t frames_read = 0;
   // Kept-encoded frames read straight into their staged area and staged
   // there (no copy on the CPU; PipelineOptions::keep_encoded).
