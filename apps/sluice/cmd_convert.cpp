@@ -2,6 +2,7 @@
 // a bounded number of frames in memory.
 #include <algorithm>
 #include <filesystem>
+#include <string>
 
 #include "commands.h"
 #include "conversion.h"
@@ -99,6 +100,12 @@ void add_convert(CLI::App& app) {
                   "Voxel side of the narrow band and of the interior's blobs, world units (default: twice the "
                   "spacing)")
       ->check(CLI::PositiveNumber);
+  cmd->add_option_function<std::string>(
+         "--band-f2", [o](const std::string& f2) { o->band_f2 = f2 == "asymmetry" ? io::F2Test::Asymmetry : io::F2Test::All; },
+         "Which particles of a selected second-layer voxel are surface: 'every' (the dissertation's choice,\n"
+         "the default) or 'asymmetry' (only those whose neighbours lie to one side: fewer bytes read;\n"
+         "docs/narrow_band.md compares them)")
+      ->check(CLI::IsMember({"every", "asymmetry"}));
   cmd->add_option("-j,--jobs", o->jobs, "Worker threads (default: all cores)");
   cmd->add_flag("--skip-bad", o->skip_bad,
                 "Leave out frames that cannot be read (damaged, cut short) and list them; without it the\n"

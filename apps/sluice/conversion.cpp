@@ -182,6 +182,7 @@ ConversionSummary convert_input(const ConversionOptions& o, const std::string& o
   settings.encode.zstd_planes = !o.gpu_decodable;
   settings.encode.layers = o.layers;
   settings.encode.band_voxel = o.band_voxel;
+  settings.encode.band_f2 = o.band_f2;
   settings.max_in_flight = size_t(jobs) + 1;
   ProgressBar bar("frames", frames, o.quiet);
   size_t warnings = 0, suppressed = 0;

@@ -9,6 +9,7 @@
 
 #include "sluice/io/convert.h"
 #include "sluice/io/format.h"
+#include "sluice/io/narrow_band.h"
 
 namespace sluice::app {
 
@@ -31,6 +32,7 @@ struct ConversionOptions {
   // 1.3). Quantized positions only: --lossless files stay one layer.
   bool layers = true;
   float band_voxel = 0;  // 0: twice the spacing
+  io::F2Test band_f2 = io::F2Test::All;
   int jobs = 0;
   bool quiet = false;
   size_t max_warnings = 20;

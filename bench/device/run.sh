@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Runs on the GPU machine (see bench/device/README.md): every benchmark the
 # issues ask GPU-machine figures for, in one call. Results go to $OUT.
-#   bash bench/device/run.sh [io] [import] [layers] [band] [render] [stream] [split] [codec] [huge] [embed] [compare] [live] [stereo] [xrsize] [firsthour] [streamcmp] [gpudecode] [gpuquick] [gpupair] [gpuab] [gpu100] [egl] [vtkpeer] [readpath] [gpusplit] [gpuplay] [gpuflight] [gpu100ab]   (default: io render stream)
+#   bash bench/device/run.sh [io] [import] [layers] [band] [render] [stream] [split] [codec] [huge] [embed] [compare] [live] [stereo] [xrsize] [firsthour] [streamcmp] [gpudecode] [gpuquick] [gpupair] [gpuab] [gpu100] [egl] [vtkpeer] [readpath] [gpusplit] [gpuplay] [gpuflight] [gpu100ab] [damf2]   (default: io render stream)
 set -uo pipefail
 OUT=${OUT:-/tmp/out}
 mkdir -p "$OUT" /tmp/s
@@ -239,6 +239,13 @@ for stage in $stages; do
         [[ -x $b ]] && run $b bench stream --gpu /tmp/ab100m.sluice --memory 48G --no-storage --min-time 3
       done
       rm -f /tmp/ab100m.sluice
+      ;;
+    damf2)  # the finer PySPH dam break with both F2 tests (.gpu/dam_every.sluice, .gpu/dam_asym.sluice, converted here)
+      for f in every asym; do
+        run $S info .gpu/dam_$f.sluice
+        run $S bench layers .gpu/dam_$f.sluice --frames 0,5,10 --repeats 3
+        run $S bench layers .gpu/dam_$f.sluice --frames 0,5,10 --repeats 3 --size 2064x2208
+      done
       ;;
     readpath)  # ways to move frames from the page cache into a window of staging (.gpu/readpath, a probe)
       run $S synth -n 10M --frames 24 -o /tmp/rp10m.sluice --force -q --gpu-decodable

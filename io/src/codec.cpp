@@ -318,7 +318,7 @@ EncodedFrame encode_frame(const FrameInput& in, const FileHeader& header, const 
   LayeredFrame layered;
   FrameInput blobs;
   if (options.layers && header.particle_spacing > 0 && header.position_coding == PositionCoding::Quantized16 && n > 0) {
-    layered = split_layers(in, header.particle_spacing, options.band_voxel);
+    layered = split_layers(in, header.particle_spacing, options.band_voxel, options.band_f2);
     blobs = layered.blobs.input();
     fh.blob_voxel = layered.blobs.counts.empty() ? 0.f : layered.voxel;
     // Payload order: surface, blobs, interior (what is read by default first).

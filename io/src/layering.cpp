@@ -14,10 +14,11 @@ FrameInput BlobRecords::input() const {
   return in;
 }
 
-LayeredFrame split_layers(const FrameInput& in, float spacing, float voxel) {
+LayeredFrame split_layers(const FrameInput& in, float spacing, float voxel, F2Test f2) {
   NarrowBandOptions options;
   options.diameter = spacing;
   options.voxel = voxel;
+  options.f2 = f2;
   options.blobs = true;
   const NarrowBand band = classify_narrow_band(in.positions, options);
   LayeredFrame out;

@@ -27,8 +27,8 @@ struct LayeredFrame {
 };
 
 // Classifies `in` (particle diameter `spacing`, voxel side `voxel`, 0: 2 x
-// spacing) and gathers the interior into blobs. A blob holding more than
-// 65535 particles is written as several at the same centroid.
-LayeredFrame split_layers(const FrameInput& in, float spacing, float voxel);
+// spacing, F2 test `f2`) and gathers the interior into blobs. A blob holding
+// more than 65535 particles is written as several at the same centroid.
+LayeredFrame split_layers(const FrameInput& in, float spacing, float voxel, F2Test f2);
 
 }  // namespace sluice::io

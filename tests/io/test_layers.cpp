@@ -6,7 +6,9 @@
 #include <array>
 #include <cmath>
 
+#include "sluice/io/codec.h"
 #include "sluice/io/format.h"
+#include "sluice/io/lod.h"
 #include "sluice/io/narrow_band.h"
 #include "records.h"
 #include "sluice/io/reader.h"
@@ -84,6 +86,32 @@ TEST(Layers, BlockIsWrittenAsSurfaceBlobsAndInterior) {
     if (c.layer != io::Layer::Interior) EXPECT_LE(c.offset + c.compressed_size, prefix);
     else EXPECT_GE(c.offset, prefix);
   }
+}
+
+// `convert --band-f2 asymmetry`: the surface chunks hold what the asymmetry
+// test keeps, fewer than every particle of the selected L2 voxels.
+TEST(Layers, TheAsymmetryTestWritesItsOwnSurface) {
+  const io::FileHeader h = test::test_header(io::PositionCoding::Quantized16);
+  const io::ParticleFrame f = test::lattice_frame(kBlock, 0);
+  const auto surface_of = [&](io::F2Test f2) {
+    const std::vector<uint16_t> lod = io::lod_values(f.ids, f.count());
+    io::FrameInput in;
+    in.positions = f.positions;
+    in.lod = lod;
+    for (size_t a = 0; a < h.attributes.size(); ++a) in.attributes.push_back(f.attributes[a]);
+    io::EncodeOptions options;
+    options.layers = true;
+    options.band_f2 = f2;
+    uint64_t surface = 0;
+    for (const io::ChunkDesc& c : io::encode_frame(in, h, options).header.chunks) {
+      if (c.layer == io::Layer::Surface) surface += c.particle_count;
+    }
+    return surface;
+  };
+  const io::NarrowBand asymmetric =
+      io::classify_narrow_band(f.positions, {.diameter = h.particle_spacing, .f2 = io::F2Test::Asymmetry});
+  EXPECT_EQ(surface_of(io::F2Test::Asymmetry), asymmetric.surface());
+  EXPECT_LT(surface_of(io::F2Test::Asymmetry), surface_of(io::F2Test::All));
 }
 
 TEST(Layers, EveryParticleComesBackWhateverTheLayers) {

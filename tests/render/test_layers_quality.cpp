@@ -3,7 +3,8 @@
 // from all its particles from five viewpoints (bench/src/layers_bench.cpp):
 // PSNR at least 40 dB and the same fluid pixels within 0.1%, wherever the
 // near-camera cull leaves the surface whole; no validation error. The same
-// with the narrow band classified on the GPU (RendererOptions::classify_unlayered).
+// with the narrow band classified on the GPU (RendererOptions::classify_unlayered),
+// and with the asymmetry F2 test (`convert --band-f2 asymmetry`).
 #include <gtest/gtest.h>
 
 #include <unistd.h>
@@ -24,7 +25,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-fs::path convert_sample_with_layers(const fs::path& out) {
+fs::path convert_sample_with_layers(const fs::path& out, io::F2Test f2) {
   const auto source = io::open_source(std::string(SLUICE_SAMPLE_DIR) + "/*.vtu", {});
   std::optional<io::ParticleFrame> first = source->read(0);
   io::FileHeader header;
@@ -35,17 +36,20 @@ fs::path convert_sample_with_layers(const fs::path& out) {
   io::ContainerWriter writer(out, header);
   io::ConvertSettings settings;
   settings.encode.layers = true;
+  settings.encode.band_f2 = f2;
   io::convert_frames(*source, std::move(first), writer, settings);
   writer.finish();
   return out;
 }
 
-// Both narrow bands against every particle: `gpu` classifies the frame
-// (read whole, its layers forgotten) on the GPU when it is first drawn.
-void expect_same_picture(bool gpu) {
+// The narrow band against every particle: `gpu` classifies the frame (read
+// whole, its layers forgotten) on the GPU when it is first drawn; `f2` is
+// the file's F2 test.
+void expect_same_picture(bool gpu, io::F2Test f2 = io::F2Test::All) {
   const fs::path file = fs::temp_directory_path() /
-                        ("sluice_layers_quality_" + std::to_string(::getpid()) + (gpu ? "_gpu" : "") + ".sluice");
-  convert_sample_with_layers(file);
+                        ("sluice_layers_quality_" + std::to_string(::getpid()) + (gpu ? "_gpu" : "") +
+                         (f2 == io::F2Test::Asymmetry ? "_asymmetry" : "") + ".sluice");
+  convert_sample_with_layers(file, f2);
   bench::LayersBenchOptions o;
   o.input = file.string();
   o.frames = {0, 6, 12};
@@ -65,7 +69,9 @@ void expect_same_picture(bool gpu) {
     EXPECT_EQ(r.validation_errors, 0u) << r.view << " frame " << r.frame;
     EXPECT_GT(r.coverage_all, 0.05) << r.view << " frame " << r.frame << ": the view misses the fluid";
     EXPECT_LE(std::abs(r.coverage_surface - r.coverage_all), 0.001 * r.coverage_all) << r.view << " frame " << r.frame;
-    if (!gpu) EXPECT_LT(r.bytes_surface, r.bytes_all);
+    if (!gpu) {
+      EXPECT_LT(r.bytes_surface, r.bytes_all);
+    }
     if (r.near_cull()) continue;
     ++judged;
     EXPECT_LT(r.drawn_surface, r.drawn_all) << r.view << " frame " << r.frame << ": the interior is left out";
@@ -75,7 +81,9 @@ void expect_same_picture(bool gpu) {
   if (gpu) {  // once per frame, when it is first drawn
     EXPECT_EQ(std::count_if(rows.begin(), rows.end(), [](const bench::LayersRow& r) { return r.classify_ms > 0; }), 3);
     for (const bench::LayersRow& r : rows) {
-      if (!r.classification.empty()) EXPECT_EQ(r.classification.rfind("classified on the GPU: ", 0), 0u) << r.classification;
+      if (!r.classification.empty()) {
+        EXPECT_EQ(r.classification.rfind("classified on the GPU: ", 0), 0u) << r.classification;
+      }
     }
   }
 }
@@ -85,6 +93,13 @@ TEST(LayersQuality, SurfaceAndBlobsLookLikeEveryParticle) {
   GTEST_SKIP() << "needs the VTK importer to convert the sample";
 #endif
   expect_same_picture(false);
+}
+
+TEST(LayersQuality, SurfaceByTheAsymmetryTestAndBlobsLookLikeEveryParticle) {
+#if !SLUICE_WITH_VTK
+  GTEST_SKIP() << "needs the VTK importer to convert the sample";
+#endif
+  expect_same_picture(false, io::F2Test::Asymmetry);
 }
 
 TEST(LayersQuality, SurfaceAndBlobsClassifiedOnTheGpuLookLikeEveryParticle) {

@@ -11,6 +11,7 @@
 
 #include "sluice/io/error.h"
 #include "sluice/io/format.h"
+#include "sluice/io/narrow_band.h"
 
 namespace sluice::io {
 
@@ -36,6 +37,7 @@ struct EncodeOptions {
   // float32 positions, the frame is written as one layer (All).
   bool layers = false;
   float band_voxel = 0;  // voxel side d of the classification and the blobs; 0: twice the particle spacing
+  F2Test band_f2 = F2Test::All;  // which particles of a selected L2 voxel are surface (narrow_band.h)
 };
 
 // One frame to encode. Spans are borrowed for the duration of the call.
