@@ -1,7 +1,5 @@
 #include "bytes.h"
 
-#include <xxhash.h>
-
 namespace sluice::io {
 
 void ByteWriter::bytes(const void* data, size_t n) {
@@ -50,7 +48,5 @@ void ByteReader::skip(size_t n) {
   need(n);
   pos_ += n;
 }
-
-uint64_t checksum(std::span<const std::byte> data) { return XXH3_64bits(data.data(), data.size()); }
 
 }  // namespace sluice::io
