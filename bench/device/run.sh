@@ -219,10 +219,10 @@ for stage in $stages; do
       done
       rm -f /tmp/ab10m.sluice
       ;;
-    gpuflight)  # two records in flight: this build against BASE's alternated twice, then other splits (10M x 24 frames)
+    gpuflight)  # two records in flight: this build against BASE's (and .gpu/sluice_sse2, if there) alternated twice, then other splits (10M x 24 frames)
       run $S synth -n 10M --frames 24 -o /tmp/fl10m.sluice --force -q --gpu-decodable
       for round in 1 2; do
-        for b in ./.gpu/sluice_base $S; do
+        for b in ./.gpu/sluice_base ./.gpu/sluice_sse2 $S; do
           [[ -x $b ]] || continue
           log "round $round: $b"
           $b bench stream --gpu /tmp/fl10m.sluice --memory 16G --no-storage --min-time 2 2>&1 | grep -E "decoded by|GPU \(kept|CPU workers|pread|mapping|GPU decode alone" | tee -a "$OUT/summary.txt"
