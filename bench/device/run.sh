@@ -11,7 +11,7 @@ for f in .gl/*.deb; do dpkg -x "$f" /; done
 ldconfig
 [[ -f /usr/share/vulkan/icd.d/nvidia_icd.json ]] || export VK_DRIVER_FILES=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
 S=./.gpu/sluice
-log() { printf '\n##### %s\n' "$*" | tee -a "$OUT/summary.txt"; }
+log() { printf '\n##### [%s] %s\n' "$(date +%T)" "$*" | tee -a "$OUT/summary.txt"; }
 run() { log "$*"; "$@" 2>&1 | tee -a "$OUT/summary.txt"; }
 
 secs() { local t0=$EPOCHREALTIME; "$@" >/dev/null 2>&1; awk -v a="$t0" -v b="$EPOCHREALTIME" 'BEGIN { printf "%.3f\n", b - a }'; }
