@@ -13,6 +13,7 @@
 #include <cmath>
 #include <deque>
 #include <limits>
+#include <memory>
 #include <stdexcept>
 
 namespace sluice::io {
@@ -103,8 +104,7 @@ class VoxelGrid {
   template <class F>
   bool each_dense_neighbour(size_t v, F& f) const {
     if (cell_voxel_.empty()) return false;
-    const uint64_t key = voxels_[v].key;
-    const int64_t centre = (int64_t(key >> 42) * dims_[1] + int64_t((key >> 21) & 0x1FFFFF)) * dims_[2] + int64_t(key & 0x1FFFFF);
+    const int64_t centre = cell_of(voxels_[v].key);
     for (const int64_t offset : offsets_) {
       const uint32_t w = cell_voxel_[size_t(centre + offset)];
       if (!f(w == kEmpty ? int64_t(-1) : int64_t(w))) break;
@@ -127,8 +127,23 @@ class VoxelGrid {
 
  private:
   static constexpr uint32_t kEmpty = std::numeric_limits<uint32_t>::max();
+  static constexpr uint32_t kBucketCells = 4096;  // cells per bucket of the counting sort's first pass
+
+  struct CellParticle {
+    uint32_t cell;
+    uint32_t particle;
+  };
 
   static uint64_t pack(int64_t x, int64_t y, int64_t z) { return (uint64_t(x) << 42) | (uint64_t(y) << 21) | uint64_t(z); }
+  // Dense grids: a key's cell in the cell array, and back.
+  uint32_t cell_of(uint64_t key) const {
+    return uint32_t((int64_t(key >> 42) * dims_[1] + int64_t((key >> 21) & 0x1FFFFF)) * dims_[2] + int64_t(key & 0x1FFFFF));
+  }
+  uint64_t key_of_cell(uint64_t c) const {
+    const uint64_t z = c % uint64_t(dims_[2]), y = c / uint64_t(dims_[2]) % uint64_t(dims_[1]),
+                   x = c / (uint64_t(dims_[2]) * uint64_t(dims_[1]));
+    return pack(int64_t(x), int64_t(y), int64_t(z));
+  }
   static uint64_t hash(uint64_t k) {
     k ^= k >> 33;
     k *= 0xff51afd7ed558ccdULL;
@@ -141,25 +156,23 @@ class VoxelGrid {
   // consecutive cells (each of T index ranges counts and then scatters its
   // own particles, in index order), then each bucket sorted by cell on its
   // own. The order is the same on any number of threads: particles in cell
-  // order, index order within a cell.
+  // order, index order within a cell. Each particle travels with its cell,
+  // so the bucket passes read their input in order instead of looking cells
+  // up by particle index (a cache miss per particle on large frames).
   void build_dense(std::span<const float> xyz, uint64_t cells) {
     const size_t n = xyz.size() / 3;
     std::vector<uint32_t> cell(n);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 16384), [&](const tbb::blocked_range<size_t>& r) {
-      for (size_t i = r.begin(); i < r.end(); ++i) {
-        const uint64_t k = key_of(xyz, i);
-        cell[i] = uint32_t((int64_t(k >> 42) * dims_[1] + int64_t((k >> 21) & 0x1FFFFF)) * dims_[2] + int64_t(k & 0x1FFFFF));
-      }
+      for (size_t i = r.begin(); i < r.end(); ++i) cell[i] = cell_of(key_of(xyz, i));
     });
-    constexpr int kBucketBits = 12;
-    const size_t buckets = size_t((cells + (uint64_t(1) << kBucketBits) - 1) >> kBucketBits);
+    const size_t buckets = size_t((cells + kBucketCells - 1) / kBucketCells);
     const size_t ranges = std::clamp<size_t>(n / 65536, 1, 64);
     const auto range_begin = [&](size_t r) { return n * r / ranges; };
     // offset[r * buckets + b]: where range r's particles of bucket b go.
     std::vector<uint32_t> offset(ranges * buckets, 0);
     tbb::parallel_for(size_t(0), ranges, [&](size_t r) {
       uint32_t* count = &offset[r * buckets];
-      for (size_t i = range_begin(r); i < range_begin(r + 1); ++i) ++count[cell[i] >> kBucketBits];
+      for (size_t i = range_begin(r); i < range_begin(r + 1); ++i) ++count[cell[i] / kBucketCells];
     });
     std::vector<uint32_t> bucket_start(buckets + 1, 0);
     uint32_t total = 0;
@@ -172,47 +185,46 @@ class VoxelGrid {
       }
     }
     bucket_start[buckets] = total;
-    std::vector<uint32_t> by_bucket(n);
+    const auto by_bucket = std::make_unique_for_overwrite<CellParticle[]>(n);
     tbb::parallel_for(size_t(0), ranges, [&](size_t r) {
       uint32_t* next = &offset[r * buckets];
-      for (size_t i = range_begin(r); i < range_begin(r + 1); ++i) by_bucket[next[cell[i] >> kBucketBits]++] = uint32_t(i);
+      for (size_t i = range_begin(r); i < range_begin(r + 1); ++i) by_bucket[next[cell[i] / kBucketCells]++] = {cell[i], uint32_t(i)};
     });
-    // Each bucket by cell; its occupied cells counted for the voxel numbering.
-    order_.resize(n);
-    cell_voxel_.assign(cells, kEmpty);
+    const auto bucket_particles = [&](size_t b) {
+      return std::span<const CellParticle>(&by_bucket[bucket_start[b]], bucket_start[b + 1] - bucket_start[b]);
+    };
+    const auto bucket_cells = [&](size_t b) {
+      return std::span<uint32_t>(cell_voxel_).subspan(b * kBucketCells, std::min<uint64_t>(kBucketCells, cells - b * kBucketCells));
+    };
+    // Particles per cell, held in cell_voxel_ until the voxels are numbered;
+    // each bucket's occupied cells counted for that numbering.
+    cell_voxel_.resize(cells);
     std::vector<uint32_t> occupied(buckets + 1, 0);
     tbb::parallel_for(size_t(0), buckets, [&](size_t b) {
-      uint32_t count[size_t(1) << kBucketBits] = {};
-      const uint32_t lo = bucket_start[b], hi = bucket_start[b + 1];
-      for (uint32_t k = lo; k < hi; ++k) ++count[cell[by_bucket[k]] & ((1u << kBucketBits) - 1)];
-      uint32_t at = lo, used = 0;
-      for (uint32_t& c : count) {  // counts into where each cell starts
-        const uint32_t here = c;
-        c = at;
-        at += here;
-        used += here > 0;
-      }
-      occupied[b + 1] = used;
-      for (uint32_t k = lo; k < hi; ++k) {
-        const uint32_t i = by_bucket[k];
-        order_[count[cell[i] & ((1u << kBucketBits) - 1)]++] = i;
-      }
+      const std::span<uint32_t> count = bucket_cells(b);
+      std::fill(count.begin(), count.end(), 0u);
+      for (const CellParticle& p : bucket_particles(b)) ++count[p.cell % kBucketCells];
+      occupied[b + 1] = uint32_t(count.size() - size_t(std::count(count.begin(), count.end(), 0u)));
     });
     for (size_t b = 0; b < buckets; ++b) occupied[b + 1] += occupied[b];
     voxels_.resize(occupied[buckets]);
+    order_.resize(n);
     tbb::parallel_for(size_t(0), buckets, [&](size_t b) {
-      uint32_t v = occupied[b];
-      uint32_t k = bucket_start[b];
-      while (k < bucket_start[b + 1]) {
-        const uint32_t c = cell[order_[k]];
-        uint32_t end = k + 1;
-        while (end < bucket_start[b + 1] && cell[order_[end]] == c) ++end;
-        const int64_t z = int64_t(c % uint64_t(dims_[2])), y = int64_t(c / uint64_t(dims_[2]) % uint64_t(dims_[1])),
-                      x = int64_t(c / (uint64_t(dims_[2]) * uint64_t(dims_[1])));
-        cell_voxel_[c] = v;
-        voxels_[v++] = {pack(x, y, z), k, end - k};
-        k = end;
+      const std::span<uint32_t> count_then_voxel = bucket_cells(b);
+      uint32_t next[kBucketCells];  // where each cell's next particle goes
+      uint32_t v = occupied[b], at = bucket_start[b];
+      for (size_t c = 0; c < count_then_voxel.size(); ++c) {
+        const uint32_t count = count_then_voxel[c];
+        next[c] = at;
+        if (count == 0) {
+          count_then_voxel[c] = kEmpty;
+          continue;
+        }
+        voxels_[v] = {key_of_cell(b * kBucketCells + c), at, count};
+        count_then_voxel[c] = v++;
+        at += count;
       }
+      for (const CellParticle& p : bucket_particles(b)) order_[next[p.cell % kBucketCells]++] = p.particle;
     });
   }
 
