@@ -1,6 +1,7 @@
-// The Layered Neighborhood Method on a sparse voxel grid: particles sorted by
-// voxel, occupied voxels in a hash table, every voxel decided from its 26
-// neighbours in parallel.
+// The Layered Neighborhood Method on a voxel grid: particles sorted by voxel;
+// on a dense grid every cell decided from its 26 neighbours by bit
+// operations over the cells, on a sparse one (occupied voxels in a hash
+// table) every voxel from its neighbours' lookups, in parallel.
 #include "sluice/io/narrow_band.h"
 
 #include <tbb/blocked_range.h>
@@ -48,6 +49,36 @@ Box bounds(std::span<const float> xyz) {
         a.join(b);
         return a;
       });
+}
+
+// One bit per cell of a dense grid.
+using CellBits = std::vector<uint64_t>;
+
+bool has(const CellBits& bits, uint64_t c) { return (bits[c / 64] >> (c % 64)) & 1; }
+
+// The 64 bits of `bits` from bit `first` on (zeros outside).
+uint64_t bits_from(const CellBits& bits, int64_t first) {
+  const auto word = [&](int64_t w) { return w >= 0 && w < int64_t(bits.size()) ? bits[size_t(w)] : uint64_t(0); };
+  const int64_t w = first >> 6, shift = first & 63;
+  return shift == 0 ? word(w) : (word(w) >> shift) | (word(w + 1) << (64 - shift));
+}
+
+// Word by word, in parallel: out[w] = f(w).
+template <class F>
+CellBits each_word(size_t words, F&& f) {
+  CellBits out(words);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, words, 4096), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t w = r.begin(); w < r.end(); ++w) out[w] = f(w);
+  });
+  return out;
+}
+
+// Bit c of the result: bits c - step, c and c + step of `bits`, or-ed.
+CellBits spread(const CellBits& bits, int64_t step) {
+  return each_word(bits.size(), [&](size_t w) {
+    const int64_t first = int64_t(64 * w);
+    return bits[w] | bits_from(bits, first - step) | bits_from(bits, first + step);
+  });
 }
 
 // Occupied voxels: the particles sorted by voxel, each voxel a run of them.
@@ -112,6 +143,32 @@ class VoxelGrid {
     return true;
   }
 
+  // Dense grids: a cell array over the box, every particle's cell kept.
+  bool dense() const { return !cell_voxel_.empty(); }
+  uint32_t cell_of_particle(size_t i) const { return particle_cell_[i]; }
+  uint32_t cell_of_voxel(size_t v) const { return cell_of(voxels_[v].key); }
+
+  // Dense grids: the cells whose voxel satisfies pred.
+  template <class P>
+  CellBits cells_where(P&& pred) const {
+    return each_word((cell_voxel_.size() + 63) / 64, [&](size_t w) {
+      uint64_t word = 0;
+      for (size_t c = 64 * w; c < std::min(64 * w + 64, cell_voxel_.size()); ++c) {
+        const uint32_t v = cell_voxel_[c];
+        if (v != kEmpty && pred(voxels_[v])) word |= uint64_t(1) << (c % 64);
+      }
+      return word;
+    });
+  }
+
+  // Dense grids: the cells with a set cell among themselves and their 26
+  // neighbours, three separable passes over words instead of 26 lookups per
+  // voxel. The offsets wrap across rows only at the outside layer, so the
+  // result is exact at every cell that holds a voxel.
+  CellBits around(const CellBits& bits) const {
+    return spread(spread(spread(bits, 1), dims_[2]), dims_[1] * dims_[2]);
+  }
+
   // The voxel at key + (dx, dy, dz), or -1 when empty or outside.
   int64_t neighbour(uint64_t key, int dx, int dy, int dz) const {
     const int64_t x = int64_t(key >> 42) + dx, y = int64_t((key >> 21) & 0x1FFFFF) + dy,
@@ -161,9 +218,10 @@ class VoxelGrid {
   // up by particle index (a cache miss per particle on large frames).
   void build_dense(std::span<const float> xyz, uint64_t cells) {
     const size_t n = xyz.size() / 3;
-    std::vector<uint32_t> cell(n);
+    particle_cell_.resize(n);
+    const std::span<const uint32_t> cell = particle_cell_;
     tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 16384), [&](const tbb::blocked_range<size_t>& r) {
-      for (size_t i = r.begin(); i < r.end(); ++i) cell[i] = cell_of(key_of(xyz, i));
+      for (size_t i = r.begin(); i < r.end(); ++i) particle_cell_[i] = cell_of(key_of(xyz, i));
     });
     const size_t buckets = size_t((cells + kBucketCells - 1) / kBucketCells);
     const size_t ranges = std::clamp<size_t>(n / 65536, 1, 64);
@@ -286,6 +344,7 @@ class VoxelGrid {
   std::vector<Voxel> voxels_;
   std::vector<uint32_t> table_;         // sparse: voxel by key hash
   std::vector<uint32_t> cell_voxel_;    // dense: voxel by cell, kEmpty where none
+  std::vector<uint32_t> particle_cell_;  // dense: each particle's cell
   std::vector<int64_t> offsets_;        // dense: the 26 neighbours' cells, relative
 };
 
@@ -359,6 +418,109 @@ float asymmetry(const VoxelGrid& grid, std::span<const float> xyz, size_t v, uin
   return float(std::sqrt(d2));
 }
 
+// A voxel's kind: L1, selected L2, or neither (0).
+constexpr uint8_t kL1 = 1, kSelectedL2 = 2;
+
+BandLayer layer_of_kind(uint8_t kind) {
+  return kind == kL1 ? BandLayer::L1 : kind == kSelectedL2 ? BandLayer::L2 : BandLayer::Interior;
+}
+
+// Sparse grids: L1 voxels have an empty or outside voxel among their 26
+// neighbours; selected L2 voxels are next to an L1 voxel of at most n1
+// particles.
+std::vector<uint8_t> voxel_kinds_by_neighbours(const VoxelGrid& grid, double n1) {
+  std::vector<uint8_t> kind(grid.size(), 0);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, grid.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t v = r.begin(); v < r.end(); ++v) {
+      bool l1 = false;
+      for_each_neighbour(grid, v, [&](int64_t w) { return !(l1 = w < 0); });
+      if (l1) kind[v] = kL1;
+    }
+  });
+  // Selected L2 voxels go to a vector of their own: the pass reads the
+  // neighbours' L1 marks, which must not change under it.
+  std::vector<uint8_t> selected(grid.size(), 0);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, grid.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t v = r.begin(); v < r.end(); ++v) {
+      if (kind[v] == kL1) continue;
+      for_each_neighbour(grid, v, [&](int64_t w) {
+        selected[v] = w >= 0 && kind[size_t(w)] == kL1 && double(grid.voxel(size_t(w)).count) <= n1;
+        return !selected[v];
+      });
+    }
+  });
+  for (size_t v = 0; v < grid.size(); ++v) {
+    if (selected[v]) kind[v] = kSelectedL2;
+  }
+  return kind;
+}
+
+// Dense grids: the same kinds as voxel_kinds_by_neighbours, cell by cell.
+struct CellKinds {
+  CellBits l1, selected_l2;
+  uint8_t at(uint64_t c) const { return has(l1, c) ? kL1 : has(selected_l2, c) ? kSelectedL2 : 0; }
+};
+
+CellKinds cell_kinds(const VoxelGrid& grid, double n1) {
+  const CellBits occupied = grid.cells_where([](const VoxelGrid::Voxel&) { return true; });
+  const CellBits few = grid.cells_where([&](const VoxelGrid::Voxel& v) { return double(v.count) <= n1; });
+  const size_t words = occupied.size();
+  CellKinds kinds;
+  const CellBits near_empty = grid.around(each_word(words, [&](size_t w) { return ~occupied[w]; }));
+  kinds.l1 = each_word(words, [&](size_t w) { return occupied[w] & near_empty[w]; });
+  const CellBits near_few_l1 = grid.around(each_word(words, [&](size_t w) { return kinds.l1[w] & few[w]; }));
+  kinds.selected_l2 = each_word(words, [&](size_t w) { return occupied[w] & ~kinds.l1[w] & near_few_l1[w]; });
+  return kinds;
+}
+
+std::vector<uint8_t> voxel_kinds(const VoxelGrid& grid, const CellKinds& cells) {
+  std::vector<uint8_t> kind(grid.size());
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, grid.size(), 16384), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t v = r.begin(); v < r.end(); ++v) kind[v] = cells.at(grid.cell_of_voxel(v));
+  });
+  return kind;
+}
+
+// Every particle's layer by its voxel's kind, in particle order: the writes
+// go in order and the bits read fit in cache.
+void layers_by_cell(const VoxelGrid& grid, const CellKinds& cells, std::vector<BandLayer>& layer) {
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, layer.size(), 16384), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i < r.end(); ++i) layer[i] = layer_of_kind(cells.at(grid.cell_of_particle(i)));
+  });
+}
+
+// Every particle's layer by its voxel's kind, voxel by voxel.
+void layers_by_voxel(const VoxelGrid& grid, const std::vector<uint8_t>& kind, std::vector<BandLayer>& layer) {
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, grid.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t v = r.begin(); v < r.end(); ++v) {
+      const auto& vox = grid.voxel(v);
+      for (uint32_t k = vox.first; k < vox.first + vox.count; ++k) layer[grid.particle(k)] = layer_of_kind(kind[v]);
+    }
+  });
+}
+
+// The tests particle by particle, over the voxels that need them: F2 by
+// asymmetry in selected L2 voxels, and the isolated test in sparse voxels
+// (a voxel of the dense fluid holds about (d/h)^3 particles), which makes
+// spray and droplets surface whatever their voxel.
+void test_particles(const VoxelGrid& grid, std::span<const float> xyz, const std::vector<uint8_t>& kind, F2Test f2,
+                    float h, float reach, std::vector<BandLayer>& layer) {
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, grid.size(), 256), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t v = r.begin(); v < r.end(); ++v) {
+      const auto& vox = grid.voxel(v);
+      const bool test_f2 = kind[v] == kSelectedL2 && f2 == F2Test::Asymmetry, test_alone = vox.count <= 2;
+      if (!test_f2 && !test_alone) continue;
+      for (uint32_t k = vox.first; k < vox.first + vox.count; ++k) {
+        const uint32_t i = grid.particle(k);
+        BandLayer l = layer_of_kind(kind[v]);
+        if (test_f2 && !(asymmetry(grid, xyz, v, i, h) > 0.1f * h)) l = BandLayer::Interior;
+        if (test_alone && alone(grid, xyz, v, i, reach)) l = BandLayer::Isolated;
+        layer[i] = l;
+      }
+    }
+  });
+}
+
 // One blob per voxel with interior particles, in voxel order (the grid's
 // key order: spatially coherent), centroids summed in double.
 void gather_blobs(const VoxelGrid& grid, std::span<const float> xyz, NarrowBand& out) {
@@ -407,54 +569,21 @@ NarrowBand classify_narrow_band(std::span<const float> xyz, const NarrowBandOpti
   // n1 = (d/h)^3: fewer particles than that cannot hide what lies behind.
   const double n1 = std::pow(double(out.voxel) / h, 3);
 
-  std::vector<uint8_t> kind(grid.size(), 0);  // 1: L1, 2: selected L2
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, grid.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
-    for (size_t v = r.begin(); v < r.end(); ++v) {
-      bool l1 = false;
-      for_each_neighbour(grid, v, [&](int64_t w) { return !(l1 = w < 0); });
-      if (l1) kind[v] = 1;
-    }
-  });
-  // Selected L2 voxels go to a vector of their own: the pass reads the
-  // neighbours' L1 marks, which must not change under it.
-  std::vector<uint8_t> selected(grid.size(), 0);
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, grid.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
-    for (size_t v = r.begin(); v < r.end(); ++v) {
-      if (kind[v] == 1) continue;
-      for_each_neighbour(grid, v, [&](int64_t w) {
-        selected[v] = w >= 0 && kind[size_t(w)] == 1 && double(grid.voxel(size_t(w)).count) <= n1;
-        return !selected[v];
-      });
-    }
-  });
-  for (size_t v = 0; v < grid.size(); ++v) {
-    if (selected[v]) kind[v] = 2;
+  std::vector<uint8_t> kind;  // per voxel: kL1, kSelectedL2 or 0
+  if (grid.dense()) {
+    const CellKinds cells = cell_kinds(grid, n1);
+    kind = voxel_kinds(grid, cells);
+    layers_by_cell(grid, cells, out.layer);
+  } else {
+    kind = voxel_kinds_by_neighbours(grid, n1);
+    layers_by_voxel(grid, kind, out.layer);
   }
-
-  const float reach = std::min(2 * h, out.voxel);
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, grid.size(), 256), [&](const tbb::blocked_range<size_t>& r) {
-    for (size_t v = r.begin(); v < r.end(); ++v) {
-      const auto& vox = grid.voxel(v);
-      for (uint32_t k = vox.first; k < vox.first + vox.count; ++k) {
-        const uint32_t i = grid.particle(k);
-        BandLayer l = BandLayer::Interior;
-        if (kind[v] == 1) {
-          l = BandLayer::L1;
-        } else if (kind[v] == 2) {
-          l = o.f2 == F2Test::All || asymmetry(grid, xyz, v, i, h) > 0.1f * h ? BandLayer::L2 : BandLayer::Interior;
-        }
-        // Spray and droplets: a particle alone in a sparse voxel is checked
-        // (a voxel of the dense fluid holds about (d/h)^3 particles).
-        if (vox.count <= 2 && alone(grid, xyz, v, i, reach)) l = BandLayer::Isolated;
-        out.layer[i] = l;
-      }
-    }
-  });
+  test_particles(grid, xyz, kind, o.f2, h, std::min(2 * h, out.voxel), out.layer);
   for (const BandLayer l : out.layer) ++out.counts[size_t(l)];
   if (o.blobs) gather_blobs(grid, xyz, out);
   for (const uint8_t k : kind) {
-    out.l1_voxels += k == 1;
-    out.l2_voxels += k == 2;
+    out.l1_voxels += k == kL1;
+    out.l2_voxels += k == kSelectedL2;
   }
   return out;
 }
