@@ -371,8 +371,23 @@ float distance2(std::span<const float> xyz, size_t i, size_t j) {
   return d2;
 }
 
+// The 26 neighbours of a voxel, faces first, then edges, then corners: the
+// nearest are the likeliest to hold a particle within reach.
+constexpr auto kNearestFirst = [] {
+  std::array<std::array<int, 3>, 26> out{};
+  size_t k = 0;
+  for (int axes = 1; axes <= 3; ++axes)
+    for (int dx = -1; dx <= 1; ++dx)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dz = -1; dz <= 1; ++dz) {
+          if ((dx != 0) + (dy != 0) + (dz != 0) == axes) out[k++] = {dx, dy, dz};
+        }
+  return out;
+}();
+
 // True when no other particle lies within `reach` of particle i, looked for
-// in its voxel and the 26 around (reach <= the voxel side).
+// in its voxel and the 26 around (reach <= the voxel side), the nearest
+// voxels first.
 bool alone(const VoxelGrid& grid, std::span<const float> xyz, size_t v, uint32_t i, float reach) {
   const float r2 = reach * reach;
   const auto none_near = [&](int64_t w) {
@@ -385,9 +400,11 @@ bool alone(const VoxelGrid& grid, std::span<const float> xyz, size_t v, uint32_t
     return true;
   };
   if (!none_near(int64_t(v))) return false;
-  bool result = true;
-  for_each_neighbour(grid, v, [&](int64_t w) { return result = none_near(w); });
-  return result;
+  const uint64_t key = grid.voxel(v).key;
+  for (const auto& d : kNearestFirst) {
+    if (!none_near(grid.neighbour(key, d[0], d[1], d[2]))) return false;
+  }
+  return true;
 }
 
 // |x_i - sum_j x_j W_ij| with normalized weights W over the 27 voxels
