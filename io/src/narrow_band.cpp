@@ -538,6 +538,22 @@ void test_particles(const VoxelGrid& grid, std::span<const float> xyz, const std
   });
 }
 
+// Particles per layer, in blocks short enough for 32-bit counters (which
+// the compiler vectorizes, unlike an increment indexed by the layer).
+std::array<uint64_t, 4> count_layers(const std::vector<BandLayer>& layer) {
+  constexpr size_t kBlock = size_t(1) << 16;
+  std::array<uint64_t, 4> counts{};
+  for (size_t begin = 0; begin < layer.size(); begin += kBlock) {
+    uint32_t block[4] = {};
+    for (size_t i = begin; i < std::min(layer.size(), begin + kBlock); ++i) {
+      for (size_t l = 1; l < 4; ++l) block[l] += layer[i] == BandLayer(l);
+    }
+    for (size_t l = 1; l < 4; ++l) counts[l] += block[l];
+  }
+  counts[0] = layer.size() - counts[1] - counts[2] - counts[3];
+  return counts;
+}
+
 // One blob per voxel with interior particles, in voxel order (the grid's
 // key order: spatially coherent), centroids summed in double.
 void gather_blobs(const VoxelGrid& grid, std::span<const float> xyz, NarrowBand& out) {
@@ -596,7 +612,7 @@ NarrowBand classify_narrow_band(std::span<const float> xyz, const NarrowBandOpti
     layers_by_voxel(grid, kind, out.layer);
   }
   test_particles(grid, xyz, kind, o.f2, h, std::min(2 * h, out.voxel), out.layer);
-  for (const BandLayer l : out.layer) ++out.counts[size_t(l)];
+  out.counts = count_layers(out.layer);
   if (o.blobs) gather_blobs(grid, xyz, out);
   for (const uint8_t k : kind) {
     out.l1_voxels += k == kL1;
