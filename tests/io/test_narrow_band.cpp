@@ -129,6 +129,8 @@ TEST(NarrowBand, DenseAndHashedGridsGiveTheSameBand) {
         pool.insert(pool.end(), {(x + jitter(rng)) * kH, (y + jitter(rng)) * kH, (z + jitter(rng)) * kH});
       }
   for (int k = 0; k < 200; ++k) pool.insert(pool.end(), {spray(rng) * kH, (22.f + spray(rng) / 3) * kH, spray(rng) * kH});
+  // Stray coordinates: their cells come from the box's lowest cell either way.
+  pool.insert(pool.end(), {NAN, 0.5f, 0.5f, 0.5f, -INFINITY, 0.5f, 0.5f, 0.5f, NAN});
   const auto with_droplet_at = [&](float spacings) {
     std::vector<float> xyz = pool;
     xyz.insert(xyz.end(), {spacings * kH, spacings * kH, spacings * kH});
