@@ -211,6 +211,15 @@ class VoxelGrid {
                    x = c / (uint64_t(dims_[2]) * uint64_t(dims_[1]));
     return pack(int64_t(x), int64_t(y), int64_t(z));
   }
+  // The key of the next cell in the cell array (z fastest, then y, then x),
+  // without key_of_cell's divisions.
+  uint64_t next_cell_key(uint64_t key) const {
+    constexpr uint64_t kField = 0x1FFFFF;
+    if ((key & kField) + 1 < uint64_t(dims_[2])) return key + 1;
+    key &= ~kField;  // z = 0
+    if (((key >> 21) & kField) + 1 < uint64_t(dims_[1])) return key + (uint64_t(1) << 21);
+    return (key & ~(kField << 21)) + (uint64_t(1) << 42);  // y = 0, the next x
+  }
   static uint64_t hash(uint64_t k) {
     k ^= k >> 33;
     k *= 0xff51afd7ed558ccdULL;
@@ -281,14 +290,15 @@ class VoxelGrid {
       const std::span<uint32_t> count_then_voxel = bucket_cells(b);
       uint32_t next[kBucketCells];  // where each cell's next particle goes
       uint32_t v = occupied[b], at = bucket_start[b];
-      for (size_t c = 0; c < count_then_voxel.size(); ++c) {
+      uint64_t key = key_of_cell(b * kBucketCells);
+      for (size_t c = 0; c < count_then_voxel.size(); ++c, key = next_cell_key(key)) {
         const uint32_t count = count_then_voxel[c];
         next[c] = at;
         if (count == 0) {
           count_then_voxel[c] = kEmpty;
           continue;
         }
-        voxels_[v] = {key_of_cell(b * kBucketCells + c), at, count};
+        voxels_[v] = {key, at, count};
         count_then_voxel[c] = v++;
         at += count;
       }
