@@ -35,18 +35,65 @@ struct Box {
   }
 };
 
+// Four lanes for GCC's (and Clang's) vector extensions, SIMD where the
+// target has it. The loops over particles below go four particles at a
+// time, their twelve coordinates in three vectors (GCC leaves the plain
+// loops scalar): lane l of vector m holds axis (4m + l) % 3.
+using Float4 = float __attribute__((vector_size(16)));
+using Int4 = int32_t __attribute__((vector_size(16)));
+
+Float4 axis_lanes(const float (&axis)[3], size_t m) {
+  return Float4{axis[(4 * m) % 3], axis[(4 * m + 1) % 3], axis[(4 * m + 2) % 3], axis[(4 * m + 3) % 3]};
+}
+
+Float4 load(const float* p) {
+  Float4 v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+
+// std::isfinite, lane by lane (a mask).
+Int4 finite(Float4 v) {
+  const Float4 infinity = Float4{} + std::numeric_limits<float>::infinity();
+  return std::bit_cast<Float4>(std::bit_cast<Int4>(v) & 0x7fffffff) < infinity;
+}
+
+// The box of the finite coordinates of particles begin .. end-1.
+Box bounds(std::span<const float> xyz, size_t begin, size_t end) {
+  Box b;
+  const Float4 lowest = Float4{} + std::numeric_limits<float>::lowest(), highest = -lowest;
+  Float4 lo[3] = {highest, highest, highest}, hi[3] = {lowest, lowest, lowest};
+  size_t i = begin;
+  for (; i + 4 <= end; i += 4) {
+    for (size_t m = 0; m < 3; ++m) {
+      const Float4 v = load(&xyz[3 * i + 4 * m]);
+      const Int4 counted = finite(v);
+      lo[m] = (counted & (v < lo[m])) ? v : lo[m];
+      hi[m] = (counted & (hi[m] < v)) ? v : hi[m];
+    }
+  }
+  for (size_t m = 0; m < 3; ++m) {
+    for (size_t lane = 0; lane < 4; ++lane) {
+      const size_t a = (4 * m + lane) % 3;
+      b.lo[a] = std::min(b.lo[a], lo[m][lane]), b.hi[a] = std::max(b.hi[a], hi[m][lane]);
+    }
+  }
+  for (; i < end; ++i) {
+    for (size_t a = 0; a < 3; ++a) {
+      const float v = xyz[3 * i + a];
+      if (!std::isfinite(v)) continue;
+      b.lo[a] = std::min(b.lo[a], v), b.hi[a] = std::max(b.hi[a], v);
+    }
+  }
+  return b;
+}
+
 Box bounds(std::span<const float> xyz) {
   const size_t n = xyz.size() / 3;
   return tbb::parallel_reduce(
       tbb::blocked_range<size_t>(0, n, 16384), Box{},
       [&](const tbb::blocked_range<size_t>& r, Box b) {
-        for (size_t i = r.begin(); i < r.end(); ++i) {
-          for (int a = 0; a < 3; ++a) {
-            const float v = xyz[3 * i + a];
-            if (!std::isfinite(v)) continue;
-            b.lo[a] = std::min(b.lo[a], v), b.hi[a] = std::max(b.hi[a], v);
-          }
-        }
+        b.join(bounds(xyz, r.begin(), r.end()));
         return b;
       },
       [](Box a, const Box& b) {
@@ -54,11 +101,6 @@ Box bounds(std::span<const float> xyz) {
         return a;
       });
 }
-
-// Four lanes for GCC's (and Clang's) vector extensions, SIMD where the
-// target has it.
-using Float4 = float __attribute__((vector_size(16)));
-using Int4 = int32_t __attribute__((vector_size(16)));
 
 // One bit per cell of a dense grid.
 using CellBits = std::vector<uint64_t>;
@@ -346,26 +388,19 @@ class VoxelGrid {
   }
 
   // Dense grids: the cells of particles begin .. end-1, key_of's float
-  // arithmetic four particles at a time (their twelve coordinates in three
-  // vectors): GCC leaves the loop over particles scalar, and this is the
-  // costliest arithmetic of the classification.
+  // arithmetic four particles at a time (the costliest arithmetic of the
+  // classification).
   void cells_of(std::span<const float> xyz, size_t begin, size_t end, uint32_t* cell) const {
-    // Lane l of vector m holds axis (4m + l) % 3.
-    const auto lanes = [](const float (&axis)[3], size_t m) {
-      return Float4{axis[(4 * m) % 3], axis[(4 * m + 1) % 3], axis[(4 * m + 2) % 3], axis[(4 * m + 3) % 3]};
-    };
-    const Float4 origin[3] = {lanes(origin_, 0), lanes(origin_, 1), lanes(origin_, 2)};
-    const Float4 last_cell[3] = {lanes(last_cell_, 0), lanes(last_cell_, 1), lanes(last_cell_, 2)};
-    const Float4 zero{}, infinity = zero + std::numeric_limits<float>::infinity();
+    const Float4 origin[3] = {axis_lanes(origin_, 0), axis_lanes(origin_, 1), axis_lanes(origin_, 2)};
+    const Float4 last_cell[3] = {axis_lanes(last_cell_, 0), axis_lanes(last_cell_, 1), axis_lanes(last_cell_, 2)};
+    const Float4 zero{};
     size_t i = begin;
     for (; i + 4 <= end; i += 4) {
       int32_t c[12];
       for (size_t m = 0; m < 3; ++m) {
-        Float4 v;
-        std::memcpy(&v, &xyz[3 * i + 4 * m], sizeof v);
-        const Float4 magnitude = std::bit_cast<Float4>(std::bit_cast<Int4>(v) & 0x7fffffff);
-        Float4 t = magnitude < infinity ? (v - origin[m]) * inverse_side_ : zero;  // isfinite(v)
-        t = t < zero ? zero : last_cell[m] < t ? last_cell[m] : t;                 // std::clamp
+        const Float4 v = load(&xyz[3 * i + 4 * m]);
+        Float4 t = finite(v) ? (v - origin[m]) * inverse_side_ : zero;
+        t = t < zero ? zero : last_cell[m] < t ? last_cell[m] : t;  // std::clamp
         const Int4 cm = __builtin_convertvector(t, Int4) + 1;
         std::memcpy(&c[4 * m], &cm, sizeof cm);
       }
