@@ -1,18 +1,24 @@
-// The Layered Neighborhood Method on a sparse voxel grid: particles sorted by
-// voxel, occupied voxels in a hash table, every voxel decided from its 26
-// neighbours in parallel.
+// The Layered Neighborhood Method on a voxel grid: particles sorted by voxel;
+// on a dense grid every cell decided from its 26 neighbours by bit
+// operations over the cells, on a sparse one (occupied voxels in a hash
+// table) every voxel from its neighbours' lookups, in parallel.
 #include "sluice/io/narrow_band.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
+#include <tbb/global_control.h>
 #include <tbb/parallel_sort.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
+#include <cstring>
 #include <deque>
 #include <limits>
+#include <memory>
 #include <stdexcept>
 
 namespace sluice::io {
@@ -29,24 +35,103 @@ struct Box {
   }
 };
 
+// Four lanes for GCC's (and Clang's) vector extensions, SIMD where the
+// target has it. The loops over particles below go four particles at a
+// time, their twelve coordinates in three vectors (GCC leaves the plain
+// loops scalar): lane l of vector m holds axis (4m + l) % 3.
+using Float4 = float __attribute__((vector_size(16)));
+using Int4 = int32_t __attribute__((vector_size(16)));
+
+Float4 axis_lanes(const float (&axis)[3], size_t m) {
+  return Float4{axis[(4 * m) % 3], axis[(4 * m + 1) % 3], axis[(4 * m + 2) % 3], axis[(4 * m + 3) % 3]};
+}
+
+Float4 load(const float* p) {
+  Float4 v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+
+// std::isfinite, lane by lane (a mask).
+Int4 finite(Float4 v) {
+  const Float4 infinity = Float4{} + std::numeric_limits<float>::infinity();
+  return std::bit_cast<Float4>(std::bit_cast<Int4>(v) & 0x7fffffff) < infinity;
+}
+
+// The box of the finite coordinates of particles begin .. end-1. Lanes take
+// their minima in another order than one loop would: only the sign of a
+// zero bound can differ, which gives the same grid.
+Box bounds(std::span<const float> xyz, size_t begin, size_t end) {
+  Box b;
+  const Float4 lowest = Float4{} + std::numeric_limits<float>::lowest(), highest = -lowest;
+  Float4 lo[3] = {highest, highest, highest}, hi[3] = {lowest, lowest, lowest};
+  size_t i = begin;
+  for (; i + 4 <= end; i += 4) {
+    for (size_t m = 0; m < 3; ++m) {
+      const Float4 v = load(&xyz[3 * i + 4 * m]);
+      const Int4 counted = finite(v);
+      lo[m] = (counted & (v < lo[m])) ? v : lo[m];
+      hi[m] = (counted & (hi[m] < v)) ? v : hi[m];
+    }
+  }
+  for (size_t m = 0; m < 3; ++m) {
+    for (size_t lane = 0; lane < 4; ++lane) {
+      const size_t a = (4 * m + lane) % 3;
+      b.lo[a] = std::min(b.lo[a], lo[m][lane]), b.hi[a] = std::max(b.hi[a], hi[m][lane]);
+    }
+  }
+  for (; i < end; ++i) {
+    for (size_t a = 0; a < 3; ++a) {
+      const float v = xyz[3 * i + a];
+      if (!std::isfinite(v)) continue;
+      b.lo[a] = std::min(b.lo[a], v), b.hi[a] = std::max(b.hi[a], v);
+    }
+  }
+  return b;
+}
+
 Box bounds(std::span<const float> xyz) {
   const size_t n = xyz.size() / 3;
   return tbb::parallel_reduce(
       tbb::blocked_range<size_t>(0, n, 16384), Box{},
       [&](const tbb::blocked_range<size_t>& r, Box b) {
-        for (size_t i = r.begin(); i < r.end(); ++i) {
-          for (int a = 0; a < 3; ++a) {
-            const float v = xyz[3 * i + a];
-            if (!std::isfinite(v)) continue;
-            b.lo[a] = std::min(b.lo[a], v), b.hi[a] = std::max(b.hi[a], v);
-          }
-        }
+        b.join(bounds(xyz, r.begin(), r.end()));
         return b;
       },
       [](Box a, const Box& b) {
         a.join(b);
         return a;
       });
+}
+
+// One bit per cell of a dense grid.
+using CellBits = std::vector<uint64_t>;
+
+bool has(const CellBits& bits, uint64_t c) { return (bits[c / 64] >> (c % 64)) & 1; }
+
+// The 64 bits of `bits` from bit `first` on (zeros outside).
+uint64_t bits_from(const CellBits& bits, int64_t first) {
+  const auto word = [&](int64_t w) { return w >= 0 && w < int64_t(bits.size()) ? bits[size_t(w)] : uint64_t(0); };
+  const int64_t w = first >> 6, shift = first & 63;
+  return shift == 0 ? word(w) : (word(w) >> shift) | (word(w + 1) << (64 - shift));
+}
+
+// Word by word, in parallel: out[w] = f(w).
+template <class F>
+CellBits each_word(size_t words, F&& f) {
+  CellBits out(words);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, words, 4096), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t w = r.begin(); w < r.end(); ++w) out[w] = f(w);
+  });
+  return out;
+}
+
+// Bit c of the result: bits c - step, c and c + step of `bits`, or-ed.
+CellBits spread(const CellBits& bits, int64_t step) {
+  return each_word(bits.size(), [&](size_t w) {
+    const int64_t first = int64_t(64 * w);
+    return bits[w] | bits_from(bits, first - step) | bits_from(bits, first + step);
+  });
 }
 
 // Occupied voxels: the particles sorted by voxel, each voxel a run of them.
@@ -103,13 +188,39 @@ class VoxelGrid {
   template <class F>
   bool each_dense_neighbour(size_t v, F& f) const {
     if (cell_voxel_.empty()) return false;
-    const uint64_t key = voxels_[v].key;
-    const int64_t centre = (int64_t(key >> 42) * dims_[1] + int64_t((key >> 21) & 0x1FFFFF)) * dims_[2] + int64_t(key & 0x1FFFFF);
+    const int64_t centre = cell_of(voxels_[v].key);
     for (const int64_t offset : offsets_) {
       const uint32_t w = cell_voxel_[size_t(centre + offset)];
       if (!f(w == kEmpty ? int64_t(-1) : int64_t(w))) break;
     }
     return true;
+  }
+
+  // Dense grids: a cell array over the box, every particle's cell kept.
+  bool dense() const { return !cell_voxel_.empty(); }
+  uint32_t cell_of_particle(size_t i) const { return particle_cell_[i]; }
+  uint32_t cell_of_voxel(size_t v) const { return cell_of(voxels_[v].key); }
+  uint32_t voxel_of_cell(uint32_t c) const { return cell_voxel_[c]; }
+
+  // Dense grids: the cells whose voxel satisfies pred.
+  template <class P>
+  CellBits cells_where(P&& pred) const {
+    return each_word((cell_voxel_.size() + 63) / 64, [&](size_t w) {
+      uint64_t word = 0;
+      for (size_t c = 64 * w; c < std::min(64 * w + 64, cell_voxel_.size()); ++c) {
+        const uint32_t v = cell_voxel_[c];
+        if (v != kEmpty && pred(voxels_[v])) word |= uint64_t(1) << (c % 64);
+      }
+      return word;
+    });
+  }
+
+  // Dense grids: the cells with a set cell among themselves and their 26
+  // neighbours, three separable passes over words instead of 26 lookups per
+  // voxel. The offsets wrap across rows only at the outside layer, so the
+  // result is exact at every cell that holds a voxel.
+  CellBits around(const CellBits& bits) const {
+    return spread(spread(spread(bits, 1), dims_[2]), dims_[1] * dims_[2]);
   }
 
   // The voxel at key + (dx, dy, dz), or -1 when empty or outside.
@@ -127,8 +238,32 @@ class VoxelGrid {
 
  private:
   static constexpr uint32_t kEmpty = std::numeric_limits<uint32_t>::max();
+  static constexpr uint32_t kBucketCells = 4096;  // cells per bucket of the counting sort's first pass
+
+  struct CellParticle {
+    uint32_t cell;
+    uint32_t particle;
+  };
 
   static uint64_t pack(int64_t x, int64_t y, int64_t z) { return (uint64_t(x) << 42) | (uint64_t(y) << 21) | uint64_t(z); }
+  // Dense grids: a key's cell in the cell array, and back.
+  uint32_t cell_of(uint64_t key) const {
+    return uint32_t((int64_t(key >> 42) * dims_[1] + int64_t((key >> 21) & 0x1FFFFF)) * dims_[2] + int64_t(key & 0x1FFFFF));
+  }
+  uint64_t key_of_cell(uint64_t c) const {
+    const uint64_t z = c % uint64_t(dims_[2]), y = c / uint64_t(dims_[2]) % uint64_t(dims_[1]),
+                   x = c / (uint64_t(dims_[2]) * uint64_t(dims_[1]));
+    return pack(int64_t(x), int64_t(y), int64_t(z));
+  }
+  // The key of the next cell in the cell array (z fastest, then y, then x),
+  // without key_of_cell's divisions.
+  uint64_t next_cell_key(uint64_t key) const {
+    constexpr uint64_t kField = 0x1FFFFF;
+    if ((key & kField) + 1 < uint64_t(dims_[2])) return key + 1;
+    key &= ~kField;  // z = 0
+    if (((key >> 21) & kField) + 1 < uint64_t(dims_[1])) return key + (uint64_t(1) << 21);
+    return (key & ~(kField << 21)) + (uint64_t(1) << 42);  // y = 0, the next x
+  }
   static uint64_t hash(uint64_t k) {
     k ^= k >> 33;
     k *= 0xff51afd7ed558ccdULL;
@@ -141,25 +276,24 @@ class VoxelGrid {
   // consecutive cells (each of T index ranges counts and then scatters its
   // own particles, in index order), then each bucket sorted by cell on its
   // own. The order is the same on any number of threads: particles in cell
-  // order, index order within a cell.
+  // order, index order within a cell. Each particle travels with its cell,
+  // so the bucket passes read their input in order instead of looking cells
+  // up by particle index (a cache miss per particle on large frames).
   void build_dense(std::span<const float> xyz, uint64_t cells) {
     const size_t n = xyz.size() / 3;
-    std::vector<uint32_t> cell(n);
+    particle_cell_.resize(n);
+    const std::span<const uint32_t> cell = particle_cell_;
     tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 16384), [&](const tbb::blocked_range<size_t>& r) {
-      for (size_t i = r.begin(); i < r.end(); ++i) {
-        const uint64_t k = key_of(xyz, i);
-        cell[i] = uint32_t((int64_t(k >> 42) * dims_[1] + int64_t((k >> 21) & 0x1FFFFF)) * dims_[2] + int64_t(k & 0x1FFFFF));
-      }
+      cells_of(xyz, r.begin(), r.end(), &particle_cell_[r.begin()]);
     });
-    constexpr int kBucketBits = 12;
-    const size_t buckets = size_t((cells + (uint64_t(1) << kBucketBits) - 1) >> kBucketBits);
+    const size_t buckets = size_t((cells + kBucketCells - 1) / kBucketCells);
     const size_t ranges = std::clamp<size_t>(n / 65536, 1, 64);
     const auto range_begin = [&](size_t r) { return n * r / ranges; };
     // offset[r * buckets + b]: where range r's particles of bucket b go.
     std::vector<uint32_t> offset(ranges * buckets, 0);
     tbb::parallel_for(size_t(0), ranges, [&](size_t r) {
       uint32_t* count = &offset[r * buckets];
-      for (size_t i = range_begin(r); i < range_begin(r + 1); ++i) ++count[cell[i] >> kBucketBits];
+      for (size_t i = range_begin(r); i < range_begin(r + 1); ++i) ++count[cell[i] / kBucketCells];
     });
     std::vector<uint32_t> bucket_start(buckets + 1, 0);
     uint32_t total = 0;
@@ -172,47 +306,47 @@ class VoxelGrid {
       }
     }
     bucket_start[buckets] = total;
-    std::vector<uint32_t> by_bucket(n);
+    const auto by_bucket = std::make_unique_for_overwrite<CellParticle[]>(n);
     tbb::parallel_for(size_t(0), ranges, [&](size_t r) {
       uint32_t* next = &offset[r * buckets];
-      for (size_t i = range_begin(r); i < range_begin(r + 1); ++i) by_bucket[next[cell[i] >> kBucketBits]++] = uint32_t(i);
+      for (size_t i = range_begin(r); i < range_begin(r + 1); ++i) by_bucket[next[cell[i] / kBucketCells]++] = {cell[i], uint32_t(i)};
     });
-    // Each bucket by cell; its occupied cells counted for the voxel numbering.
-    order_.resize(n);
-    cell_voxel_.assign(cells, kEmpty);
+    const auto bucket_particles = [&](size_t b) {
+      return std::span<const CellParticle>(&by_bucket[bucket_start[b]], bucket_start[b + 1] - bucket_start[b]);
+    };
+    const auto bucket_cells = [&](size_t b) {
+      return std::span<uint32_t>(cell_voxel_).subspan(b * kBucketCells, std::min<uint64_t>(kBucketCells, cells - b * kBucketCells));
+    };
+    // Particles per cell, held in cell_voxel_ until the voxels are numbered;
+    // each bucket's occupied cells counted for that numbering.
+    cell_voxel_.resize(cells);
     std::vector<uint32_t> occupied(buckets + 1, 0);
     tbb::parallel_for(size_t(0), buckets, [&](size_t b) {
-      uint32_t count[size_t(1) << kBucketBits] = {};
-      const uint32_t lo = bucket_start[b], hi = bucket_start[b + 1];
-      for (uint32_t k = lo; k < hi; ++k) ++count[cell[by_bucket[k]] & ((1u << kBucketBits) - 1)];
-      uint32_t at = lo, used = 0;
-      for (uint32_t& c : count) {  // counts into where each cell starts
-        const uint32_t here = c;
-        c = at;
-        at += here;
-        used += here > 0;
-      }
-      occupied[b + 1] = used;
-      for (uint32_t k = lo; k < hi; ++k) {
-        const uint32_t i = by_bucket[k];
-        order_[count[cell[i] & ((1u << kBucketBits) - 1)]++] = i;
-      }
+      const std::span<uint32_t> count = bucket_cells(b);
+      std::fill(count.begin(), count.end(), 0u);
+      for (const CellParticle& p : bucket_particles(b)) ++count[p.cell % kBucketCells];
+      occupied[b + 1] = uint32_t(count.size() - size_t(std::count(count.begin(), count.end(), 0u)));
     });
     for (size_t b = 0; b < buckets; ++b) occupied[b + 1] += occupied[b];
     voxels_.resize(occupied[buckets]);
+    order_.resize(n);
     tbb::parallel_for(size_t(0), buckets, [&](size_t b) {
-      uint32_t v = occupied[b];
-      uint32_t k = bucket_start[b];
-      while (k < bucket_start[b + 1]) {
-        const uint32_t c = cell[order_[k]];
-        uint32_t end = k + 1;
-        while (end < bucket_start[b + 1] && cell[order_[end]] == c) ++end;
-        const int64_t z = int64_t(c % uint64_t(dims_[2])), y = int64_t(c / uint64_t(dims_[2]) % uint64_t(dims_[1])),
-                      x = int64_t(c / (uint64_t(dims_[2]) * uint64_t(dims_[1])));
-        cell_voxel_[c] = v;
-        voxels_[v++] = {pack(x, y, z), k, end - k};
-        k = end;
+      const std::span<uint32_t> count_then_voxel = bucket_cells(b);
+      uint32_t next[kBucketCells];  // where each cell's next particle goes
+      uint32_t v = occupied[b], at = bucket_start[b];
+      uint64_t key = key_of_cell(b * kBucketCells);
+      for (size_t c = 0; c < count_then_voxel.size(); ++c, key = next_cell_key(key)) {
+        const uint32_t count = count_then_voxel[c];
+        next[c] = at;
+        if (count == 0) {
+          count_then_voxel[c] = kEmpty;
+          continue;
+        }
+        voxels_[v] = {key, at, count};
+        count_then_voxel[c] = v++;
+        at += count;
       }
+      for (const CellParticle& p : bucket_particles(b)) order_[next[p.cell % kBucketCells]++] = p.particle;
     });
   }
 
@@ -255,6 +389,28 @@ class VoxelGrid {
     return pack(c[0], c[1], c[2]);
   }
 
+  // Dense grids: the cells of particles begin .. end-1, key_of's float
+  // arithmetic four particles at a time (the costliest arithmetic of the
+  // classification).
+  void cells_of(std::span<const float> xyz, size_t begin, size_t end, uint32_t* cell) const {
+    const Float4 origin[3] = {axis_lanes(origin_, 0), axis_lanes(origin_, 1), axis_lanes(origin_, 2)};
+    const Float4 last_cell[3] = {axis_lanes(last_cell_, 0), axis_lanes(last_cell_, 1), axis_lanes(last_cell_, 2)};
+    const Float4 zero{};
+    size_t i = begin;
+    for (; i + 4 <= end; i += 4) {
+      int32_t c[12];
+      for (size_t m = 0; m < 3; ++m) {
+        const Float4 v = load(&xyz[3 * i + 4 * m]);
+        Float4 t = finite(v) ? (v - origin[m]) * inverse_side_ : zero;
+        t = t < zero ? zero : last_cell[m] < t ? last_cell[m] : t;  // std::clamp
+        const Int4 cm = __builtin_convertvector(t, Int4) + 1;
+        std::memcpy(&c[4 * m], &cm, sizeof cm);
+      }
+      for (size_t j = 0; j < 4; ++j) cell[i - begin + j] = cell_of(pack(c[3 * j], c[3 * j + 1], c[3 * j + 2]));
+    }
+    for (; i < end; ++i) cell[i - begin] = cell_of(key_of(xyz, i));
+  }
+
   int64_t find(uint64_t key) const {
     size_t slot = hash(key) & (table_.size() - 1);
     while (table_[slot] != kEmpty) {
@@ -274,6 +430,7 @@ class VoxelGrid {
   std::vector<Voxel> voxels_;
   std::vector<uint32_t> table_;         // sparse: voxel by key hash
   std::vector<uint32_t> cell_voxel_;    // dense: voxel by cell, kEmpty where none
+  std::vector<uint32_t> particle_cell_;  // dense: each particle's cell
   std::vector<int64_t> offsets_;        // dense: the 26 neighbours' cells, relative
 };
 
@@ -300,8 +457,23 @@ float distance2(std::span<const float> xyz, size_t i, size_t j) {
   return d2;
 }
 
+// The 26 neighbours of a voxel, faces first, then edges, then corners: the
+// nearest are the likeliest to hold a particle within reach.
+constexpr auto kNearestFirst = [] {
+  std::array<std::array<int, 3>, 26> out{};
+  size_t k = 0;
+  for (int axes = 1; axes <= 3; ++axes)
+    for (int dx = -1; dx <= 1; ++dx)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dz = -1; dz <= 1; ++dz) {
+          if ((dx != 0) + (dy != 0) + (dz != 0) == axes) out[k++] = {dx, dy, dz};
+        }
+  return out;
+}();
+
 // True when no other particle lies within `reach` of particle i, looked for
-// in its voxel and the 26 around (reach <= the voxel side).
+// in its voxel and the 26 around (reach <= the voxel side), the nearest
+// voxels first.
 bool alone(const VoxelGrid& grid, std::span<const float> xyz, size_t v, uint32_t i, float reach) {
   const float r2 = reach * reach;
   const auto none_near = [&](int64_t w) {
@@ -314,9 +486,11 @@ bool alone(const VoxelGrid& grid, std::span<const float> xyz, size_t v, uint32_t
     return true;
   };
   if (!none_near(int64_t(v))) return false;
-  bool result = true;
-  for_each_neighbour(grid, v, [&](int64_t w) { return result = none_near(w); });
-  return result;
+  const uint64_t key = grid.voxel(v).key;
+  for (const auto& d : kNearestFirst) {
+    if (!none_near(grid.neighbour(key, d[0], d[1], d[2]))) return false;
+  }
+  return true;
 }
 
 // |x_i - sum_j x_j W_ij| with normalized weights W over the 27 voxels
@@ -347,37 +521,222 @@ float asymmetry(const VoxelGrid& grid, std::span<const float> xyz, size_t v, uin
   return float(std::sqrt(d2));
 }
 
-// One blob per voxel with interior particles, in voxel order (the grid's
-// key order: spatially coherent), centroids summed in double.
-void gather_blobs(const VoxelGrid& grid, std::span<const float> xyz, NarrowBand& out) {
-  const size_t voxels = grid.size();
-  std::vector<uint32_t> interior(voxels, 0);
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, voxels, 1024), [&](const tbb::blocked_range<size_t>& r) {
+// A voxel's kind: L1, selected L2, or neither (0).
+constexpr uint8_t kL1 = 1, kSelectedL2 = 2;
+
+BandLayer layer_of_kind(uint8_t kind) {
+  return kind == kL1 ? BandLayer::L1 : kind == kSelectedL2 ? BandLayer::L2 : BandLayer::Interior;
+}
+
+// Sparse grids: L1 voxels have an empty or outside voxel among their 26
+// neighbours; selected L2 voxels are next to an L1 voxel of at most n1
+// particles.
+std::vector<uint8_t> voxel_kinds_by_neighbours(const VoxelGrid& grid, double n1) {
+  std::vector<uint8_t> kind(grid.size(), 0);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, grid.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t v = r.begin(); v < r.end(); ++v) {
-      const auto& vox = grid.voxel(v);
-      for (uint32_t k = vox.first; k < vox.first + vox.count; ++k) interior[v] += out.layer[grid.particle(k)] == BandLayer::Interior;
+      bool l1 = false;
+      for_each_neighbour(grid, v, [&](int64_t w) { return !(l1 = w < 0); });
+      if (l1) kind[v] = kL1;
     }
   });
-  std::vector<uint32_t> first(voxels + 1, 0);  // blob index of each voxel's blob
-  for (size_t v = 0; v < voxels; ++v) first[v + 1] = first[v] + (interior[v] > 0);
-  out.blobs.assign(first[voxels], VoxelBlob{});
-  out.blob_of.assign(out.layer.size(), NarrowBand::kNoBlob);
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, voxels, 1024), [&](const tbb::blocked_range<size_t>& r) {
+  // Selected L2 voxels go to a vector of their own: the pass reads the
+  // neighbours' L1 marks, which must not change under it.
+  std::vector<uint8_t> selected(grid.size(), 0);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, grid.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t v = r.begin(); v < r.end(); ++v) {
-      if (interior[v] == 0) continue;
+      if (kind[v] == kL1) continue;
+      for_each_neighbour(grid, v, [&](int64_t w) {
+        selected[v] = w >= 0 && kind[size_t(w)] == kL1 && double(grid.voxel(size_t(w)).count) <= n1;
+        return !selected[v];
+      });
+    }
+  });
+  for (size_t v = 0; v < grid.size(); ++v) {
+    if (selected[v]) kind[v] = kSelectedL2;
+  }
+  return kind;
+}
+
+// Dense grids: the same kinds as voxel_kinds_by_neighbours, cell by cell.
+struct CellKinds {
+  CellBits l1, selected_l2;
+  uint8_t at(uint64_t c) const { return has(l1, c) ? kL1 : has(selected_l2, c) ? kSelectedL2 : 0; }
+};
+
+CellKinds cell_kinds(const VoxelGrid& grid, double n1) {
+  const CellBits occupied = grid.cells_where([](const VoxelGrid::Voxel&) { return true; });
+  const CellBits few = grid.cells_where([&](const VoxelGrid::Voxel& v) { return double(v.count) <= n1; });
+  const size_t words = occupied.size();
+  CellKinds kinds;
+  const CellBits near_empty = grid.around(each_word(words, [&](size_t w) { return ~occupied[w]; }));
+  kinds.l1 = each_word(words, [&](size_t w) { return occupied[w] & near_empty[w]; });
+  const CellBits near_few_l1 = grid.around(each_word(words, [&](size_t w) { return kinds.l1[w] & few[w]; }));
+  kinds.selected_l2 = each_word(words, [&](size_t w) { return occupied[w] & ~kinds.l1[w] & near_few_l1[w]; });
+  return kinds;
+}
+
+std::vector<uint8_t> voxel_kinds(const VoxelGrid& grid, const CellKinds& cells) {
+  std::vector<uint8_t> kind(grid.size());
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, grid.size(), 16384), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t v = r.begin(); v < r.end(); ++v) kind[v] = cells.at(grid.cell_of_voxel(v));
+  });
+  return kind;
+}
+
+// Every particle's layer by its voxel's kind, in particle order: the writes
+// go in order and the bits read fit in cache.
+void layers_by_cell(const VoxelGrid& grid, const CellKinds& cells, std::vector<BandLayer>& layer) {
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, layer.size(), 16384), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i < r.end(); ++i) layer[i] = layer_of_kind(cells.at(grid.cell_of_particle(i)));
+  });
+}
+
+// Every particle's layer by its voxel's kind, voxel by voxel.
+void layers_by_voxel(const VoxelGrid& grid, const std::vector<uint8_t>& kind, std::vector<BandLayer>& layer) {
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, grid.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t v = r.begin(); v < r.end(); ++v) {
       const auto& vox = grid.voxel(v);
-      double sum[3] = {0, 0, 0};
+      for (uint32_t k = vox.first; k < vox.first + vox.count; ++k) layer[grid.particle(k)] = layer_of_kind(kind[v]);
+    }
+  });
+}
+
+// The tests particle by particle, over the voxels that need them: F2 by
+// asymmetry in selected L2 voxels, and the isolated test in sparse voxels
+// (a voxel of the dense fluid holds about (d/h)^3 particles), which makes
+// spray and droplets surface whatever their voxel.
+void test_particles(const VoxelGrid& grid, std::span<const float> xyz, const std::vector<uint8_t>& kind, F2Test f2,
+                    float h, float reach, std::vector<BandLayer>& layer) {
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, grid.size(), 256), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t v = r.begin(); v < r.end(); ++v) {
+      const auto& vox = grid.voxel(v);
+      const bool test_f2 = kind[v] == kSelectedL2 && f2 == F2Test::Asymmetry, test_alone = vox.count <= 2;
+      if (!test_f2 && !test_alone) continue;
       for (uint32_t k = vox.first; k < vox.first + vox.count; ++k) {
         const uint32_t i = grid.particle(k);
-        if (out.layer[i] != BandLayer::Interior) continue;
-        for (int a = 0; a < 3; ++a) sum[a] += xyz[3 * size_t(i) + a];
-        out.blob_of[i] = first[v];
+        BandLayer l = layer_of_kind(kind[v]);
+        if (test_f2 && !(asymmetry(grid, xyz, v, i, h) > 0.1f * h)) l = BandLayer::Interior;
+        if (test_alone && alone(grid, xyz, v, i, reach)) l = BandLayer::Isolated;
+        layer[i] = l;
       }
-      VoxelBlob& b = out.blobs[first[v]];
-      b.count = interior[v];
-      for (int a = 0; a < 3; ++a) b.centroid[size_t(a)] = float(sum[a] / interior[v]);
     }
   });
+}
+
+// Particles per layer, in blocks short enough for 32-bit counters (which
+// the compiler vectorizes, unlike an increment indexed by the layer).
+std::array<uint64_t, 4> count_layers(const std::vector<BandLayer>& layer) {
+  constexpr size_t kBlock = size_t(1) << 16;
+  std::array<uint64_t, 4> counts{};
+  for (size_t begin = 0; begin < layer.size(); begin += kBlock) {
+    uint32_t block[4] = {};
+    for (size_t i = begin; i < std::min(layer.size(), begin + kBlock); ++i) {
+      for (size_t l = 1; l < 4; ++l) block[l] += layer[i] == BandLayer(l);
+    }
+    for (size_t l = 1; l < 4; ++l) counts[l] += block[l];
+  }
+  counts[0] = layer.size() - counts[1] - counts[2] - counts[3];
+  return counts;
+}
+
+// Per voxel: how many interior particles, and their positions summed in
+// double in index order.
+struct InteriorSums {
+  std::vector<uint32_t> count;
+  std::vector<std::array<double, 3>> sum;
+  explicit InteriorSums(size_t voxels) : count(voxels, 0), sum(voxels, {0, 0, 0}) {}
+};
+
+// Voxel by voxel: reads each voxel's particles where they lie in memory.
+InteriorSums interior_sums_by_voxel(const VoxelGrid& grid, std::span<const float> xyz, const std::vector<BandLayer>& layer) {
+  InteriorSums out(grid.size());
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, grid.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t v = r.begin(); v < r.end(); ++v) {
+      const auto& vox = grid.voxel(v);
+      for (uint32_t k = vox.first; k < vox.first + vox.count; ++k) {
+        const uint32_t i = grid.particle(k);
+        if (layer[i] != BandLayer::Interior) continue;
+        for (size_t a = 0; a < 3; ++a) out.sum[v][a] += xyz[3 * size_t(i) + a];
+        ++out.count[v];
+      }
+    }
+  });
+  return out;
+}
+
+// Dense grids: the same sums in particle order, which reads positions in
+// order instead of one cache miss per particle. Each task owns a slab of
+// voxels and scans every particle's cell for its own, so every voxel is
+// still summed by one task in index order; one slab per thread at work.
+InteriorSums interior_sums_by_cell(const VoxelGrid& grid, std::span<const float> xyz, const std::vector<BandLayer>& layer) {
+  InteriorSums out(grid.size());
+  const size_t threads = std::min<size_t>(size_t(tbb::this_task_arena::max_concurrency()),
+                                          tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
+  const size_t slabs = std::clamp<size_t>(threads, 1, grid.size());
+  tbb::parallel_for(size_t(0), slabs, [&](size_t s) {
+    const uint32_t lo = grid.cell_of_voxel(grid.size() * s / slabs), hi = grid.cell_of_voxel(grid.size() * (s + 1) / slabs - 1);
+    for (size_t i = 0; i < layer.size(); ++i) {
+      const uint32_t c = grid.cell_of_particle(i);
+      if (c < lo || c > hi || layer[i] != BandLayer::Interior) continue;
+      const uint32_t v = grid.voxel_of_cell(c);
+      for (size_t a = 0; a < 3; ++a) out.sum[v][a] += xyz[3 * i + a];
+      ++out.count[v];
+    }
+  });
+  return out;
+}
+
+// One blob per voxel with interior particles, in voxel order (the grid's
+// key order: spatially coherent); returns each voxel's blob (kNoBlob where
+// none).
+std::vector<uint32_t> make_blobs(const InteriorSums& interior, std::vector<VoxelBlob>& blobs) {
+  const size_t voxels = interior.count.size();
+  std::vector<uint32_t> blob_of_voxel(voxels, NarrowBand::kNoBlob);
+  uint32_t next = 0;
+  for (size_t v = 0; v < voxels; ++v) {
+    if (interior.count[v] > 0) blob_of_voxel[v] = next++;
+  }
+  blobs.resize(next);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, voxels, 16384), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t v = r.begin(); v < r.end(); ++v) {
+      if (blob_of_voxel[v] == NarrowBand::kNoBlob) continue;
+      VoxelBlob& b = blobs[blob_of_voxel[v]];
+      b.count = interior.count[v];
+      for (size_t a = 0; a < 3; ++a) b.centroid[a] = float(interior.sum[v][a] / interior.count[v]);
+    }
+  });
+  return blob_of_voxel;
+}
+
+// Every interior particle's blob, its voxel's; surface particles none.
+void assign_blobs(const VoxelGrid& grid, const std::vector<uint32_t>& blob_of_voxel, NarrowBand& out) {
+  out.blob_of.assign(out.layer.size(), NarrowBand::kNoBlob);
+  if (grid.dense()) {  // in particle order: the writes go in order
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, out.layer.size(), 16384), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t i = r.begin(); i < r.end(); ++i) {
+        if (out.layer[i] == BandLayer::Interior) out.blob_of[i] = blob_of_voxel[grid.voxel_of_cell(grid.cell_of_particle(i))];
+      }
+    });
+    return;
+  }
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, grid.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t v = r.begin(); v < r.end(); ++v) {
+      if (blob_of_voxel[v] == NarrowBand::kNoBlob) continue;
+      const auto& vox = grid.voxel(v);
+      for (uint32_t k = vox.first; k < vox.first + vox.count; ++k) {
+        const uint32_t i = grid.particle(k);
+        if (out.layer[i] == BandLayer::Interior) out.blob_of[i] = blob_of_voxel[v];
+      }
+    }
+  });
+}
+
+// The interior's blobs; the sums are dropped before blob_of is allocated.
+void gather_blobs(const VoxelGrid& grid, std::span<const float> xyz, NarrowBand& out) {
+  const std::vector<uint32_t> blob_of_voxel =
+      make_blobs(grid.dense() ? interior_sums_by_cell(grid, xyz, out.layer) : interior_sums_by_voxel(grid, xyz, out.layer), out.blobs);
+  assign_blobs(grid, blob_of_voxel, out);
 }
 
 }  // namespace
@@ -395,54 +754,21 @@ NarrowBand classify_narrow_band(std::span<const float> xyz, const NarrowBandOpti
   // n1 = (d/h)^3: fewer particles than that cannot hide what lies behind.
   const double n1 = std::pow(double(out.voxel) / h, 3);
 
-  std::vector<uint8_t> kind(grid.size(), 0);  // 1: L1, 2: selected L2
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, grid.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
-    for (size_t v = r.begin(); v < r.end(); ++v) {
-      bool l1 = false;
-      for_each_neighbour(grid, v, [&](int64_t w) { return !(l1 = w < 0); });
-      if (l1) kind[v] = 1;
-    }
-  });
-  // Selected L2 voxels go to a vector of their own: the pass reads the
-  // neighbours' L1 marks, which must not change under it.
-  std::vector<uint8_t> selected(grid.size(), 0);
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, grid.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
-    for (size_t v = r.begin(); v < r.end(); ++v) {
-      if (kind[v] == 1) continue;
-      for_each_neighbour(grid, v, [&](int64_t w) {
-        selected[v] = w >= 0 && kind[size_t(w)] == 1 && double(grid.voxel(size_t(w)).count) <= n1;
-        return !selected[v];
-      });
-    }
-  });
-  for (size_t v = 0; v < grid.size(); ++v) {
-    if (selected[v]) kind[v] = 2;
+  std::vector<uint8_t> kind;  // per voxel: kL1, kSelectedL2 or 0
+  if (grid.dense()) {
+    const CellKinds cells = cell_kinds(grid, n1);
+    kind = voxel_kinds(grid, cells);
+    layers_by_cell(grid, cells, out.layer);
+  } else {
+    kind = voxel_kinds_by_neighbours(grid, n1);
+    layers_by_voxel(grid, kind, out.layer);
   }
-
-  const float reach = std::min(2 * h, out.voxel);
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, grid.size(), 256), [&](const tbb::blocked_range<size_t>& r) {
-    for (size_t v = r.begin(); v < r.end(); ++v) {
-      const auto& vox = grid.voxel(v);
-      for (uint32_t k = vox.first; k < vox.first + vox.count; ++k) {
-        const uint32_t i = grid.particle(k);
-        BandLayer l = BandLayer::Interior;
-        if (kind[v] == 1) {
-          l = BandLayer::L1;
-        } else if (kind[v] == 2) {
-          l = o.f2 == F2Test::All || asymmetry(grid, xyz, v, i, h) > 0.1f * h ? BandLayer::L2 : BandLayer::Interior;
-        }
-        // Spray and droplets: a particle alone in a sparse voxel is checked
-        // (a voxel of the dense fluid holds about (d/h)^3 particles).
-        if (vox.count <= 2 && alone(grid, xyz, v, i, reach)) l = BandLayer::Isolated;
-        out.layer[i] = l;
-      }
-    }
-  });
-  for (const BandLayer l : out.layer) ++out.counts[size_t(l)];
+  test_particles(grid, xyz, kind, o.f2, h, std::min(2 * h, out.voxel), out.layer);
+  out.counts = count_layers(out.layer);
   if (o.blobs) gather_blobs(grid, xyz, out);
   for (const uint8_t k : kind) {
-    out.l1_voxels += k == 1;
-    out.l2_voxels += k == 2;
+    out.l1_voxels += k == kL1;
+    out.l2_voxels += k == kSelectedL2;
   }
   return out;
 }

@@ -113,6 +113,52 @@ TEST(NarrowBand, SprayIsSurface) {
   EXPECT_EQ(band.layer[n - 1], BandLayer::Isolated);
 }
 
+// The dense grid (L1 and L2 by bit operations over its cells, layers in
+// particle order) and the hashed one (voxel by voxel) give the same answer.
+// A droplet beyond the pool's highest corner leaves the grid's origin, and
+// so every voxel, where it was; far away, it makes the box too large for a
+// cell array, and the voxels are hashed.
+TEST(NarrowBand, DenseAndHashedGridsGiveTheSameBand) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> jitter(-0.3f, 0.3f), spray(0.f, 30.f);
+  std::vector<float> pool;
+  for (int x = 0; x < 24; ++x)
+    for (int y = 0; y < 20; ++y)
+      for (int z = 0; z < 16; ++z) {
+        if (x > 12 && y > 10) continue;  // a step, so that L1 meets the outside on inner edges too
+        pool.insert(pool.end(), {(x + jitter(rng)) * kH, (y + jitter(rng)) * kH, (z + jitter(rng)) * kH});
+      }
+  for (int k = 0; k < 200; ++k) pool.insert(pool.end(), {spray(rng) * kH, (22.f + spray(rng) / 3) * kH, spray(rng) * kH});
+  // Stray coordinates: their cells come from the box's lowest cell either way.
+  pool.insert(pool.end(), {NAN, 0.5f, 0.5f, 0.5f, -INFINITY, 0.5f, 0.5f, 0.5f, NAN});
+  const auto with_droplet_at = [&](float spacings) {
+    std::vector<float> xyz = pool;
+    xyz.insert(xyz.end(), {spacings * kH, spacings * kH, spacings * kH});
+    return xyz;
+  };
+  const std::vector<float> near = with_droplet_at(40.f), far = with_droplet_at(5000.f);
+  for (const float voxel : {2 * kH, 1.5f * kH}) {
+    for (const auto f2 : {sluice::io::F2Test::All, sluice::io::F2Test::Asymmetry}) {
+      const NarrowBandOptions o{.diameter = kH, .voxel = voxel, .f2 = f2, .blobs = true};
+      const auto dense = sluice::io::classify_narrow_band(near, o), hashed = sluice::io::classify_narrow_band(far, o);
+      EXPECT_GT(dense.counts[1], 0u);
+      EXPECT_GT(dense.counts[2], 0u);
+      EXPECT_GT(dense.counts[3], 20u);  // spray and the droplet
+      EXPECT_EQ(dense.layer, hashed.layer);
+      EXPECT_EQ(dense.counts, hashed.counts);
+      EXPECT_EQ(dense.voxels, hashed.voxels);
+      EXPECT_EQ(dense.l1_voxels, hashed.l1_voxels);
+      EXPECT_EQ(dense.l2_voxels, hashed.l2_voxels);
+      EXPECT_EQ(dense.blob_of, hashed.blob_of);
+      ASSERT_EQ(dense.blobs.size(), hashed.blobs.size());
+      for (size_t b = 0; b < dense.blobs.size(); ++b) {
+        EXPECT_EQ(dense.blobs[b].centroid, hashed.blobs[b].centroid);
+        EXPECT_EQ(dense.blobs[b].count, hashed.blobs[b].count);
+      }
+    }
+  }
+}
+
 TEST(NarrowBand, VoxelLayersCountFromTheOutside) {
   const Lattice l = box();  // 17 particles a side: voxels of 2h hold 2 along an axis
   const std::vector<uint8_t> layers = sluice::io::voxel_layers(l.xyz, 2 * kH);
