@@ -219,23 +219,19 @@ for stage in $stages; do
       done
       rm -f /tmp/ab10m.sluice
       ;;
-    gpuflight)  # two records in flight: this build against BASE's (and .gpu/sluice_sse2, if there) alternated twice, then other splits (10M x 24 frames)
+    gpuflight)  # two records in flight: this build against BASE's alternated twice (and .gpu/sluice_sse2 once, if there), then 10 readers (10M x 24 frames)
       run $S synth -n 10M --frames 24 -o /tmp/fl10m.sluice --force -q --gpu-decodable
-      for round in 1 2; do
-        for b in ./.gpu/sluice_base ./.gpu/sluice_sse2 $S; do
-          [[ -x $b ]] || continue
-          log "round $round: $b"
-          $b bench stream --gpu /tmp/fl10m.sluice --memory 16G --no-storage --min-time 2 2>&1 | grep -E "decoded by|GPU \(kept|CPU workers|pread|mapping|GPU decode alone" | tee -a "$OUT/summary.txt"
-        done
+      for b in ./.gpu/sluice_base $S ./.gpu/sluice_sse2 ./.gpu/sluice_base $S; do
+        [[ -x $b ]] || continue
+        log "$b"
+        $b bench stream --gpu /tmp/fl10m.sluice --memory 16G --no-storage --min-time 2 2>&1 | grep -E "decoded by|GPU \(kept|CPU workers|pread|mapping|GPU decode alone" | tee -a "$OUT/summary.txt"
       done
-      for rt in 10 6; do
-        run $S bench stream --gpu /tmp/fl10m.sluice --memory 16G --no-storage --min-time 2 --read-threads $rt --threads $((16 - rt))
-      done
+      run $S bench stream --gpu /tmp/fl10m.sluice --memory 16G --no-storage --min-time 2 --read-threads 10 --threads 6
       rm -f /tmp/fl10m.sluice
       ;;
-    gpu100ab)  # 100M particles a frame through the GPU path, this build and BASE's
+    gpu100ab)  # 100M particles a frame through the GPU path, this build (and BASE's with AB100_BASE=1)
       run $S synth -n 100M --frames 12 -o /tmp/ab100m.sluice --force -q --gpu-decodable
-      for b in $S ./.gpu/sluice_base; do
+      for b in $S ${AB100_BASE:+./.gpu/sluice_base}; do
         [[ -x $b ]] && run $b bench stream --gpu /tmp/ab100m.sluice --memory 48G --no-storage --min-time 3
       done
       rm -f /tmp/ab100m.sluice
@@ -244,7 +240,6 @@ for stage in $stages; do
       for f in every asym; do
         run $S info .gpu/dam_$f.sluice
         run $S bench layers .gpu/dam_$f.sluice --frames 0,5,10 --repeats 3
-        run $S bench layers .gpu/dam_$f.sluice --frames 0,5,10 --repeats 3 --size 2064x2208
       done
       ;;
     readpath)  # ways to move frames from the page cache into a window of staging (.gpu/readpath, a probe)
