@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Runs on the GPU machine (see bench/device/README.md): every benchmark the
 # issues ask GPU-machine figures for, in one call. Results go to $OUT.
-#   bash bench/device/run.sh [io] [import] [layers] [band] [render] [stream] [split] [codec] [huge] [embed] [compare] [live] [stereo] [xrsize] [firsthour] [streamcmp] [gpudecode] [gpuquick] [gpupair] [gpuab] [gpu100] [egl] [vtkpeer] [readpath] [gpusplit] [gpuplay] [gpuflight] [gpu100ab] [damf2]   (default: io render stream)
+#   bash bench/device/run.sh [io] [import] [layers] [band] [render] [stream] [split] [codec] [huge] [embed] [compare] [live] [stereo] [xrsize] [firsthour] [streamcmp] [gpudecode] [gpuquick] [gpupair] [gpuab] [gpu100] [egl] [vtkpeer] [readpath] [gpusplit] [gpuplay] [gpuflight] [gpu100ab] [damf2] [gpusweep]   (default: io render stream)
 set -uo pipefail
 OUT=${OUT:-/tmp/out}
 mkdir -p "$OUT" /tmp/s
@@ -228,6 +228,21 @@ for stage in $stages; do
       done
       run $S bench stream --gpu /tmp/fl10m.sluice --memory 16G --no-storage --min-time 2 --read-threads 10 --threads 6
       rm -f /tmp/fl10m.sluice
+      ;;
+    gpusweep)  # the GPU path's split of 16 cores between reading and checking, twice over (10M x 24 frames), then 100M
+      run $S synth -n 10M --frames 24 -o /tmp/sw10m.sluice --force -q --gpu-decodable
+      for round in 1 2; do
+        for rt in ${SWEEP_READERS:-8 10 12}; do
+          log "round $round: $rt readers"
+          $S bench stream --gpu /tmp/sw10m.sluice --memory 16G --no-storage --min-time 2 --read-threads $rt --threads $((16 - rt)) 2>&1 | grep -E "decoded by|GPU \(kept|mapping into" | tee -a "$OUT/summary.txt"
+        done
+      done
+      rm -f /tmp/sw10m.sluice
+      run $S synth -n 100M --frames 12 -o /tmp/sw100m.sluice --force -q --gpu-decodable
+      for rt in ${SWEEP100_READERS:-10}; do
+        run $S bench stream --gpu /tmp/sw100m.sluice --memory 48G --no-storage --min-time 3 --read-threads $rt --threads $((16 - rt))
+      done
+      rm -f /tmp/sw100m.sluice
       ;;
     gpu100ab)  # 100M particles a frame through the GPU path, this build (and BASE's with AB100_BASE=1)
       run $S synth -n 100M --frames 12 -o /tmp/ab100m.sluice --force -q --gpu-decodable

@@ -50,6 +50,8 @@ struct DevicePass {
   double in_place = 0;  // share of the frames read straight into their staged area
   double reading = 0;   // share of the timed run with a read in progress
   double read_busy = 0; // share of the read threads' time spent copying
+  double waiting_frames = 0;  // share of the timed run the consumer waited for the pipeline
+  double waiting_gpu = 0;     // share it waited for the GPU (a copy and decode two frames back)
   uint64_t fresh_blocks = 0;  // staging blocks allocated anew during the timed run
 };
 
@@ -87,11 +89,15 @@ DevicePass stream_to_device(const io::ContainerReader& reader, const Slice& slic
 
   std::deque<std::pair<runtime::FrameHandle, uint64_t>> flight;
   uint64_t staged = 0;
+  double waited_frames = 0, waited_gpu = 0;
   auto consume = [&](uint64_t most, double seconds) {
     const auto start = Clock::now();
     uint64_t n = 0;
     for (; n < most && (seconds <= 0 || seconds_since(start) < seconds); ++n) {
-      if (pipeline.wait_next().end) break;
+      const auto asked = Clock::now();
+      const bool end = pipeline.wait_next().end;
+      waited_frames += seconds_since(asked);
+      if (end) break;
       runtime::FrameHandle h = pipeline.take();
       if (h.failed()) throw io::Error(h.error()->where, h.error()->message);
       uint64_t ticket = 0;
@@ -104,16 +110,19 @@ DevicePass stream_to_device(const io::ContainerReader& reader, const Slice& slic
         staged += h.header().particle_count * (8 + (setup.color >= 0 ? 2 : 0));
       }
       flight.emplace_back(std::move(h), ticket);
+      const auto before = Clock::now();
       while (flight.size() > kInFlight) {
         renderer.wait_upload(flight.front().second);
         flight.pop_front();
       }
+      waited_gpu += seconds_since(before);
     }
     return n;
   };
   consume(pipeline.window(), 0);
   DevicePass p;
   staged = 0;
+  waited_frames = waited_gpu = 0;
   const double cpu0 = cpu_seconds();
   const runtime::PipelineStats stats0 = pipeline.stats();
   const uint64_t blocks0 = staging.fresh_allocations();
@@ -129,6 +138,8 @@ DevicePass stream_to_device(const io::ContainerReader& reader, const Slice& slic
   p.reading = (stats.read_seconds - stats0.read_seconds) / p.seconds;
   p.read_busy = (stats.read_thread_seconds - stats0.read_thread_seconds) / (std::max(1u, stats.read_threads) * p.seconds);
   p.fresh_blocks = staging.fresh_allocations() - blocks0;
+  p.waiting_frames = waited_frames / p.seconds;
+  p.waiting_gpu = waited_gpu / p.seconds;
   flight.clear();
   return p;
 }
@@ -277,7 +288,7 @@ void run_stream_gpu_bench(const StreamBenchOptions& o) {
   // 2. The pipeline into device memory, GPU decode and CPU decode.
   Table passes({"decoded by", "frames/s", "M particles/s", "MB/frame copied", "window", "bound frames/s", "vs bound",
                 "limited by", "CPU ms/frame", "cores busy", "read in place", "reading", "read threads copying",
-                "new blocks"});
+                "new blocks", "waiting for frames", "waiting for the GPU"});
   struct Way {
     bool gpu, mapped;
   };
@@ -297,7 +308,8 @@ void run_stream_gpu_bench(const StreamBenchOptions& o) {
                 num(per_frame / 1e6, 1), p.window, num(bound, 1), percent(fps / bound),
                 read_fps < copy_fps ? "page-cache read" : "host -> device copy", num(1e3 * p.cpu / double(p.frames), 2),
                 num(p.cpu / p.seconds, 1), gpu ? percent(p.in_place) : "-", percent(p.reading),
-                percent(p.read_busy), std::to_string(p.fresh_blocks)});
+                percent(p.read_busy), std::to_string(p.fresh_blocks), percent(p.waiting_frames),
+                percent(p.waiting_gpu)});
   }
   passes.print("Pipeline -> renderer device buffers, page cache, two frames in flight (bound: the slower of reading the "
                "file and copying it to the device)");
