@@ -237,6 +237,12 @@ for stage in $stages; do
           $S bench stream --gpu /tmp/sw10m.sluice --memory 16G --no-storage --min-time 2 --read-threads $rt --threads $((16 - rt)) 2>&1 | grep -E "decoded by|GPU \(kept|mapping into" | tee -a "$OUT/summary.txt"
         done
       done
+      if [[ -x ./.gpu/sluice_alt ]]; then  # a variant build to try, carried beside
+        for round in 1 2; do
+          log "round $round: .gpu/sluice_alt, 10 readers"
+          ./.gpu/sluice_alt bench stream --gpu /tmp/sw10m.sluice --memory 16G --no-storage --min-time 2 --read-threads 10 --threads 6 2>&1 | grep -E "decoded by|GPU \(kept|mapping into" | tee -a "$OUT/summary.txt"
+        done
+      fi
       rm -f /tmp/sw10m.sluice
       run $S synth -n 100M --frames 12 -o /tmp/sw100m.sluice --force -q --gpu-decodable
       for rt in ${SWEEP100_READERS:-10}; do
