@@ -14,7 +14,7 @@ ThreadSplit default_thread_split(int cores, bool kept_encoded) {
   cores = std::max(cores, 1);
   ThreadSplit split;
   if (kept_encoded) {
-    split.read = std::clamp(cores / 2, 1, 8);
+    split.read = std::clamp(cores * 5 / 8, 1, 10);
     split.decode = std::max(1, cores - split.read);
     return split;
   }

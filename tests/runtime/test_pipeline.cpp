@@ -453,16 +453,18 @@ TEST(ThreadSplit, OneReaderPerFourCoresFromEightCoresOn) {
   EXPECT_EQ(default_thread_split(64).read, 4);
 }
 
-TEST(ThreadSplit, FramesKeptEncodedReadOnHalfTheCores) {
-  // The workers only check checksums: half the cores read, 1 to 8.
+TEST(ThreadSplit, FramesKeptEncodedReadOnFiveEighthsOfTheCores) {
+  // The workers only check checksums: five eighths of the cores read, 1 to 10.
   EXPECT_EQ(default_thread_split(1, true).read, 1);
   EXPECT_EQ(default_thread_split(1, true).decode, 1);
   EXPECT_EQ(default_thread_split(2, true).read, 1);
   EXPECT_EQ(default_thread_split(2, true).decode, 1);
-  EXPECT_EQ(default_thread_split(16, true).read, 8);
-  EXPECT_EQ(default_thread_split(16, true).decode, 8);
-  EXPECT_EQ(default_thread_split(64, true).read, 8);
-  EXPECT_EQ(default_thread_split(64, true).decode, 56);
+  EXPECT_EQ(default_thread_split(8, true).read, 5);
+  EXPECT_EQ(default_thread_split(8, true).decode, 3);
+  EXPECT_EQ(default_thread_split(16, true).read, 10);
+  EXPECT_EQ(default_thread_split(16, true).decode, 6);
+  EXPECT_EQ(default_thread_split(64, true).read, 10);
+  EXPECT_EQ(default_thread_split(64, true).decode, 54);
 }
 
 // A file with the narrow band's layers: with the surface set the pipeline

@@ -107,10 +107,11 @@ struct PipelineOptions {
 // workers load memory (docs/measurements.md).
 //
 // Frames kept encoded for the GPU (`keep_encoded`) leave the workers only
-// checksums (and any zstd planes) to do, so reading takes half the cores,
-// 1 to 8, and the rest check: on the same machine 10M-particle frames reach
-// device memory at 352 frames/s with 8 + 8 against 239 with 4 + 12
-// (docs/measurements.md, "Reading out of the file's mapping").
+// checksums (and any zstd planes) to do, so reading takes five eighths of
+// the cores, 1 to 10, and the rest check: on the same machine 10M-particle
+// frames reach device memory at 346-378 frames/s with 6 workers + 10
+// readers against 310-326 with 8 + 8 (docs/measurements.md, "Two records
+// in flight, wider checksums").
 struct ThreadSplit {
   int decode = 1;
   int read = 1;
