@@ -14,15 +14,13 @@ namespace {
 
 using Hash = uint64_t (*)(const void*, size_t);
 
-uint64_t baseline(const void* data, size_t n) { return XXH3_64bits(data, n); }
-
 Hash widest() {
 #if defined(__x86_64__) && defined(__GNUC__)
   __builtin_cpu_init();
   if (__builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512bw")) return detail::xxh3_avx512;
   if (__builtin_cpu_supports("avx2")) return detail::xxh3_avx2;
 #endif
-  return baseline;
+  return detail::xxh3_baseline;
 }
 
 }  // namespace
@@ -33,7 +31,7 @@ uint64_t checksum(std::span<const std::byte> data) {
 }
 
 namespace detail {
-uint64_t xxh3_baseline(const void* data, size_t n) { return baseline(data, n); }
+uint64_t xxh3_baseline(const void* data, size_t n) { return XXH3_64bits(data, n); }
 }  // namespace detail
 
 }  // namespace sluice::io

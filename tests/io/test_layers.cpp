@@ -6,9 +6,7 @@
 #include <array>
 #include <cmath>
 
-#include "sluice/io/codec.h"
 #include "sluice/io/format.h"
-#include "sluice/io/lod.h"
 #include "sluice/io/narrow_band.h"
 #include "records.h"
 #include "sluice/io/reader.h"
@@ -94,16 +92,8 @@ TEST(Layers, TheAsymmetryTestWritesItsOwnSurface) {
   const io::FileHeader h = test::test_header(io::PositionCoding::Quantized16);
   const io::ParticleFrame f = test::lattice_frame(kBlock, 0);
   const auto surface_of = [&](io::F2Test f2) {
-    const std::vector<uint16_t> lod = io::lod_values(f.ids, f.count());
-    io::FrameInput in;
-    in.positions = f.positions;
-    in.lod = lod;
-    for (size_t a = 0; a < h.attributes.size(); ++a) in.attributes.push_back(f.attributes[a]);
-    io::EncodeOptions options;
-    options.layers = true;
-    options.band_f2 = f2;
     uint64_t surface = 0;
-    for (const io::ChunkDesc& c : io::encode_frame(in, h, options).header.chunks) {
+    for (const io::ChunkDesc& c : test::encode(f, h, 4096, true, f2).header.chunks) {
       if (c.layer == io::Layer::Surface) surface += c.particle_count;
     }
     return surface;

@@ -50,7 +50,7 @@ inline io::FileHeader test_header(io::PositionCoding coding, bool with_attribute
 }
 
 inline io::EncodedFrame encode(const io::ParticleFrame& f, const io::FileHeader& h, uint32_t chunk = 4096,
-                               bool layers = false) {
+                               bool layers = false, io::F2Test f2 = io::F2Test::All) {
   const std::vector<uint16_t> lod = io::lod_values(f.ids, f.count());
   io::FrameInput in;
   in.positions = f.positions;
@@ -60,6 +60,7 @@ inline io::EncodedFrame encode(const io::ParticleFrame& f, const io::FileHeader&
   io::EncodeOptions options;
   options.chunk_particles = chunk;
   options.layers = layers;
+  options.band_f2 = f2;
   return io::encode_frame(in, h, options);
 }
 
