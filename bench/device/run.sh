@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Runs on the GPU machine (see bench/device/README.md): every benchmark the
 # issues ask GPU-machine figures for, in one call. Results go to $OUT.
-#   bash bench/device/run.sh [io] [import] [layers] [band] [render] [stream] [split] [codec] [huge] [embed] [compare] [live] [stereo] [xrsize] [firsthour] [streamcmp] [gpudecode] [gpuquick] [gpupair] [gpuab] [gpu100] [egl] [vtkpeer] [readpath] [gpusplit] [gpuplay] [gpuflight] [gpu100ab] [damf2] [gpusweep]   (default: io render stream)
+#   bash bench/device/run.sh [io] [import] [layers] [band] [render] [stream] [split] [codec] [huge] [embed] [compare] [live] [stereo] [xrsize] [firsthour] [streamcmp] [gpudecode] [gpuquick] [gpupair] [gpuab] [gpu100] [egl] [vtkpeer] [readpath] [gpusplit] [gpuplay] [gpuflight] [gpu100ab] [damf2] [gpusweep] [gpuvar]   (default: io render stream)
 set -uo pipefail
 OUT=${OUT:-/tmp/out}
 mkdir -p "$OUT" /tmp/s
@@ -249,6 +249,17 @@ for stage in $stages; do
         run $S bench stream --gpu /tmp/sw100m.sluice --memory 48G --no-storage --min-time 3 --read-threads $rt --threads $((16 - rt))
       done
       rm -f /tmp/sw100m.sluice
+      ;;
+    gpuvar)  # variant builds (.gpu/sluice_v*, carried beside) against this one, alternated, 10M x 24 frames
+      run $S synth -n 10M --frames 24 -o /tmp/gv10m.sluice --force -q --gpu-decodable
+      for round in $(seq ${VAR_ROUNDS:-2}); do
+        for b in $S ./.gpu/sluice_v*; do
+          [[ -x $b ]] || continue
+          log "round $round: $b"
+          $b bench stream --gpu /tmp/gv10m.sluice --memory 16G --no-storage --min-time 2 2>&1 | grep -E "decoded by|GPU \(kept|mapping into|host -> device copy \(" | tee -a "$OUT/summary.txt"
+        done
+      done
+      rm -f /tmp/gv10m.sluice
       ;;
     gpu100ab)  # 100M particles a frame through the GPU path, this build (and BASE's with AB100_BASE=1)
       run $S synth -n 100M --frames 12 -o /tmp/ab100m.sluice --force -q --gpu-decodable

@@ -60,8 +60,8 @@ struct PieceRound {
 // before it (reader_thread.cpp: start_entry).
 struct PendingRead {
   uint32_t slot = 0;
-  uint64_t k = 0;             // its schedule entry
-  uint64_t record_offset = 0; // where the record starts in the round's dst
+  uint64_t k = 0;                    // its schedule entry
+  std::span<const std::byte> record; // what the frame sees of its record once read
   PieceRound round;
 };
 
@@ -151,17 +151,21 @@ class PipelineCore {
   // a buffered source) straight into its staged area, the record being its
   // prefix so that no worker copies it. Allocates; sets slot.partial.
   struct ReadTarget {
-    std::span<std::byte> dst;  // the read lands here
-    uint64_t offset = 0;       // the file offset of dst[0]
-    uint64_t need = 0;         // bytes of dst the whole record needs
-    uint64_t record_offset = 0;// where the record starts in dst
+    std::span<std::byte> dst;     // the read lands here
+    uint64_t offset = 0;          // the file offset of dst[0]
+    uint64_t need = 0;            // bytes of dst that come from the file (the rest is alignment padding)
+    std::span<std::byte> record;  // the frame's record (or its wanted prefix) once read, in dst's buffer
   };
   ReadTarget record_target(ReaderState& rs, Slot& slot, uint32_t record);
   ReadTarget staged_target(ReaderState& rs, Slot& slot);
   bool reads_in_place() const;
-  // Only some layers wanted: the table first, then the payloads up to the
-  // last wanted one (the interior comes last). Synchronous.
-  bool read_layers(Slot& slot, const ReadTarget& target, uint64_t generation);
+  // Whether the layers left out of options_.layers let the frame be read as
+  // a prefix of its record: they include the layer written last.
+  bool reads_prefix(const io::FrameIndexEntry& e) const;
+  // A prefix read: the record's table is read and parsed now, on this
+  // thread; returns what is left to read (the payloads up to the last
+  // wanted layer's), which may be nothing.
+  ReadTarget read_table(Slot& slot, const ReadTarget& whole);
   // The whole record in the background: with the crew's rounds all in
   // flight the oldest is joined first, this read begins, then that frame is
   // finished.
@@ -183,9 +187,8 @@ class PipelineCore {
   void release_buffers(ReaderState& rs, Slot& slot);
   void move_to_larger_area(ReaderState& rs, Slot& slot, uint64_t staged_bytes);
   // record_read.cpp: reads [0, need) of `dst` from `offset` in pieces, on
-  // read_threads_ threads; false if a newer generation (or stop) came first.
-  bool read_pieces(std::span<std::byte> dst, uint64_t offset, uint64_t need, uint64_t frame, uint64_t generation);
-  // The same in two halves (read_crew.h): begin, other work, join.
+  // read_threads_ threads, in two halves (read_crew.h): begin, other work,
+  // join; join is false if a newer generation (or stop) came first.
   void begin_pieces(PieceRound& round, std::span<std::byte> dst, uint64_t offset, uint64_t need, uint64_t frame,
                     uint64_t generation);
   bool join_pieces(PieceRound& round);

@@ -289,6 +289,8 @@ PipelineCore::Start PipelineCore::start_entry(ReaderState& rs, uint64_t k, uint6
       slot.where.file = reader_.path();
     }
     target = reads_in_place() ? staged_target(rs, slot) : record_target(rs, slot, record);
+    slot.partial = reads_prefix(reader_.index().frames[frame]);
+    if (slot.partial) target = read_table(slot, target);
   } catch (const io::Error& e) {
     settle_all_pending(rs);  // entries go out in schedule order
     finish_read(rs, s, k, ReadOutcome::Failed, FrameError::from(e));
@@ -298,27 +300,7 @@ PipelineCore::Start PipelineCore::start_entry(ReaderState& rs, uint64_t k, uint6
     finish_read(rs, s, k, ReadOutcome::Failed, FrameError{reader_.location(frame), e.what()});
     return Start::Pushed;
   }
-  if (!slot.partial) {
-    begin_background_read(rs, s, k, target);
-    return Start::Pushed;
-  }
-  settle_all_pending(rs);
-  FrameError error;
-  ReadOutcome outcome = ReadOutcome::Read;
-  try {
-    if (!read_layers(slot, target, rs.generation)) outcome = ReadOutcome::Cancelled;
-  } catch (const io::Error& e) {
-    error = FrameError::from(e);
-    outcome = ReadOutcome::Failed;
-  } catch (const std::exception& e) {
-    error = {reader_.location(frame), e.what()};
-    outcome = ReadOutcome::Failed;
-  }
-  if (outcome == ReadOutcome::Cancelled) {
-    abandon_read(rs, s);
-    return Start::Cancelled;  // a newer schedule is waiting
-  }
-  finish_read(rs, s, k, outcome, std::move(error));
+  begin_background_read(rs, s, k, target);
   return Start::Pushed;
 }
 
@@ -335,7 +317,7 @@ void PipelineCore::begin_background_read(ReaderState& rs, uint32_t s, uint64_t k
   PendingRead& read = rs.pending.push();
   read.slot = s;
   read.k = k;
-  read.record_offset = target.record_offset;
+  read.record = target.record;
   begin_pieces(read.round, target.dst, target.offset, target.need, slots_[s].frame, rs.generation);
 
   if (joined) finish_read(rs, joined_slot, joined_k, outcome, std::move(error));
@@ -359,12 +341,10 @@ PipelineCore::ReadOutcome PipelineCore::join_pending(ReaderState& rs, FrameError
     error = {reader_.location(frame), e.what()};
     return ReadOutcome::Failed;
   }
-  const std::span<std::byte> dst = read.round.dst;
-  const uint64_t record_offset = read.record_offset;
+  const std::span<const std::byte> record = read.record;
   rs.pending.pop();
   if (!completed) return ReadOutcome::Cancelled;
-  const io::FrameIndexEntry& e = reader_.index().frames[frame];
-  slot.record_bytes = dst.subspan(record_offset, e.bytes);
+  slot.record_bytes = record;
   counters_.frames_read.fetch_add(1, kRelaxed);
   return ReadOutcome::Read;
 }
@@ -464,8 +444,7 @@ PipelineCore::ReadTarget PipelineCore::record_target(ReaderState& rs, Slot& slot
     counters_.held_bytes.store(held_now(rs), kRelaxed);
     if (rs.record_held > counters_.peak_record_bytes.load(kRelaxed)) counters_.peak_record_bytes.store(rs.record_held, kRelaxed);
   }
-  slot.partial = e.layered() && e.count_in(options_.layers) != e.particle_count;
-  return {buffer.span().first(span), begin, need, e.offset - begin};
+  return {buffer.span().first(span), begin, need, buffer.span().subspan(e.offset - begin, e.bytes)};
 }
 
 bool PipelineCore::reads_in_place() const {
@@ -484,30 +463,42 @@ PipelineCore::ReadTarget PipelineCore::staged_target(ReaderState& rs, Slot& slot
   if (slot.buffers.particles.size() < e.bytes) {
     throw io::Error(reader_.location(slot.frame), "the frame allocator returned buffers smaller than the frame");
   }
-  slot.partial = e.layered() && e.count_in(options_.layers) != e.particle_count;
-  return {slot.buffers.particles.first(e.bytes), e.offset, e.bytes, 0};
+  const std::span<std::byte> area = slot.buffers.particles.first(e.bytes);
+  return {area, e.offset, e.bytes, area};
 }
 
-// The table first, then the payloads up to the last wanted layer; offsets
-// in the target stay aligned for O_DIRECT (record buffers only).
-bool PipelineCore::read_layers(Slot& slot, const ReadTarget& target, uint64_t generation) {
+// Payloads are written surface, blobs, interior (io/src/codec.cpp): leaving
+// out the interior leaves a prefix to read. Leaving out only the blobs, in
+// the middle, saves nothing: the whole record is read (in the background,
+// two records at once) and their chunks are dropped.
+bool PipelineCore::reads_prefix(const io::FrameIndexEntry& e) const {
+  if (!e.layered()) return false;
+  io::Layer last = io::Layer::Surface;
+  if (e.layer_particles[size_t(io::Layer::Blobs)] > 0) last = io::Layer::Blobs;
+  if (e.layer_particles[size_t(io::Layer::Interior)] > 0) last = io::Layer::Interior;
+  return !options_.layers.has(last);
+}
+
+// The table is a few KiB: read here rather than as a crew round, so that the
+// rounds in flight go on. Offsets stay aligned for O_DIRECT (record buffers
+// only).
+PipelineCore::ReadTarget PipelineCore::read_table(Slot& slot, const ReadTarget& whole) {
   const io::FrameIndexEntry& e = reader_.index().frames[slot.frame];
   const uint64_t align = std::max<size_t>(1, source_->alignment());
   const uint64_t table = std::min<uint64_t>(e.bytes, io::frame_table_bytes(e.chunk_count, reader_.header().attributes.size()));
-  const uint64_t into = target.record_offset;  // where the record starts in dst
+  const auto into = static_cast<uint64_t>(whole.record.data() - whole.dst.data());  // where the record starts in dst
   const uint64_t first = round_up(into + table, align);
-  if (!read_pieces(target.dst.first(first), target.offset, into + table, slot.frame, generation)) return false;
+  read_piece(whole.dst.first(first), whole.offset, into + table, slot.frame, whole.offset + whole.need);
   record_where_.frame = slot.frame;
-  reader_.parse_table(slot.frame, target.dst.subspan(into, table), slot.header, record_where_);
+  reader_.parse_table(slot.frame, whole.record.first(table), slot.header, record_where_);
   const uint64_t end = io::layers_end(slot.header, options_.layers, reader_.header().attributes.size());
   const uint64_t wanted = into + end;
-  if (wanted > first && !read_pieces(target.dst.subspan(first, round_up(wanted, align) - first), target.offset + first,
-                                     wanted - first, slot.frame, generation)) {
-    return false;
-  }
-  slot.record_bytes = target.dst.subspan(into, end);
-  counters_.frames_read.fetch_add(1, kRelaxed);
-  return true;
+  ReadTarget rest;
+  rest.offset = whole.offset + first;
+  rest.record = whole.record.first(end);
+  rest.dst = whole.dst.subspan(first, wanted > first ? round_up(wanted, align) - first : 0);
+  rest.need = wanted > first ? wanted - first : 0;
+  return rest;
 }
 
 void PipelineCore::set_layout(Slot& slot, uint64_t particles, uint64_t encoded_bytes) const {

@@ -86,11 +86,4 @@ bool PipelineCore::join_pieces(PieceRound& round) {
   return !round.gave_up.load(kRelaxed);
 }
 
-bool PipelineCore::read_pieces(std::span<std::byte> dst, uint64_t offset, uint64_t need, uint64_t frame,
-                               uint64_t generation) {
-  PieceRound round;
-  begin_pieces(round, dst, offset, need, frame, generation);
-  return join_pieces(round);
-}
-
 }  // namespace sluice::runtime::detail

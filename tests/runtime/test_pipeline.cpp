@@ -501,12 +501,16 @@ TEST(PipelineLayers, SurfaceSetReadsThePrefixAndDeliversSurfaceAndBlobs) {
     whole_bytes += reader.index().frames[f].bytes;
   }
   ASSERT_LT(prefix_bytes, whole_bytes);
-  for (const bool surface : {true, false}) {
+  // One read thread reads in order; three read two records at once, a
+  // prefix's table on the reader thread while the crew copies the record
+  // before it.
+  for (const auto& [surface, read_threads] : {std::pair{true, 1}, {false, 1}, {true, 3}, {false, 3}}) {
+    SCOPED_TRACE(testing::Message() << (surface ? "surface" : "every particle") << ", " << read_threads << " read threads");
     HostFrameAllocator allocator;
     PipelineOptions o;
     o.decode_threads = 2;
-    o.read_threads = 1;
-    o.budget.max_frames = 2;
+    o.read_threads = read_threads;
+    o.budget.max_frames = 3;
     o.layers = surface ? io::LayerSet::surface() : io::LayerSet::particles();
     Pipeline p(reader, allocator, o);
     p.restart({reader.frame_count(), 0, 1, 1, EndMode::Stop});
