@@ -67,7 +67,9 @@ void PipelineCore::decode_chunk(Slot& slot, size_t c) noexcept {
     // The slot's location names the file and frame without an allocation per
     // chunk; the chunk is added to the error below.
     if (slot.layout.encoded_bytes > 0) {  // kept encoded: the GPU decodes it
-      io::stage_chunk(slot.record_bytes, slot.header, slot.plan, c, slot.buffers.particles, true, slot.where);
+      // Checked on read: the bytes were hashed as they were copied in.
+      io::stage_chunk(slot.record_bytes, slot.header, slot.plan, c, slot.buffers.particles, !slot.checked_on_read,
+                      slot.where);
     } else {
       std::array<uint16_t*, io::kMaxAttributes> targets{};
       for (size_t a = 0; a < slot.attribute_targets.size(); ++a) {

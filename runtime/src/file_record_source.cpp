@@ -8,6 +8,7 @@
 #include <cstring>
 
 #include "mapped_copy.h"
+#include "sluice/io/checksum.h"
 #include "sluice/io/error.h"
 #include "sluice/runtime/record_source.h"
 
@@ -98,6 +99,25 @@ size_t FileRecordSource::read_at(std::span<std::byte> dst, uint64_t offset) {
     }
     throw read_failed(path_, dst.size(), offset, errno);
   }
+}
+
+size_t RecordSource::read_checked(std::span<std::byte> dst, uint64_t offset, uint64_t& checksum) {
+  size_t got = 0;
+  while (got < dst.size()) {
+    const size_t n = read_at(dst.subspan(got), offset + got);
+    if (n == 0) break;
+    got += n;
+  }
+  checksum = io::chunk_checksum(dst.first(got));
+  return got;
+}
+
+size_t FileRecordSource::read_checked(std::span<std::byte> dst, uint64_t offset, uint64_t& checksum) {
+  const bool mapped = direct_fd_.load(std::memory_order_relaxed) < 0 && offset < map_bytes_ && dst.size() <= map_bytes_ - offset;
+  if (mapped && detail::copy_from_mapping_checked(dst.data(), map_ + offset, dst.size(), checksum) && reaches(offset + dst.size())) {
+    return dst.size();
+  }
+  return RecordSource::read_checked(dst, offset, checksum);  // pread: O_DIRECT, past the mapping, or a file cut under it
 }
 
 size_t FileRecordSource::alignment() const {

@@ -6,6 +6,8 @@
 #include <cstring>
 #include <mutex>
 
+#include "sluice/io/checksum.h"
+
 #if defined(__x86_64__) || defined(_M_X64)
 #include <emmintrin.h>
 #define SLUICE_STREAM_STORES 1
@@ -83,6 +85,20 @@ bool copy_from_mapping(std::byte* dst, const std::byte* src, size_t n) noexcept 
   }
   t_landing = &landing;
   stream_copy(dst, src, n);
+  t_landing = nullptr;
+  return true;
+}
+
+bool copy_from_mapping_checked(std::byte* dst, const std::byte* src, size_t n, uint64_t& checksum) noexcept {
+  install_handler();
+  sigjmp_buf landing;
+  if (sigsetjmp(landing, 1) != 0) {
+    t_landing = nullptr;
+    return false;
+  }
+  t_landing = &landing;  // the hash reads the mapping too
+  checksum = io::copy_and_checksum(dst, src, n, [](std::byte* d, const std::byte* s, size_t k, void*) { stream_copy(d, s, k); },
+                                   nullptr);
   t_landing = nullptr;
   return true;
 }

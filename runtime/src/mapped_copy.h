@@ -16,6 +16,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 
 namespace sluice::runtime::detail {
 
@@ -23,6 +24,11 @@ namespace sluice::runtime::detail {
 // false when the mapping's pages vanished under the copy (the file was cut
 // while it ran): dst then holds an unknown prefix. Any thread; no allocation.
 bool copy_from_mapping(std::byte* dst, const std::byte* src, size_t n) noexcept;
+
+// copy_from_mapping(), and sets `checksum` to io::chunk_checksum() of the
+// bytes, each block hashed from the cache right after its copy
+// (io::copy_and_checksum). False as above.
+bool copy_from_mapping_checked(std::byte* dst, const std::byte* src, size_t n, uint64_t& checksum) noexcept;
 
 // Copies n bytes with streaming stores where the CPU has them (x86-64:
 // SSE2), plain memcpy elsewhere; dst and src may have any alignment.

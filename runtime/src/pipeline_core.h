@@ -52,6 +52,11 @@ struct PieceRound {
   PipelineCore* core = nullptr;
   std::span<std::byte> dst;  // [0, need) comes from the file at `offset`; the rest is alignment padding
   uint64_t offset = 0, need = 0, piece = 0, count = 0, frame = 0, generation = 0;
+  // A checked read: piece p reads chunks [cuts[p], cuts[p + 1]) to their
+  // offsets in dst (the record, at `offset` in the file) and checks them.
+  std::span<const io::ChunkDesc> chunks;
+  std::span<const uint32_t> cuts;
+  bool by_chunks = false;
   mutable std::atomic<bool> gave_up{false};  // a newer schedule (or stop) came first: the pieces left are skipped
   void operator()(uint64_t p) const;
 };
@@ -149,12 +154,13 @@ class PipelineCore {
   Start start_entry(ReaderState& rs, uint64_t k, uint64_t frame);
   // Where a frame's bytes go: its record buffer, or (kept-encoded frames from
   // a buffered source) straight into its staged area, the record being its
-  // prefix so that no worker copies it. Allocates; sets slot.partial.
+  // prefix so that no worker copies it. Allocates.
   struct ReadTarget {
     std::span<std::byte> dst;     // the read lands here
     uint64_t offset = 0;          // the file offset of dst[0]
     uint64_t need = 0;            // bytes of dst that come from the file (the rest is alignment padding)
     std::span<std::byte> record;  // the frame's record (or its wanted prefix) once read, in dst's buffer
+    bool by_chunks = false;       // chunks_to_read(): the slot's wanted chunks are read and checked, not dst
   };
   ReadTarget record_target(ReaderState& rs, Slot& slot, uint32_t record);
   ReadTarget staged_target(ReaderState& rs, Slot& slot);
@@ -166,6 +172,10 @@ class PipelineCore {
   // thread; returns what is left to read (the payloads up to the last
   // wanted layer's), which may be nothing.
   ReadTarget read_table(Slot& slot, const ReadTarget& whole);
+  // A checked read: keeps the wanted layers' chunks, checks that their
+  // payloads lie in `record` past the `table`, and cuts them into pieces
+  // (slot.piece_cuts). `record` starts at the frame's offset in the file.
+  ReadTarget chunks_to_read(Slot& slot, std::span<std::byte> record, uint64_t table);
   // The whole record in the background: with the crew's rounds all in
   // flight the oldest is joined first, this read begins, then that frame is
   // finished.
@@ -191,9 +201,15 @@ class PipelineCore {
   // join; join is false if a newer generation (or stop) came first.
   void begin_pieces(PieceRound& round, std::span<std::byte> dst, uint64_t offset, uint64_t need, uint64_t frame,
                     uint64_t generation);
+  // The same for a checked read (chunks_to_read()): piece p reads and checks
+  // the slot's chunks [piece_cuts[p], piece_cuts[p + 1]).
+  void begin_chunk_pieces(PieceRound& round, const Slot& slot, const ReadTarget& target, uint64_t generation);
   bool join_pieces(PieceRound& round);
   friend struct PieceRound;
   void read_piece(std::span<std::byte> piece, uint64_t offset, uint64_t required, uint64_t frame, uint64_t frame_end);
+  // Reads chunk `c` of the frame into `dst` from `offset` and checks it
+  // against its checksum; throws io::Error naming the chunk.
+  void read_chunk(std::span<std::byte> dst, uint64_t offset, uint64_t frame, size_t c, uint64_t checksum);
   void prepare_decode(ReaderState& rs, Slot& slot);
   void publish(ReaderState& rs, uint32_t s, uint64_t k);
   void fail(ReaderState& rs, uint32_t s, uint64_t k, FrameError error);

@@ -285,12 +285,16 @@ PipelineCore::Start PipelineCore::start_entry(ReaderState& rs, uint64_t k, uint6
     if (slot.header.chunks.capacity() < most_chunks_) {  // a slot's first use: room for any frame of the file
       slot.header.chunks.reserve(most_chunks_);
       slot.chunk_first.reserve(most_chunks_);
+      slot.piece_cuts.reserve(size_t(most_chunks_) + 1);
       slot.attribute_targets.reserve(reader_.header().attributes.size());
       slot.where.file = reader_.path();
     }
     target = reads_in_place() ? staged_target(rs, slot) : record_target(rs, slot, record);
-    slot.partial = reads_prefix(reader_.index().frames[frame]);
-    if (slot.partial) target = read_table(slot, target);
+    // Frames kept encoded and read in place are checked as they are read,
+    // chunk by chunk, so their tables come first.
+    slot.checked_on_read = reads_in_place();
+    slot.table_parsed = slot.checked_on_read || reads_prefix(reader_.index().frames[frame]);
+    if (slot.table_parsed) target = read_table(slot, target);
   } catch (const io::Error& e) {
     settle_all_pending(rs);  // entries go out in schedule order
     finish_read(rs, s, k, ReadOutcome::Failed, FrameError::from(e));
@@ -318,7 +322,11 @@ void PipelineCore::begin_background_read(ReaderState& rs, uint32_t s, uint64_t k
   read.slot = s;
   read.k = k;
   read.record = target.record;
-  begin_pieces(read.round, target.dst, target.offset, target.need, slots_[s].frame, rs.generation);
+  if (target.by_chunks) {
+    begin_chunk_pieces(read.round, slots_[s], target, rs.generation);
+  } else {
+    begin_pieces(read.round, target.dst, target.offset, target.need, slots_[s].frame, rs.generation);
+  }
 
   if (joined) finish_read(rs, joined_slot, joined_k, outcome, std::move(error));
 }
@@ -391,7 +399,7 @@ void PipelineCore::finish_entry(ReaderState& rs, uint32_t s, uint64_t k) {
   const uint64_t frame = slot.frame;
   try {
     record_where_.frame = frame;
-    if (!slot.partial) reader_.parse_record(frame, slot.record_bytes, slot.header, record_where_);  // no allocation per frame
+    if (!slot.table_parsed) reader_.parse_record(frame, slot.record_bytes, slot.header, record_where_);  // no allocation per frame
     io::keep_layers(slot.header, options_.layers);  // the chunks read (decode checks their payloads lie in the prefix)
     slot.where.frame = frame;  // its file was set with its chunk table
     prepare_decode(rs, slot);
@@ -493,12 +501,52 @@ PipelineCore::ReadTarget PipelineCore::read_table(Slot& slot, const ReadTarget& 
   reader_.parse_table(slot.frame, whole.record.first(table), slot.header, record_where_);
   const uint64_t end = io::layers_end(slot.header, options_.layers, reader_.header().attributes.size());
   const uint64_t wanted = into + end;
+  if (slot.checked_on_read) return chunks_to_read(slot, whole.record.first(end), table);
   ReadTarget rest;
   rest.offset = whole.offset + first;
   rest.record = whole.record.first(end);
   rest.dst = whole.dst.subspan(first, wanted > first ? round_up(wanted, align) - first : 0);
   rest.need = wanted > first ? wanted - first : 0;
   return rest;
+}
+
+// The wanted chunks, in pieces of about equal bytes: each piece copies its
+// chunks and checks them as it goes (record_read.cpp).
+PipelineCore::ReadTarget PipelineCore::chunks_to_read(Slot& slot, std::span<std::byte> record, uint64_t table) {
+  io::keep_layers(slot.header, options_.layers);
+  const std::vector<io::ChunkDesc>& chunks = slot.header.chunks;
+  uint64_t total = 0;
+  for (size_t c = 0; c < chunks.size(); ++c) {
+    // The payload is written where the table says: inside the record, past the table.
+    if (chunks[c].offset < table || chunks[c].offset > record.size() || chunks[c].compressed_size > record.size() - chunks[c].offset) {
+      io::ErrorLocation at = reader_.location(slot.frame);
+      at.chunk = c;
+      throw io::Error(at, "the chunk's payload (bytes " + std::to_string(chunks[c].offset) + " to " +
+                              std::to_string(chunks[c].offset + chunks[c].compressed_size) +
+                              ") lies outside the frame record's payloads (bytes " + std::to_string(table) + " to " +
+                              std::to_string(record.size()) + ")");
+    }
+    total += chunks[c].compressed_size;
+  }
+  // As many pieces as byte pieces would be (a multiple of the threads
+  // reading), at most one per chunk; cut where the running sum crosses each
+  // equal share.
+  const uint64_t most = std::max<uint64_t>(options_.read_piece_bytes, 1);
+  const uint64_t threads = uint64_t(read_crew_.helpers()) + 1;
+  const uint64_t at_most = (total + most - 1) / most;
+  const uint64_t pieces = std::min<uint64_t>(chunks.size(), (at_most + threads - 1) / threads * threads);
+  slot.piece_cuts.clear();
+  slot.piece_cuts.push_back(0);
+  uint64_t sum = 0;
+  for (size_t c = 0; c < chunks.size(); ++c) {
+    sum += chunks[c].compressed_size;
+    if (c + 1 == chunks.size() || sum * pieces >= slot.piece_cuts.size() * total) slot.piece_cuts.push_back(static_cast<uint32_t>(c + 1));
+  }
+  ReadTarget target;
+  target.record = record;
+  target.offset = reader_.index().frames[slot.frame].offset;
+  target.by_chunks = true;
+  return target;
 }
 
 void PipelineCore::set_layout(Slot& slot, uint64_t particles, uint64_t encoded_bytes) const {

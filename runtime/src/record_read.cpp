@@ -55,12 +55,48 @@ void PipelineCore::begin_pieces(PieceRound& round, std::span<std::byte> dst, uin
   read_crew_.begin(round.count, round);
 }
 
+void PipelineCore::begin_chunk_pieces(PieceRound& round, const Slot& slot, const ReadTarget& target, uint64_t generation) {
+  round.core = this;
+  round.dst = target.record;
+  round.offset = target.offset;
+  round.need = target.record.size();
+  round.frame = slot.frame;
+  round.generation = generation;
+  round.chunks = slot.header.chunks;
+  round.cuts = slot.piece_cuts;
+  round.by_chunks = true;
+  round.count = slot.piece_cuts.size() - 1;
+  round.gave_up.store(false, kRelaxed);
+  if (read_crew_.in_flight() == 0) reading_since_ = std::chrono::steady_clock::now();
+  read_crew_.begin(round.count, round);
+}
+
+void PipelineCore::read_chunk(std::span<std::byte> dst, uint64_t offset, uint64_t frame, size_t c, uint64_t checksum) {
+  uint64_t got_checksum = 0;
+  const size_t got = source_->read_checked(dst, offset, got_checksum);
+  counters_.bytes_read.fetch_add(got, kRelaxed);
+  io::ErrorLocation at = reader_.location(frame);
+  at.chunk = c;
+  if (got < dst.size()) {
+    throw io::Error(at, "the file ends at byte " + std::to_string(offset + got) + " but the chunk runs to byte " +
+                            std::to_string(offset + dst.size()) + " (short read: was the file cut while playing?)");
+  }
+  if (got_checksum != checksum) throw io::Error(at, "chunk checksum mismatch (the chunk's bytes are corrupt)");
+}
+
 // Piece p covers [p * piece, +piece) of dst; bytes past `need` are only
 // alignment padding and may lie beyond the end of the file. With no helpers
 // the crew runs the pieces in order on the joining thread.
 void PieceRound::operator()(uint64_t p) const {
   if (gave_up.load(kRelaxed) || core->stopping_.load(kRelaxed) || core->generation_.load(kRelaxed) != generation) {
     gave_up.store(true, kRelaxed);
+    return;
+  }
+  if (by_chunks) {
+    for (uint32_t c = cuts[p]; c < cuts[p + 1]; ++c) {
+      const io::ChunkDesc& chunk = chunks[c];
+      core->read_chunk(dst.subspan(chunk.offset, chunk.compressed_size), offset + chunk.offset, frame, c, chunk.checksum);
+    }
     return;
   }
   const uint64_t at = p * piece;

@@ -57,8 +57,10 @@ struct Slot {
   bool has_buffers = false;
   std::vector<uint16_t*> attribute_targets;      // per header attribute; nullptr where not decoded
   uint32_t record = kNoRecord;                   // record buffer in use while decoding
-  std::span<const std::byte> record_bytes;       // the frame record inside it (a prefix: see `partial`)
-  bool partial = false;                          // only the wanted layers were read; the table is parsed
+  std::span<const std::byte> record_bytes;       // the frame record inside it (or the prefix the wanted layers need)
+  bool table_parsed = false;                     // the table was read first and parsed (`header`) before the payloads
+  bool checked_on_read = false;                  // the wanted chunks were checked as they were read (checksums)
+  std::vector<uint32_t> piece_cuts;              // checked reads: piece p reads chunks [cuts[p], cuts[p + 1])
   io::GpuDecodePlan plan;                        // PipelineOptions::keep_encoded: what the workers stage
 
   // Written by the reader (read errors) or the chunk that won error_claimed.

@@ -14,6 +14,7 @@
 
 #include "failing_allocation.h"
 #include "runtime_test_util.h"
+#include "sluice/io/checksum.h"
 #include "sluice/runtime/player.h"
 
 using namespace sluice;
@@ -224,6 +225,40 @@ TEST_F(FaultTest, CorruptChunkNamesFileFrameAndChunk) {
   EXPECT_EQ(error->where.frame, kBad);
   EXPECT_EQ(error->where.chunk, 1u);
   EXPECT_NE(error->message.find("checksum"), std::string::npos) << error->text();
+
+  // Kept encoded for the GPU, the chunk is checked as the read copies it:
+  // out of the mapping or by pread, on the reader thread alone or with
+  // helpers. The same error, in its place; every other frame arrives.
+  ASSERT_TRUE(io::gpu_decodable(reader.header()));
+  struct Way {
+    bool mapped;
+    int read_threads;
+  };
+  for (const Way way : {Way{true, 1}, Way{true, 3}, Way{false, 3}}) {
+    SCOPED_TRACE(testing::Message() << (way.mapped ? "mapped" : "pread") << ", " << way.read_threads << " read threads");
+    HostFrameAllocator memory;
+    PipelineOptions o;
+    o.decode_threads = 2;
+    o.keep_encoded = true;
+    o.mapped_reads = way.mapped;
+    o.read_threads = way.read_threads;
+    Pipeline p(reader, memory, o);
+    p.restart({reader.frame_count(), 0, 1, 1, EndMode::Stop});
+    for (uint64_t f = 0; f < reader.frame_count(); ++f) {
+      const NextEntry next = p.wait_next();
+      ASSERT_EQ(next.frame, f);
+      ASSERT_EQ(next.status, f == kBad ? EntryStatus::Failed : EntryStatus::Ready);
+      const FrameHandle h = p.take();
+      if (f != kBad) continue;
+      ASSERT_TRUE(h.error());
+      EXPECT_EQ(h.error()->where.file, bad.string());
+      EXPECT_EQ(h.error()->where.frame, kBad);
+      EXPECT_EQ(h.error()->where.chunk, 1u);
+      EXPECT_NE(h.error()->message.find("checksum"), std::string::npos) << h.error()->text();
+    }
+    EXPECT_TRUE(p.wait_next().end);
+    EXPECT_EQ(p.stats().frames_failed, 1u);
+  }
 }
 
 TEST_F(FaultTest, PipelineHandsFailuresToTheConsumerInOrder) {
@@ -505,6 +540,30 @@ TEST(MappedSource, ReadsTheFileAndSaysItIsMapped) {
   EXPECT_EQ(mapped.read_at(a, size), 0u);
 }
 
+// A checked read hashes what it reads: out of the mapping block by block as
+// it copies, or after pread; the bytes and the hash are the same either way,
+// and a read past the end is short with the hash of what it got.
+TEST(MappedSource, ACheckedReadHashesTheBytesItRead) {
+  test::TempDir dir;
+  const auto path = test::write_tiny_file(dir / "checked.sluice", {6, 20000, 8, true});
+  const io::ContainerReader reader(path);
+  FileRecordSource mapped(reader.path(), reader.descriptor(), false, true);
+  FileRecordSource plain(reader.path(), reader.descriptor(), false, false);
+  const uint64_t size = std::filesystem::file_size(path);
+  ASSERT_GT(size, 3 * io::kChecksumBlock);
+  for (const auto& [offset, length] : {std::pair<uint64_t, uint64_t>{0, size}, {1, io::kChecksumBlock + 1}, {size / 3, 3 * io::kChecksumBlock - 5},
+                                       {size - 7, 7}, {size - 7, 100}}) {
+    std::vector<std::byte> a(length), b(length);
+    uint64_t ha = 0, hb = 0;
+    const size_t na = mapped.read_checked(a, offset, ha), nb = plain.read_checked(b, offset, hb);
+    EXPECT_EQ(na, std::min<uint64_t>(length, size - offset)) << "offset " << offset;
+    ASSERT_EQ(na, nb);
+    EXPECT_EQ(std::memcmp(a.data(), b.data(), na), 0) << "offset " << offset;
+    EXPECT_EQ(ha, io::chunk_checksum(std::span(b).first(nb))) << "offset " << offset;
+    EXPECT_EQ(ha, hb) << "offset " << offset;
+  }
+}
+
 TEST(MappedSource, AFileCutWhileMappedReadsAsEndingAtTheCut) {
   test::TempDir dir;
   const auto path = test::write_tiny_file(dir / "cut.sluice", {6, 4000, 8, true});
@@ -518,6 +577,9 @@ TEST(MappedSource, AFileCutWhileMappedReadsAsEndingAtTheCut) {
   EXPECT_EQ(source.read_at(buffer, 0), cut);                      // pages wholly past the cut: SIGBUS, caught
   EXPECT_EQ(source.read_at(std::span(buffer).first(50), 4096 + 200), 0u);  // past the cut, inside its page
   EXPECT_EQ(source.read_at(std::span(buffer).first(50), 3 * 4096), 0u);    // a page wholly past it
+  uint64_t checksum = 0;  // a checked read too: short, with the hash of what it got
+  EXPECT_EQ(source.read_checked(buffer, 0, checksum), cut);
+  EXPECT_EQ(checksum, io::chunk_checksum(std::span(buffer).first(cut)));
   // The file grows back past its old end: bytes beyond the mapping by pread.
   std::filesystem::resize_file(path, size + 10);
   EXPECT_EQ(source.read_at(std::span(buffer).first(20), size), 10u);

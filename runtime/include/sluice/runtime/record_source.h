@@ -29,6 +29,13 @@ class RecordSource {
   // at end of file. May return fewer than asked (the caller loops). Throws
   // io::Error naming the file when the read fails.
   virtual size_t read_at(std::span<std::byte> dst, uint64_t offset) = 0;
+  // Reads all of dst at `offset` (fewer bytes only where the file ends) and
+  // sets `checksum` to io::chunk_checksum() of the bytes read: how a reader
+  // checks a chunk as it brings it in. This default reads with read_at()
+  // and then hashes dst; FileRecordSource hashes its mapping's bytes block
+  // by block as it copies them, so that they come from memory once.
+  // Threads and errors as read_at().
+  virtual size_t read_checked(std::span<std::byte> dst, uint64_t offset, uint64_t& checksum);
   // Offsets, sizes and buffer addresses of reads must be multiples of this
   // (O_DIRECT); 1 when there is no constraint. May change after a read (a
   // refused O_DIRECT falls back to buffered reads).
@@ -55,6 +62,7 @@ class FileRecordSource final : public RecordSource {
   FileRecordSource& operator=(const FileRecordSource&) = delete;
 
   size_t read_at(std::span<std::byte> dst, uint64_t offset) override;
+  size_t read_checked(std::span<std::byte> dst, uint64_t offset, uint64_t& checksum) override;
   size_t alignment() const override;
   void will_need(uint64_t offset, uint64_t bytes) override;
   void set_access(AccessPattern pattern) override;
