@@ -48,7 +48,7 @@ void add_bench(CLI::App& app) {
   st->footer("Example: sluice synth -n 10M --frames 200 -o synth.sluice && sluice bench stream synth.sluice");
   st->add_option("file", stream->file, ".sluice file to stream")->required()->check(CLI::ExistingFile);
   st->add_option("-t,--threads", stream->max_threads, "Most decode workers (default: the pipeline's, all cores but one per 4 kept for reading)");
-  st->add_option("-r,--read-threads", stream->read_threads, "Threads reading a record (default: one per 4 cores, 1 to 4; five eighths of the cores, 1 to 10, for the --gpu rows)");
+  st->add_option("-r,--read-threads", stream->read_threads, "Threads reading a record (default: one per 4 cores, 1 to 4; thirteen sixteenths of the cores, 1 to 13, for the --gpu rows)");
   st->add_option("--min-time", stream->min_seconds, "Seconds each page-cache timing runs for")->capture_default_str();
   st->add_option("--memory", *stream_memory, "Memory cap of the pipeline, e.g. 4G (default: 2G)");
   st->add_option("--frames", stream->frames, "Stream the first N frames (default: as many as fit in the page cache)");

@@ -192,7 +192,7 @@ void add_play(CLI::App& app) {
   cmd->add_option("--memory", o->memory, "Cap on the memory the prefetch window uses, e.g. 8G");
   cmd->add_option("--window", o->window, "Cap on the prefetch window, in frames");
   cmd->add_option("-t,--threads", o->threads, "Decode workers (default: all cores but one per 4 kept for reading)");
-  cmd->add_option("-r,--read-threads", o->read_threads, "Threads reading a record (default: one per 4 cores, 1 to 4, or five eighths of the cores, 1 to 10, when the GPU decodes; a quarter of --threads when that is given)");
+  cmd->add_option("-r,--read-threads", o->read_threads, "Threads reading a record (default: one per 4 cores, 1 to 4, or thirteen sixteenths of the cores, 1 to 13, when the GPU decodes; a quarter of --threads when that is given)");
   cmd->add_flag("--direct", o->direct, "Read with O_DIRECT (bypass the page cache) where the filesystem allows");
   cmd->add_option("--stats-every", o->stats_every, "Seconds between stats lines")->capture_default_str();
   cmd->add_flag("-q,--quiet", o->quiet, "Only the summary");

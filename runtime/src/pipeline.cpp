@@ -14,7 +14,7 @@ ThreadSplit default_thread_split(int cores, bool kept_encoded) {
   cores = std::max(cores, 1);
   ThreadSplit split;
   if (kept_encoded) {
-    split.read = std::clamp(cores * 5 / 8, 1, 10);
+    split.read = std::clamp(cores * 13 / 16, 1, 13);
     split.decode = std::max(1, cores - split.read);
     return split;
   }
@@ -266,7 +266,7 @@ PipelineStats PipelineCore::stats() const {
   s.io_mode = source_->describe() + (read_threads_ > 1 ? ", " + std::to_string(read_threads_) + " read threads" : "");
   const Counters& c = counters_;
   s.bytes_read = c.bytes_read.load(kRelaxed);
-  s.read_seconds = double(c.read_ns.load(kRelaxed)) * 1e-9;
+  s.read_seconds = double(read_ns_now()) * 1e-9;
   s.read_thread_seconds = double(read_crew_.busy_ns()) * 1e-9;
   s.read_threads = static_cast<uint32_t>(read_threads_);
   s.frames_read = c.frames_read.load(kRelaxed);

@@ -205,6 +205,7 @@ class PipelineCore {
   // the slot's chunks [piece_cuts[p], piece_cuts[p + 1]).
   void begin_chunk_pieces(PieceRound& round, const Slot& slot, const ReadTarget& target, uint64_t generation);
   bool join_pieces(PieceRound& round);
+  uint64_t read_ns_now() const;  // time with a read in flight, the open stretch included
   friend struct PieceRound;
   void read_piece(std::span<std::byte> piece, uint64_t offset, uint64_t required, uint64_t frame, uint64_t frame_end);
   // Reads chunk `c` of the frame into `dst` from `offset` and checks it
@@ -286,7 +287,9 @@ class PipelineCore {
   // pieces of one record at once (page-cache copies and O_DIRECT requests
   // both scale with it).
   ReadCrew read_crew_;
-  std::chrono::steady_clock::time_point reading_since_;  // the reader thread's: when the crew last went from idle to reading
+  // When the crew last went from idle to reading (steady clock, ns; 0: idle).
+  // Written by the reader thread, read by stats().
+  std::atomic<uint64_t> reading_since_ns_{0};
 
   std::thread reader_thread_;  // last: started once everything above exists
 };

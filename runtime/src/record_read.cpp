@@ -13,6 +13,12 @@ constexpr auto kRelaxed = std::memory_order_relaxed;
 
 uint64_t round_up(uint64_t n, uint64_t to) { return (n + to - 1) / to * to; }
 
+uint64_t steady_ns() {
+  return static_cast<uint64_t>(std::chrono::duration_cast<std::chrono::nanoseconds>(
+                                   std::chrono::steady_clock::now().time_since_epoch())
+                                   .count());
+}
+
 }  // namespace
 
 void PipelineCore::read_piece(std::span<std::byte> piece, uint64_t offset, uint64_t required, uint64_t frame,
@@ -51,7 +57,7 @@ void PipelineCore::begin_pieces(PieceRound& round, std::span<std::byte> dst, uin
   round.piece = std::max(align, round_up((dst.size() + even - 1) / std::max<uint64_t>(even, 1), align));
   round.count = (dst.size() + round.piece - 1) / round.piece;
   round.gave_up.store(false, kRelaxed);
-  if (read_crew_.in_flight() == 0) reading_since_ = std::chrono::steady_clock::now();
+  if (read_crew_.in_flight() == 0) reading_since_ns_.store(steady_ns(), kRelaxed);
   read_crew_.begin(round.count, round);
 }
 
@@ -67,7 +73,7 @@ void PipelineCore::begin_chunk_pieces(PieceRound& round, const Slot& slot, const
   round.by_chunks = true;
   round.count = slot.piece_cuts.size() - 1;
   round.gave_up.store(false, kRelaxed);
-  if (read_crew_.in_flight() == 0) reading_since_ = std::chrono::steady_clock::now();
+  if (read_crew_.in_flight() == 0) reading_since_ns_.store(steady_ns(), kRelaxed);
   read_crew_.begin(round.count, round);
 }
 
@@ -105,12 +111,20 @@ void PieceRound::operator()(uint64_t p) const {
 }
 
 // Read time is wall time with a round in flight: two rounds at once count
-// once.
+// once. A stretch still open counts up to now (stats()).
+uint64_t PipelineCore::read_ns_now() const {
+  const uint64_t since = reading_since_ns_.load(kRelaxed);
+  const uint64_t closed = counters_.read_ns.load(kRelaxed);
+  const uint64_t now = steady_ns();
+  return closed + (since != 0 && now > since ? now - since : 0);
+}
+
 bool PipelineCore::join_pieces(PieceRound& round) {
   auto count_time = [&] {
     if (read_crew_.in_flight() > 0) return;
-    const auto ns = std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - reading_since_);
-    counters_.read_ns.fetch_add(static_cast<uint64_t>(ns.count()), kRelaxed);
+    // Cleared first: stats() may miss this stretch for an instant, never count it twice.
+    const uint64_t since = reading_since_ns_.exchange(0, kRelaxed);
+    counters_.read_ns.fetch_add(steady_ns() - since, kRelaxed);
   };
   try {
     read_crew_.join();

@@ -248,13 +248,13 @@ TEST_F(FaultTest, CorruptChunkNamesFileFrameAndChunk) {
       const NextEntry next = p.wait_next();
       ASSERT_EQ(next.frame, f);
       ASSERT_EQ(next.status, f == kBad ? EntryStatus::Failed : EntryStatus::Ready);
-      const FrameHandle h = p.take();
+      const FrameHandle taken = p.take();
       if (f != kBad) continue;
-      ASSERT_TRUE(h.error());
-      EXPECT_EQ(h.error()->where.file, bad.string());
-      EXPECT_EQ(h.error()->where.frame, kBad);
-      EXPECT_EQ(h.error()->where.chunk, 1u);
-      EXPECT_NE(h.error()->message.find("checksum"), std::string::npos) << h.error()->text();
+      ASSERT_TRUE(taken.error());
+      EXPECT_EQ(taken.error()->where.file, bad.string());
+      EXPECT_EQ(taken.error()->where.frame, kBad);
+      EXPECT_EQ(taken.error()->where.chunk, 1u);
+      EXPECT_NE(taken.error()->message.find("checksum"), std::string::npos) << taken.error()->text();
     }
     EXPECT_TRUE(p.wait_next().end);
     EXPECT_EQ(p.stats().frames_failed, 1u);

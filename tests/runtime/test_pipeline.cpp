@@ -453,18 +453,19 @@ TEST(ThreadSplit, OneReaderPerFourCoresFromEightCoresOn) {
   EXPECT_EQ(default_thread_split(64).read, 4);
 }
 
-TEST(ThreadSplit, FramesKeptEncodedReadOnFiveEighthsOfTheCores) {
-  // The workers only check checksums: five eighths of the cores read, 1 to 10.
+TEST(ThreadSplit, FramesKeptEncodedReadOnThirteenSixteenthsOfTheCores) {
+  // The reads check the chunks; the workers only inflate zstd planes:
+  // thirteen sixteenths of the cores read, 1 to 13.
   EXPECT_EQ(default_thread_split(1, true).read, 1);
   EXPECT_EQ(default_thread_split(1, true).decode, 1);
   EXPECT_EQ(default_thread_split(2, true).read, 1);
   EXPECT_EQ(default_thread_split(2, true).decode, 1);
-  EXPECT_EQ(default_thread_split(8, true).read, 5);
-  EXPECT_EQ(default_thread_split(8, true).decode, 3);
-  EXPECT_EQ(default_thread_split(16, true).read, 10);
-  EXPECT_EQ(default_thread_split(16, true).decode, 6);
-  EXPECT_EQ(default_thread_split(64, true).read, 10);
-  EXPECT_EQ(default_thread_split(64, true).decode, 54);
+  EXPECT_EQ(default_thread_split(8, true).read, 6);
+  EXPECT_EQ(default_thread_split(8, true).decode, 2);
+  EXPECT_EQ(default_thread_split(16, true).read, 13);
+  EXPECT_EQ(default_thread_split(16, true).decode, 3);
+  EXPECT_EQ(default_thread_split(64, true).read, 13);
+  EXPECT_EQ(default_thread_split(64, true).decode, 51);
 }
 
 // A file with the narrow band's layers: with the surface set the pipeline

@@ -106,12 +106,12 @@ struct PipelineOptions {
 // copying out of the page cache slows to under 4 GB/s per thread while the
 // workers load memory (docs/measurements.md).
 //
-// Frames kept encoded for the GPU (`keep_encoded`) leave the workers only
-// checksums (and any zstd planes) to do, so reading takes five eighths of
-// the cores, 1 to 10, and the rest check: on the same machine 10M-particle
-// frames reach device memory at 346-378 frames/s with 6 workers + 10
-// readers against 310-326 with 8 + 8 (docs/measurements.md, "Two records
-// in flight, wider checksums").
+// Frames kept encoded for the GPU (`keep_encoded`) are checked as they are
+// read, which leaves the workers only zstd planes to inflate, so reading
+// takes thirteen sixteenths of the cores, 1 to 13, and the rest are
+// workers: on the same machine 10M-particle frames reach device memory at
+// 525.6-545.7 frames/s with 3 workers + 13 readers against 437.1-453.3 with
+// 6 + 10 (docs/measurements.md, "Checked as read").
 struct ThreadSplit {
   int decode = 1;
   int read = 1;
