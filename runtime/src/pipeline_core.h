@@ -1,6 +1,8 @@
-// The pipeline's internals, shared by its three parts:
+// The pipeline's internals, shared by its parts:
 //   pipeline.cpp       construction, the consumer's side, stats
 //   reader_thread.cpp  the reader thread: schedule, window, reads, dispatch
+//   read_target.cpp    where a frame's bytes go, and in what pieces
+//   record_read.cpp    the pieces, read on the crew (read_crew.cpp)
 //   decode_task.cpp    TBB decode of a frame's chunks and its completion
 #pragma once
 

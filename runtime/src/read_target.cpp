@@ -1,0 +1,131 @@
+// Where a frame's bytes go and in what pieces: a record buffer, or the
+// frame's staged area (frames kept encoded); the whole record, or its table
+// first and then a prefix, or its wanted chunks checked as they are read.
+// The reader thread's (reader_thread.cpp); the pieces are read by the crew
+// (record_read.cpp).
+#include <algorithm>
+#include <string>
+
+#include "pipeline_core.h"
+
+namespace sluice::runtime::detail {
+namespace {
+
+constexpr auto kRelaxed = std::memory_order_relaxed;
+
+uint64_t round_up(uint64_t n, uint64_t to) { return (n + to - 1) / to * to; }
+
+}  // namespace
+
+PipelineCore::ReadTarget PipelineCore::record_target(ReaderState& rs, Slot& slot, uint32_t record) {
+  const io::FrameIndexEntry& e = reader_.index().frames[slot.frame];
+  const uint64_t align = std::max<size_t>(1, source_->alignment());
+  const uint64_t begin = e.offset / align * align;
+  const uint64_t need = e.offset + e.bytes - begin;  // bytes from `begin` the frame needs
+  const uint64_t span = round_up(need, align);
+  AlignedBuffer& buffer = records_[record];
+  const size_t before = buffer.capacity();
+  buffer.reserve(std::max<uint64_t>(footprint_.record_bytes, span));
+  if (buffer.capacity() != before) {
+    rs.record_held += buffer.capacity() - before;
+    counters_.held_bytes.store(held_now(rs), kRelaxed);
+    if (rs.record_held > counters_.peak_record_bytes.load(kRelaxed)) counters_.peak_record_bytes.store(rs.record_held, kRelaxed);
+  }
+  return {buffer.span().first(span), begin, need, buffer.span().subspan(e.offset - begin, e.bytes)};
+}
+
+bool PipelineCore::reads_in_place() const {
+  return options_.keep_encoded && source_->alignment() <= 1;
+}
+
+// The area is sized for the record and its tables with no plane inflated
+// (GPU-decodable files); prepare_decode moves a frame with zstd planes to a
+// larger one. The record holds the slot's record buffer as a token only
+// (it bounds the frames being read and staged at once), not its memory.
+PipelineCore::ReadTarget PipelineCore::staged_target(ReaderState& rs, Slot& slot) {
+  const io::FrameIndexEntry& e = reader_.index().frames[slot.frame];
+  set_layout(slot, e.count_in(options_.layers),
+             encoded_block_bytes(io::staged_bytes_bound(e.bytes, e.chunk_count, e.particle_count, 0)));
+  allocate_buffers(rs, slot);
+  if (slot.buffers.particles.size() < e.bytes) {
+    throw io::Error(reader_.location(slot.frame), "the frame allocator returned buffers smaller than the frame");
+  }
+  const std::span<std::byte> area = slot.buffers.particles.first(e.bytes);
+  return {area, e.offset, e.bytes, area};
+}
+
+// Payloads are written surface, blobs, interior (io/src/codec.cpp): leaving
+// out the interior leaves a prefix to read. Leaving out only the blobs, in
+// the middle, saves nothing: the whole record is read (in the background,
+// two records at once) and their chunks are dropped.
+bool PipelineCore::reads_prefix(const io::FrameIndexEntry& e) const {
+  if (!e.layered()) return false;
+  io::Layer last = io::Layer::Surface;
+  if (e.layer_particles[size_t(io::Layer::Blobs)] > 0) last = io::Layer::Blobs;
+  if (e.layer_particles[size_t(io::Layer::Interior)] > 0) last = io::Layer::Interior;
+  return !options_.layers.has(last);
+}
+
+// The table is a few KiB: read here rather than as a crew round, so that the
+// rounds in flight go on. Offsets stay aligned for O_DIRECT (record buffers
+// only).
+PipelineCore::ReadTarget PipelineCore::read_table(Slot& slot, const ReadTarget& whole) {
+  const io::FrameIndexEntry& e = reader_.index().frames[slot.frame];
+  const uint64_t align = std::max<size_t>(1, source_->alignment());
+  const uint64_t table = std::min<uint64_t>(e.bytes, io::frame_table_bytes(e.chunk_count, reader_.header().attributes.size()));
+  const auto into = static_cast<uint64_t>(whole.record.data() - whole.dst.data());  // where the record starts in dst
+  const uint64_t first = round_up(into + table, align);
+  read_piece(whole.dst.first(first), whole.offset, into + table, slot.frame, whole.offset + whole.need);
+  record_where_.frame = slot.frame;
+  reader_.parse_table(slot.frame, whole.record.first(table), slot.header, record_where_);
+  const uint64_t end = io::layers_end(slot.header, options_.layers, reader_.header().attributes.size());
+  const uint64_t wanted = into + end;
+  if (slot.checked_on_read) return chunks_to_read(slot, whole.record.first(end), table);
+  ReadTarget rest;
+  rest.offset = whole.offset + first;
+  rest.record = whole.record.first(end);
+  rest.dst = whole.dst.subspan(first, wanted > first ? round_up(wanted, align) - first : 0);
+  rest.need = wanted > first ? wanted - first : 0;
+  return rest;
+}
+
+// The wanted chunks, in pieces of about equal bytes: each piece copies its
+// chunks and checks them as it goes (record_read.cpp).
+PipelineCore::ReadTarget PipelineCore::chunks_to_read(Slot& slot, std::span<std::byte> record, uint64_t table) {
+  io::keep_layers(slot.header, options_.layers);
+  const std::vector<io::ChunkDesc>& chunks = slot.header.chunks;
+  uint64_t total = 0;
+  for (size_t c = 0; c < chunks.size(); ++c) {
+    // The payload is written where the table says: inside the record, past the table.
+    if (chunks[c].offset < table || chunks[c].offset > record.size() || chunks[c].compressed_size > record.size() - chunks[c].offset) {
+      io::ErrorLocation at = reader_.location(slot.frame);
+      at.chunk = c;
+      throw io::Error(at, "the chunk's payload (bytes " + std::to_string(chunks[c].offset) + " to " +
+                              std::to_string(chunks[c].offset + chunks[c].compressed_size) +
+                              ") lies outside the frame record's payloads (bytes " + std::to_string(table) + " to " +
+                              std::to_string(record.size()) + ")");
+    }
+    total += chunks[c].compressed_size;
+  }
+  // As many pieces as byte pieces would be (a multiple of the threads
+  // reading), at most one per chunk; cut where the running sum crosses each
+  // equal share.
+  const uint64_t most = std::max<uint64_t>(options_.read_piece_bytes, 1);
+  const uint64_t threads = uint64_t(read_crew_.helpers()) + 1;
+  const uint64_t at_most = (total + most - 1) / most;
+  const uint64_t pieces = std::min<uint64_t>(chunks.size(), (at_most + threads - 1) / threads * threads);
+  slot.piece_cuts.clear();
+  slot.piece_cuts.push_back(0);
+  uint64_t sum = 0;
+  for (size_t c = 0; c < chunks.size(); ++c) {
+    sum += chunks[c].compressed_size;
+    if (c + 1 == chunks.size() || sum * pieces >= slot.piece_cuts.size() * total) slot.piece_cuts.push_back(static_cast<uint32_t>(c + 1));
+  }
+  ReadTarget target;
+  target.record = record;
+  target.offset = reader_.index().frames[slot.frame].offset;
+  target.by_chunks = true;
+  return target;
+}
+
+}  // namespace sluice::runtime::detail
