@@ -199,6 +199,11 @@ class GatedSource final : public runtime::RecordSource {
     allowed_.notify_all();
   }
   void open() { allow(1u << 30); }
+  // Reads that have come to the gate and not passed it yet.
+  uint32_t waiting() const {
+    const uint32_t arrived = reads_.load(), allowed = allowed_.load();
+    return arrived > allowed ? arrived - allowed : 0;
+  }
 
  private:
   std::shared_ptr<runtime::RecordSource> inner_;

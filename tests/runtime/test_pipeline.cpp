@@ -5,9 +5,11 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <chrono>
 #include <cstring>
 #include <memory>
 #include <random>
+#include <thread>
 
 #include "runtime_test_util.h"
 #include "sluice/io/gpu_decode_plan.h"
@@ -228,6 +230,28 @@ TEST_F(PipelineTest, DecodesOnlyTheAttributesAskedFor) {
 
   o.attributes = std::vector<uint32_t>{1};
   EXPECT_THROW(Pipeline(reader, allocator, o), io::Error);
+}
+
+// Read time counts a read still in flight: taken while a read waits at a
+// gate, stats() already shows the time since it began. (It used to count a
+// stretch only once every read had ended, so with reads always in flight it
+// showed next to nothing.)
+TEST_F(PipelineTest, ReadTimeCountsAReadStillInFlight) {
+  const io::ContainerReader reader(*path_);
+  auto gate = std::make_shared<test::GatedSource>(
+      std::make_shared<FileRecordSource>(reader.path(), reader.descriptor(), false), 0);  // nothing passes
+  const test::OpenAtExit open_gate{*gate};
+  HostFrameAllocator allocator;
+  PipelineOptions o = options();
+  o.source = gate;
+  Pipeline p(reader, allocator, o);
+  p.restart({reader.frame_count(), 0, 1, 1, EndMode::Stop});
+  while (gate->waiting() == 0) std::this_thread::yield();
+  const auto waited = std::chrono::milliseconds(50);
+  std::this_thread::sleep_for(waited);  // at least this long; the read began before it
+  EXPECT_GE(p.stats().read_seconds, 0.05);
+  gate->open();
+  EXPECT_EQ(p.wait_next().status, EntryStatus::Ready);
 }
 
 // Kept encoded for a GPU decoder: the staged area, decoded from its plan
