@@ -74,7 +74,13 @@ void stream_copy(std::byte* dst, const std::byte* src, size_t n) noexcept {
 #endif
 }
 
-bool copy_from_mapping(std::byte* dst, const std::byte* src, size_t n) noexcept {
+namespace {
+
+// Runs `touch` (which reads the mapping) with this thread's landing set:
+// false if a SIGBUS jumped out of it. `touch` holds nothing that needs
+// unwinding.
+template <class Touch>
+bool with_landing(Touch touch) noexcept {
   install_handler();
   sigjmp_buf landing;
   // savemask: the handler runs with SIGBUS blocked; the jump back restores
@@ -84,23 +90,22 @@ bool copy_from_mapping(std::byte* dst, const std::byte* src, size_t n) noexcept 
     return false;
   }
   t_landing = &landing;
-  stream_copy(dst, src, n);
+  touch();
   t_landing = nullptr;
   return true;
 }
 
+}  // namespace
+
+bool copy_from_mapping(std::byte* dst, const std::byte* src, size_t n) noexcept {
+  return with_landing([&] { stream_copy(dst, src, n); });
+}
+
 bool copy_from_mapping_checked(std::byte* dst, const std::byte* src, size_t n, uint64_t& checksum) noexcept {
-  install_handler();
-  sigjmp_buf landing;
-  if (sigsetjmp(landing, 1) != 0) {
-    t_landing = nullptr;
-    return false;
-  }
-  t_landing = &landing;  // the hash reads the mapping too
-  checksum = io::copy_and_checksum(dst, src, n, [](std::byte* d, const std::byte* s, size_t k, void*) { stream_copy(d, s, k); },
-                                   nullptr);
-  t_landing = nullptr;
-  return true;
+  return with_landing([&] {  // the hash reads the mapping too
+    const auto copy = [](std::byte* d, const std::byte* s, size_t k, void*) { stream_copy(d, s, k); };
+    checksum = io::copy_and_checksum(dst, src, n, copy, nullptr);
+  });
 }
 
 }  // namespace sluice::runtime::detail

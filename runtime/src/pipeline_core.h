@@ -57,8 +57,8 @@ struct PieceRound {
   // A checked read: piece p reads chunks [cuts[p], cuts[p + 1]) to their
   // offsets in dst (the record, at `offset` in the file) and checks them.
   std::span<const io::ChunkDesc> chunks;
-  std::span<const uint32_t> cuts;
-  bool by_chunks = false;
+  std::span<const uint32_t> cuts;  // empty: byte pieces
+  bool by_chunks() const { return !cuts.empty(); }
   mutable std::atomic<bool> gave_up{false};  // a newer schedule (or stop) came first: the pieces left are skipped
   void operator()(uint64_t p) const;
 };
@@ -206,6 +206,7 @@ class PipelineCore {
   // The same for a checked read (chunks_to_read()): piece p reads and checks
   // the slot's chunks [piece_cuts[p], piece_cuts[p + 1]).
   void begin_chunk_pieces(PieceRound& round, const Slot& slot, const ReadTarget& target, uint64_t generation);
+  void begin_round(PieceRound& round);  // the common end of both: hands the round to the crew
   bool join_pieces(PieceRound& round);
   uint64_t read_ns_now() const;  // time with a read in flight, the open stretch included
   friend struct PieceRound;

@@ -56,6 +56,12 @@ void PipelineCore::begin_pieces(PieceRound& round, std::span<std::byte> dst, uin
   round.generation = generation;
   round.piece = std::max(align, round_up((dst.size() + even - 1) / std::max<uint64_t>(even, 1), align));
   round.count = (dst.size() + round.piece - 1) / round.piece;
+  round.chunks = {};
+  round.cuts = {};  // byte pieces (the round may have held a checked read before)
+  begin_round(round);
+}
+
+void PipelineCore::begin_round(PieceRound& round) {
   round.gave_up.store(false, kRelaxed);
   if (read_crew_.in_flight() == 0) reading_since_ns_.store(steady_ns(), kRelaxed);
   read_crew_.begin(round.count, round);
@@ -70,24 +76,22 @@ void PipelineCore::begin_chunk_pieces(PieceRound& round, const Slot& slot, const
   round.generation = generation;
   round.chunks = slot.header.chunks;
   round.cuts = slot.piece_cuts;
-  round.by_chunks = true;
   round.count = slot.piece_cuts.size() - 1;
-  round.gave_up.store(false, kRelaxed);
-  if (read_crew_.in_flight() == 0) reading_since_ns_.store(steady_ns(), kRelaxed);
-  read_crew_.begin(round.count, round);
+  begin_round(round);
 }
 
 void PipelineCore::read_chunk(std::span<std::byte> dst, uint64_t offset, uint64_t frame, size_t c, uint64_t checksum) {
   uint64_t got_checksum = 0;
   const size_t got = source_->read_checked(dst, offset, got_checksum);
   counters_.bytes_read.fetch_add(got, kRelaxed);
-  io::ErrorLocation at = reader_.location(frame);
+  if (got == dst.size() && got_checksum == checksum) return;
+  io::ErrorLocation at = reader_.location(frame);  // only now: it allocates
   at.chunk = c;
   if (got < dst.size()) {
     throw io::Error(at, "the file ends at byte " + std::to_string(offset + got) + " but the chunk runs to byte " +
                             std::to_string(offset + dst.size()) + " (short read: was the file cut while playing?)");
   }
-  if (got_checksum != checksum) throw io::Error(at, "chunk checksum mismatch (the chunk's bytes are corrupt)");
+  throw io::Error(at, "chunk checksum mismatch (the chunk's bytes are corrupt)");
 }
 
 // Piece p covers [p * piece, +piece) of dst; bytes past `need` are only
@@ -98,7 +102,7 @@ void PieceRound::operator()(uint64_t p) const {
     gave_up.store(true, kRelaxed);
     return;
   }
-  if (by_chunks) {
+  if (by_chunks()) {
     for (uint32_t c = cuts[p]; c < cuts[p + 1]; ++c) {
       const io::ChunkDesc& chunk = chunks[c];
       core->read_chunk(dst.subspan(chunk.offset, chunk.compressed_size), offset + chunk.offset, frame, c, chunk.checksum);
