@@ -13,37 +13,60 @@
 namespace sluice::render {
 namespace {
 
-// Copies `bytes` from `source` to `target` on the transfer queue, `repeats`
-// times after a warm-up; GB/s of the median (submission to fence).
-double timed_copy_gbps(Context::Impl& ctx, vk::Buffer source, vk::Buffer target, uint64_t bytes, int repeats) {
+// Copies of `bytes` from `source` into device-local memory on the transfer
+// queue, `in_flight` of them queued at a time (each into its own target),
+// kept queued for at least `seconds` after one warm-up round; GB/s over the
+// timed stretch, from the first submission to the last fence.
+double sustained_copy_gbps(Context::Impl& ctx, vk::Buffer source, uint64_t bytes, int in_flight, double seconds) {
+  in_flight = std::max(in_flight, 1);
   const vk::raii::CommandPool pool(ctx.device, vk::CommandPoolCreateInfo({}, ctx.transfer_family));
-  vk::raii::CommandBuffers cmds(ctx.device, vk::CommandBufferAllocateInfo(*pool, vk::CommandBufferLevel::ePrimary, 1));
-  const vk::CommandBuffer cmd = *cmds[0];
-  cmd.begin(vk::CommandBufferBeginInfo());
-  cmd.copyBuffer(source, target, vk::BufferCopy(0, 0, bytes));
-  cmd.end();
-  std::vector<double> seconds;
-  for (int k = 0; k <= std::max(repeats, 1); ++k) {
-    const vk::raii::Fence fence(ctx.device, vk::FenceCreateInfo());
-    const vk::CommandBufferSubmitInfo cb(cmd);
-    const auto t0 = std::chrono::steady_clock::now();
-    ctx.transfer_queue.submit2(vk::SubmitInfo2({}, {}, cb), *fence);
-    while (ctx.device.waitForFences(*fence, VK_TRUE, UINT64_MAX) == vk::Result::eTimeout) {
-    }
-    if (k > 0) seconds.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+  const vk::raii::CommandBuffers cmds(
+      ctx.device, vk::CommandBufferAllocateInfo(*pool, vk::CommandBufferLevel::ePrimary, uint32_t(in_flight)));
+  std::vector<Buffer> targets;
+  std::vector<vk::raii::Fence> fences;
+  for (int k = 0; k < in_flight; ++k) {
+    targets.push_back(create_buffer(ctx, bytes, vk::BufferUsageFlagBits::eTransferDst, MemoryKind::DeviceLocal));
+    fences.emplace_back(ctx.device, vk::FenceCreateInfo());
+    const vk::CommandBuffer cmd = *cmds[k];
+    cmd.begin(vk::CommandBufferBeginInfo());
+    cmd.copyBuffer(source, *targets.back().buffer, vk::BufferCopy(0, 0, bytes));
+    cmd.end();
   }
-  std::sort(seconds.begin(), seconds.end());
-  return double(bytes) / seconds[seconds.size() / 2] / 1e9;
+  const auto submit = [&](int k) {
+    const vk::CommandBufferSubmitInfo cb(*cmds[k]);
+    ctx.transfer_queue.submit2(vk::SubmitInfo2({}, {}, cb), *fences[k]);
+  };
+  const auto wait = [&](int k) {
+    while (ctx.device.waitForFences(*fences[k], VK_TRUE, UINT64_MAX) == vk::Result::eTimeout) {
+    }
+    ctx.device.resetFences(*fences[k]);
+  };
+  for (int k = 0; k < in_flight; ++k) submit(k);  // warm-up: first touches, clocks up
+  for (int k = 0; k < in_flight; ++k) wait(k);
+  const auto t0 = std::chrono::steady_clock::now();
+  const auto elapsed = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(); };
+  for (int k = 0; k < in_flight; ++k) submit(k);
+  uint64_t copies = 0;
+  for (int k = 0;; k = (k + 1) % in_flight) {
+    wait(k);
+    ++copies;
+    // At least two rounds, so a single copy's start-up does not dominate.
+    if (elapsed() >= seconds && copies >= uint64_t(2 * in_flight)) break;
+    submit(k);
+  }
+  const double gbps = double(copies) * double(bytes) / elapsed() / 1e9;
+  ctx.transfer_queue.waitIdle();  // the copies still queued, before their targets go
+  return gbps;
 }
 
 }  // namespace
 
-double host_to_device_gbps(Context& context, uint64_t bytes, int repeats) {
+double host_to_device_gbps(Context& context, uint64_t bytes, const CopyShape& shape) {
   Context::Impl& ctx = context_impl(context);
-  const Buffer staging = create_buffer(ctx, bytes, vk::BufferUsageFlagBits::eTransferSrc, MemoryKind::Upload);
-  const Buffer device = create_buffer(ctx, bytes, vk::BufferUsageFlagBits::eTransferDst, MemoryKind::DeviceLocal);
+  const MemoryKind kind = shape.staging == StagingMemory::Cached ? MemoryKind::UploadRead : MemoryKind::Upload;
+  const Buffer staging = create_buffer(ctx, bytes, vk::BufferUsageFlagBits::eTransferSrc, kind);
   std::memset(staging.mapped, 1, bytes);  // pages touched before timing
-  return timed_copy_gbps(ctx, *staging.buffer, *device.buffer, bytes, repeats);
+  return sustained_copy_gbps(ctx, *staging.buffer, bytes, shape.in_flight, shape.seconds);
 }
 
 uint64_t import_alignment(Context& context) {
@@ -55,7 +78,7 @@ uint64_t import_alignment(Context& context) {
       .minImportedHostPointerAlignment;
 }
 
-ImportedCopy imported_host_copy_gbps(Context& context, const void* host, uint64_t bytes, int repeats) {
+ImportedCopy imported_host_copy_gbps(Context& context, const void* host, uint64_t bytes, const CopyShape& shape) {
   Context::Impl& ctx = context_impl(context);
   ImportedCopy out;
   const uint64_t alignment = import_alignment(context);
@@ -84,8 +107,7 @@ ImportedCopy imported_host_copy_gbps(Context& context, const void* host, uint64_
     allocate.pNext = &import;
     vk::raii::DeviceMemory memory(ctx.device, allocate);
     source.bindMemory(*memory, 0);
-    const Buffer device = create_buffer(ctx, bytes, vk::BufferUsageFlagBits::eTransferDst, MemoryKind::DeviceLocal);
-    out.gbps = timed_copy_gbps(ctx, *source, *device.buffer, bytes, repeats);
+    out.gbps = sustained_copy_gbps(ctx, *source, bytes, shape.in_flight, shape.seconds);
     out.imported = true;
   } catch (const vk::SystemError& e) {
     out.refusal = e.what();

@@ -11,6 +11,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -325,6 +326,20 @@ TEST(GpuDecode, CorruptPlanesAreCaughtAndNamed) {
 }
 
 
+// The copy bound the GPU bench prints: every shape (copies queued at once,
+// either staging memory) times real copies and leaves nothing queued
+// (the validation layer sees every target outlive its copy).
+TEST(CopyBound, EveryShapeTimesItsCopies) {
+  ValidationGuard guard;
+  for (const StagingMemory staging : {StagingMemory::Plain, StagingMemory::Cached}) {
+    for (const int in_flight : {1, 3}) {
+      const double gbps = host_to_device_gbps(context(), 4 << 20, {in_flight, staging, 0.0});
+      EXPECT_TRUE(std::isfinite(gbps)) << in_flight << " in flight";
+      EXPECT_GT(gbps, 0.0) << in_flight << " in flight";
+    }
+  }
+}
+
 // The copy straight from a file's page-cache pages (what the pipeline could
 // use instead of the workers' copy): the driver's answer is the figure, so
 // the test checks that it is asked properly: a mapping of a file at the
@@ -349,7 +364,7 @@ TEST(ImportedCopy, AFilesMappingIsImportedAndMisalignmentRefused) {
   ASSERT_GE(fd, 0);
   void* mapped = ::mmap(nullptr, bytes, PROT_READ, MAP_SHARED | MAP_POPULATE, fd, 0);
   ASSERT_NE(mapped, MAP_FAILED);
-  const ImportedCopy good = imported_host_copy_gbps(context(), mapped, bytes, 1);
+  const ImportedCopy good = imported_host_copy_gbps(context(), mapped, bytes, {.in_flight = 1, .seconds = 0});
   if (good.imported) {
     EXPECT_GT(good.gbps, 0.0);
   } else {
@@ -357,7 +372,7 @@ TEST(ImportedCopy, AFilesMappingIsImportedAndMisalignmentRefused) {
     EXPECT_NE(good.refusal.find("vk"), std::string::npos) << good.refusal;
     std::printf("the driver refuses a file's mapping: %s\n", good.refusal.c_str());
   }
-  const ImportedCopy bad = imported_host_copy_gbps(context(), static_cast<char*>(mapped) + 1, bytes - alignment, 1);
+  const ImportedCopy bad = imported_host_copy_gbps(context(), static_cast<char*>(mapped) + 1, bytes - alignment, {.in_flight = 1, .seconds = 0});
   EXPECT_FALSE(bad.imported);
   EXPECT_NE(bad.refusal.find("multiple"), std::string::npos) << bad.refusal;
   ::munmap(mapped, bytes);

@@ -13,11 +13,25 @@
 
 namespace sluice::render {
 
-// `bytes` of persistently mapped staging memory (the kind the renderer's
-// uploads copy from) copied into device-local memory on the transfer
-// queue, `repeats` times after one warm-up copy; GB/s of the median copy
-// (wall clock from submission to the fence).
-double host_to_device_gbps(Context& context, uint64_t bytes, int repeats);
+// Which of the renderer's two kinds of staging memory a copy reads: Plain
+// (write-combined where the driver offers it) for frames decoded on the
+// CPU, Cached for frames kept encoded, whose checksums the CPU computes.
+enum class StagingMemory { Plain, Cached };
+
+// How the copies are made: `in_flight` copies queued on the transfer queue
+// at a time (the pipeline keeps two frames in flight), kept queued for at
+// least `seconds` (and two rounds) after one warm-up round.
+struct CopyShape {
+  int in_flight = 2;
+  StagingMemory staging = StagingMemory::Cached;
+  double seconds = 0.3;
+};
+
+// Copies of `bytes` each from persistently mapped staging into device-local
+// memory (one target per copy in flight: `in_flight` x `bytes` of device
+// memory), made as `shape` says; GB/s sustained over the timed stretch
+// (first submission to the last fence waited). Blocks for the stretch.
+double host_to_device_gbps(Context& context, uint64_t bytes, const CopyShape& shape);
 
 // The same copy from `bytes` at `host` imported as memory the device reads
 // (VK_EXT_external_memory_host, host allocation): with `host` a read-only
@@ -28,9 +42,9 @@ double host_to_device_gbps(Context& context, uint64_t bytes, int repeats);
 struct ImportedCopy {
   bool imported = false;  // the driver accepted the import
   std::string refusal;    // otherwise why (no extension, alignment, the driver's error)
-  double gbps = 0;        // median copy, as host_to_device_gbps
+  double gbps = 0;        // sustained, as host_to_device_gbps (shape.staging does not apply)
 };
-ImportedCopy imported_host_copy_gbps(Context& context, const void* host, uint64_t bytes, int repeats);
+ImportedCopy imported_host_copy_gbps(Context& context, const void* host, uint64_t bytes, const CopyShape& shape);
 // minImportedHostPointerAlignment; 0 when the context has no
 // VK_EXT_external_memory_host (only contexts sluice creates enable it).
 uint64_t import_alignment(Context& context);
