@@ -58,7 +58,8 @@ void add_bench(CLI::App& app) {
   auto stream_gpu = std::make_shared<bool>(false);
   st->add_flag("--gpu", *stream_gpu,
                "Frames into the renderer's device memory, decoded by the GPU and, beside it, by the CPU, against\n"
-               "the page-cache read, host-to-device copy and GPU-decode bounds (needs a Vulkan device)");
+               "the bounds: the page-cache read, the host-to-device copy (1, 2 and 4 copies in flight; the best),\n"
+               "the two at once, and GPU decode alone (needs a Vulkan device)");
   st->add_option("--device", stream->device, "With --gpu: the Vulkan device (index or name; default: the first GPU)");
   st->callback([stream, stream_memory, stream_gpu] {
     if (!stream_memory->empty()) {
