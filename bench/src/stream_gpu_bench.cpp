@@ -13,6 +13,7 @@
 #include <chrono>
 #include <cstdio>
 #include <deque>
+#include <exception>
 #include <stdexcept>
 #include <thread>
 
@@ -224,8 +225,13 @@ struct AtOnce {
 AtOnce read_and_copy_at_once(render::Context& context, const std::string& path, const Slice& slice, uint64_t frame_bytes,
                              uint64_t copy_bytes, int read_threads, double seconds) {
   AtOnce out;
+  std::exception_ptr read_error;  // rethrown here: an exception may not leave a std::thread
   std::thread reader([&] {
-    out.read_gbps = window_read_gbps(path, slice.offset, slice.bytes, frame_bytes, read_threads, true, seconds);
+    try {
+      out.read_gbps = window_read_gbps(path, slice.offset, slice.bytes, frame_bytes, read_threads, true, seconds);
+    } catch (...) {
+      read_error = std::current_exception();
+    }
   });
   try {
     out.copy_gbps = render::host_to_device_gbps(context, copy_bytes, {2, render::StagingMemory::Cached, seconds});
@@ -234,6 +240,7 @@ AtOnce read_and_copy_at_once(render::Context& context, const std::string& path, 
     throw;
   }
   reader.join();
+  if (read_error) std::rethrow_exception(read_error);
   return out;
 }
 
