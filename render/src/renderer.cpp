@@ -302,6 +302,13 @@ Renderer::~Renderer() {
   // The uploads are this renderer's own submissions: wait for them. Frames
   // the host submitted are the host's to finish before destroying us.
   wait_upload(impl_->upload_value);
+  // A timeline value seen on the host is not the end of the queue's work
+  // with the semaphore: lavapipe's submit thread still releases the
+  // timeline's points after the wait returns, and destroying the semaphores
+  // then crashed it (bench stream --gpu under ASan and load, 2 runs of 12).
+  // So the queues this renderer submitted to go idle first.
+  if (impl_->upload_value > 0) impl_->ctx.transfer_queue.waitIdle();
+  if (impl_->last_decode_ticket > 0) impl_->ctx.graphics_queue.waitIdle();
 }
 
 const SceneInfo& Renderer::scene() const { return impl_->scene; }

@@ -197,6 +197,10 @@ struct RendererOptions {
 class Renderer {
  public:
   Renderer(Context& context, const SceneInfo& scene, const RendererOptions& options = {});
+  // Waits for the renderer's own uploads, then for the queues it uploaded
+  // on (the transfer queue; the graphics queue too once it decoded a frame)
+  // to go idle: no other thread may use those queues meanwhile. Frames the
+  // host submitted are the host's to finish first.
   ~Renderer();
   Renderer(const Renderer&) = delete;
   Renderer& operator=(const Renderer&) = delete;
