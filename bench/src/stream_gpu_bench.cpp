@@ -90,6 +90,10 @@ DevicePass stream_to_device(const io::ContainerReader& reader, const Slice& slic
   runtime::Pipeline pipeline(reader, staging, o);
   pipeline.restart({slice.frames, 0, 1, 1, runtime::EndMode::Loop});
 
+  // A small memory cap plans a small window: frames held in flight stay
+  // below what the reader may keep ahead, or the next would never come.
+  const uint32_t window = pipeline.window();
+  const size_t in_flight = std::clamp<size_t>(window - window / 4 - 1, 1, kInFlight);
   std::deque<std::pair<runtime::FrameHandle, uint64_t>> flight;
   uint64_t staged = 0;
   double waited_frames = 0, waited_gpu = 0;
@@ -114,7 +118,7 @@ DevicePass stream_to_device(const io::ContainerReader& reader, const Slice& slic
       }
       flight.emplace_back(std::move(h), ticket);
       const auto before = Clock::now();
-      while (flight.size() > kInFlight) {
+      while (flight.size() > in_flight) {
         renderer.wait_upload(flight.front().second);
         flight.pop_front();
       }

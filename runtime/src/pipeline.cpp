@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <exception>
 #include <stdexcept>
+#include <string>
 #include <utility>
 
 #include "pipeline_core.h"
@@ -157,6 +158,11 @@ uint64_t PipelineCore::restart(const PlaybackSchedule& schedule) {
   return g;
 }
 
+void PipelineCore::release(uint32_t s) {
+  --handles_held_;
+  give_back(s);
+}
+
 void PipelineCore::give_back(uint32_t s) {
   // The return ring holds every slot at once: a push cannot fail.
   if (!returns_.try_push(s)) std::terminate();
@@ -208,6 +214,14 @@ NextEntry PipelineCore::wait_next() {
     if (!e) {
       const NextEntry n = describe(nullptr, 0);
       if (n.end) return n;
+      // The reader starts no frame while the consumer's handles fill what it
+      // may keep ahead: waiting would never end.
+      const uint32_t window = counters_.window_frames.load(kRelaxed);
+      if (handles_held_ >= ahead_most(window)) {
+        throw std::logic_error("Pipeline::wait_next(): the consumer holds " + std::to_string(handles_held_) +
+                               " frames, all the reader may keep ahead in a window of " + std::to_string(window) +
+                               ": release one (FrameHandle::reset) before waiting for the next");
+      }
       consumer_wake_.wait(seen, std::memory_order_acquire);
       continue;
     }
@@ -236,6 +250,7 @@ FrameHandle PipelineCore::take() {
     give_back(entry.slot);
   } else {
     slots_[entry.slot].state.store(SlotState::Shown, kRelaxed);
+    ++handles_held_;
     h.owner_ = this;
     h.slot_ = entry.slot;
     counters_.frames_delivered.fetch_add(1, kRelaxed);
@@ -312,7 +327,7 @@ FrameHandle& FrameHandle::operator=(FrameHandle&& other) noexcept {
 }
 
 void FrameHandle::reset() {
-  if (owner_) std::exchange(owner_, nullptr)->give_back(slot_);
+  if (owner_) std::exchange(owner_, nullptr)->release(slot_);
   error_.reset();
 }
 

@@ -47,6 +47,11 @@ struct Counters {
 
 class PipelineCore;
 
+// Frames the reader keeps ahead of the playhead (delivered and not yet
+// released ones count) in a window of `frames`: the rest is kept for frames
+// behind it.
+inline uint32_t ahead_most(uint32_t frames) { return frames - frames / 4; }
+
 // One read of a byte range in pieces on the read crew (record_read.cpp): the
 // crew calls it once per piece until the round is joined, so it lives until
 // then (on the caller's stack, or in ReaderState::pending).
@@ -123,7 +128,8 @@ class PipelineCore {
   FrameHandle take();
   void drop();
   uint32_t ready_count();
-  void give_back(uint32_t slot);  // a handle's release
+  void give_back(uint32_t slot);  // a slot back to the reader (a dropped entry, a failed handle)
+  void release(uint32_t slot);    // a handle's release: give_back, one handle fewer held
   const Slot& slot(uint32_t s) const { return slots_[s]; }
   PipelineStats stats() const;
 
@@ -217,7 +223,7 @@ class PipelineCore {
   void prepare_decode(ReaderState& rs, Slot& slot);
   void publish(ReaderState& rs, uint32_t s, uint64_t k);
   void fail(ReaderState& rs, uint32_t s, uint64_t k, FrameError error);
-  uint32_t ahead_limit(const ReaderState& rs) const;
+  uint32_t ahead_limit(const ReaderState& rs) const;  // ahead_most(rs.active)
   bool grow(ReaderState& rs);
   uint32_t initial_active(const WindowPlan& plan) const;
   uint32_t occupied(const ReaderState& rs) const;
@@ -274,6 +280,7 @@ class PipelineCore {
   PlaybackSchedule schedule_;
   uint64_t consumer_generation_ = 0;
   uint64_t next_sequence_ = 0;
+  uint32_t handles_held_ = 0;  // taken and not released
 
   // Stats.
   Counters counters_;

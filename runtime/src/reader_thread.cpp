@@ -68,7 +68,10 @@ bool PipelineCore::reader_iteration(ReaderState& rs) {
   // now, not when the next one begins.
   const auto frame = rs.schedule.frame_at(rs.next_k);
   if (!frame) return settle_pending(rs);
-  if (rs.out + rs.pending.size() >= ahead_limit(rs) && !grow(rs)) return settle_pending(rs);
+  if (rs.out + rs.pending.size() >= ahead_limit(rs)) {
+    if (!grow(rs)) return settle_pending(rs);
+    return true;  // grown: measured again against the larger limit (never past ahead_most of the window)
+  }
   switch (start_entry(rs, rs.next_k, *frame)) {
     case Start::Pushed: ++rs.next_k; return true;
     case Start::Cancelled: return true;  // a newer schedule is waiting
@@ -77,7 +80,7 @@ bool PipelineCore::reader_iteration(ReaderState& rs) {
   return false;
 }
 
-uint32_t PipelineCore::ahead_limit(const ReaderState& rs) const { return rs.active - rs.active / 4; }
+uint32_t PipelineCore::ahead_limit(const ReaderState& rs) const { return ahead_most(rs.active); }
 
 bool PipelineCore::grow(ReaderState& rs) {
   // Slow start: a fresh frame buffer costs a page fault per 4 KiB on first

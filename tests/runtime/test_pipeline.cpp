@@ -163,6 +163,35 @@ TEST_F(PipelineTest, TwoFrameBudgetStillPlays) {
   EXPECT_LE(allocator.peak_held_bytes() + p.stats().peak_record_bytes, o.budget.memory_cap);
 }
 
+// A consumer holding every frame the reader may keep ahead gets an error
+// from wait_next(), not a wait that never ends; one release and it plays on.
+TEST_F(PipelineTest, WaitingWithTheWindowHeldThrows) {
+  const io::ContainerReader reader(*path_);
+  for (uint32_t window : {2u, 3u, 8u}) {
+    HostFrameAllocator allocator;
+    PipelineOptions o = options();
+    o.budget.max_frames = window;
+    Pipeline p(reader, allocator, o);
+    ASSERT_EQ(p.window(), window);
+    p.restart({reader.frame_count(), 0, 1, 1, EndMode::Loop});
+    const uint32_t ahead = window - window / 4;
+    std::vector<FrameHandle> held;
+    for (uint32_t i = 0; i < ahead; ++i) {
+      ASSERT_FALSE(p.wait_next().end);
+      held.push_back(p.take());
+      ASSERT_TRUE(test::holds_frame(held.back(), i, spec_));
+    }
+    EXPECT_THROW(p.wait_next(), std::logic_error) << "window " << window;
+    held.erase(held.begin());
+    const NextEntry next = p.wait_next();
+    ASSERT_EQ(next.status, EntryStatus::Ready) << "window " << window;
+    EXPECT_EQ(next.frame, ahead % reader.frame_count());
+    held.push_back(p.take());
+    EXPECT_THROW(p.wait_next(), std::logic_error) << "window " << window;
+    held.clear();
+  }
+}
+
 TEST_F(PipelineTest, PeakMemoryStaysWithinTheBudget) {
   const io::ContainerReader reader(*path_);
   HostFrameAllocator allocator;

@@ -199,8 +199,10 @@ class Pipeline {
   NextEntry peek(size_t i = 0);
   // Consumer: blocks until the next entry is Ready or Failed, or returns
   // with `end` set when the schedule has no next entry. Releasing frames is
-  // the consumer's job: holding a whole window of handles while waiting
-  // would wait forever.
+  // the consumer's job: the reader keeps at most window() - window() / 4
+  // frames ahead, handles held included, so with that many handles held and
+  // no entry queued nothing could arrive, and wait_next() throws
+  // std::logic_error instead of waiting forever.
   NextEntry wait_next();
   // Consumer: takes the next entry, which must be Ready or Failed (a failed
   // handle carries the error; its frame is already given back). Throws
