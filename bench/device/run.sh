@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Runs on the GPU machine (see bench/device/README.md): every benchmark the
 # issues ask GPU-machine figures for, in one call. Results go to $OUT.
-#   bash bench/device/run.sh [io] [import] [layers] [band] [render] [stream] [split] [codec] [huge] [embed] [compare] [live] [stereo] [xrsize] [firsthour] [streamcmp] [gpudecode] [gpuquick] [gpupair] [gpuab] [gpu100] [egl] [vtkpeer] [readpath] [gpusplit] [gpuplay] [gpuflight] [gpu100ab] [damf2] [gpusweep] [gpuvar]   (default: io render stream)
+#   bash bench/device/run.sh [io] [import] [layers] [band] [render] [stream] [split] [codec] [huge] [embed] [compare] [live] [stereo] [xrsize] [firsthour] [streamcmp] [gpudecode] [gpuquick] [gpupair] [gpuab] [gpu100] [egl] [vtkpeer] [readpath] [importprobe] [relayprobe] [storeab] [gpusplit] [gpuplay] [gpuflight] [gpu100ab] [damf2] [gpusweep] [gpuvar]   (default: io render stream)
 set -uo pipefail
 OUT=${OUT:-/tmp/out}
 mkdir -p "$OUT" /tmp/s
@@ -273,6 +273,41 @@ for stage in $stages; do
         run $S info .gpu/dam_$f.sluice
         run $S bench layers .gpu/dam_$f.sluice --frames 0,5,10 --repeats 3
       done
+      ;;
+    importprobe)  # which host mappings the driver imports as device memory (.gpu/importprobe, a probe), one mode a process
+      { uname -r; echo "memlock: $(ulimit -l)"; df -h /dev/shm | tail -1; } 2>&1 | tee -a "$OUT/summary.txt"
+      run $S synth -n 10M --frames 24 -o /tmp/ip10m.sluice --force -q --gpu-decodable
+      cat /tmp/ip10m.sluice > /dev/null
+      whole=$(stat -c %s /tmp/ip10m.sluice)
+      for bytes in 67108864 $whole; do
+        for mode in anon shared_ro private_ro private_rw shared_rw; do run ./.gpu/importprobe $mode /tmp/ip10m.sluice $bytes; done
+      done
+      if cp /tmp/ip10m.sluice /dev/shm/ip10m.sluice 2>/dev/null; then
+        for mode in shared_ro shared_rw; do run ./.gpu/importprobe $mode /dev/shm/ip10m.sluice $whole; done
+        rm -f /dev/shm/ip10m.sluice
+      fi
+      ;;
+    relayprobe)  # the smallest pipeline of the GPU path's bytes: page cache -> staging ring (CPU) -> device (GPU), by unit, ring and stores (.gpu/relayprobe)
+      run $S synth -n 10M --frames 24 -o /tmp/rl10m.sluice --force -q --gpu-decodable
+      cat /tmp/rl10m.sluice > /dev/null
+      fb=$(( $(stat -c %s /tmp/rl10m.sluice) / 24 ))
+      for shape in ${RELAY_SHAPES:-"$fb 2" "$fb 4" "$fb 12" "16777216 4" "16777216 8" "4194304 8" "4194304 16" "1048576 16" "1048576 64"}; do
+        for stores in nt plain; do
+          ./.gpu/relayprobe /tmp/rl10m.sluice $fb $shape ${RELAY_THREADS:-13} $stores ${RELAY_SECONDS:-3} 2>&1 | tee -a "$OUT/summary.txt"
+        done
+      done
+      [[ -n ${RELAY_BENCH-1} ]] && run $S bench stream --gpu /tmp/rl10m.sluice --memory 16G --no-storage --min-time 2
+      rm -f /tmp/rl10m.sluice
+      ;;
+    storeab)  # the pipeline's read with streaming or plain stores (.gpu/sluice_vplain reads SLUICE_PLAIN_STORES), by window (memory cap)
+      run $S synth -n 10M --frames 24 -o /tmp/sa10m.sluice --force -q --gpu-decodable
+      for mem in ${STORE_MEMS:-160M 300M 600M 16G}; do
+        for plain in "" 1; do
+          log "memory $mem, plain stores: ${plain:-no}"
+          SLUICE_PLAIN_STORES=$plain ./.gpu/sluice_vplain bench stream --gpu /tmp/sa10m.sluice --memory $mem --no-storage --min-time 2 2>&1 | grep -E "GPU \(kept|at once|window" | tee -a "$OUT/summary.txt"
+        done
+      done
+      rm -f /tmp/sa10m.sluice
       ;;
     readpath)  # ways to move frames from the page cache into a window of staging (.gpu/readpath, a probe)
       run $S synth -n 10M --frames 24 -o /tmp/rp10m.sluice --force -q --gpu-decodable
