@@ -59,7 +59,8 @@ void add_bench(CLI::App& app) {
   st->add_flag("--gpu", *stream_gpu,
                "Frames into the renderer's device memory, decoded by the GPU and, beside it, by the CPU, against\n"
                "the bounds: the page-cache read, the host-to-device copy (1, 2 and 4 copies in flight; the best),\n"
-               "the two at once, and GPU decode alone (needs a Vulkan device)");
+               "the two at once, and GPU decode alone; the read and the copy are measured again after the\n"
+               "pipeline rows, and each row is put against the mean of both measures (needs a Vulkan device)");
   st->add_option("--device", stream->device, "With --gpu: the Vulkan device (index or name; default: the first GPU)");
   st->callback([stream, stream_memory, stream_gpu] {
     if (!stream_memory->empty()) {
