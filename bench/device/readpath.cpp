@@ -5,7 +5,6 @@
 //   g++ -O2 -mavx2 -std=c++20 bench/device/readpath.cpp -o .gpu/readpath -lxxhash -pthread
 //   readpath FILE FRAME_BYTES THREADS...
 #include <fcntl.h>
-#include <immintrin.h>
 #include <sys/mman.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -19,25 +18,10 @@
 #include <string>
 #include <thread>
 #include <vector>
-using Clock = std::chrono::steady_clock;
-static double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
-
-static void nt_copy(char* dst, const char* src, size_t n) {
-  size_t i = 0;
-  // dst 32-aligned assumed (pieces are 4096-aligned)
-  for (; i + 128 <= n; i += 128) {
-    __m256i a = _mm256_loadu_si256((const __m256i*)(src + i));
-    __m256i b = _mm256_loadu_si256((const __m256i*)(src + i + 32));
-    __m256i c = _mm256_loadu_si256((const __m256i*)(src + i + 64));
-    __m256i d = _mm256_loadu_si256((const __m256i*)(src + i + 96));
-    _mm256_stream_si256((__m256i*)(dst + i), a);
-    _mm256_stream_si256((__m256i*)(dst + i + 32), b);
-    _mm256_stream_si256((__m256i*)(dst + i + 64), c);
-    _mm256_stream_si256((__m256i*)(dst + i + 96), d);
-  }
-  std::memcpy(dst + i, src + i, n - i);
-  _mm_sfence();
-}
+#include "probe.h"
+using probe::Clock;
+using probe::nt_copy;
+using probe::since;
 
 int main(int argc, char** argv) {
   if (argc < 4) { std::fprintf(stderr, "usage: readpath FILE FRAME_BYTES THREADS... \n"); return 2; }
@@ -52,7 +36,7 @@ int main(int argc, char** argv) {
   std::vector<char*> ring(window);
   for (auto& r : ring) { r = (char*)std::aligned_alloc(4096, (frame + 4095) / 4096 * 4096); std::memset(r, 1, frame); }
   char* map = (char*)::mmap(nullptr, size, PROT_READ, MAP_SHARED | MAP_POPULATE, fd, 0);
-  { volatile uint64_t s = 0; for (uint64_t i = 0; i < size; i += 4096) s += map[i]; }
+  { volatile uint64_t s = 0; for (uint64_t i = 0; i < size; i += 4096) s = s + map[i]; }
   std::printf("file %s: %.1f MB, %llu frames of %.1f MB\n", path.c_str(), size / 1e6, (unsigned long long)frames, frame / 1e6);
   std::atomic<uint64_t> sink{0};
   auto bench = [&](const char* name, int T, uint64_t piece, auto&& body) {
