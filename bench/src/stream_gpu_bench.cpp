@@ -92,8 +92,7 @@ DevicePass stream_to_device(const io::ContainerReader& reader, const Slice& slic
 
   // A small memory cap plans a small window: frames held in flight stay
   // below what the reader may keep ahead, or the next would never come.
-  const uint32_t window = pipeline.window();
-  const size_t in_flight = std::clamp<size_t>(window - window / 4 - 1, 1, kInFlight);
+  const size_t in_flight = std::clamp<size_t>(pipeline.most_ahead() - 1, 1, kInFlight);
   std::deque<std::pair<runtime::FrameHandle, uint64_t>> flight;
   uint64_t staged = 0;
   double waited_frames = 0, waited_gpu = 0;
@@ -290,8 +289,12 @@ void run_stream_gpu_bench(const StreamBenchOptions& o) {
   std::fflush(stdout);
   step("the page-cache read");
   (void)sequential_read_gbps(o.file, slice.offset, slice.bytes, ReadMode::PageCache, 0, setup.read_threads);  // bring it in
-  const double cached =
-      *sequential_read_gbps(o.file, slice.offset, slice.bytes, ReadMode::PageCache, o.min_seconds, setup.read_threads) * 1e9;
+  // The page-cache read on `threads` threads, bytes/s; the CPU row's own
+  // readers are measured only when they differ from the GPU rows'.
+  const auto page_cache_read = [&](int threads) {
+    return *sequential_read_gbps(o.file, slice.offset, slice.bytes, ReadMode::PageCache, o.min_seconds, threads) * 1e9;
+  };
+  const double cached = page_cache_read(setup.read_threads);
   step("the page-cache read into a window of frames");
   const uint64_t frame_bytes = uint64_t(in);
   const double window_pread =
@@ -313,11 +316,7 @@ void run_stream_gpu_bench(const StreamBenchOptions& o) {
   bounds.row({"pread, page cache, " + std::to_string(setup.read_threads) + " threads", num(cached / 1e9, 2),
               num(cached / in, 1), "file bytes read into one hot 8 MiB buffer per thread"});
   // The CPU row's own readers, when they differ: its bound.
-  const double cached_cpu =
-      cpu_setup.read_threads == setup.read_threads
-          ? cached
-          : *sequential_read_gbps(o.file, slice.offset, slice.bytes, ReadMode::PageCache, o.min_seconds,
-                                  cpu_setup.read_threads) * 1e9;
+  const double cached_cpu = cpu_setup.read_threads == setup.read_threads ? cached : page_cache_read(cpu_setup.read_threads);
   if (cpu_setup.read_threads != setup.read_threads) {
     bounds.row({"pread, page cache, " + std::to_string(cpu_setup.read_threads) + " threads (the CPU row's)",
                 num(cached_cpu / 1e9, 2), num(cached_cpu / in, 1), "file bytes read into one hot 8 MiB buffer per thread"});
@@ -366,13 +365,9 @@ void run_stream_gpu_bench(const StreamBenchOptions& o) {
   // frames/s between two runs of one call), so each row is measured against
   // the mean of its bounds before and after the rows.
   step("the page-cache read and the host -> device copy again");
-  const double cached_after =
-      *sequential_read_gbps(o.file, slice.offset, slice.bytes, ReadMode::PageCache, o.min_seconds, setup.read_threads) * 1e9;
+  const double cached_after = page_cache_read(setup.read_threads);
   const double cached_cpu_after =
-      cpu_setup.read_threads == setup.read_threads
-          ? cached_after
-          : *sequential_read_gbps(o.file, slice.offset, slice.bytes, ReadMode::PageCache, o.min_seconds,
-                                  cpu_setup.read_threads) * 1e9;
+      cpu_setup.read_threads == setup.read_threads ? cached_after : page_cache_read(cpu_setup.read_threads);
   const double h2d_after = copy_grid(context, copy_bytes).best * 1e9;
   std::printf("  measured again after the pipeline rows: pread, page cache, %d threads %.2f GB/s (before %.2f); host -> "
               "device copy %.2f GB/s (before %.2f)\n",

@@ -356,6 +356,7 @@ void Pipeline::drop() { core_->drop(); }
 uint32_t Pipeline::ready_count() { return core_->ready_count(); }
 PipelineStats Pipeline::stats() const { return core_->stats(); }
 uint32_t Pipeline::window() const { return core_->counters_.window_frames.load(std::memory_order_relaxed); }
+uint32_t Pipeline::most_ahead() const { return detail::ahead_most(window()); }
 std::string Pipeline::io_mode() const { return core_->stats().io_mode; }
 const io::ContainerReader& Pipeline::reader() const { return core_->reader_; }
 std::optional<FrameError> Pipeline::fatal_error() const {

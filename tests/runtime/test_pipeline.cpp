@@ -175,6 +175,7 @@ TEST_F(PipelineTest, WaitingWithTheWindowHeldThrows) {
     ASSERT_EQ(p.window(), window);
     p.restart({reader.frame_count(), 0, 1, 1, EndMode::Loop});
     const uint32_t ahead = window - window / 4;
+    EXPECT_EQ(p.most_ahead(), ahead);
     std::vector<FrameHandle> held;
     for (uint32_t i = 0; i < ahead; ++i) {
       ASSERT_FALSE(p.wait_next().end);

@@ -199,10 +199,10 @@ class Pipeline {
   NextEntry peek(size_t i = 0);
   // Consumer: blocks until the next entry is Ready or Failed, or returns
   // with `end` set when the schedule has no next entry. Releasing frames is
-  // the consumer's job: the reader keeps at most window() - window() / 4
-  // frames ahead, handles held included, so with that many handles held and
-  // no entry queued nothing could arrive, and wait_next() throws
-  // std::logic_error instead of waiting forever.
+  // the consumer's job: the reader keeps at most most_ahead() frames ahead,
+  // handles held included, so with that many handles held and no entry
+  // queued nothing could arrive, and wait_next() throws std::logic_error
+  // instead of waiting forever.
   NextEntry wait_next();
   // Consumer: takes the next entry, which must be Ready or Failed (a failed
   // handle carries the error; its frame is already given back). Throws
@@ -217,6 +217,10 @@ class Pipeline {
   // Any thread.
   PipelineStats stats() const;
   uint32_t window() const;
+  // Frames the reader keeps ahead of the playhead, handles the consumer
+  // holds included: window() - window() / 4 (the rest is kept behind). A
+  // consumer that waits holds fewer.
+  uint32_t most_ahead() const;
   std::string io_mode() const;
   const io::ContainerReader& reader() const;
   // Set if the reader thread stopped on an error outside any frame (out of
