@@ -14,6 +14,7 @@
 #include <algorithm>
 #include <array>
 #include <functional>
+#include <mutex>
 #include <cstring>
 #include <stdexcept>
 
@@ -142,7 +143,12 @@ struct Window::Impl {
   vk::Extent2D captured;
   int captured_slot = -1;
 
-  Impl(const render::VulkanHandles& h, const WindowOptions& o) : ctx(h), options(o) {}
+  // Held around submits and presents: the context's relay may share the
+  // queue (render/context.h, "Queues").
+  std::mutex& queue_lock;
+
+  Impl(const render::Context& context, const WindowOptions& o)
+      : ctx(context.vulkan()), options(o), queue_lock(context.queue_lock()) {}
   void create_swapchain();
   void wait(Slot& s) {
     if (!s.submitted) return;
@@ -179,7 +185,10 @@ void Window::Impl::run_once(const std::function<void(vk::CommandBuffer)>& record
   cmd.end();
   vk::raii::Fence fence(ctx.device, vk::FenceCreateInfo());
   const vk::CommandBufferSubmitInfo cb(*cmd);
-  ctx.queue.submit2(vk::SubmitInfo2({}, {}, cb), *fence);
+  {
+    const std::lock_guard lock(queue_lock);
+    ctx.queue.submit2(vk::SubmitInfo2({}, {}, cb), *fence);
+  }
   while (ctx.device.waitForFences(*fence, VK_TRUE, UINT64_MAX) == vk::Result::eTimeout) {
   }
 }
@@ -221,7 +230,7 @@ void Window::Impl::create_swapchain() {
 }
 
 Window::Window(render::Context& context, const WindowOptions& options, const WindowCallbacks& callbacks)
-    : impl_(std::make_unique<Impl>(context.vulkan(), options)) {
+    : impl_(std::make_unique<Impl>(context, options)) {
   Impl& w = *impl_;
   ensure_glfw();
   glfwWindowHint(GLFW_CLIENT_API, GLFW_NO_API);
@@ -411,6 +420,7 @@ bool Window::present(render::Renderer& renderer, const render::Camera& camera, c
                                                  vk::PipelineStageFlags2(sync.wait_stages))};
   const vk::SemaphoreSubmitInfo signal(*w.finished[index], 0, Stage::eAllCommands);
   w.ctx.device.resetFences(*slot.fence);
+  std::unique_lock lock(w.queue_lock);
   w.ctx.queue.submit2(vk::SubmitInfo2({}, waits, cb, signal), *slot.fence);
   slot.submitted = true;
   ++w.frame;
@@ -424,6 +434,7 @@ bool Window::present(render::Renderer& renderer, const render::Camera& camera, c
   } catch (const vk::OutOfDateKHRError&) {
     result = vk::Result::eErrorOutOfDateKHR;
   }
+  lock.unlock();
   if (result != vk::Result::eSuccess) w.create_swapchain();
   return true;
 }

@@ -6,6 +6,7 @@
 #include <zstd.h>
 
 #include <cstring>
+#include <functional>
 #include <stdexcept>
 #include <string>
 
@@ -56,11 +57,13 @@ void locate(std::span<const std::byte> payload, uint64_t payload_at, ChunkCodec 
 }
 
 // A packed plane's width, values and escapes, checked as unpack_plane does.
-GpuPlane packed_plane(std::span<const std::byte> record, const PlaneSource& s, uint64_t n, size_t p,
+// `bytes` holds the record's bytes from `base` on (the whole record, or one
+// chunk's payload as a read thread holds it).
+GpuPlane packed_plane(std::span<const std::byte> bytes, uint64_t base, const PlaneSource& s, uint64_t n, size_t p,
                       const ErrorLocation& where) {
   const std::string what = "plane " + std::to_string(p);
   if (s.size == 0) throw Error(where, what + ": packed plane is empty");
-  const uint32_t width = uint32_t(record[s.at]);
+  const uint32_t width = uint32_t(bytes[s.at - base]);
   if (width < 1 || width > uint32_t(kMaxPackedWidth)) {
     throw Error(where, what + ": packed width " + std::to_string(width) + " is not 1..7");
   }
@@ -77,16 +80,89 @@ GpuPlane packed_plane(std::span<const std::byte> record, const PlaneSource& s, u
 
 uint64_t round16(uint64_t v) { return (v + 15) & ~uint64_t(15); }
 
+// Where a zstd plane goes: sets `out` and returns true, or returns false
+// (the caller cannot inflate it).
+using PlaneSink = std::function<bool(GpuPlane& out, const PlaneSource& s, size_t p)>;
+
+// The GPU planes of chunk `chunk` from its plane table, in GpuChunkPlan
+// order; `bytes` holds the record from byte `base` on, the chunk's payload
+// included. False if a zstd plane was refused by `zstd`.
+bool plan_planes(std::span<const std::byte> bytes, uint64_t base, const ChunkDesc& chunk, const FileHeader& file,
+                 const GpuPlanOptions& options, GpuChunkPlan& g, const PlaneSink& zstd, const ErrorLocation& at) {
+  thread_local std::vector<PlaneSource> sources;
+  const size_t attributes = file.attributes.size();
+  const size_t planes = raw_chunk_bytes(file.position_coding, 1, attributes);
+  const bool attribute = options.color_attribute >= 0 && size_t(options.color_attribute) < attributes;
+  const uint64_t n = chunk.particle_count;
+  if (chunk.offset < base || chunk.offset - base > bytes.size() || chunk.compressed_size > bytes.size() - (chunk.offset - base)) {
+    throw Error(at, "a chunk payload lies outside the frame record");
+  }
+  locate(bytes.subspan(chunk.offset - base, chunk.compressed_size), chunk.offset, chunk.codec, n, planes, sources, at);
+  const size_t colour = 8 + 2 * size_t(attribute ? options.color_attribute : 0);
+  for (int k = 0; k < kGpuPlanes; ++k) {
+    if (k >= 8 && !attribute) break;
+    const size_t p = k < 8 ? size_t(k) : colour + size_t(k - 8);
+    const PlaneSource& s = sources[p];
+    GpuPlane& out = g.planes[k];
+    switch (s.kind) {
+      case PlaneSource::Stored: out = {uint32_t(s.at), 0, 0, 0}; break;
+      case PlaneSource::Packed: out = packed_plane(bytes, base, s, n, p, at); break;
+      case PlaneSource::Zstd:
+        if (!zstd(out, s, p)) return false;
+        break;
+    }
+  }
+  return true;
+}
+
+// Chunk c's plan before its planes: where its particles and tiles go.
+void start_chunk(GpuDecodePlan& plan, const ChunkDesc& chunk, size_t c, uint64_t first, bool attribute) {
+  GpuChunkPlan& g = plan.chunks[c];
+  g = GpuChunkPlan{};
+  g.first = uint32_t(first);
+  g.count = chunk.particle_count;
+  g.with_attribute = attribute ? 1 : 0;
+  g.first_tile = uint32_t(plan.tile_chunk.size());
+  plan.tile_chunk.insert(plan.tile_chunk.end(), (uint64_t(chunk.particle_count) + kGpuTile - 1) / kGpuTile, uint32_t(c));
+}
+
+// The plan's statistics, from its planes and jobs.
+void count_planes(GpuDecodePlan& plan) {
+  plan.stored_planes = plan.packed_planes = 0;
+  plan.zstd_planes = plan.inflate.size();
+  for (const GpuChunkPlan& g : plan.chunks) {
+    const int planes = g.with_attribute ? kGpuPlanes : 8;
+    for (int k = 0; k < planes; ++k) {
+      if (g.planes[k].width > 0) ++plan.packed_planes;
+      else ++plan.stored_planes;
+    }
+  }
+  plan.stored_planes -= plan.zstd_planes;  // inflated planes read as stored
+}
+
 }  // namespace
 
 bool gpu_decodable(const FileHeader& file) { return file.position_coding == PositionCoding::Quantized16; }
 
-void plan_gpu_decode(std::span<const std::byte> record, const FrameHeader& header, const FileHeader& file,
-                     const GpuPlanOptions& options, GpuDecodePlan& plan, const ErrorLocation& where) {
+namespace {
+
+bool wants_attribute(const FileHeader& file, const GpuPlanOptions& options) {
+  return options.color_attribute >= 0 && size_t(options.color_attribute) < file.attributes.size();
+}
+
+void check_offsets_fit(const GpuDecodePlan& plan, const ErrorLocation& where) {
+  if (plan.encoded_bytes() > kMax32) {
+    throw Error(where, "the frame's encoded bytes (" + std::to_string(plan.encoded_bytes()) +
+                           ") do not fit the GPU decoder's 32-bit offsets");
+  }
+}
+
+}  // namespace
+
+void plan_gpu_frame(const FrameHeader& header, const FileHeader& file, const GpuPlanOptions& options, GpuDecodePlan& plan,
+                    const ErrorLocation& where) {
   if (!gpu_decodable(file)) throw Error(where, "float32 positions are not decoded on the GPU");
-  const size_t attributes = file.attributes.size();
-  const size_t planes = raw_chunk_bytes(file.position_coding, 1, attributes);
-  const bool attribute = options.color_attribute >= 0 && size_t(options.color_attribute) < attributes;
+  const bool attribute = wants_attribute(file, options);
   plan.chunks.resize(header.chunks.size());
   plan.inflate.clear();
   plan.chunk_inflate.assign(header.chunks.size() + 1, 0);
@@ -95,60 +171,55 @@ void plan_gpu_decode(std::span<const std::byte> record, const FrameHeader& heade
   plan.inflated_bytes = 0;
   plan.stored_planes = plan.packed_planes = plan.zstd_planes = 0;
   for (const ChunkDesc& c : header.chunks) plan.record_bytes = std::max(plan.record_bytes, c.offset + c.compressed_size);
-  if (plan.record_bytes > record.size()) throw Error(where, "a chunk payload lies outside the frame record");
   plan.inflated_offset = round16(plan.record_bytes);
-
-  thread_local std::vector<PlaneSource> sources;
-  // The GPU planes of a chunk, in GpuChunkPlan order, by payload plane.
   uint64_t first = 0;
+  for (size_t c = 0; c < header.chunks.size(); ++c) {
+    start_chunk(plan, header.chunks[c], c, first, attribute);
+    first += header.chunks[c].particle_count;
+    if (first > kMax32) {
+      ErrorLocation at = where;
+      at.chunk = c;
+      throw Error(at, "the frame has 2^32 particles or more");
+    }
+  }
+  check_offsets_fit(plan, where);
+}
+
+bool plan_gpu_chunk(std::span<const std::byte> payload, const FrameHeader& header, const FileHeader& file,
+                    const GpuPlanOptions& options, size_t c, GpuDecodePlan& plan, const ErrorLocation& where) {
+  ErrorLocation at = where;
+  at.chunk = c;
+  const ChunkDesc& chunk = header.chunks[c];
+  if (payload.size() != chunk.compressed_size || c >= plan.chunks.size()) {
+    throw Error(at, "plan_gpu_chunk: the payload or the plan does not match the frame");
+  }
+  const PlaneSink refuse = [](GpuPlane&, const PlaneSource&, size_t) { return false; };
+  return plan_planes(payload, chunk.offset, chunk, file, options, plan.chunks[c], refuse, at);
+}
+
+void finish_gpu_plan(GpuDecodePlan& plan) { count_planes(plan); }
+
+void plan_gpu_decode(std::span<const std::byte> record, const FrameHeader& header, const FileHeader& file,
+                     const GpuPlanOptions& options, GpuDecodePlan& plan, const ErrorLocation& where) {
+  plan_gpu_frame(header, file, options, plan, where);
+  if (plan.record_bytes > record.size()) throw Error(where, "a chunk payload lies outside the frame record");
   for (size_t c = 0; c < header.chunks.size(); ++c) {
     ErrorLocation at = where;
     at.chunk = c;
     const ChunkDesc& chunk = header.chunks[c];
-    const uint64_t n = chunk.particle_count;
-    const std::span<const std::byte> payload = record.subspan(chunk.offset, chunk.compressed_size);
     plan.chunk_inflate[c] = uint32_t(plan.inflate.size());
-    locate(payload, chunk.offset, chunk.codec, n, planes, sources, at);
-    GpuChunkPlan& g = plan.chunks[c];
-    g = GpuChunkPlan{};
-    g.first = uint32_t(first);
-    g.count = uint32_t(n);
-    g.with_attribute = attribute ? 1 : 0;
-    g.first_tile = uint32_t(plan.tile_chunk.size());
-    plan.tile_chunk.insert(plan.tile_chunk.end(), (n + kGpuTile - 1) / kGpuTile, uint32_t(c));
-    const size_t colour = 8 + 2 * size_t(attribute ? options.color_attribute : 0);
-    for (int k = 0; k < kGpuPlanes; ++k) {
-      if (k >= 8 && !attribute) break;
-      const size_t p = k < 8 ? size_t(k) : colour + size_t(k - 8);
-      const PlaneSource& s = sources[p];
-      GpuPlane& out = g.planes[k];
-      switch (s.kind) {
-        case PlaneSource::Stored:
-          out = {uint32_t(s.at), 0, 0, 0};
-          ++plan.stored_planes;
-          break;
-        case PlaneSource::Packed:
-          out = packed_plane(record, s, n, p, at);
-          ++plan.packed_planes;
-          break;
-        case PlaneSource::Zstd: {
-          const uint64_t target = plan.inflated_offset + plan.inflated_bytes;
-          plan.inflate.push_back({s.at, s.size, uint32_t(n), target, uint32_t(c), uint32_t(p)});
-          out = {uint32_t(target), 0, 0, 0};
-          plan.inflated_bytes = round16(plan.inflated_bytes + n);
-          ++plan.zstd_planes;
-          break;
-        }
-      }
-    }
+    const PlaneSink inflate = [&](GpuPlane& out, const PlaneSource& s, size_t p) {
+      const uint64_t target = plan.inflated_offset + plan.inflated_bytes;
+      plan.inflate.push_back({s.at, s.size, uint32_t(chunk.particle_count), target, uint32_t(c), uint32_t(p)});
+      out = {uint32_t(target), 0, 0, 0};
+      plan.inflated_bytes = round16(plan.inflated_bytes + chunk.particle_count);
+      return true;
+    };
+    plan_planes(record, 0, chunk, file, options, plan.chunks[c], inflate, at);
     plan.chunk_inflate[c + 1] = uint32_t(plan.inflate.size());
-    first += n;
-    if (first > kMax32) throw Error(at, "the frame has 2^32 particles or more");
   }
-  if (plan.encoded_bytes() > kMax32) {
-    throw Error(where, "the frame's encoded bytes (" + std::to_string(plan.encoded_bytes()) +
-                           ") do not fit the GPU decoder's 32-bit offsets");
-  }
+  count_planes(plan);
+  check_offsets_fit(plan, where);
 }
 
 void stage_chunk(std::span<const std::byte> record, const FrameHeader& header, const GpuDecodePlan& plan, size_t c,
@@ -193,6 +264,13 @@ void write_tables(const GpuDecodePlan& plan, std::span<std::byte> staged) {
   if (staged.size() < plan.staged_bytes()) throw std::invalid_argument("write_tables: the staged area is too small");
   std::memcpy(staged.data() + plan.plans_offset(), plan.chunks.data(), plan.chunks.size() * sizeof(GpuChunkPlan));
   std::memcpy(staged.data() + plan.tiles_offset(), plan.tile_chunk.data(), plan.tile_chunk.size() * 4);
+}
+
+void write_table_block(const GpuDecodePlan& plan, std::span<std::byte> out) {
+  const uint64_t plans = plan.chunks.size() * sizeof(GpuChunkPlan);
+  if (out.size() < plans + plan.tile_chunk.size() * 4) throw std::invalid_argument("write_table_block: too small");
+  std::memcpy(out.data(), plan.chunks.data(), plans);
+  std::memcpy(out.data() + plans, plan.tile_chunk.data(), plan.tile_chunk.size() * 4);
 }
 
 namespace {

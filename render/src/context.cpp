@@ -1,5 +1,6 @@
 // Vulkan instance, device selection and queues; buffer and image helpers.
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <cstdio>
 #include <cstring>
@@ -237,8 +238,17 @@ Context::Context(const ContextOptions& options) : impl_(std::make_unique<Impl>()
   c.graphics_family = *graphics;
   c.transfer_family = transfer.value_or(*graphics);
   const float priority = 1.0f;
-  std::vector<vk::DeviceQueueCreateInfo> queues{vk::DeviceQueueCreateInfo({}, c.graphics_family, 1, &priority)};
-  if (c.transfer_family != c.graphics_family) queues.emplace_back(vk::DeviceQueueCreateInfo({}, c.transfer_family, 1, &priority));
+  // A second queue of the transfer family, where it has one, for the relay
+  // alone (vk_common.h).
+  const std::array<float, 2> priorities{1.0f, 1.0f};
+  const uint32_t transfer_queues = std::min<uint32_t>(2, families[c.transfer_family].queueCount);
+  std::vector<vk::DeviceQueueCreateInfo> queues;
+  if (c.transfer_family != c.graphics_family) {
+    queues.emplace_back(vk::DeviceQueueCreateInfo({}, c.graphics_family, 1, &priority));
+    queues.emplace_back(vk::DeviceQueueCreateInfo({}, c.transfer_family, transfer_queues, priorities.data()));
+  } else {
+    queues.emplace_back(vk::DeviceQueueCreateInfo({}, c.graphics_family, transfer_queues, priorities.data()));
+  }
 
   const auto device_extensions = c.physical.enumerateDeviceExtensionProperties();
   std::vector<const char*> extensions;
@@ -257,6 +267,8 @@ Context::Context(const ContextOptions& options) : impl_(std::make_unique<Impl>()
   c.device = vk::raii::Device(c.physical, info);
   c.graphics_queue = vk::raii::Queue(c.device, c.graphics_family, 0);
   c.transfer_queue = vk::raii::Queue(c.device, c.transfer_family, 0);
+  c.relay_shared = transfer_queues < 2;
+  c.relay_queue = vk::raii::Queue(c.device, c.transfer_family, c.relay_shared ? 0 : 1);
   c.handles = {static_cast<VkInstance>(*c.instance), static_cast<VkPhysicalDevice>(*c.physical),
                static_cast<VkDevice>(*c.device),      c.graphics_family,
                static_cast<VkQueue>(*c.graphics_queue), c.transfer_family != c.graphics_family ? c.transfer_family : UINT32_MAX,
@@ -290,12 +302,14 @@ Context::Context(const HostVulkan& host) : impl_(std::make_unique<Impl>()) {
   const bool transfer = h.transfer_family != UINT32_MAX && h.transfer_family != h.graphics_family;
   c.transfer_family = transfer ? h.transfer_family : h.graphics_family;
   c.transfer_queue = vk::raii::Queue(c.device, transfer ? h.transfer_queue : h.graphics_queue);
+  c.relay_queue = vk::raii::Queue(c.device, transfer ? h.transfer_queue : h.graphics_queue);  // shared: queue_lock()
 }
 
 Context::Impl::~Impl() {
   if (*device && owning) device.waitIdle();
   if (!owning) {
     // The host's handles: let go of them without destroying anything.
+    relay_queue.release();
     transfer_queue.release();
     graphics_queue.release();
     device.release();
@@ -308,6 +322,8 @@ Context::~Context() = default;
 
 const VulkanHandles& Context::vulkan() const { return impl_->handles; }
 bool Context::owns_device() const { return impl_->owning; }
+bool Context::relay_queue_shared() const { return impl_->relay_shared; }
+std::mutex& Context::queue_lock() const { return impl_->queue_mutex; }
 
 std::vector<const char*> required_instance_extensions() { return {}; }
 
@@ -429,9 +445,23 @@ void Context::Impl::run_once(const std::function<void(vk::CommandBuffer)>& recor
   cmd.end();
   vk::raii::Fence fence(device, vk::FenceCreateInfo());
   vk::CommandBufferSubmitInfo cb(cmd);
-  graphics_queue.submit2(vk::SubmitInfo2({}, {}, cb), *fence);
+  submit(graphics_queue, vk::SubmitInfo2({}, {}, cb), *fence);
   while (device.waitForFences(*fence, VK_TRUE, UINT64_MAX) == vk::Result::eTimeout) {
   }
+}
+
+void Context::Impl::submit(const vk::raii::Queue& queue, const vk::SubmitInfo2& info, vk::Fence fence) const {
+  if (!relay_shared) {
+    queue.submit2(info, fence);
+    return;
+  }
+  const std::lock_guard lock(queue_mutex);
+  queue.submit2(info, fence);
+}
+
+void Context::Impl::wait_idle(const vk::raii::Queue& queue) const {
+  const std::lock_guard lock(queue_mutex);  // rare: teardown
+  queue.waitIdle();
 }
 
 Buffer create_buffer(const Context::Impl& ctx, vk::DeviceSize size, vk::BufferUsageFlags usage, MemoryKind kind) {

@@ -137,7 +137,7 @@ FrameStats OffscreenTarget::render(Renderer& renderer, std::span<const View> vie
   const vk::SemaphoreSubmitInfo wait(vk::Semaphore(sync.upload_semaphore), sync.upload_value,
                                      vk::PipelineStageFlags2(sync.wait_stages));
   o.ctx.device.resetFences(*slot.fence);
-  o.ctx.graphics_queue.submit2(vk::SubmitInfo2({}, wait, cb), *slot.fence);
+  o.ctx.submit(o.ctx.graphics_queue, vk::SubmitInfo2({}, wait, cb), *slot.fence);
   slot.submitted = true;
   o.last = index;
   ++o.frames;

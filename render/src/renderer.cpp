@@ -307,8 +307,8 @@ Renderer::~Renderer() {
   // timeline's points after the wait returns, and destroying the semaphores
   // then crashed it (bench stream --gpu under ASan and load, 2 runs of 12).
   // So the queues this renderer submitted to go idle first.
-  if (impl_->upload_value > 0) impl_->ctx.transfer_queue.waitIdle();
-  if (impl_->last_decode_ticket > 0) impl_->ctx.graphics_queue.waitIdle();
+  if (impl_->upload_value > 0) impl_->ctx.wait_idle(impl_->ctx.transfer_queue);
+  if (impl_->last_decode_ticket > 0) impl_->ctx.wait_idle(impl_->ctx.graphics_queue);
 }
 
 const SceneInfo& Renderer::scene() const { return impl_->scene; }

@@ -3,6 +3,10 @@
 #include <algorithm>
 #include <cstdlib>
 #include <new>
+#include <stdexcept>
+#include <thread>
+
+#include "sluice/runtime/pipeline.h"
 
 #include "staging_block.h"
 
@@ -21,13 +25,16 @@ constexpr auto kStagingProps = vk::MemoryPropertyFlagBits::eHostVisible | vk::Me
 // Without it nothing is known about other users: the heap's size, which
 // already includes what this allocator holds (adding it again made the plan
 // grow with the window).
+// With a resident window the same for the device-local heap and the areas
+// held there.
 class StagingAllocator::HeapBudget final : public runtime::DeviceMemoryBudget {
  public:
-  HeapBudget(const Context& context, const StagingAllocator& owner, uint32_t heap)
-      : context_(context), owner_(owner), heap_(heap) {}
+  HeapBudget(const Context& context, const StagingAllocator& owner, uint32_t heap, bool resident)
+      : context_(context), owner_(owner), heap_(heap), resident_(resident) {}
   uint64_t available_bytes() const override {
     if (!context_impl(context_).memory_budget) return context_.heap_available_bytes(heap_);
-    const uint64_t in_heap = owner_.pool_->held_where([](const Memory& m) { return !m.host; });
+    const uint64_t in_heap = resident_ ? owner_.resident_pool_->held_bytes()
+                                       : owner_.pool_->held_where([](const Memory& m) { return !m.host; });
     return context_.heap_available_bytes(heap_) + in_heap;
   }
 
@@ -35,35 +42,90 @@ class StagingAllocator::HeapBudget final : public runtime::DeviceMemoryBudget {
   const Context& context_;
   const StagingAllocator& owner_;
   uint32_t heap_;
+  bool resident_;
 };
 
-StagingAllocator::StagingAllocator(Context& context) : context_(context), pool_(std::make_unique<Pool>()) {
-  const Context::Impl& c = context_impl(context);
+namespace {
+
+uint32_t heap_with(const Context::Impl& c, vk::MemoryPropertyFlags props) {
   for (uint32_t t = 0; t < c.memory.memoryTypeCount; ++t) {
-    if ((c.memory.memoryTypes[t].propertyFlags & kStagingProps) == kStagingProps) {
-      heap_ = c.memory.memoryTypes[t].heapIndex;
-      device_heap_ = bool(c.memory.memoryHeaps[heap_].flags & vk::MemoryHeapFlagBits::eDeviceLocal);
-      break;
-    }
+    if ((c.memory.memoryTypes[t].propertyFlags & props) == props) return c.memory.memoryTypes[t].heapIndex;
   }
-  if (device_heap_) budget_ = std::make_unique<HeapBudget>(context, *this, heap_);
+  return 0;
 }
+
+// The pipeline's read threads by default on this machine (one piece each
+// at a time), and a few more so that a slot whose copy is still running
+// is not waited for.
+uint32_t default_ring_slots() {
+  const int cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  return static_cast<uint32_t>(runtime::default_thread_split(cores, true).read + 4);
+}
+
+}  // namespace
+
+StagingAllocator::StagingAllocator(Context& context, const StagingOptions& options)
+    : context_(context), options_(options), pool_(std::make_unique<Pool>()), resident_pool_(std::make_unique<Pool>()) {
+  const Context::Impl& c = context_impl(context);
+  heap_ = heap_with(c, kStagingProps);
+  device_heap_ = bool(c.memory.memoryHeaps[heap_].flags & vk::MemoryHeapFlagBits::eDeviceLocal);
+  device_local_heap_ = heap_with(c, vk::MemoryPropertyFlagBits::eDeviceLocal);
+  if (options_.resident) {
+    const uint32_t slots = options_.ring_slots > 0 ? options_.ring_slots : default_ring_slots();
+    ring_ = std::make_unique<RelayRing>(c, slots, std::max<uint64_t>(options_.ring_piece_bytes, 4096));
+    budget_ = std::make_unique<HeapBudget>(context, *this, device_local_heap_, true);
+  } else if (device_heap_) {
+    budget_ = std::make_unique<HeapBudget>(context, *this, heap_, false);
+  }
+}
+
+runtime::PieceRelay* StagingAllocator::relay() { return ring_.get(); }
+
+VkSemaphore StagingAllocator::relay_semaphore() const { return ring_ ? static_cast<VkSemaphore>(ring_->semaphore()) : VK_NULL_HANDLE; }
 
 StagingAllocator::~StagingAllocator() = default;
 
 const runtime::DeviceMemoryBudget* StagingAllocator::device_budget() const { return budget_.get(); }
 
-uint64_t StagingAllocator::kept_bytes() const { return pool_->kept_bytes(); }
-void StagingAllocator::trim(uint64_t keep) { pool_->trim(keep); }
-uint64_t StagingAllocator::held_bytes() const { return pool_->held_bytes(); }
-uint64_t StagingAllocator::peak_held_bytes() const { return pool_->peak_held_bytes(); }
-uint64_t StagingAllocator::fresh_allocations() const { return pool_->allocations(); }
+uint64_t StagingAllocator::kept_bytes() const { return pool_->kept_bytes() + resident_pool_->kept_bytes(); }
+void StagingAllocator::trim(uint64_t keep) {
+  // Host staging first: the window's frames are of one kind at a time.
+  const uint64_t resident = resident_pool_->kept_bytes();
+  pool_->trim(keep > resident ? keep - resident : 0);
+  resident_pool_->trim(keep > pool_->kept_bytes() ? keep - pool_->kept_bytes() : 0);
+}
+uint64_t StagingAllocator::held_bytes() const { return pool_->held_bytes() + resident_pool_->held_bytes(); }
+uint64_t StagingAllocator::peak_held_bytes() const { return pool_->peak_held_bytes() + resident_pool_->peak_held_bytes(); }
+uint64_t StagingAllocator::fresh_allocations() const { return pool_->allocations() + resident_pool_->allocations(); }
+
+namespace {
+uint64_t resident_bytes(const runtime::FrameLayout& layout) { return (layout.encoded_bytes + kAlignment - 1) / kAlignment * kAlignment; }
+}  // namespace
 
 uint64_t StagingAllocator::bytes_for(const runtime::FrameLayout& layout) const {
+  if (layout.resident) return resident_bytes(layout);
   return runtime::block_layout(layout, kAlignment).bytes;
 }
 
 runtime::FrameBuffers StagingAllocator::allocate(const runtime::FrameLayout& layout) {
+  if (layout.resident) {
+    if (!ring_) throw std::logic_error("StagingAllocator: a resident frame asked of an allocator without a resident window");
+    const Context::Impl& c = context_impl(context_);
+    Pool::Block& block = resident_pool_->acquire(resident_bytes(layout), [&](uint64_t need) {
+      Memory m;
+      m.area = std::make_unique<ResidentArea>(
+          *ring_, create_buffer(c, need,
+                                vk::BufferUsageFlagBits::eStorageBuffer | vk::BufferUsageFlagBits::eShaderDeviceAddress |
+                                    vk::BufferUsageFlagBits::eTransferDst,
+                                MemoryKind::DeviceLocal));
+      return m;
+    });
+    // A read cut short may have left copies into it in flight.
+    ring_->wait(block.memory.area->relayed.load(std::memory_order_relaxed));
+    runtime::FrameBuffers out;
+    out.tag = reinterpret_cast<uintptr_t>(&block);
+    return out;
+  }
   const runtime::BlockLayout at = runtime::block_layout(layout, kAlignment);
   Pool::Block& block = pool_->acquire(at.bytes, [&](uint64_t need) {
     Memory m;
@@ -87,7 +149,8 @@ runtime::FrameBuffers StagingAllocator::allocate(const runtime::FrameLayout& lay
 
 void StagingAllocator::release(runtime::FrameBuffers& buffers) {
   if (!buffers.tag) return;
-  pool_->release(*reinterpret_cast<Pool::Block*>(static_cast<uintptr_t>(buffers.tag)));
+  Pool::Block& block = *reinterpret_cast<Pool::Block*>(static_cast<uintptr_t>(buffers.tag));
+  (block.memory.resident() ? *resident_pool_ : *pool_).release(block);
   buffers = {};
 }
 

@@ -34,7 +34,7 @@ double sustained_copy_gbps(Context::Impl& ctx, vk::Buffer source, uint64_t bytes
   }
   const auto submit = [&](int k) {
     const vk::CommandBufferSubmitInfo cb(*cmds[k]);
-    ctx.transfer_queue.submit2(vk::SubmitInfo2({}, {}, cb), *fences[k]);
+    ctx.submit(ctx.transfer_queue, vk::SubmitInfo2({}, {}, cb), *fences[k]);
   };
   const auto wait = [&](int k) {
     while (ctx.device.waitForFences(*fences[k], VK_TRUE, UINT64_MAX) == vk::Result::eTimeout) {
@@ -55,7 +55,7 @@ double sustained_copy_gbps(Context::Impl& ctx, vk::Buffer source, uint64_t bytes
     submit(k);
   }
   const double gbps = double(copies) * double(bytes) / elapsed() / 1e9;
-  ctx.transfer_queue.waitIdle();  // the copies still queued, before their targets go
+  ctx.wait_idle(ctx.transfer_queue);  // the copies still queued, before their targets go
   return gbps;
 }
 

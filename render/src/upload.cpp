@@ -7,6 +7,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <array>
 #include <cstring>
 #include <stdexcept>
 
@@ -160,17 +161,21 @@ struct UploadSource {  // where upload_frame() copies a part of a frame from
   vk::DeviceSize offset = 0;
 };
 
-// A frame committed encoded: its staged area, decoded on the GPU after the copy.
+// A frame committed encoded: its staged area, decoded on the GPU after the
+// copy. A resident one (relay_ring.h) is in device memory already: only its
+// tables are copied (from `area`, table_block_bytes() of them), into it.
 struct EncodedSource {
   UploadSource area;
   const io::GpuDecodePlan* plan = nullptr;
+  const ResidentArea* resident = nullptr;
+  vk::Semaphore relayed;  // the relay's timeline, when resident
 };
 
 // Records the decode of `set`'s staged area into its particle and
 // attribute buffers, creating what it needs first (the pass, a command
 // buffer, the tile sums sized for `plan`); submits nothing, so a failure
 // here leaves no copy in flight.
-void record_decode(Renderer::Impl& r, FrameSet& set, const io::GpuDecodePlan& plan) {
+void record_decode(Renderer::Impl& r, FrameSet& set, const io::GpuDecodePlan& plan, vk::DeviceAddress encoded) {
   using Stage = vk::PipelineStageFlagBits2;
   using Access = vk::AccessFlagBits2;
   if (!r.decode_pass) {
@@ -191,12 +196,12 @@ void record_decode(Renderer::Impl& r, FrameSet& set, const io::GpuDecodePlan& pl
   cmd.begin(vk::CommandBufferBeginInfo(vk::CommandBufferUsageFlagBits::eOneTimeSubmit));
   cmd.writeTimestamp2(Stage::eAllCommands, *set.decode_stamps, 0);
   DecodePass::barrier(cmd);
-  const DecodeRun run{set.encoded.address,
-                      set.encoded.address + plan.plans_offset(),
+  const DecodeRun run{encoded,
+                      encoded + plan.plans_offset(),
                       set.particles.address,
                       set.attributes.address,
                       set.decode_errors.address,
-                      set.encoded.address + plan.tiles_offset(),
+                      encoded + plan.tiles_offset(),
                       set.decode_tiles.address,
                       uint32_t(plan.tile_chunk.size())};
   r.decode_pass->record(cmd, run);
@@ -209,15 +214,21 @@ void record_decode(Renderer::Impl& r, FrameSet& set, const io::GpuDecodePlan& pl
 }
 
 // Submits the decode record_decode() recorded to the graphics queue, after
-// the copy that signals `copy_value` on copy_done; returns the upload
-// timeline value the decode signals.
-uint64_t submit_decode(Renderer::Impl& r, FrameSet& set, uint64_t copy_value) {
+// the copy that signals `copy_value` on copy_done (and, for a resident
+// frame, the relay's copies into it); returns the upload timeline value the
+// decode signals.
+uint64_t submit_decode(Renderer::Impl& r, FrameSet& set, uint64_t copy_value, const EncodedSource& source) {
   using Stage = vk::PipelineStageFlagBits2;
   const vk::CommandBufferSubmitInfo cb(*set.decode);
   // Every stage waits (the first timestamp too, so decode_ms is the decode's).
-  const vk::SemaphoreSubmitInfo wait(*r.copy_done, copy_value, Stage::eAllCommands);
+  const uint64_t relayed = source.resident ? source.resident->relayed.load(std::memory_order_relaxed) : 0;
+  const std::array waits{vk::SemaphoreSubmitInfo(*r.copy_done, copy_value, Stage::eAllCommands),
+                         vk::SemaphoreSubmitInfo(source.relayed, relayed, Stage::eAllCommands)};
+  const uint32_t wait_count = relayed > 0 ? 2 : 1;
   const vk::SemaphoreSubmitInfo signal(*r.upload_done, r.upload_value + 1, Stage::eAllCommands);
-  r.ctx.graphics_queue.submit2(vk::SubmitInfo2({}, wait, cb, signal));
+  r.ctx.submit(r.ctx.graphics_queue,
+               vk::SubmitInfo2({}, vk::ArrayProxyNoTemporaries<const vk::SemaphoreSubmitInfo>(wait_count, waits.data()), cb,
+                               signal));
   set.decoded_on_gpu = true;
   set.decode_ms = -1;
   set.decode_errors_found = 0;
@@ -268,10 +279,10 @@ uint64_t upload_frame(Renderer::Impl& r, FrameSet& set, UploadSource particles_s
   r.ensure(r.big, std::max<uint64_t>((n + room) * 4 * 2, 16), kDeviceUsage, MemoryKind::DeviceLocal);
 
   if (encoded) {
-    r.ensure(set.encoded, encoded->plan->staged_bytes(), kDeviceUsage, MemoryKind::DeviceLocal);
+    if (!encoded->resident) r.ensure(set.encoded, encoded->plan->staged_bytes(), kDeviceUsage, MemoryKind::DeviceLocal);
     r.ensure(set.decode_errors, std::max<uint64_t>(uint64_t(chunks) * 4, 16),
              vk::BufferUsageFlagBits::eStorageBuffer | vk::BufferUsageFlagBits::eShaderDeviceAddress, MemoryKind::Readback);
-    record_decode(r, set, *encoded->plan);
+    record_decode(r, set, *encoded->plan, encoded->resident ? encoded->resident->device.address : set.encoded.address);
   }
 
   (*r.ctx.device).resetQueryPool(*set.stamps, 0, 2);
@@ -279,7 +290,10 @@ uint64_t upload_frame(Renderer::Impl& r, FrameSet& set, UploadSource particles_s
   cmd.reset();
   cmd.begin(vk::CommandBufferBeginInfo(vk::CommandBufferUsageFlagBits::eOneTimeSubmit));
   cmd.writeTimestamp2(vk::PipelineStageFlagBits2::eAllCommands, *set.stamps, 0);
-  if (encoded) {
+  if (encoded && encoded->resident) {
+    cmd.copyBuffer(encoded->area.buffer, *encoded->resident->device.buffer,
+                   vk::BufferCopy(encoded->area.offset, encoded->plan->plans_offset(), io::table_block_bytes(*encoded->plan)));
+  } else if (encoded) {
     cmd.copyBuffer(encoded->area.buffer, *set.encoded.buffer,
                    vk::BufferCopy(encoded->area.offset, 0, encoded->plan->staged_bytes()));
   } else if (n > 0) {
@@ -310,8 +324,8 @@ uint64_t upload_frame(Renderer::Impl& r, FrameSet& set, UploadSource particles_s
     // queue, waits for it and signals the upload timeline (in order).
     ++r.copy_value;
     const vk::SemaphoreSubmitInfo copied(*r.copy_done, r.copy_value, vk::PipelineStageFlagBits2::eAllCommands);
-    r.ctx.transfer_queue.submit2(vk::SubmitInfo2({}, {}, cb, copied));
-    r.upload_value = submit_decode(r, set, r.copy_value);
+    r.ctx.submit(r.ctx.transfer_queue, vk::SubmitInfo2({}, {}, cb, copied));
+    r.upload_value = submit_decode(r, set, r.copy_value, *encoded);
     r.last_decode_ticket = r.upload_value;
   } else {
     // A timeline's values must rise in the order they are signalled: after
@@ -321,10 +335,10 @@ uint64_t upload_frame(Renderer::Impl& r, FrameSet& set, UploadSource particles_s
     const bool order = r.last_decode_ticket > 0 && r.last_decode_ticket == r.upload_value;
     ++r.upload_value;
     const vk::SemaphoreSubmitInfo signal(*r.upload_done, r.upload_value, vk::PipelineStageFlagBits2::eAllCommands);
-    r.ctx.transfer_queue.submit2(
-        vk::SubmitInfo2({}, order ? vk::ArrayProxyNoTemporaries<const vk::SemaphoreSubmitInfo>(after_decode)
-                                  : vk::ArrayProxyNoTemporaries<const vk::SemaphoreSubmitInfo>(),
-                        cb, signal));
+    r.ctx.submit(r.ctx.transfer_queue,
+                 vk::SubmitInfo2({}, order ? vk::ArrayProxyNoTemporaries<const vk::SemaphoreSubmitInfo>(after_decode)
+                                           : vk::ArrayProxyNoTemporaries<const vk::SemaphoreSubmitInfo>(),
+                                 cb, signal));
   }
   set.ticket = r.upload_value;
   set.upload_ms = -1;
@@ -443,27 +457,38 @@ uint64_t Renderer::commit_encoded(const EncodedFrameView& frame, const StagingAl
   }
   if (r.scene.coding != io::PositionCoding::Quantized16) throw std::invalid_argument("commit_encoded: a float32 scene");
   const uint64_t staged = plan.staged_bytes();
-  if (frame.buffers->particles.size() < staged) throw std::invalid_argument("commit_encoded: the staged area is too small");
   const bool attribute = frame.color_attribute >= 0 && chunks > 0 && plan.chunks[0].with_attribute != 0;
   const StagingAllocator::Memory* block = from ? &staging_memory(*frame.buffers) : nullptr;
-  const bool own = !block || block->host;  // not in Vulkan memory: through the renderer's staging
+  const ResidentArea* resident = block && block->resident() ? block->area.get() : nullptr;
+  if (resident && resident->device.size < staged) throw std::invalid_argument("commit_encoded: the resident area is too small");
+  if (!resident && frame.buffers->particles.size() < staged) {
+    throw std::invalid_argument("commit_encoded: the staged area is too small");
+  }
+  const bool own = !resident && (!block || block->host);  // not in Vulkan memory: through the renderer's staging
+  // A resident frame's tables go through the renderer's staging too.
+  const uint64_t extra = own ? staged : resident ? io::table_block_bytes(plan) : 0;
 
   const int index = r.free_set();
   FrameSet& set = r.sets[size_t(index)];
   r.stride = 8;
   const uint64_t table = (uint64_t(chunks) * sizeof(GpuChunk) + 15) & ~uint64_t(15);
-  r.ensure(set.staging, std::max<uint64_t>(table + (own ? staged : 0), 16), vk::BufferUsageFlagBits::eTransferSrc,
-           MemoryKind::Upload);
+  r.ensure(set.staging, std::max<uint64_t>(table + extra, 16), vk::BufferUsageFlagBits::eTransferSrc, MemoryKind::Upload);
   set.ticket = 0;
   auto* base = static_cast<std::byte*>(set.staging.mapped);
   fill_chunk_table(header, frame.chunk_first, attribute ? frame.color_attribute : -1,
                    {reinterpret_cast<GpuChunk*>(base), chunks}, io::ErrorLocation{{}, header.frame_number, {}});
   if (own) std::memcpy(base + table, frame.buffers->particles.data(), staged);
+  if (resident) io::write_table_block(plan, {base + table, size_t(extra)});
   mark_layers(set, header);
   set.particle_count = header.particle_count;
   set.chunk_count = chunks;
   set.has_attribute = attribute;
-  const EncodedSource source{own ? UploadSource{*set.staging.buffer, table} : UploadSource{*block->staging.buffer, 0}, &plan};
+  EncodedSource source{own || resident ? UploadSource{*set.staging.buffer, table} : UploadSource{*block->staging.buffer, 0},
+                       &plan};
+  if (resident) {
+    source.resident = resident;
+    source.relayed = static_cast<vk::Semaphore>(from->relay_semaphore());
+  }
   return upload_frame(r, set, {}, 0, {}, &source);
 }
 

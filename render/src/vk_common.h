@@ -33,6 +33,15 @@ struct Context::Impl {
   uint32_t transfer_family = 0;  // == graphics_family when there is no separate one
   vk::raii::Queue graphics_queue{nullptr};
   vk::raii::Queue transfer_queue{nullptr};  // the graphics queue when there is no separate one
+  // Where a StagingAllocator's relay copies frames' pieces from the
+  // pipeline's read threads (runtime/relay.h): a second queue of the
+  // transfer family where the device has one (devices sluice creates),
+  // else the transfer queue, shared: then every submission to it holds
+  // queue_mutex (sluice's own through submit(); the host's by
+  // Context::queue_lock()).
+  vk::raii::Queue relay_queue{nullptr};
+  bool relay_shared = true;
+  mutable std::mutex queue_mutex;
   vk::PhysicalDeviceProperties properties;
   vk::PhysicalDeviceMemoryProperties memory;
   bool memory_budget = false;  // VK_EXT_memory_budget enabled
@@ -49,6 +58,10 @@ struct Context::Impl {
   ~Impl();
 
   uint32_t memory_type(uint32_t type_bits, vk::MemoryPropertyFlags wanted) const;
+  // Submits to `queue` (one of the above), holding queue_mutex while the
+  // relay shares it: sluice's submissions go through here.
+  void submit(const vk::raii::Queue& queue, const vk::SubmitInfo2& info, vk::Fence fence = {}) const;
+  void wait_idle(const vk::raii::Queue& queue) const;
   // Records `record` into a fresh command buffer on the graphics queue, submits
   // it and waits. For setup work only.
   void run_once(const std::function<void(vk::CommandBuffer)>& record) const;

@@ -101,7 +101,7 @@ size_t FileRecordSource::read_at(std::span<std::byte> dst, uint64_t offset) {
   }
 }
 
-size_t RecordSource::read_checked(std::span<std::byte> dst, uint64_t offset, uint64_t& checksum) {
+size_t RecordSource::read_checked(std::span<std::byte> dst, uint64_t offset, uint64_t& checksum, Stores /*stores*/) {
   size_t got = 0;
   while (got < dst.size()) {
     const size_t n = read_at(dst.subspan(got), offset + got);
@@ -112,9 +112,9 @@ size_t RecordSource::read_checked(std::span<std::byte> dst, uint64_t offset, uin
   return got;
 }
 
-size_t FileRecordSource::read_checked(std::span<std::byte> dst, uint64_t offset, uint64_t& checksum) {
+size_t FileRecordSource::read_checked(std::span<std::byte> dst, uint64_t offset, uint64_t& checksum, Stores stores) {
   const bool mapped = direct_fd_.load(std::memory_order_relaxed) < 0 && offset < map_bytes_ && dst.size() <= map_bytes_ - offset;
-  if (mapped && detail::copy_from_mapping_checked(dst.data(), map_ + offset, dst.size(), checksum) && reaches(offset + dst.size())) {
+  if (mapped && detail::copy_from_mapping_checked(dst.data(), map_ + offset, dst.size(), checksum, stores == Stores::Streaming) && reaches(offset + dst.size())) {
     return dst.size();
   }
   return RecordSource::read_checked(dst, offset, checksum);  // pread: O_DIRECT, past the mapping, or a file cut under it

@@ -101,10 +101,11 @@ bool copy_from_mapping(std::byte* dst, const std::byte* src, size_t n) noexcept 
   return with_landing([&] { stream_copy(dst, src, n); });
 }
 
-bool copy_from_mapping_checked(std::byte* dst, const std::byte* src, size_t n, uint64_t& checksum) noexcept {
+bool copy_from_mapping_checked(std::byte* dst, const std::byte* src, size_t n, uint64_t& checksum, bool streaming) noexcept {
   return with_landing([&] {  // the hash reads the mapping too
-    const auto copy = [](std::byte* d, const std::byte* s, size_t k, void*) { stream_copy(d, s, k); };
-    checksum = io::copy_and_checksum(dst, src, n, copy, nullptr);
+    const auto stream = [](std::byte* d, const std::byte* s, size_t k, void*) { stream_copy(d, s, k); };
+    const auto plain = [](std::byte* d, const std::byte* s, size_t k, void*) { std::memcpy(d, s, k); };
+    checksum = io::copy_and_checksum(dst, src, n, streaming ? io::BlockCopy(stream) : io::BlockCopy(plain), nullptr);
   });
 }
 

@@ -27,8 +27,9 @@ bool copy_from_mapping(std::byte* dst, const std::byte* src, size_t n) noexcept;
 
 // copy_from_mapping(), and sets `checksum` to io::chunk_checksum() of the
 // bytes, each block hashed from the cache right after its copy
-// (io::copy_and_checksum). False as above.
-bool copy_from_mapping_checked(std::byte* dst, const std::byte* src, size_t n, uint64_t& checksum) noexcept;
+// (io::copy_and_checksum); with streaming stores, or plain ones that leave
+// dst in the cache. False as above.
+bool copy_from_mapping_checked(std::byte* dst, const std::byte* src, size_t n, uint64_t& checksum, bool streaming = true) noexcept;
 
 // Copies n bytes with streaming stores where the CPU has them (x86-64:
 // SSE2), plain memcpy elsewhere; dst and src may have any alignment.

@@ -65,6 +65,7 @@ PipelineCore::PipelineCore(const io::ContainerReader& reader, FrameAllocator& al
     if (!io::gpu_decodable(reader_.header())) {
       throw io::Error({reader_.path()}, "frames cannot stay encoded for the GPU: its positions are float32");
     }
+    relay_ = allocator_.relay();
   }
   const std::optional<std::vector<uint32_t>> none = std::vector<uint32_t>{};  // encoded: nothing decoded on the CPU
   stream_of_attribute_ = stream_map(reader_, options_.keep_encoded ? none : options_.attributes, attribute_streams_);
@@ -286,6 +287,7 @@ PipelineStats PipelineCore::stats() const {
   s.read_threads = static_cast<uint32_t>(read_threads_);
   s.frames_read = c.frames_read.load(kRelaxed);
   s.frames_in_place = c.frames_in_place.load(kRelaxed);
+  s.frames_relayed = c.frames_relayed.load(kRelaxed);
   s.cache_hits = c.cache_hits.load(kRelaxed);
   s.frames_decoded = c.frames_decoded.load(kRelaxed);
   s.decoded_bytes = c.decoded_bytes.load(kRelaxed);

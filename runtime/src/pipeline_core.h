@@ -27,6 +27,7 @@
 #include "slot.h"
 #include "spsc_ring.h"
 #include "sluice/runtime/pipeline.h"
+#include "sluice/runtime/relay.h"
 
 namespace sluice::runtime::detail {
 
@@ -38,7 +39,7 @@ struct alignas(64) WorkerCounters {
 };
 
 struct Counters {
-  std::atomic<uint64_t> bytes_read{0}, read_ns{0}, frames_read{0}, frames_in_place{0}, cache_hits{0};
+  std::atomic<uint64_t> bytes_read{0}, read_ns{0}, frames_read{0}, frames_in_place{0}, frames_relayed{0}, cache_hits{0};
   std::atomic<uint64_t> frames_decoded{0}, decoded_bytes{0}, frames_cancelled{0};
   std::atomic<uint64_t> frames_delivered{0}, frames_failed{0};
   std::atomic<uint64_t> held_bytes{0}, peak_record_bytes{0};
@@ -64,6 +65,7 @@ struct PieceRound {
   std::span<const io::ChunkDesc> chunks;
   std::span<const uint32_t> cuts;  // empty: byte pieces
   bool by_chunks() const { return !cuts.empty(); }
+  Slot* relayed = nullptr;  // a relayed read (relay.h): the chunks go through the relay into this slot's area, not dst
   mutable std::atomic<bool> gave_up{false};  // a newer schedule (or stop) came first: the pieces left are skipped
   void operator()(uint64_t p) const;
 };
@@ -171,6 +173,7 @@ class PipelineCore {
     bool by_chunks = false;       // chunks_to_read(): the slot's wanted chunks are read and checked, not dst
   };
   ReadTarget record_target(ReaderState& rs, Slot& slot, uint32_t record);
+  AlignedBuffer& record_buffer(ReaderState& rs, uint32_t record, uint64_t bytes);
   ReadTarget staged_target(ReaderState& rs, Slot& slot);
   bool reads_in_place() const;
   // Whether the layers left out of options_.layers let the frame be read as
@@ -183,7 +186,18 @@ class PipelineCore {
   // A checked read: keeps the wanted layers' chunks, checks that their
   // payloads lie in `record` past the `table`, and cuts them into pieces
   // (slot.piece_cuts). `record` starts at the frame's offset in the file.
-  ReadTarget chunks_to_read(Slot& slot, std::span<std::byte> record, uint64_t table);
+  ReadTarget chunks_to_read(Slot& slot, std::span<std::byte> record, uint64_t record_bytes, uint64_t table);
+  // relay.h: whether the next frame is relayed into device memory, its
+  // target (the table into the record buffer, the area resident), and the
+  // read of a piece's chunks through the relay (on a read thread).
+  bool relays() const;
+  ReadTarget relayed_target(ReaderState& rs, Slot& slot, uint32_t record);
+  void relay_chunks(const PieceRound& round, uint64_t p);
+  void relay_large_chunk(Slot& slot, size_t c, uint64_t offset);
+  // A relayed frame with zstd planes (the mixed rule needs the record on
+  // the host): read again into a staged area in host memory; later frames
+  // are no longer relayed.
+  void read_again_on_host(ReaderState& rs, Slot& slot);
   // The whole record in the background: with the crew's rounds all in
   // flight the oldest is joined first, this read begins, then that frame is
   // finished.
@@ -211,7 +225,7 @@ class PipelineCore {
                     uint64_t generation);
   // The same for a checked read (chunks_to_read()): piece p reads and checks
   // the slot's chunks [piece_cuts[p], piece_cuts[p + 1]).
-  void begin_chunk_pieces(PieceRound& round, const Slot& slot, const ReadTarget& target, uint64_t generation);
+  void begin_chunk_pieces(PieceRound& round, Slot& slot, const ReadTarget& target, uint64_t generation);
   void begin_round(PieceRound& round);  // the common end of both: hands the round to the crew
   bool join_pieces(PieceRound& round);
   uint64_t read_ns_now() const;  // time with a read in flight, the open stretch included
@@ -219,7 +233,8 @@ class PipelineCore {
   void read_piece(std::span<std::byte> piece, uint64_t offset, uint64_t required, uint64_t frame, uint64_t frame_end);
   // Reads chunk `c` of the frame into `dst` from `offset` and checks it
   // against its checksum; throws io::Error naming the chunk.
-  void read_chunk(std::span<std::byte> dst, uint64_t offset, uint64_t frame, size_t c, uint64_t checksum);
+  void read_chunk(std::span<std::byte> dst, uint64_t offset, uint64_t frame, size_t c, uint64_t checksum,
+                  Stores stores = Stores::Streaming);
   void prepare_decode(ReaderState& rs, Slot& slot);
   void publish(ReaderState& rs, uint32_t s, uint64_t k);
   void fail(ReaderState& rs, uint32_t s, uint64_t k, FrameError error);
@@ -247,6 +262,8 @@ class PipelineCore {
 
   // Fixed at construction.
   std::shared_ptr<RecordSource> source_;
+  PieceRelay* relay_ = nullptr;  // the allocator's, for frames kept encoded; null: none
+  bool relay_off_ = false;       // the reader thread's: a relayed frame had zstd planes
   std::vector<uint32_t> stream_of_attribute_;  // header attribute -> decoded stream, or ~0u
   uint32_t attribute_streams_ = 0;
   FrameFootprint footprint_;

@@ -17,25 +17,47 @@ uint64_t round_up(uint64_t n, uint64_t to) { return (n + to - 1) / to * to; }
 
 }  // namespace
 
+// A record buffer of at least `bytes`, its growth counted as held.
+AlignedBuffer& PipelineCore::record_buffer(ReaderState& rs, uint32_t record, uint64_t bytes) {
+  AlignedBuffer& buffer = records_[record];
+  const size_t before = buffer.capacity();
+  buffer.reserve(bytes);
+  if (buffer.capacity() != before) {
+    rs.record_held += buffer.capacity() - before;
+    counters_.held_bytes.store(held_now(rs), kRelaxed);
+    if (rs.record_held > counters_.peak_record_bytes.load(kRelaxed)) counters_.peak_record_bytes.store(rs.record_held, kRelaxed);
+  }
+  return buffer;
+}
+
 PipelineCore::ReadTarget PipelineCore::record_target(ReaderState& rs, Slot& slot, uint32_t record) {
   const io::FrameIndexEntry& e = reader_.index().frames[slot.frame];
   const uint64_t align = std::max<size_t>(1, source_->alignment());
   const uint64_t begin = e.offset / align * align;
   const uint64_t need = e.offset + e.bytes - begin;  // bytes from `begin` the frame needs
   const uint64_t span = round_up(need, align);
-  AlignedBuffer& buffer = records_[record];
-  const size_t before = buffer.capacity();
-  buffer.reserve(std::max<uint64_t>(footprint_.record_bytes, span));
-  if (buffer.capacity() != before) {
-    rs.record_held += buffer.capacity() - before;
-    counters_.held_bytes.store(held_now(rs), kRelaxed);
-    if (rs.record_held > counters_.peak_record_bytes.load(kRelaxed)) counters_.peak_record_bytes.store(rs.record_held, kRelaxed);
-  }
+  AlignedBuffer& buffer = record_buffer(rs, record, std::max<uint64_t>(footprint_.record_bytes, span));
   return {buffer.span().first(span), begin, need, buffer.span().subspan(e.offset - begin, e.bytes)};
 }
 
 bool PipelineCore::reads_in_place() const {
   return options_.keep_encoded && source_->alignment() <= 1;
+}
+
+bool PipelineCore::relays() const { return relay_ != nullptr && !relay_off_ && reads_in_place(); }
+
+// The area is resident (device memory, relay.h); only the table is read
+// into host memory, the slot's record buffer. The area's size is the
+// staged_target()'s; a frame with zstd planes is read again on the host.
+PipelineCore::ReadTarget PipelineCore::relayed_target(ReaderState& rs, Slot& slot, uint32_t record) {
+  const io::FrameIndexEntry& e = reader_.index().frames[slot.frame];
+  set_layout(slot, e.count_in(options_.layers),
+             encoded_block_bytes(io::staged_bytes_bound(e.bytes, e.chunk_count, e.particle_count, 0)));
+  slot.layout.resident = true;
+  allocate_buffers(rs, slot);
+  const uint64_t table = std::min<uint64_t>(e.bytes, io::frame_table_bytes(e.chunk_count, reader_.header().attributes.size()));
+  const std::span<std::byte> into = record_buffer(rs, record, table).span().first(table);
+  return {into, e.offset, table, into};
 }
 
 // The area is sized for the record and its tables with no plane inflated
@@ -80,7 +102,8 @@ PipelineCore::ReadTarget PipelineCore::read_table(Slot& slot, const ReadTarget& 
   reader_.parse_table(slot.frame, whole.record.first(table), slot.header, record_where_);
   const uint64_t end = io::layers_end(slot.header, options_.layers, reader_.header().attributes.size());
   const uint64_t wanted = into + end;
-  if (slot.checked_on_read) return chunks_to_read(slot, whole.record.first(end), table);
+  if (slot.relayed) return chunks_to_read(slot, {}, end, table);
+  if (slot.checked_on_read) return chunks_to_read(slot, whole.record.first(end), end, table);
   ReadTarget rest;
   rest.offset = whole.offset + first;
   rest.record = whole.record.first(end);
@@ -90,27 +113,35 @@ PipelineCore::ReadTarget PipelineCore::read_table(Slot& slot, const ReadTarget& 
 }
 
 // The wanted chunks, in pieces of about equal bytes: each piece copies its
-// chunks and checks them as it goes (record_read.cpp).
-PipelineCore::ReadTarget PipelineCore::chunks_to_read(Slot& slot, std::span<std::byte> record, uint64_t table) {
+// chunks and checks them as it goes (record_read.cpp). `record` is empty
+// for a relayed frame: its chunks go through the relay, planned as they
+// arrive.
+PipelineCore::ReadTarget PipelineCore::chunks_to_read(Slot& slot, std::span<std::byte> record, uint64_t record_bytes,
+                                                      uint64_t table) {
   io::keep_layers(slot.header, options_.layers);
   const std::vector<io::ChunkDesc>& chunks = slot.header.chunks;
   uint64_t total = 0;
   for (size_t c = 0; c < chunks.size(); ++c) {
     // The payload is written where the table says: inside the record, past the table.
-    if (chunks[c].offset < table || chunks[c].offset > record.size() || chunks[c].compressed_size > record.size() - chunks[c].offset) {
+    if (chunks[c].offset < table || chunks[c].offset > record_bytes || chunks[c].compressed_size > record_bytes - chunks[c].offset) {
       io::ErrorLocation at = reader_.location(slot.frame);
       at.chunk = c;
       throw io::Error(at, "the chunk's payload (bytes " + std::to_string(chunks[c].offset) + " to " +
                               std::to_string(chunks[c].offset + chunks[c].compressed_size) +
                               ") lies outside the frame record's payloads (bytes " + std::to_string(table) + " to " +
-                              std::to_string(record.size()) + ")");
+                              std::to_string(record_bytes) + ")");
     }
     total += chunks[c].compressed_size;
   }
+  if (slot.relayed) {
+    io::plan_gpu_frame(slot.header, reader_.header(), {.color_attribute = options_.encoded_color_attribute}, slot.plan,
+                       reader_.location(slot.frame));
+  }
   // As many pieces as byte pieces would be (a multiple of the threads
   // reading), at most one per chunk; cut where the running sum crosses each
-  // equal share.
-  const uint64_t most = std::max<uint64_t>(options_.read_piece_bytes, 1);
+  // equal share. A relayed piece fits a ring slot.
+  uint64_t most = std::max<uint64_t>(options_.read_piece_bytes, 1);
+  if (slot.relayed) most = std::min(most, std::max<uint64_t>(relay_->piece_bytes(), 1));
   const uint64_t threads = uint64_t(read_crew_.helpers()) + 1;
   const uint64_t at_most = (total + most - 1) / most;
   const uint64_t pieces = std::min<uint64_t>(chunks.size(), (at_most + threads - 1) / threads * threads);

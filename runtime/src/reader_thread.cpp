@@ -290,9 +290,15 @@ PipelineCore::Start PipelineCore::start_entry(ReaderState& rs, uint64_t k, uint6
       slot.attribute_targets.reserve(reader_.header().attributes.size());
       slot.where.file = reader_.path();
     }
-    target = reads_in_place() ? staged_target(rs, slot) : record_target(rs, slot, record);
     // Frames kept encoded and read in place are checked as they are read,
-    // chunk by chunk, so their tables come first.
+    // chunk by chunk, so their tables come first; relayed, their chunks are
+    // planned as they are read too (relay.h).
+    slot.relayed = relays();
+    slot.relay_refused.store(false, kRelaxed);
+    slot.where.frame = frame;
+    target = slot.relayed ? relayed_target(rs, slot, record)
+             : reads_in_place() ? staged_target(rs, slot)
+                                : record_target(rs, slot, record);
     slot.checked_on_read = reads_in_place();
     slot.table_parsed = slot.checked_on_read || reads_prefix(reader_.index().frames[frame]);
     if (slot.table_parsed) target = read_table(slot, target);
@@ -403,6 +409,7 @@ void PipelineCore::finish_entry(ReaderState& rs, uint32_t s, uint64_t k) {
     if (!slot.table_parsed) reader_.parse_record(frame, slot.record_bytes, slot.header, record_where_);  // no allocation per frame
     io::keep_layers(slot.header, options_.layers);  // the chunks read (decode checks their payloads lie in the prefix)
     slot.where.frame = frame;  // its file was set with its chunk table
+    if (slot.relayed && slot.relay_refused.load(std::memory_order_acquire)) read_again_on_host(rs, slot);
     prepare_decode(rs, slot);
   } catch (const io::Error& e) {
     FrameError error = FrameError::from(e);
@@ -415,7 +422,7 @@ void PipelineCore::finish_entry(ReaderState& rs, uint32_t s, uint64_t k) {
   }
 
   const size_t chunks = slot.header.chunks.size();
-  if (chunks == 0) {  // an empty frame: nothing to decode
+  if (chunks == 0 || slot.relayed) {  // an empty frame, or one relayed (checked and planned as read): nothing to do
     rs.free_records.push_back(slot.record);
     slot.record = kNoRecord;
     counters_.frames_decoded.fetch_add(1, kRelaxed);
@@ -445,6 +452,7 @@ void PipelineCore::set_layout(Slot& slot, uint64_t particles, uint64_t encoded_b
   slot.layout.particle_stride = static_cast<uint32_t>(io::decoded_particle_bytes(reader_.header().position_coding));
   slot.layout.attribute_streams = attribute_streams_;
   slot.layout.encoded_bytes = encoded_bytes;
+  slot.layout.resident = false;
 }
 
 void PipelineCore::allocate_buffers(ReaderState& rs, Slot& slot) {
@@ -474,10 +482,32 @@ void PipelineCore::move_to_larger_area(ReaderState& rs, Slot& slot, uint64_t sta
   slot.record_bytes = buffers.particles.first(slot.record_bytes.size());
 }
 
+void PipelineCore::read_again_on_host(ReaderState& rs, Slot& slot) {
+  relay_off_ = true;
+  release_buffers(rs, slot);
+  slot.relayed = false;
+  slot.checked_on_read = false;  // the workers check the chunks
+  const io::FrameIndexEntry& e = reader_.index().frames[slot.frame];
+  set_layout(slot, e.count_in(options_.layers),
+             encoded_block_bytes(io::staged_bytes_bound(e.bytes, e.chunk_count, e.particle_count, 0)));
+  allocate_buffers(rs, slot);
+  if (slot.buffers.particles.size() < e.bytes) {
+    throw io::Error(reader_.location(slot.frame), "the frame allocator returned buffers smaller than the frame");
+  }
+  read_piece(slot.buffers.particles.first(e.bytes), e.offset, e.bytes, slot.frame, e.offset + e.bytes);
+  slot.record_bytes = slot.buffers.particles.first(e.bytes);
+}
+
 void PipelineCore::prepare_decode(ReaderState& rs, Slot& slot) {
   const io::FrameHeader& h = slot.header;
   slot.chunk_first.resize(h.chunks.size());
   io::chunk_starts(h, slot.chunk_first);  // parse_record checked that the counts add up to the index's
+  if (slot.relayed) {  // planned chunk by chunk as read; the plan's tables travel with it
+    io::finish_gpu_plan(slot.plan);
+    counters_.frames_in_place.fetch_add(1, kRelaxed);
+    counters_.frames_relayed.fetch_add(1, kRelaxed);
+    return;
+  }
   if (!slot.has_buffers) set_layout(slot, h.particle_count, 0);
   if (options_.keep_encoded) {  // the tables are read here; the workers stage the payloads
     io::plan_gpu_decode(slot.record_bytes, h, reader_.header(), {.color_attribute = options_.encoded_color_attribute},

@@ -3,6 +3,8 @@
 // out of the page cache tops out well below what the decode workers take.
 #include <algorithm>
 #include <chrono>
+#include <cstring>
+#include <vector>
 
 #include "pipeline_core.h"
 
@@ -58,6 +60,7 @@ void PipelineCore::begin_pieces(PieceRound& round, std::span<std::byte> dst, uin
   round.count = (dst.size() + round.piece - 1) / round.piece;
   round.chunks = {};
   round.cuts = {};  // byte pieces (the round may have held a checked read before)
+  round.relayed = nullptr;
   begin_round(round);
 }
 
@@ -67,7 +70,7 @@ void PipelineCore::begin_round(PieceRound& round) {
   read_crew_.begin(round.count, round);
 }
 
-void PipelineCore::begin_chunk_pieces(PieceRound& round, const Slot& slot, const ReadTarget& target, uint64_t generation) {
+void PipelineCore::begin_chunk_pieces(PieceRound& round, Slot& slot, const ReadTarget& target, uint64_t generation) {
   round.core = this;
   round.dst = target.record;
   round.offset = target.offset;
@@ -77,12 +80,14 @@ void PipelineCore::begin_chunk_pieces(PieceRound& round, const Slot& slot, const
   round.chunks = slot.header.chunks;
   round.cuts = slot.piece_cuts;
   round.count = slot.piece_cuts.size() - 1;
+  round.relayed = slot.relayed ? &slot : nullptr;
   begin_round(round);
 }
 
-void PipelineCore::read_chunk(std::span<std::byte> dst, uint64_t offset, uint64_t frame, size_t c, uint64_t checksum) {
+void PipelineCore::read_chunk(std::span<std::byte> dst, uint64_t offset, uint64_t frame, size_t c, uint64_t checksum,
+                              Stores stores) {
   uint64_t got_checksum = 0;
-  const size_t got = source_->read_checked(dst, offset, got_checksum);
+  const size_t got = source_->read_checked(dst, offset, got_checksum, stores);
   counters_.bytes_read.fetch_add(got, kRelaxed);
   if (got == dst.size() && got_checksum == checksum) return;
   io::ErrorLocation at = reader_.location(frame);  // only now: it allocates
@@ -102,6 +107,10 @@ void PieceRound::operator()(uint64_t p) const {
     gave_up.store(true, kRelaxed);
     return;
   }
+  if (by_chunks() && relayed) {
+    core->relay_chunks(*this, p);
+    return;
+  }
   if (by_chunks()) {
     for (uint32_t c = cuts[p]; c < cuts[p + 1]; ++c) {
       const io::ChunkDesc& chunk = chunks[c];
@@ -112,6 +121,79 @@ void PieceRound::operator()(uint64_t p) const {
   const uint64_t at = p * piece;
   const uint64_t length = std::min(piece, dst.size() - at);
   core->read_piece(dst.subspan(at, length), offset + at, std::min(length, need - at), frame, offset + need);
+}
+
+// A relayed piece: its chunks, packed one after another into ring slots
+// (as many as fit each), read out of the page cache with plain stores,
+// checked and planned while the cache holds them, then sent to their place
+// in the frame's resident area. Runs of chunks that follow each other in
+// the record go as one range.
+void PipelineCore::relay_chunks(const PieceRound& round, uint64_t p) {
+  Slot& slot = *round.relayed;
+  const uint64_t most = relay_->piece_bytes();
+  const io::GpuPlanOptions plan_options{.color_attribute = options_.encoded_color_attribute};
+  thread_local std::vector<PieceRelay::Range> ranges;  // grows once per thread
+  uint32_t c = round.cuts[p];
+  const uint32_t end = round.cuts[p + 1];
+  while (c < end && !slot.relay_refused.load(kRelaxed)) {
+    if (round.chunks[c].compressed_size > most) {
+      relay_large_chunk(slot, c, round.offset);
+      ++c;
+      continue;
+    }
+    uint64_t bytes = 0;
+    uint32_t last = c;
+    while (last < end && bytes + round.chunks[last].compressed_size <= most) bytes += round.chunks[last++].compressed_size;
+    const std::span<std::byte> piece = relay_->claim(bytes);
+    try {
+      ranges.clear();
+      uint64_t at = 0;
+      for (uint32_t k = c; k < last; ++k) {
+        const io::ChunkDesc& chunk = round.chunks[k];
+        const std::span<std::byte> dst = piece.subspan(at, chunk.compressed_size);
+        read_chunk(dst, round.offset + chunk.offset, round.frame, k, chunk.checksum, Stores::Cached);
+        if (!io::plan_gpu_chunk(dst, slot.header, reader_.header(), plan_options, k, slot.plan, slot.where)) {
+          slot.relay_refused.store(true, kRelaxed);  // zstd planes: the frame is read again on the host
+          relay_->give_back(piece);
+          return;
+        }
+        PieceRelay::Range* run = ranges.empty() ? nullptr : &ranges.back();
+        if (run && run->from + run->bytes == at && run->to + run->bytes == chunk.offset) {
+          run->bytes += chunk.compressed_size;
+        } else {
+          ranges.push_back({at, chunk.offset, chunk.compressed_size});
+        }
+        at += chunk.compressed_size;
+      }
+    } catch (...) {
+      relay_->give_back(piece);
+      throw;
+    }
+    relay_->send(piece, slot.buffers, ranges);
+    c = last;
+  }
+}
+
+// A chunk larger than a ring slot: read and checked whole into this
+// thread's own buffer (kept for the next), then sent in slot-sized parts.
+void PipelineCore::relay_large_chunk(Slot& slot, size_t c, uint64_t offset) {
+  const io::ChunkDesc& chunk = slot.header.chunks[c];
+  thread_local std::vector<std::byte> whole;
+  whole.resize(chunk.compressed_size);
+  read_chunk(whole, offset + chunk.offset, slot.frame, c, chunk.checksum);
+  if (!io::plan_gpu_chunk(whole, slot.header, reader_.header(), {.color_attribute = options_.encoded_color_attribute}, c,
+                          slot.plan, slot.where)) {
+    slot.relay_refused.store(true, kRelaxed);
+    return;
+  }
+  const uint64_t most = relay_->piece_bytes();
+  for (uint64_t at = 0; at < whole.size(); at += most) {
+    const uint64_t n = std::min<uint64_t>(most, whole.size() - at);
+    const std::span<std::byte> piece = relay_->claim(n);
+    std::memcpy(piece.data(), whole.data() + at, n);
+    const PieceRelay::Range range{0, chunk.offset + at, n};
+    relay_->send(piece, slot.buffers, {&range, 1});
+  }
 }
 
 // Read time is wall time with a round in flight: two rounds at once count

@@ -45,6 +45,9 @@ struct Slot {
   std::atomic<bool> abandoned{false};      // the consumer dropped it: skip chunks not started
   std::atomic<bool> skipped{false};        // some chunk was not decoded
   std::atomic<bool> error_claimed{false};  // a chunk has written `error`
+  // A relayed read met a zstd plane: the frame is read again on the host
+  // (written by read threads, read by the reader after the round's join).
+  std::atomic<bool> relay_refused{false};
 
   // Written by the reader while it owns the slot.
   uint64_t frame = 0;
@@ -60,6 +63,7 @@ struct Slot {
   std::span<const std::byte> record_bytes;       // the frame record inside it (or the prefix the wanted layers need)
   bool table_parsed = false;                     // the table was read first and parsed (`header`) before the payloads
   bool checked_on_read = false;                  // the wanted chunks were checked as they were read (checksums)
+  bool relayed = false;                          // ... and sent to a resident area through the relay (relay.h)
   std::vector<uint32_t> piece_cuts;              // checked reads: piece p reads chunks [cuts[p], cuts[p + 1])
   io::GpuDecodePlan plan;                        // PipelineOptions::keep_encoded: what the workers stage
 

@@ -28,9 +28,11 @@ using testing::ValidationGuard;
 constexpr uint64_t kFrames = 4;
 
 // A falling block of 24^3 jittered particles with a height attribute, in
-// chunks of 1000 particles, a different drop height per frame.
-fs::path write_block_file() {
-  const fs::path path = fs::temp_directory_path() / ("sluice_streamed_" + std::to_string(::getpid()) + ".sluice");
+// chunks of 1000 particles, a different drop height per frame. Without
+// `zstd_planes`, every plane is one the GPU decodes (--gpu-decodable).
+fs::path write_block_file(bool zstd_planes = true) {
+  const fs::path path = fs::temp_directory_path() /
+                        ("sluice_streamed_" + std::to_string(::getpid()) + (zstd_planes ? "" : "_gpu") + ".sluice");
   io::FileHeader header;
   header.particle_spacing = 0.02f;
   header.particle_radius = 0.01f;
@@ -55,6 +57,7 @@ fs::path write_block_file() {
     in.time = double(f) / 30;
     io::EncodeOptions options;
     options.chunk_particles = 1000;
+    options.zstd_planes = zstd_planes;
     writer.append(io::encode_frame(in, header, options));
   }
   writer.finish();
@@ -80,7 +83,7 @@ Rendered draw(testing::OffscreenRenderer& r, const SceneInfo& scene) {
 // `from` (the allocator again when it is a StagingAllocator) to
 // commit_decoded, or with `encoded` to commit_encoded (the GPU decodes).
 std::vector<Rendered> streamed(const io::ContainerReader& reader, runtime::FrameAllocator& allocator,
-                               const StagingAllocator* from, bool encoded = false) {
+                               const StagingAllocator* from, bool encoded = false, runtime::PipelineStats* stats = nullptr) {
   const SceneInfo scene = scene_info(reader);
   testing::OffscreenRenderer r(context(), scene, 160, 120);
   runtime::PipelineOptions po;
@@ -105,14 +108,21 @@ std::vector<Rendered> streamed(const io::ContainerReader& reader, runtime::Frame
     }
     out.push_back(draw(r, scene));
   }
+  if (stats) *stats = pipeline.stats();
   return out;
 }
 
 class StreamedUpload : public ::testing::Test {
  protected:
-  static void SetUpTestSuite() { path_ = write_block_file(); }
-  static void TearDownTestSuite() { fs::remove(path_); }
-  static fs::path path_;
+  static void SetUpTestSuite() {
+    path_ = write_block_file();
+    gpu_path_ = write_block_file(false);
+  }
+  static void TearDownTestSuite() {
+    fs::remove(path_);
+    fs::remove(gpu_path_);
+  }
+  static fs::path path_, gpu_path_;
 
   // What load_frame renders, frame by frame.
   static std::vector<Rendered> reference(const io::ContainerReader& reader) {
@@ -140,7 +150,7 @@ class StreamedUpload : public ::testing::Test {
     EXPECT_NE(expected[0].depth, expected[1].depth);
   }
 };
-fs::path StreamedUpload::path_;
+fs::path StreamedUpload::path_, StreamedUpload::gpu_path_;
 
 TEST_F(StreamedUpload, FromStagingMatchesLoadFrame) {
   ValidationGuard guard;
@@ -177,6 +187,47 @@ TEST_F(StreamedUpload, EncodedFromHostMemoryMatchesLoadFrame) {
   const std::vector<Rendered> expected = reference(reader);
   runtime::HostFrameAllocator host;
   expect_same(streamed(reader, host, nullptr, true), expected);
+}
+
+// A resident window (relay.h): the frames' pieces go through the ring
+// into device memory as they are read, planned chunk by chunk, and the
+// GPU decodes them there. The same pictures, every frame relayed.
+TEST_F(StreamedUpload, RelayedIntoDeviceMemoryMatchesLoadFrame) {
+  ValidationGuard guard;
+  const io::ContainerReader reader(gpu_path_);
+  const std::vector<Rendered> expected = reference(reader);
+  StagingAllocator staging(context(), {.resident = true});
+  ASSERT_NE(staging.relay(), nullptr);
+  runtime::PipelineStats stats;
+  expect_same(streamed(reader, staging, &staging, true, &stats), expected);
+  EXPECT_EQ(stats.frames_relayed, kFrames);
+  EXPECT_EQ(stats.frames_read, kFrames);
+}
+
+// Pieces smaller than a chunk (a chunk here is about 5 KB): each chunk is
+// read whole on its own and sent in parts, several slots at once.
+TEST_F(StreamedUpload, RelayedInPiecesSmallerThanAChunkMatchesLoadFrame) {
+  ValidationGuard guard;
+  const io::ContainerReader reader(gpu_path_);
+  const std::vector<Rendered> expected = reference(reader);
+  StagingAllocator staging(context(), {.resident = true, .ring_slots = 3, .ring_piece_bytes = 4096});
+  runtime::PipelineStats stats;
+  expect_same(streamed(reader, staging, &staging, true, &stats), expected);
+  EXPECT_EQ(stats.frames_relayed, kFrames);
+}
+
+// A file with zstd planes (the mixed rule: the CPU inflates them into the
+// area, so the record must be on the host): the first frame relayed meets
+// one, is read again into host staging, and the rest are never relayed.
+TEST_F(StreamedUpload, RelayMeetingZstdPlanesFallsBackToHostStaging) {
+  ValidationGuard guard;
+  const io::ContainerReader reader(path_);
+  const std::vector<Rendered> expected = reference(reader);
+  StagingAllocator staging(context(), {.resident = true});
+  runtime::PipelineStats stats;
+  expect_same(streamed(reader, staging, &staging, true, &stats), expected);
+  EXPECT_EQ(stats.frames_relayed, 0u);
+  EXPECT_EQ(stats.frames_failed, 0u);
 }
 
 }  // namespace

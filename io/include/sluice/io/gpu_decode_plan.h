@@ -110,6 +110,23 @@ bool gpu_decodable(const FileHeader& file);
 void plan_gpu_decode(std::span<const std::byte> record, const FrameHeader& header, const FileHeader& file,
                      const GpuPlanOptions& options, GpuDecodePlan& plan, const ErrorLocation& where);
 
+// The same plan in steps, for a reader that plans each chunk as it brings
+// it in (runtime's pieces relayed to device memory) and no longer holds
+// the record afterwards. plan_gpu_frame() lays out the frame from `header`
+// alone: every chunk's first particle and tiles, record_bytes, no planes
+// yet and nothing inflated. plan_gpu_chunk() then reads chunk c's plane
+// table from its `payload` (the chunk's compressed_size bytes; chunks may
+// be planned from different threads at once) and returns false, leaving
+// the chunk's planes unfinished, if a plane is zstd: such a frame needs
+// plan_gpu_decode() over the whole record (its planes are inflated into the
+// area). finish_gpu_plan() counts the planes once every chunk is planned.
+// Errors as plan_gpu_decode().
+void plan_gpu_frame(const FrameHeader& header, const FileHeader& file, const GpuPlanOptions& options, GpuDecodePlan& plan,
+                    const ErrorLocation& where);
+bool plan_gpu_chunk(std::span<const std::byte> payload, const FrameHeader& header, const FileHeader& file,
+                    const GpuPlanOptions& options, size_t c, GpuDecodePlan& plan, const ErrorLocation& where);
+void finish_gpu_plan(GpuDecodePlan& plan);
+
 // The CPU's share of chunk `c`: checks its checksum (when `verify`), copies
 // its payload to the same offset of `encoded` (unless `record` already is
 // encoded's prefix) and inflates its zstd planes there. `encoded` holds at
@@ -126,6 +143,14 @@ void stage_frame(std::span<const std::byte> record, const FrameHeader& header, c
 // Writes the chunk plans and the tile table at their offsets of `staged`
 // (staged_bytes() bytes).
 void write_tables(const GpuDecodePlan& plan, std::span<std::byte> staged);
+
+// The chunk plans and then the tile table, from the start of `out` (at
+// least table_block_bytes()): the tables alone, for an area that lives
+// elsewhere (they belong at plans_offset() of it).
+inline uint64_t table_block_bytes(const GpuDecodePlan& plan) {
+  return plan.chunks.size() * sizeof(GpuChunkPlan) + plan.tile_chunk.size() * 4;
+}
+void write_table_block(const GpuDecodePlan& plan, std::span<std::byte> out);
 
 // The CPU's reference for what the GPU decodes from a plan: particles
 // (8 bytes each) and the colour attribute, bit for bit what decode_chunk

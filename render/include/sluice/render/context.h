@@ -18,13 +18,21 @@
 // transfer queue for frame uploads, always from the thread that calls the
 // Renderer; Vulkan requires queue access to be externally synchronized, so
 // the host must not submit to the same VkQueue from another thread at the
-// same time.
+// same time. One exception: a StagingAllocator with a resident window
+// (staging_allocator.h) relays frames' pieces to the device from the
+// pipeline's read threads, on a queue of its own where the device has a
+// second queue in the transfer family (contexts sluice creates), else on
+// the transfer queue (the graphics queue where there is no transfer
+// family): then relay_queue_shared() is true, and every submission or
+// present on that queue, the host's too, must hold queue_lock() while such
+// a pipeline runs.
 #pragma once
 
 #include <vulkan/vulkan_core.h>
 
 #include <cstdint>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -130,6 +138,9 @@ class Context {
   const VulkanHandles& vulkan() const;
   bool owns_device() const;
   bool has_transfer_queue() const;  // a separate transfer-only queue family is used for uploads
+  // See "Queues" above. Any thread.
+  bool relay_queue_shared() const;
+  std::mutex& queue_lock() const;
   // Device-local memory the process may still allocate, from
   // VK_EXT_memory_budget where present (else the heap size): for the runtime's
   // prefetch window.

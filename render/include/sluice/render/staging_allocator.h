@@ -9,9 +9,18 @@
 // host memory and the renderer copies it through its own staging (counted in
 // fallback_allocations()).
 //
+// With a resident window (StagingOptions::resident), frames kept encoded
+// live in device memory instead, filled through a small ring of staging
+// slots as they are read (runtime/relay.h): relay() offers the ring, and a
+// pipeline kept encoded uses it for every frame it reads in place. The
+// window then costs device memory (device_budget() plans it), and the host
+// holds the ring only.
+//
 // Ownership: borrows the Context, which must outlive it (and every frame it
 // handed out). Threads: allocate()/release() as runtime::FrameAllocator says
-// (one thread at a time); the counters and device_budget() from any thread.
+// (one thread at a time); the counters and device_budget() from any thread;
+// the relay as relay.h says (it submits on the context's relay queue: see
+// context.h, "Queues").
 #pragma once
 
 #include <atomic>
@@ -26,9 +35,22 @@
 
 namespace sluice::render {
 
+class RelayRing;
+
+struct StagingOptions {
+  // Frames kept encoded live in device memory, relayed through a ring.
+  bool resident = false;
+  // The ring: `ring_slots` slots of `ring_piece_bytes` (0: the read threads
+  // a pipeline has by default on this machine, plus 4). The H200 moved the
+  // 10M synthetic file at 98-99% of its copy bound through 4-8 pieces of
+  // 16.8 MB (docs/gpu_decode.md).
+  uint32_t ring_slots = 0;
+  uint64_t ring_piece_bytes = 8 << 20;
+};
+
 class StagingAllocator final : public runtime::FrameAllocator {
  public:
-  explicit StagingAllocator(Context& context);
+  explicit StagingAllocator(Context& context, const StagingOptions& options = {});
   ~StagingAllocator() override;
   StagingAllocator(const StagingAllocator&) = delete;
   StagingAllocator& operator=(const StagingAllocator&) = delete;
@@ -38,12 +60,18 @@ class StagingAllocator final : public runtime::FrameAllocator {
   uint64_t bytes_for(const runtime::FrameLayout& layout) const override;
   uint64_t kept_bytes() const override;
   void trim(uint64_t keep) override;
+  runtime::PieceRelay* relay() override;  // null without a resident window
+  bool resident() const { return options_.resident; }
+  // The ring's timeline semaphore, which a resident frame's decode waits on
+  // (null without a resident window).
+  VkSemaphore relay_semaphore() const;
 
   // The budget to give the pipeline for device memory: the free part of the
   // heap staging memory comes from (VK_EXT_memory_budget), plus what this
   // allocator already holds there, when that heap is device-local (integrated
   // GPUs, lavapipe, resizable BAR); nullptr when staging lives in system
-  // memory, where the host budget already covers it.
+  // memory, where the host budget already covers it. With a resident
+  // window: the device-local heap's free part plus the areas held.
   const runtime::DeviceMemoryBudget* device_budget() const;
   bool staging_in_device_heap() const { return device_heap_; }
 
@@ -59,7 +87,11 @@ class StagingAllocator final : public runtime::FrameAllocator {
   class HeapBudget;
 
   Context& context_;
+  StagingOptions options_;
+  std::unique_ptr<RelayRing> ring_;      // before the pools: their resident areas wait on it when destroyed
   std::unique_ptr<Pool> pool_;
+  std::unique_ptr<Pool> resident_pool_;  // device areas
+  uint32_t device_local_heap_ = 0;
   bool device_heap_ = false;
   uint32_t heap_ = 0;
   std::unique_ptr<HeapBudget> budget_;

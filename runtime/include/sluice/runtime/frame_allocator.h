@@ -21,6 +21,7 @@ namespace sluice::runtime {
 
 template <class Memory>
 class BlockPool;
+class PieceRelay;
 
 // What one frame needs. Sizes come from the frame index.
 struct FrameLayout {
@@ -34,8 +35,16 @@ struct FrameLayout {
   // plans, tile table; staged_bytes() of them, the rest unused), and there
   // are no attribute streams.
   uint64_t encoded_bytes = 0;
+  // With encoded_bytes: the staged area lives in device memory, filled
+  // through the allocator's relay() as it is read; FrameBuffers::particles
+  // is then empty (the plan's tables travel with the plan). Only for an
+  // allocator that offers a relay.
+  bool resident = false;
 
-  uint64_t particle_bytes() const { return encoded_bytes > 0 ? encoded_bytes : particles * particle_stride; }
+  uint64_t particle_bytes() const {
+    if (resident) return 0;
+    return encoded_bytes > 0 ? encoded_bytes : particles * particle_stride;
+  }
   uint64_t attribute_bytes() const { return particles * 2; }  // per stream
   uint64_t total_bytes() const { return particle_bytes() + attribute_streams * attribute_bytes(); }
 };
@@ -81,6 +90,10 @@ class FrameAllocator {
   // calls it when the window shrinks, so memory held follows the window.
   // Same thread rule as allocate() and release().
   virtual void trim(uint64_t keep) { (void)keep; }
+  // Where resident frames are filled from (relay.h); null when the
+  // allocator hands out host memory only. Borrowed: lives as long as the
+  // allocator.
+  virtual PieceRelay* relay() { return nullptr; }
 };
 
 // Host memory with byte accounting, for headless playback, benchmarks and

@@ -19,6 +19,12 @@ namespace sluice::runtime {
 
 enum class AccessPattern : uint8_t { Sequential, Random };
 
+// How a copy out of the page cache writes its destination. Streaming: past
+// the CPU's caches (the destination is read much later: a window of frames
+// in staging). Cached: plain stores that leave it in the cache (the GPU
+// copies it soon after: a small ring, runtime/relay.h).
+enum class Stores : uint8_t { Streaming, Cached };
+
 // Threads: read_at() may be called from several of the pipeline's read
 // threads at once (different ranges); the hints from the reader thread only;
 // describe() from any thread.
@@ -34,8 +40,10 @@ class RecordSource {
   // checks a chunk as it brings it in. This default reads with read_at()
   // and then hashes dst; FileRecordSource hashes its mapping's bytes block
   // by block as it copies them, so that they come from memory once.
-  // Threads and errors as read_at().
-  virtual size_t read_checked(std::span<std::byte> dst, uint64_t offset, uint64_t& checksum);
+  // `stores` is a hint for copies out of a mapping. Threads and errors as
+  // read_at().
+  virtual size_t read_checked(std::span<std::byte> dst, uint64_t offset, uint64_t& checksum,
+                              Stores stores = Stores::Streaming);
   // Offsets, sizes and buffer addresses of reads must be multiples of this
   // (O_DIRECT); 1 when there is no constraint. May change after a read (a
   // refused O_DIRECT falls back to buffered reads).
@@ -62,7 +70,8 @@ class FileRecordSource final : public RecordSource {
   FileRecordSource& operator=(const FileRecordSource&) = delete;
 
   size_t read_at(std::span<std::byte> dst, uint64_t offset) override;
-  size_t read_checked(std::span<std::byte> dst, uint64_t offset, uint64_t& checksum) override;
+  size_t read_checked(std::span<std::byte> dst, uint64_t offset, uint64_t& checksum,
+                      Stores stores = Stores::Streaming) override;
   size_t alignment() const override;
   void will_need(uint64_t offset, uint64_t bytes) override;
   void set_access(AccessPattern pattern) override;

@@ -34,6 +34,8 @@ struct PipelineStats {
   // Kept-encoded frames read straight into their staged area and staged
   // there (no copy on the CPU; PipelineOptions::keep_encoded).
   uint64_t frames_in_place = 0;
+  // ... of which relayed to device memory as read (runtime/relay.h).
+  uint64_t frames_relayed = 0;
   uint64_t cache_hits = 0;     // entries served from a frame kept in memory, no read or decode
 
   // Decode workers.
