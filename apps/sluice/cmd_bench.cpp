@@ -62,11 +62,20 @@ void add_bench(CLI::App& app) {
                "the two at once, and GPU decode alone; the read and the copy are measured again after the\n"
                "pipeline rows, and each row is put against the mean of both measures (needs a Vulkan device)");
   st->add_option("--device", stream->device, "With --gpu: the Vulkan device (index or name; default: the first GPU)");
-  st->callback([stream, stream_memory, stream_gpu] {
+  auto ring_piece = std::make_shared<std::string>();
+  st->add_option("--ring-slots", stream->ring_slots,
+                 "With --gpu: slots of the ring the relayed row reads through (default: the read threads + 4)");
+  st->add_option("--ring-piece", *ring_piece, "With --gpu: bytes of a ring slot, e.g. 8M (default: 8M)");
+  st->callback([stream, stream_memory, stream_gpu, ring_piece] {
     if (!stream_memory->empty()) {
       const auto bytes = runtime::parse_byte_size(*stream_memory);
       if (!bytes) throw std::runtime_error("--memory: cannot read '" + *stream_memory + "' as a size (try 4G or 512M)");
       stream->memory = *bytes;
+    }
+    if (!ring_piece->empty()) {
+      const auto bytes = runtime::parse_byte_size(*ring_piece);
+      if (!bytes || *bytes < 4096) throw std::runtime_error("--ring-piece: cannot read '" + *ring_piece + "' as a size of 4K or more (try 8M)");
+      stream->ring_piece_bytes = *bytes;
     }
     if (*stream_gpu) {
 #if SLUICE_WITH_RENDER

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Runs on the GPU machine (see bench/device/README.md): every benchmark the
 # issues ask GPU-machine figures for, in one call. Results go to $OUT.
-#   bash bench/device/run.sh [io] [import] [layers] [band] [render] [stream] [split] [codec] [huge] [embed] [compare] [live] [stereo] [xrsize] [firsthour] [streamcmp] [gpudecode] [gpuquick] [gpupair] [gpuab] [gpu100] [egl] [vtkpeer] [readpath] [importprobe] [relayprobe] [storeab] [gpusplit] [gpuplay] [gpuflight] [gpu100ab] [damf2] [gpusweep] [gpuvar]   (default: io render stream)
+#   bash bench/device/run.sh [io] [import] [layers] [band] [render] [stream] [split] [codec] [huge] [embed] [compare] [live] [stereo] [xrsize] [firsthour] [streamcmp] [gpudecode] [gpuquick] [gpupair] [gpuab] [gpu100] [egl] [vtkpeer] [readpath] [importprobe] [relayprobe] [storeab] [gpusplit] [gpuplay] [gpuflight] [gpu100ab] [damf2] [gpusweep] [gpuvar] [relay] [relay100]   (default: io render stream)
 set -uo pipefail
 OUT=${OUT:-/tmp/out}
 mkdir -p "$OUT" /tmp/s
@@ -249,6 +249,22 @@ for stage in $stages; do
         run $S bench stream --gpu /tmp/sw100m.sluice --memory 48G --no-storage --min-time 3 --read-threads $rt --threads $((16 - rt))
       done
       rm -f /tmp/sw100m.sluice
+      ;;
+    relay)  # the relayed row (window in device memory, filled through a ring) and ring shapes, 10M x 24 frames
+      run $S synth -n 10M --frames 24 -o /tmp/rl10m.sluice --force -q --gpu-decodable
+      run $S bench stream --gpu /tmp/rl10m.sluice --memory 16G --no-storage --min-time 2
+      for shape in ${RELAY_RINGS:-"8 8M" "32 4M" "8 16M"}; do
+        read -r slots piece <<< "$shape"
+        log "ring of $slots x $piece"
+        $S bench stream --gpu /tmp/rl10m.sluice --memory 16G --no-storage --min-time 2 --ring-slots "$slots" --ring-piece "$piece" 2>&1 \
+          | grep -E "relayed|GPU \(kept encoded\), mapped|measured again|pread, page cache|host -> device copy \(|at once" | tee -a "$OUT/summary.txt"
+      done
+      rm -f /tmp/rl10m.sluice
+      ;;
+    relay100)  # the relayed row at 100M particles a frame
+      run $S synth -n 100M --frames ${RELAY100_FRAMES:-8} -o /tmp/rl100m.sluice --force -q --gpu-decodable
+      run $S bench stream --gpu /tmp/rl100m.sluice --memory 32G --no-storage --min-time 2
+      rm -f /tmp/rl100m.sluice
       ;;
     gpuvar)  # variant builds (.gpu/sluice_v*, carried beside) against this one, alternated, 10M x 24 frames
       run $S synth -n 10M --frames 24 -o /tmp/gv10m.sluice --force -q --gpu-decodable

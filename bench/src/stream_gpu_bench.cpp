@@ -51,6 +51,7 @@ struct DevicePass {
   uint64_t staged_bytes = 0;  // bytes copied to the device over the timed frames
   std::string window;
   double in_place = 0;  // share of the frames read straight into their staged area
+  double relayed = 0;   // share of the frames relayed to device memory as read
   double reading = 0;   // share of the timed run with a read in progress
   double read_busy = 0; // share of the read threads' time spent copying
   double waiting_frames = 0;  // share of the timed run the consumer waited for the pipeline
@@ -62,6 +63,7 @@ struct DeviceSetup {
   int decode_threads = 1, read_threads = 1;
   uint64_t memory = 0;
   int color = -1;  // attribute decoded with the positions (-1: none)
+  render::StagingOptions staging;  // .resident: the relayed row
 };
 
 // Streams the slice round and round through a pipeline into a renderer's
@@ -72,7 +74,7 @@ constexpr size_t kInFlight = 2;  // frames handed to the renderer and not yet wa
 
 DevicePass stream_to_device(const io::ContainerReader& reader, const Slice& slice, render::Context& context,
                             const DeviceSetup& setup, bool gpu_decode, bool mapped, double min_seconds) {
-  render::StagingAllocator staging(context);
+  render::StagingAllocator staging(context, setup.staging);
   render::Renderer renderer(context, render::scene_info(reader));
   runtime::PipelineOptions o;
   o.decode_threads = setup.decode_threads;
@@ -141,6 +143,7 @@ DevicePass stream_to_device(const io::ContainerReader& reader, const Slice& slic
   const runtime::PipelineStats stats = pipeline.stats();
   p.window = std::to_string(stats.active_frames) + "/" + std::to_string(stats.window_frames);
   p.in_place = double(stats.frames_in_place) / double(std::max<uint64_t>(stats.frames_read, 1));
+  p.relayed = double(stats.frames_relayed) / double(std::max<uint64_t>(stats.frames_read, 1));
   p.reading = (stats.read_seconds - stats0.read_seconds) / p.seconds;
   p.read_busy = (stats.read_thread_seconds - stats0.read_thread_seconds) / (std::max(1u, stats.read_threads) * p.seconds);
   p.fresh_blocks = staging.fresh_allocations() - blocks0;
@@ -349,15 +352,22 @@ void run_stream_gpu_bench(const StreamBenchOptions& o) {
   std::fflush(stdout);
 
   // 2. The pipeline into device memory, GPU decode and CPU decode.
+  // The relayed row: the window in device memory, filled through a ring
+  // as read (runtime/relay.h); the others stage the window on the host.
   struct Way {
-    bool gpu, mapped;
+    bool gpu, mapped, relayed;
   };
-  constexpr std::array<Way, 3> kWays{Way{true, true}, Way{true, false}, Way{false, true}};
+  constexpr std::array<Way, 4> kWays{Way{true, true, true}, Way{true, true, false}, Way{true, false, false},
+                                     Way{false, true, false}};
+  DeviceSetup relayed_setup = setup;
+  relayed_setup.staging.resident = true;
+  if (o.ring_slots > 0) relayed_setup.staging.ring_slots = o.ring_slots;
+  if (o.ring_piece_bytes > 0) relayed_setup.staging.ring_piece_bytes = o.ring_piece_bytes;
   std::array<DevicePass, kWays.size()> runs;
   for (size_t w = 0; w < kWays.size(); ++w) {
-    step(kWays[w].gpu ? "the pipeline, GPU decoding" : "the pipeline, CPU decoding");
-    runs[w] = stream_to_device(reader, slice, context, kWays[w].gpu ? setup : cpu_setup, kWays[w].gpu, kWays[w].mapped,
-                               o.min_seconds);
+    step(kWays[w].relayed ? "the pipeline, GPU decoding, relayed" : kWays[w].gpu ? "the pipeline, GPU decoding" : "the pipeline, CPU decoding");
+    const DeviceSetup& used = kWays[w].relayed ? relayed_setup : kWays[w].gpu ? setup : cpu_setup;
+    runs[w] = stream_to_device(reader, slice, context, used, kWays[w].gpu, kWays[w].mapped, o.min_seconds);
   }
 
   // 3. The read and the copy bounds again: the machine's memory speed drifts
@@ -377,7 +387,7 @@ void run_stream_gpu_bench(const StreamBenchOptions& o) {
   const double copy_bound = (h2d + h2d_after) / 2;
 
   Table passes({"decoded by", "frames/s", "M particles/s", "MB/frame copied", "window", "bound frames/s", "vs bound",
-                "limited by", "vs both at once", "CPU ms/frame", "cores busy", "read in place", "reading", "read threads copying",
+                "limited by", "vs both at once", "CPU ms/frame", "cores busy", "read in place", "relayed", "reading", "read threads copying",
                 "new blocks", "waiting for frames", "waiting for the GPU"});
   for (size_t w = 0; w < kWays.size(); ++w) {
     const bool gpu = kWays[w].gpu;
@@ -388,14 +398,15 @@ void run_stream_gpu_bench(const StreamBenchOptions& o) {
     const double copy_fps = copy_bound / per_frame;
     const double bound = std::min(read_fps, copy_fps);
     const DeviceSetup& used = gpu ? setup : cpu_setup;
-    passes.row({std::string(gpu ? "GPU (kept encoded)" : "CPU workers") + (kWays[w].mapped ? ", mapped" : ", pread") + ", " +
+    passes.row({std::string(gpu ? "GPU (kept encoded)" : "CPU workers") + (kWays[w].relayed ? ", relayed" : "") +
+                    (kWays[w].mapped ? ", mapped" : ", pread") + ", " +
                     std::to_string(used.decode_threads) + " + " + std::to_string(used.read_threads),
                 num(fps, 1), num(fps * particles / 1e6, 1),
                 num(per_frame / 1e6, 1), p.window, num(bound, 1), percent(fps / bound),
                 read_fps < copy_fps ? "page-cache read" : "host -> device copy",
                 gpu ? percent(fps / std::min(at_once.read_gbps * 1e9 / in, at_once.copy_gbps * 1e9 / per_frame)) : "-",
                 num(1e3 * p.cpu / double(p.frames), 2),
-                num(p.cpu / p.seconds, 1), gpu ? percent(p.in_place) : "-", percent(p.reading),
+                num(p.cpu / p.seconds, 1), gpu ? percent(p.in_place) : "-", gpu ? percent(p.relayed) : "-", percent(p.reading),
                 percent(p.read_busy), std::to_string(p.fresh_blocks), percent(p.waiting_frames),
                 percent(p.waiting_gpu)});
   }

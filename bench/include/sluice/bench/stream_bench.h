@@ -23,6 +23,9 @@ struct StreamBenchOptions {
   bool storage = true;       // also measure from storage (drops the file from the page cache)
   bool surface = false;      // the pipeline reads the surface and blobs of a file with layers (format 1.3)
   std::string device;        // --gpu: the Vulkan device (render::ContextOptions::device; "": the first GPU)
+  // --gpu: the relayed row's ring (render::StagingOptions; 0: its defaults).
+  uint32_t ring_slots = 0;
+  uint64_t ring_piece_bytes = 0;
 };
 
 // Throws io::Error on a bad file.
