@@ -230,5 +230,88 @@ TEST_F(StreamedUpload, RelayMeetingZstdPlanesFallsBackToHostStaging) {
   EXPECT_EQ(stats.frames_failed, 0u);
 }
 
+// A corrupt chunk in a relayed frame: that frame fails, naming the chunk;
+// the others arrive and render as before.
+TEST_F(StreamedUpload, RelayedCorruptChunkFailsItsFrameOnly) {
+  ValidationGuard guard;
+  const fs::path copy = fs::path(gpu_path_).replace_extension(".corrupt.sluice");
+  fs::copy_file(gpu_path_, copy, fs::copy_options::overwrite_existing);
+  std::vector<Rendered> expected;
+  uint64_t at = 0;
+  {
+    const io::ContainerReader reader(gpu_path_);
+    expected = reference(reader);
+    const std::vector<std::byte> record = reader.read_record(2);
+    const io::FrameHeader header = reader.parse_record(2, record);
+    const io::ChunkDesc& chunk = header.chunks[3];
+    at = reader.index().frames[2].offset + chunk.offset + chunk.compressed_size / 2;
+  }
+  {
+    std::FILE* f = std::fopen(copy.c_str(), "r+b");
+    ASSERT_NE(f, nullptr);
+    std::fseek(f, long(at), SEEK_SET);
+    const int byte = std::fgetc(f);
+    std::fseek(f, long(at), SEEK_SET);
+    std::fputc(byte ^ 0x5a, f);
+    std::fclose(f);
+  }
+  const io::ContainerReader reader(copy);
+  const SceneInfo scene = scene_info(reader);
+  testing::OffscreenRenderer r(context(), scene, 160, 120);
+  StagingAllocator staging(context(), {.resident = true});
+  runtime::PipelineOptions po;
+  po.keep_encoded = true;
+  po.encoded_color_attribute = 0;
+  runtime::Pipeline pipeline(reader, staging, po);
+  pipeline.restart({reader.frame_count(), 0, 1, 1, runtime::EndMode::Stop});
+  for (uint64_t f = 0; f < kFrames; ++f) {
+    ASSERT_FALSE(pipeline.wait_next().end);
+    runtime::FrameHandle h = pipeline.take();
+    if (f == 2) {
+      ASSERT_TRUE(h.failed());
+      EXPECT_EQ(h.error()->where.frame, 2u);
+      EXPECT_EQ(h.error()->where.chunk, 3u);
+      EXPECT_NE(h.error()->message.find("checksum"), std::string::npos) << h.error()->text();
+      continue;
+    }
+    ASSERT_FALSE(h.failed()) << h.error()->text();
+    r.commit_encoded({&h.header(), h.chunk_first(), &h.buffers(), h.gpu_plan(), 0}, &staging);
+    EXPECT_EQ(draw(r, scene).depth, expected[f].depth) << "frame " << f;
+  }
+  EXPECT_EQ(pipeline.stats().frames_relayed, kFrames - 1);
+  fs::remove(copy);
+}
+
+// Seeking while frames are relayed: reads cut short leave copies in flight
+// into areas the next frames reuse. Every frame that arrives, whatever the
+// seeks, renders as load_frame renders it.
+TEST_F(StreamedUpload, RelayedFramesSurviveSeeks) {
+  ValidationGuard guard;
+  const io::ContainerReader reader(gpu_path_);
+  const std::vector<Rendered> expected = reference(reader);
+  const SceneInfo scene = scene_info(reader);
+  testing::OffscreenRenderer r(context(), scene, 160, 120);
+  StagingAllocator staging(context(), {.resident = true, .ring_slots = 2, .ring_piece_bytes = 8192});
+  runtime::PipelineOptions po;
+  po.keep_encoded = true;
+  po.encoded_color_attribute = 0;
+  runtime::Pipeline pipeline(reader, staging, po);
+  uint64_t drawn = 0;
+  for (int seek = 0; seek < 12; ++seek) {
+    const uint64_t start = uint64_t(seek * 5) % kFrames;
+    pipeline.restart({reader.frame_count(), int64_t(start), seek % 2 ? -1 : 1, 1, runtime::EndMode::Loop});
+    for (int taken = 0; taken < 1 + seek % 3; ++taken) {
+      ASSERT_FALSE(pipeline.wait_next().end);
+      runtime::FrameHandle h = pipeline.take();
+      ASSERT_FALSE(h.failed()) << h.error()->text();
+      r.commit_encoded({&h.header(), h.chunk_first(), &h.buffers(), h.gpu_plan(), 0}, &staging);
+      EXPECT_EQ(draw(r, scene).depth, expected[h.frame()].depth) << "seek " << seek << ", frame " << h.frame();
+      ++drawn;
+    }
+  }
+  EXPECT_GE(drawn, 12u);
+  EXPECT_GT(pipeline.stats().frames_relayed, 0u);
+}
+
 }  // namespace
 }  // namespace sluice::render
