@@ -56,7 +56,7 @@ void run_play_gpu(const PlayOptions& o, const WindowPlayOptions& w) {
   render::OffscreenTarget target(context, width, height, oo);
 
   // Decoded straight into staging memory the transfer queue copies from.
-  render::StagingAllocator staging(context);
+  render::StagingAllocator staging(context, render::FrameFeed::staging_options(context, reader.header(), decode_site(o.decode), true));
   runtime::PlayerOptions po = player_options(o, false);
   const int color = fluid.scalar_visibility ? fluid.color_attribute : -1;
   render::FrameFeed::configure(po, staging, color, reader.header(), decode_site(o.decode));
@@ -132,6 +132,10 @@ void run_play_gpu(const PlayOptions& o, const WindowPlayOptions& w) {
               o.file.c_str(), (unsigned long long)new_frames, human_duration(elapsed).c_str(),
               fixed(double(new_frames) / elapsed, 1).c_str(), (unsigned long long)ticks, (unsigned long long)s.stalls,
               (unsigned long long)s.drops, (unsigned long long)s.errors, (unsigned long long)s.pipeline.cache_hits);
+  if (po.pipeline.keep_encoded) {
+    std::printf("  frames relayed to device memory as read (the window in device memory): %llu of %llu read\n",
+                (unsigned long long)s.pipeline.frames_relayed, (unsigned long long)s.pipeline.frames_read);
+  }
   if (intervals.empty()) {
     std::printf("  (play more than one pass over the file, e.g. --loop --seconds 10, for per-frame medians)\n");
     return;

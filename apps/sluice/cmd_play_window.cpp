@@ -239,6 +239,10 @@ void draw_hud(Player& p, const std::string& file) {
     if (p.stats.decoded_on_gpu) {
       ImGui::Text("decoded on the GPU: %.2f ms%s", p.stats.decode_ms,
                   p.stats.decode_errors > 0 ? "  (chunks with corrupt planes!)" : "");
+      if (st.pipeline.frames_relayed > 0) {
+        ImGui::Text("relayed to device memory as read: %llu of %llu frames", (unsigned long long)st.pipeline.frames_relayed,
+                    (unsigned long long)st.pipeline.frames_read);
+      }
     } else {
       ImGui::Text("decoded on the CPU");
     }
@@ -325,7 +329,8 @@ void run_play_window(const PlayOptions& o, const WindowPlayOptions& wo) {
 
   // The streaming runtime decodes the colour attribute only (if any), into
   // staging memory the GPU copies from.
-  render::StagingAllocator staging(context);
+  // The window takes the context's queue lock (desktop/window.h).
+  render::StagingAllocator staging(context, render::FrameFeed::staging_options(context, reader.header(), decode_site(o.decode), true));
   runtime::PlayerOptions po = player_options(o, true);
   po.start_frame = p.frame;
   po.display_rate = o.display_hz > 0 ? o.display_hz : display_refresh_hz();

@@ -92,7 +92,7 @@ void run_render(const RenderCommand& o, const ViewSettings& v) {
   // Frames stream through the runtime (read ahead, decoded on every core into
   // staging) and the frame feed, like playback: every frame due at once, none
   // skipped (hold), the first bad frame stops the render with its error.
-  render::StagingAllocator staging(context);
+  render::StagingAllocator staging(context, render::FrameFeed::staging_options(context, reader.header(), decode_site(o.decode), true));
   runtime::PlayerOptions po;
   po.frame_rate = 1e9;
   po.start_frame = first;

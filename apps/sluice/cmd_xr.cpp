@@ -96,7 +96,10 @@ void run_xr(const XrOptions& o) {
   const render::FluidOptions fluid = o.view.fluid_options(scene);
   render::LodOptions lod = o.view.lod_options();
 
-  render::StagingAllocator staging(session.context());
+  // The session submits without the context's queue lock: relayed only
+  // where the relay has a queue of its own.
+  render::StagingAllocator staging(
+      session.context(), render::FrameFeed::staging_options(session.context(), reader.header(), decode_site(p.decode), false));
   runtime::PlayerOptions po = player_options(p, true);
   const int color = fluid.scalar_visibility ? fluid.color_attribute : -1;
   render::FrameFeed::configure(po, staging, color, reader.header(), decode_site(p.decode));

@@ -450,13 +450,13 @@ void Context::Impl::run_once(const std::function<void(vk::CommandBuffer)>& recor
   }
 }
 
-void Context::Impl::submit(const vk::raii::Queue& queue, const vk::SubmitInfo2& info, vk::Fence fence) const {
+void Context::Impl::submit(const vk::raii::Queue& queue, const vk::SubmitInfo2& submission, vk::Fence fence) const {
   if (!relay_shared) {
-    queue.submit2(info, fence);
+    queue.submit2(submission, fence);
     return;
   }
   const std::lock_guard lock(queue_mutex);
-  queue.submit2(info, fence);
+  queue.submit2(submission, fence);
 }
 
 void Context::Impl::wait_idle(const vk::raii::Queue& queue) const {

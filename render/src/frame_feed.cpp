@@ -19,6 +19,13 @@ void FrameFeed::configure(runtime::PlayerOptions& options, const StagingAllocato
   options.pipeline.encoded_color_attribute = color_attribute;
 }
 
+StagingOptions FrameFeed::staging_options(const Context& context, const io::FileHeader& file, DecodeSite decode,
+                                          bool host_takes_queue_lock) {
+  StagingOptions o;
+  o.resident = decode != DecodeSite::Cpu && io::gpu_decodable(file) && (host_takes_queue_lock || !context.relay_queue_shared());
+  return o;
+}
+
 FeedUpdate FrameFeed::update() {
   renderer_.wait_upload(pending_);  // the player may now take those buffers back
   const runtime::Tick tick = player_.update();

@@ -25,7 +25,7 @@ class RelayRing;
 // Destroying it waits for the copies into it (a read a newer schedule cut
 // short may leave some in flight).
 struct ResidentArea {
-  ResidentArea(const RelayRing& ring, Buffer buffer) : ring(ring), device(std::move(buffer)) {}
+  ResidentArea(const RelayRing& relay, Buffer buffer) : ring(relay), device(std::move(buffer)) {}
   ~ResidentArea();
   ResidentArea(const ResidentArea&) = delete;
   ResidentArea& operator=(const ResidentArea&) = delete;

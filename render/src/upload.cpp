@@ -483,8 +483,9 @@ uint64_t Renderer::commit_encoded(const EncodedFrameView& frame, const StagingAl
   set.particle_count = header.particle_count;
   set.chunk_count = chunks;
   set.has_attribute = attribute;
-  EncodedSource source{own || resident ? UploadSource{*set.staging.buffer, table} : UploadSource{*block->staging.buffer, 0},
-                       &plan};
+  EncodedSource source;
+  source.area = own || resident ? UploadSource{*set.staging.buffer, table} : UploadSource{*block->staging.buffer, 0};
+  source.plan = &plan;
   if (resident) {
     source.resident = resident;
     source.relayed = static_cast<vk::Semaphore>(from->relay_semaphore());

@@ -60,7 +60,7 @@ struct Context::Impl {
   uint32_t memory_type(uint32_t type_bits, vk::MemoryPropertyFlags wanted) const;
   // Submits to `queue` (one of the above), holding queue_mutex while the
   // relay shares it: sluice's submissions go through here.
-  void submit(const vk::raii::Queue& queue, const vk::SubmitInfo2& info, vk::Fence fence = {}) const;
+  void submit(const vk::raii::Queue& queue, const vk::SubmitInfo2& submission, vk::Fence fence = {}) const;
   void wait_idle(const vk::raii::Queue& queue) const;
   // Records `record` into a fresh command buffer on the graphics queue, submits
   // it and waits. For setup work only.
