@@ -263,7 +263,7 @@ for stage in $stages; do
       ;;
     relay100)  # the relayed row at 100M particles a frame
       run $S synth -n 100M --frames ${RELAY100_FRAMES:-8} -o /tmp/rl100m.sluice --force -q --gpu-decodable
-      run $S bench stream --gpu /tmp/rl100m.sluice --memory 32G --no-storage --min-time 2
+      run $S bench stream --gpu /tmp/rl100m.sluice --memory ${RELAY100_MEMORY:-48G} --no-storage --min-time 2
       rm -f /tmp/rl100m.sluice
       ;;
     gpuvar)  # variant builds (.gpu/sluice_v*, carried beside) against this one, alternated, 10M x 24 frames
