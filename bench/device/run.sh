@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Runs on the GPU machine (see bench/device/README.md): every benchmark the
 # issues ask GPU-machine figures for, in one call. Results go to $OUT.
-#   bash bench/device/run.sh [io] [import] [layers] [band] [render] [stream] [split] [codec] [huge] [embed] [compare] [live] [stereo] [xrsize] [firsthour] [streamcmp] [gpudecode] [gpuquick] [gpupair] [gpuab] [gpu100] [egl] [vtkpeer] [readpath] [importprobe] [relayprobe] [storeab] [gpusplit] [gpuplay] [gpuflight] [gpu100ab] [damf2] [gpusweep] [gpuvar] [relay] [relay100]   (default: io render stream)
+#   bash bench/device/run.sh [io] [import] [layers] [band] [render] [stream] [split] [codec] [huge] [embed] [compare] [live] [stereo] [xrsize] [firsthour] [streamcmp] [gpudecode] [gpuquick] [gpupair] [gpuab] [gpu100] [egl] [vtkpeer] [readpath] [importprobe] [relayprobe] [storeab] [gpusplit] [gpuplay] [gpuflight] [gpu100ab] [damf2] [gpusweep] [gpuvar] [relay] [relay100] [gpuplayall]   (default: io render stream)
 set -uo pipefail
 OUT=${OUT:-/tmp/out}
 mkdir -p "$OUT" /tmp/s
@@ -253,7 +253,8 @@ for stage in $stages; do
     relay)  # the relayed row (window in device memory, filled through a ring) and ring shapes, 10M x 24 frames
       run $S synth -n 10M --frames 24 -o /tmp/rl10m.sluice --force -q --gpu-decodable
       run $S bench stream --gpu /tmp/rl10m.sluice --memory 16G --no-storage --min-time 2
-      for shape in ${RELAY_RINGS:-"8 8M" "32 4M" "8 16M"}; do
+      IFS=, read -ra rings <<< "${RELAY_RINGS:-8 8M,32 4M,8 16M}"  # shapes "SLOTS PIECE", comma-separated
+      for shape in "${rings[@]}"; do
         read -r slots piece <<< "$shape"
         log "ring of $slots x $piece"
         $S bench stream --gpu /tmp/rl10m.sluice --memory 16G --no-storage --min-time 2 --ring-slots "$slots" --ring-piece "$piece" 2>&1 \
@@ -349,6 +350,15 @@ for stage in $stages; do
       rm -f /tmp/p10m.sluice
       run $S synth -n 100M --frames 12 -o /tmp/p100m.sluice --force -q --gpu-decodable
       run $S play --headless --gpu --stats /tmp/p100m.sluice --loop --seconds 8 --fps 1000 --display-hz 1000 --memory 48G
+      ;;
+    gpuplayall)  # playback streaming every particle (--layers all) through a window of 4 frames, 10M and 100M
+      run $S bench render --sizes 1M --repeats 3 >/dev/null  # warm-up
+      run $S synth -n 10M --frames 24 -o /tmp/pa10m.sluice --force -q --gpu-decodable
+      run $S play --headless --gpu --stats /tmp/pa10m.sluice --loop --seconds 8 --fps 1000 --display-hz 1000 --memory 16G --window 4 --layers all
+      rm -f /tmp/pa10m.sluice
+      run $S synth -n 100M --frames 12 -o /tmp/pa100m.sluice --force -q --gpu-decodable
+      run $S play --headless --gpu --stats /tmp/pa100m.sluice --loop --seconds 8 --fps 1000 --display-hz 1000 --memory 48G --window 4 --layers all
+      rm -f /tmp/pa100m.sluice
       ;;
     gpu100)  # 100M particles a frame through the GPU path, more frames than the window holds
       run $S synth -n 100M --frames 12 -o /tmp/g100m.sluice --force -q --gpu-decodable

@@ -2,7 +2,8 @@
 // frames, bit-packed planes with their escapes, stored planes, and the
 // unfilters; then through the GPU decoder's CPU side (plan_gpu_decode,
 // stage_frame) and its reference decode (decode_plan_on_cpu, what the
-// kernel computes). Any io::Error is a correct answer; a crash, a sanitizer
+// kernel computes), and the same chunk planned from its payload alone
+// (plan_gpu_frame, plan_gpu_chunk). Any io::Error is a correct answer; a crash, a sanitizer
 // report or a read or write outside the chunk's buffers is a bug, and so is
 // a plan the CPU accepts whose decode differs from decode_chunk's.
 #include <cstdint>
@@ -54,8 +55,10 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   frame.chunks.push_back(chunk);
   const int color = setup.attributes > 0 ? 0 : -1;
   io::GpuDecodePlan plan;
+  bool whole_planned = false;
   try {
     io::plan_gpu_decode(record, frame, header, {.color_attribute = color}, plan, {"fuzz.sluice", 0, 0});
+    whole_planned = true;
     std::vector<std::byte> staged(plan.staged_bytes());
     io::stage_frame(record, frame, plan, staged, true, {"fuzz.sluice", 0, 0});
     std::vector<uint64_t> gpu_particles(setup.particles);
@@ -64,6 +67,22 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     // A chunk both decoders accept decodes to the same particles.
     if (decoded && std::memcmp(gpu_particles.data(), particles.data(), particles.size()) != 0) std::abort();
     if (decoded && color == 0 && gpu_attribute != attributes[0]) std::abort();
+  } catch (const io::Error&) {
+  }
+  // The same chunk planned as a relaying reader plans it (the payload
+  // alone, in a buffer of its own size): accepted only where the whole
+  // record's plan is, to the same planes, or refused for a zstd plane.
+  io::GpuDecodePlan steps;
+  try {
+    io::plan_gpu_frame(frame, header, {.color_attribute = color}, steps, {"fuzz.sluice", 0, 0});
+    const io::ChunkDesc& c = frame.chunks[0];
+    if (c.offset > record.size() || c.compressed_size > record.size() - c.offset) return 0;
+    const std::vector<std::byte> payload(record.begin() + long(c.offset), record.begin() + long(c.offset + c.compressed_size));
+    const bool planned = io::plan_gpu_chunk(payload, frame, header, {.color_attribute = color}, 0, steps, {"fuzz.sluice", 0, 0});
+    if (planned && (!whole_planned || plan.chunks.size() != 1 || plan.zstd_planes != 0 ||
+                    std::memcmp(&plan.chunks[0], &steps.chunks[0], sizeof(io::GpuChunkPlan)) != 0)) {
+      std::abort();
+    }
   } catch (const io::Error&) {
   }
   return 0;
