@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Runs on the GPU machine (see bench/device/README.md): every benchmark the
 # issues ask GPU-machine figures for, in one call. Results go to $OUT.
-#   bash bench/device/run.sh [io] [import] [layers] [band] [render] [stream] [split] [codec] [huge] [embed] [compare] [live] [stereo] [xrsize] [firsthour] [streamcmp] [gpudecode] [gpuquick] [gpupair] [gpuab] [gpu100] [egl] [vtkpeer] [readpath] [importprobe] [relayprobe] [storeab] [gpusplit] [gpuplay] [gpuflight] [gpu100ab] [damf2] [gpusweep] [gpuvar] [relay] [relay100] [gpuplayall]   (default: io render stream)
+#   bash bench/device/run.sh [io] [import] [layers] [band] [render] [stream] [split] [codec] [huge] [embed] [compare] [live] [stereo] [xrsize] [firsthour] [streamcmp] [gpudecode] [gpuquick] [gpupair] [gpuab] [gpu100] [egl] [vtkpeer] [readpath] [importprobe] [relayprobe] [storeab] [gpusplit] [gpuplay] [gpuflight] [gpu100ab] [damf2] [gpusweep] [gpuvar] [relay] [relaytests] [relay100] [gpuplayall]   (default: io render stream)
 set -uo pipefail
 OUT=${OUT:-/tmp/out}
 mkdir -p "$OUT" /tmp/s
@@ -261,6 +261,9 @@ for stage in $stages; do
           | grep -E "relayed|GPU \(kept encoded\), mapped|measured again|pread, page cache|host -> device copy \(|at once" | tee -a "$OUT/summary.txt"
       done
       rm -f /tmp/rl10m.sluice
+      ;;
+    relaytests)  # the renderer's streamed-upload tests (relayed frames render as load_frame renders them) on this GPU
+      [[ -x .gpu/sluice_render_tests ]] && run ./.gpu/sluice_render_tests --gtest_brief=1 --gtest_filter='StreamedUpload.*'
       ;;
     relay100)  # the relayed row at 100M particles a frame
       run $S synth -n 100M --frames ${RELAY100_FRAMES:-8} -o /tmp/rl100m.sluice --force -q --gpu-decodable

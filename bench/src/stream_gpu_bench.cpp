@@ -75,6 +75,11 @@ constexpr size_t kInFlight = 2;  // frames handed to the renderer and not yet wa
 DevicePass stream_to_device(const io::ContainerReader& reader, const Slice& slice, render::Context& context,
                             const DeviceSetup& setup, bool gpu_decode, bool mapped, double min_seconds) {
   render::StagingAllocator staging(context, setup.staging);
+  if (staging.resident()) {
+    std::fprintf(stderr, "  the relayed row's ring: %u slots of %.1f MiB, %s\n", staging.ring_slots(),
+                 double(staging.ring_piece_bytes()) / (1 << 20),
+                 context.relay_queue_shared() ? "sharing the transfer queue (Context::queue_lock)" : "on a queue of its own");
+  }
   render::Renderer renderer(context, render::scene_info(reader));
   runtime::PipelineOptions o;
   o.decode_threads = setup.decode_threads;

@@ -80,6 +80,8 @@ StagingAllocator::StagingAllocator(Context& context, const StagingOptions& optio
 }
 
 runtime::PieceRelay* StagingAllocator::relay() { return ring_.get(); }
+uint32_t StagingAllocator::ring_slots() const { return ring_ ? ring_->slots() : 0; }
+uint64_t StagingAllocator::ring_piece_bytes() const { return ring_ ? ring_->piece_bytes() : 0; }
 
 VkSemaphore StagingAllocator::relay_semaphore() const { return ring_ ? static_cast<VkSemaphore>(ring_->semaphore()) : VK_NULL_HANDLE; }
 

@@ -62,6 +62,9 @@ class StagingAllocator final : public runtime::FrameAllocator {
   void trim(uint64_t keep) override;
   runtime::PieceRelay* relay() override;  // null without a resident window
   bool resident() const { return options_.resident; }
+  // The ring's shape (0 slots without a resident window).
+  uint32_t ring_slots() const;
+  uint64_t ring_piece_bytes() const;
   // The ring's timeline semaphore, which a resident frame's decode waits on
   // (null without a resident window).
   VkSemaphore relay_semaphore() const;
