@@ -4,6 +4,9 @@
 //                          |          \__________________________/   ^   |
 //                          +-> Failed / Cancelled ---(returned)-> Free   +-> Ready (a cache hit)
 //
+// Empty frames and relayed ones (relay.h: checked and planned as read) go
+// from Reading straight to Ready.
+//
 // Ownership follows the state, so each field has one writer at a time:
 //  - the reader thread owns Free, Reading and Cached slots and fills them;
 //  - decode workers own a Decoding slot's buffers; the worker that finishes

@@ -232,7 +232,11 @@ class Renderer {
   // which then stay untouched until upload_complete(ticket); otherwise
   // through the renderer's staging) and its decode on the GPU
   // (shaders/decode.comp): a compute submission to the graphics queue that
-  // waits for the copy. The ticket is the decode's. The one queue
+  // waits for the copy. A frame relayed into a resident area (a
+  // StagingAllocator with StagingOptions::resident) is already in device
+  // memory: only its tables are copied into the area, and the decode reads
+  // it there, waiting for the relay's copies into it too. The ticket is
+  // the decode's. The one queue
   // submission the renderer makes per frame on its own: the host must not
   // use the graphics queue from another thread meanwhile.
   uint64_t commit_encoded(const EncodedFrameView& frame, const StagingAllocator* from);

@@ -72,6 +72,12 @@ struct PipelineOptions {
   // the buffer ends with the chunk plans. Needs io::gpu_decodable(file)
   // (the constructor throws io::Error otherwise). `attributes` is ignored:
   // the plan decodes `encoded_color_attribute` (file index; -1: none).
+  // When the allocator offers a relay (relay.h) and reads are buffered,
+  // frames are relayed instead: their areas are resident (device memory),
+  // filled as the read threads read, checked and planned chunk by chunk,
+  // with no worker pass; FrameHandle::layout().resident says so, and
+  // buffers().particles is then empty (the plan's tables travel with
+  // gpu_plan()).
   bool keep_encoded = false;
   int encoded_color_attribute = -1;
   BudgetOptions budget;
@@ -159,7 +165,7 @@ class FrameHandle {
   const io::FrameHeader& header() const;           // chunk table: counts, AABBs (to dequantize), layers
   std::span<const uint64_t> chunk_first() const;   // first particle of each chunk
   const FrameLayout& layout() const;
-  const FrameBuffers& buffers() const;             // particles (io::decoded_particle_bytes each; kept encoded: the staged area), attributes
+  const FrameBuffers& buffers() const;             // particles (io::decoded_particle_bytes each; kept encoded: the staged area; relayed: empty), attributes
   // Frames kept encoded (PipelineOptions::keep_encoded): the plan of the
   // staged area in buffers().particles; null otherwise.
   const io::GpuDecodePlan* gpu_plan() const;
