@@ -487,15 +487,9 @@ void PipelineCore::read_again_on_host(ReaderState& rs, Slot& slot) {
   release_buffers(rs, slot);
   slot.relayed = false;
   slot.checked_on_read = false;  // the workers check the chunks
-  const io::FrameIndexEntry& e = reader_.index().frames[slot.frame];
-  set_layout(slot, e.count_in(options_.layers),
-             encoded_block_bytes(io::staged_bytes_bound(e.bytes, e.chunk_count, e.particle_count, 0)));
-  allocate_buffers(rs, slot);
-  if (slot.buffers.particles.size() < e.bytes) {
-    throw io::Error(reader_.location(slot.frame), "the frame allocator returned buffers smaller than the frame");
-  }
-  read_piece(slot.buffers.particles.first(e.bytes), e.offset, e.bytes, slot.frame, e.offset + e.bytes);
-  slot.record_bytes = slot.buffers.particles.first(e.bytes);
+  const ReadTarget whole = staged_target(rs, slot);  // the whole record, on this thread (a rare path)
+  read_piece(whole.dst, whole.offset, whole.need, slot.frame, whole.offset + whole.need);
+  slot.record_bytes = whole.record;
 }
 
 void PipelineCore::prepare_decode(ReaderState& rs, Slot& slot) {
