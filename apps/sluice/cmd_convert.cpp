@@ -94,6 +94,9 @@ void add_convert(CLI::App& app) {
   cmd->add_flag("--gpu-decodable", o->gpu_decodable,
                 "No zstd planes (each stored or bit-packed): every chunk decodes on the GPU with no CPU work but\n"
                 "its checksum (`sluice play` decodes on the GPU by default); files some percent larger");
+  cmd->add_flag("--no-tiers", [o](int64_t) { o->lod_tiers = false; },
+                "One record per chunk instead of one per LOD tier: a few percent smaller, but a player then reads\n"
+                "every particle of a chunk it draws, however far away (docs/format.md, \"LOD tiers\")");
   cmd->add_flag("--no-layers", [o](int64_t) { o->layers = false; },
                 "Do not classify the narrow band: every frame is one layer of all its particles");
   cmd->add_option("--band-voxel", o->band_voxel,

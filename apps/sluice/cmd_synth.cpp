@@ -63,6 +63,8 @@ void add_synth(CLI::App& app) {
   cmd->add_option("--level", o->zstd_level, "zstd level")->capture_default_str();
   cmd->add_flag("--no-layers", [o](int64_t) { o->layers = false; },
                 "Do not classify the narrow band: every frame one layer of all its particles");
+  cmd->add_flag("--no-tiers", [o](int64_t) { o->lod_tiers = false; },
+                "One record per chunk, not one per LOD tier (format 1.3's layout): smaller, always read whole");
   cmd->add_flag("--smallest", [o](int64_t) { o->pack_planes = false; },
                 "zstd on every plane it shrinks most (smaller, slower to decode)");
   cmd->add_flag("--gpu-decodable", [o](int64_t) { o->zstd_planes = false; },

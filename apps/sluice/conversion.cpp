@@ -180,6 +180,7 @@ ConversionSummary convert_input(const ConversionOptions& o, const std::string& o
   settings.encode.zstd_level = o.level;
   settings.encode.pack_planes = !o.smallest;
   settings.encode.zstd_planes = !o.gpu_decodable;
+  settings.encode.lod_tiers = o.lod_tiers;
   settings.encode.layers = o.layers;
   settings.encode.band_voxel = o.band_voxel;
   settings.encode.band_f2 = o.band_f2;

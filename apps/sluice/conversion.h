@@ -27,6 +27,7 @@ struct ConversionOptions {
   uint32_t chunk = 65536;
   int level = 3;
   bool smallest = false;
+  bool lod_tiers = true;       // chunks as LOD tiers (EncodeOptions::lod_tiers)
   bool gpu_decodable = false;  // no zstd planes (EncodeOptions::zstd_planes)
   // Classify the narrow band: surface, interior and blob layers (format
   // 1.3). Quantized positions only: --lossless files stay one layer.

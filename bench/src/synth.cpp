@@ -143,6 +143,7 @@ SynthResult write_synthetic(const SynthOptions& o, const std::function<void(uint
   encode.zstd_level = o.zstd_level;
   encode.pack_planes = o.pack_planes;
   encode.zstd_planes = o.zstd_planes;
+  encode.lod_tiers = o.lod_tiers;
   encode.layers = o.layers;
   const size_t jobs = o.jobs > 0 ? size_t(o.jobs) : size_t(tbb::info::default_concurrency());
   const io::ConvertResult r = io::convert_frames(*source, std::nullopt, writer, io::ConvertSettings{.encode = encode, .max_in_flight = jobs + 1},

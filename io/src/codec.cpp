@@ -23,6 +23,7 @@
 #include "packed_plane.h"
 #include "quantized_unpack.h"
 #include "records.h"
+#include "sluice/io/lod.h"
 
 namespace sluice::io {
 
@@ -82,6 +83,7 @@ ZSTD_CCtx* thread_compressor() {
 constexpr double kMinPlaneGain = 0.15;
 constexpr double kZstdGainOverPacked = 1.0 / 3.0;
 constexpr uint32_t kPackedFlag = kPackedPlaneFlag;
+constexpr uint32_t kLeastTierRecord = 1024;
 
 void entry_stored(std::vector<std::byte>& payload, const std::byte* plane, size_t n, size_t p) {
   const auto entry = static_cast<uint32_t>(n);
@@ -178,14 +180,24 @@ void locate_planes(std::span<const std::byte> payload, ChunkCodec codec, size_t 
   if (at != payload.size()) throw Error(where, "chunk payload has trailing bytes");
 }
 
-EncodedChunk encode_chunk(const FrameInput& in, std::span<const uint32_t> members, PositionCoding coding,
+// The box of `members`' positions.
+Aabb box_of(const FrameInput& in, std::span<const uint32_t> members) {
+  Aabb box;
+  for (uint32_t p : members) box.extend(in.positions[3 * p], in.positions[3 * p + 1], in.positions[3 * p + 2]);
+  return box;
+}
+
+// `box` holds every member: the chunk's own, or its cell's when the chunk is
+// one LOD tier of a cell (every tier of a cell is quantized in one box, so a
+// particle decodes to the same position whichever tiers are read).
+EncodedChunk encode_chunk(const FrameInput& in, std::span<const uint32_t> members, const Aabb& box, PositionCoding coding,
                           const EncodeOptions& options) {
   const size_t n = members.size();
   const size_t attributes = in.attributes.size();
   EncodedChunk out;
   ChunkDesc& desc = out.desc;
   desc.particle_count = static_cast<uint32_t>(n);
-  for (uint32_t p : members) desc.bounds.extend(in.positions[3 * p], in.positions[3 * p + 1], in.positions[3 * p + 2]);
+  desc.bounds = box;
 
   // Widen the top of the box until the decoder's float arithmetic maps the
   // largest code inside it: then every decoded particle lies in the box.
@@ -303,6 +315,69 @@ Group plan_all(const FrameInput& in, const Aabb& bounds, uint32_t limit) {
   return {&in, std::move(plan.order), std::move(plan.chunks), Layer::All};
 }
 
+// One job per record: a chunk, or LOD tiers of it.
+struct Job {
+  const Group* group;
+  ChunkPlan::Range range;
+  uint32_t cell;  // the chunk's index in `cells`
+  uint8_t tier;
+  bool continues_cell;
+};
+struct Cell {
+  Group* group;
+  ChunkPlan::Range range;
+  Aabb box;
+  std::array<uint32_t, kLodTiers + 1> first{};  // tier t: members [first[t], first[t + 1]) of the range
+};
+
+// A cell written as tiers costs more bytes than written whole (sparser
+// Morton deltas, attribute deltas between less similar neighbours, a zstd
+// frame per plane and a table entry per record): on lattice-like data up
+// to 2.3x (the bundled dam break's first frame). Where that cost exceeds
+// kMostTierCost the cell is written whole, as one record of tier 0: a
+// reader then reads all of it when it reads any.
+constexpr double kMostTierCost = 0.08;
+
+std::vector<EncodedChunk> keep_tiers_that_pay(std::vector<EncodedChunk> records, const std::vector<Job>& jobs,
+                                              const std::vector<Cell>& cells, const FileHeader& header,
+                                              const EncodeOptions& options) {
+  const size_t desc = chunk_desc_bytes(header.attributes.size());
+  std::vector<uint64_t> tiered(cells.size(), 0);
+  std::vector<uint32_t> count(cells.size(), 0);
+  for (size_t r = 0; r < records.size(); ++r) {
+    tiered[jobs[r].cell] += records[r].payload.size() + desc;
+    ++count[jobs[r].cell];
+  }
+  std::vector<uint32_t> split;  // cells of more than one record
+  for (uint32_t c = 0; c < cells.size(); ++c) {
+    if (count[c] > 1) split.push_back(c);
+  }
+  if (split.empty()) return records;
+  std::vector<EncodedChunk> whole(split.size());
+  tbb::parallel_for(size_t(0), split.size(), [&](size_t k) {
+    const Cell& cell = cells[split[k]];
+    whole[k] = encode_chunk(*cell.group->in,
+                            std::span(cell.group->order).subspan(cell.range.begin, cell.range.end - cell.range.begin),
+                            cell.box, header.position_coding, options);
+    whole[k].desc.layer = cell.group->layer;
+  });
+  std::vector<int64_t> replacement(cells.size(), -1);
+  for (size_t k = 0; k < split.size(); ++k) {
+    if (double(tiered[split[k]]) > double(whole[k].payload.size() + desc) * (1.0 + kMostTierCost)) replacement[split[k]] = int64_t(k);
+  }
+  std::vector<EncodedChunk> out;
+  out.reserve(records.size());
+  for (size_t r = 0; r < records.size(); ++r) {
+    const int64_t k = replacement[jobs[r].cell];
+    if (k < 0) {
+      out.push_back(std::move(records[r]));
+    } else if (!jobs[r].continues_cell) {
+      out.push_back(std::move(whole[size_t(k)]));
+    }
+  }
+  return out;
+}
+
 }  // namespace
 
 EncodedFrame encode_frame(const FrameInput& in, const FileHeader& header, const EncodeOptions& options) {
@@ -331,23 +406,68 @@ EncodedFrame encode_frame(const FrameInput& in, const FileHeader& header, const 
     groups.push_back(plan_all(in, fh.bounds, limit));
   }
 
-  struct Job {
-    const Group* group;
-    ChunkPlan::Range range;
-  };
-  std::vector<Job> jobs;
-  for (const Group& g : groups) {
-    for (const auto& r : g.chunks) jobs.push_back({&g, r});
+  // One job per record: a chunk, or one LOD tier of it. Tiers reorder the
+  // chunk's members by tier (counting sort, stable) so each is a range.
+  std::vector<Cell> cells;
+  for (Group& g : groups) {
+    for (const auto& r : g.chunks) cells.push_back({&g, r, {}, {}});
   }
-  std::vector<EncodedChunk> chunks(jobs.size());
-  tbb::parallel_for(size_t(0), chunks.size(), [&](size_t c) {
-    const Job& j = jobs[c];
-    chunks[c] = encode_chunk(*j.group->in, std::span(j.group->order).subspan(j.range.begin, j.range.end - j.range.begin),
-                             header.position_coding, options);
-    chunks[c].desc.layer = j.group->layer;
+  tbb::parallel_for(size_t(0), cells.size(), [&](size_t c) {
+    Cell& cell = cells[c];
+    const FrameInput& source = *cell.group->in;
+    const std::span<uint32_t> members = std::span(cell.group->order).subspan(cell.range.begin, cell.range.end - cell.range.begin);
+    cell.box = box_of(source, members);
+    if (!options.lod_tiers || cell.group->layer == Layer::Blobs) {
+      cell.first.fill(uint32_t(members.size()));
+      cell.first[0] = 0;
+      return;
+    }
+    for (uint32_t p : members) ++cell.first[lod_tier(source.lod[p]) + 1];
+    for (uint32_t t = 0; t < kLodTiers; ++t) cell.first[t + 1] += cell.first[t];
+    std::vector<uint32_t> sorted(members.size());
+    std::array<uint32_t, kLodTiers> at{};
+    std::copy(cell.first.begin(), cell.first.begin() + kLodTiers, at.begin());
+    for (uint32_t p : members) sorted[at[lod_tier(source.lod[p])]++] = p;
+    std::copy(sorted.begin(), sorted.end(), members.begin());
   });
-
+  // Tiers smaller than kLeastTierRecord particles join the tiers after them
+  // in one record labelled with the first (a reader that needs that tier
+  // reads a little more); a small last record joins the one before. Small
+  // records cost more than they save: every plane's zstd frame and table
+  // entry, and sparser Morton deltas (docs/format.md, "LOD tiers").
+  std::vector<Job> jobs;
+  for (uint32_t c = 0; c < cells.size(); ++c) {
+    const uint32_t base = cells[c].range.begin;
+    const size_t cell_first_job = jobs.size();
+    uint32_t t = 0;
+    while (t < kLodTiers) {
+      const uint32_t begin = cells[c].first[t];
+      uint32_t end_tier = t + 1;
+      while (end_tier < kLodTiers && cells[c].first[end_tier] - begin < kLeastTierRecord) ++end_tier;
+      const uint32_t end = cells[c].first[end_tier];
+      if (end > begin) {
+        const bool continues = jobs.size() > cell_first_job;
+        if (continues && end - begin < kLeastTierRecord) {
+          jobs.back().range.end = base + end;  // a small tail: into the record before
+        } else {
+          jobs.push_back({cells[c].group, {base + begin, base + end}, c, static_cast<uint8_t>(t), continues});
+        }
+      }
+      t = end_tier;
+    }
+  }
+  std::vector<EncodedChunk> records(jobs.size());
+  tbb::parallel_for(size_t(0), records.size(), [&](size_t c) {
+    const Job& j = jobs[c];
+    records[c] = encode_chunk(*j.group->in, std::span(j.group->order).subspan(j.range.begin, j.range.end - j.range.begin),
+                              cells[j.cell].box, header.position_coding, options);
+    records[c].desc.layer = j.group->layer;
+    records[c].desc.tier = j.tier;
+    records[c].desc.continues_cell = j.continues_cell;
+  });
   const size_t attributes = header.attributes.size();
+  std::vector<EncodedChunk> chunks = keep_tiers_that_pay(std::move(records), jobs, cells, header, options);
+
   uint64_t offset = frame_table_bytes(chunks.size(), attributes);
   for (EncodedChunk& c : chunks) {
     c.desc.offset = offset;

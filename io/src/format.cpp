@@ -4,6 +4,7 @@
 
 #include "bytes.h"
 #include "records.h"
+#include "sluice/io/lod.h"
 
 namespace sluice::io {
 namespace {
@@ -164,7 +165,8 @@ std::vector<std::byte> serialize_frame_table(const FrameHeader& f, size_t attrib
     w.u32(c.particle_count);
     w.u8(static_cast<uint8_t>(c.layer));
     w.u8(static_cast<uint8_t>(c.codec));
-    w.u16(0);
+    w.u8(c.tier);                           // format 1.4; reserved (0) before
+    w.u8(c.continues_cell ? 1 : 0);
     write_aabb(w, c.bounds);
     w.u64(c.checksum);
     for (const auto& range : c.attribute_ranges) {
@@ -227,7 +229,8 @@ void parse_frame_table(std::span<const std::byte> record, size_t attribute_count
     c.particle_count = r.u32();
     const uint8_t layer = r.u8();
     const uint8_t codec = r.u8();
-    r.u16();
+    const uint8_t tier = r.u8();
+    const uint8_t cell = r.u8();
     c.bounds = read_aabb(r);
     c.checksum = r.u64();
     c.attribute_ranges.resize(attribute_count);
@@ -248,6 +251,16 @@ void parse_frame_table(std::span<const std::byte> record, size_t attribute_count
       r.fail("chunk payload lies outside the frame record");
     }
     if (c.layer == Layer::Blobs && !(f.blob_voxel > 0)) r.fail("blob chunk in a frame without a blob voxel side");
+    if (tier >= kLodTiers) r.fail("LOD tier " + std::to_string(tier) + " is out of range (0 to " + std::to_string(kLodTiers - 1) + ")");
+    if (cell > 1) r.fail("unknown cell flags " + std::to_string(cell));
+    c.tier = tier;
+    c.continues_cell = cell == 1;
+    if (c.continues_cell) {
+      const ChunkDesc* before = &c == f.chunks.data() ? nullptr : &c - 1;
+      if (!before || before->layer != c.layer || before->tier >= c.tier || !(before->bounds == c.bounds)) {
+        r.fail("a record continues a cell it does not follow (tiers must rise within one layer and box)");
+      }
+    }
     particles += c.particle_count;
   }
   if (particles != f.particle_count) r.fail("chunk particle counts do not add up to the frame's");

@@ -60,7 +60,8 @@ PipelineCore::PipelineCore(const io::ContainerReader& reader, FrameAllocator& al
       delivery_(std::max<uint32_t>(2, options_.budget.ring_capacity)),
       returns_(std::max<uint32_t>(2, options_.budget.ring_capacity)),
       record_returns_(size_t(decode_threads_) + 1),
-      records_(size_t(decode_threads_) + 1) {
+      records_(size_t(decode_threads_) + 1),
+      demand_(options_.demand) {
   if (options_.keep_encoded) {
     if (!io::gpu_decodable(reader_.header())) {
       throw io::Error({reader_.path()}, "frames cannot stay encoded for the GPU: its positions are float32");
@@ -286,6 +287,8 @@ PipelineStats PipelineCore::stats() const {
   s.read_thread_seconds = double(read_crew_.busy_ns()) * 1e-9;
   s.read_threads = static_cast<uint32_t>(read_threads_);
   s.frames_read = c.frames_read.load(kRelaxed);
+  s.record_bytes = c.record_bytes.load(kRelaxed);
+  s.frames_by_demand = c.frames_by_demand.load(kRelaxed);
   s.frames_in_place = c.frames_in_place.load(kRelaxed);
   s.frames_relayed = c.frames_relayed.load(kRelaxed);
   s.cache_hits = c.cache_hits.load(kRelaxed);
@@ -364,6 +367,17 @@ const io::ContainerReader& Pipeline::reader() const { return core_->reader_; }
 std::optional<FrameError> Pipeline::fatal_error() const {
   if (!core_->reader_failed_.load(std::memory_order_acquire)) return std::nullopt;
   return core_->fatal_;
+}
+
+void Pipeline::set_demand(const ViewDemand& demand) {
+  core_->demand_.set(demand);
+  core_->wake_reader();  // a cached frame short of it is read again when next due
+}
+
+bool Pipeline::short_of(const FrameHandle& frame, const ViewDemand& demand) const {
+  if (frame.empty() || frame.failed()) return false;
+  const Slot& slot = core_->slot(frame.slot_);
+  return slot.demand_applied && runtime::short_of(demand, slot.cells, slot.header.blob_voxel);
 }
 
 }  // namespace sluice::runtime

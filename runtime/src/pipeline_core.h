@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "aligned_buffer.h"
+#include "demand_box.h"
 #include "mpsc_ring.h"
 #include "slot.h"
 #include "spsc_ring.h"
@@ -39,6 +40,7 @@ struct alignas(64) WorkerCounters {
 };
 
 struct Counters {
+  std::atomic<uint64_t> record_bytes{0}, frames_by_demand{0};
   std::atomic<uint64_t> bytes_read{0}, read_ns{0}, frames_read{0}, frames_in_place{0}, frames_relayed{0}, cache_hits{0};
   std::atomic<uint64_t> frames_decoded{0}, decoded_bytes{0}, frames_cancelled{0};
   std::atomic<uint64_t> frames_delivered{0}, frames_failed{0};
@@ -176,6 +178,7 @@ class PipelineCore {
   AlignedBuffer& record_buffer(ReaderState& rs, uint32_t record, uint64_t bytes);
   ReadTarget staged_target(ReaderState& rs, Slot& slot);
   bool reads_in_place() const;
+  bool reads_by_demand();  // the latest demand leaves something out, and chunks can be read one by one
   // Whether the layers left out of options_.layers let the frame be read as
   // a prefix of its record: they include the layer written last.
   bool reads_prefix(const io::FrameIndexEntry& e) const;
@@ -236,6 +239,11 @@ class PipelineCore {
   void read_chunk(std::span<std::byte> dst, uint64_t offset, uint64_t frame, size_t c, uint64_t checksum,
                   Stores stores = Stores::Streaming);
   void prepare_decode(ReaderState& rs, Slot& slot);
+  // Keeps the tiers the latest demand needs of the frame's cells (once per
+  // read) and records what was kept (slot.cells).
+  void take_demand(Slot& slot);
+  // Whether the frame in `slot` lacks tiers the latest demand needs.
+  bool short_of_latest(const Slot& slot);
   void publish(ReaderState& rs, uint32_t s, uint64_t k);
   void fail(ReaderState& rs, uint32_t s, uint64_t k, FrameError error);
   uint32_t ahead_limit(const ReaderState& rs) const;  // ahead_most(rs.active)
@@ -281,6 +289,9 @@ class PipelineCore {
   SpscRing<uint32_t> returns_;        // consumer -> reader
   MpscRing<uint32_t> record_returns_; // decode workers -> reader
   std::vector<AlignedBuffer> records_;
+
+  // The views' demand (set_demand), taken by the reader thread per frame.
+  DemandBox demand_;
 
   // Control: the schedule the consumer asked for, picked up by the reader.
   std::mutex control_mutex_;

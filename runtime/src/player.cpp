@@ -37,6 +37,7 @@ Player::Player(const io::ContainerReader& reader, FrameAllocator& allocator, con
       pipeline_(reader, allocator, options_.pipeline),
       clock_state_(media_rate(reader, options_.frame_rate)),
       end_(options_.end) {
+  demand_ = options_.pipeline.demand;
   const double now = clock_.now();
   clock_state_.set_rate(now, options_.rate);
   const uint64_t start = frame_count_ ? std::min(options_.start_frame, frame_count_ - 1) : 0;
@@ -150,8 +151,21 @@ bool Player::check_end(const NextEntry& next, double now) {
   return true;
 }
 
+void Player::set_demand(const ViewDemand& demand) {
+  demand_ = demand;
+  pipeline_.set_demand(demand);
+}
+
+void Player::refine() {
+  if (target_ || shown_.empty() || !pipeline_.short_of(shown_, demand_)) return;
+  // The frame stays on screen until its new read is shown (tick_paused).
+  restart_from(shown_position_, schedule_.direction, schedule_.stride, false);
+  target_ = 0;
+  stat_refinements_.fetch_add(1, kRelaxed);
+}
+
 void Player::tick_paused(double now) {
-  if (!target_) return;
+  if (!target_) return refine();
   const NextEntry next = pipeline_.peek(0);
   if (next.end || next.sequence != *target_) {
     if (next.end) target_.reset();
@@ -160,6 +174,7 @@ void Player::tick_paused(double now) {
   if (next.status == EntryStatus::Ready) {
     target_.reset();
     show(pipeline_.take(), now);
+    refine();  // the demand may have grown while it was read
   } else if (next.status == EntryStatus::Failed) {
     target_.reset();
     handle_failure(pipeline_.take(), now);
@@ -397,6 +412,7 @@ PlaybackStats Player::stats() const {
   s.stalls = stat_stalls_.load(kRelaxed);
   s.drops = stat_drops_.load(kRelaxed);
   s.errors = stat_errors_.load(kRelaxed);
+  s.refinements = stat_refinements_.load(kRelaxed);
   s.pipeline = pipeline_.stats();
   return s;
 }

@@ -44,6 +44,12 @@ bool PipelineCore::reads_in_place() const {
   return options_.keep_encoded && source_->alignment() <= 1;
 }
 
+// A demand that leaves tiers out is read chunk by chunk (table first), the
+// CPU decode path too; O_DIRECT reads whole records (its offsets are aligned).
+bool PipelineCore::reads_by_demand() {
+  return !demand_.latest().everything() && source_->alignment() <= 1;
+}
+
 bool PipelineCore::relays() const { return relay_ != nullptr && !relay_off_ && reads_in_place(); }
 
 // The area is resident (device memory, relay.h); only the table is read
@@ -103,7 +109,7 @@ PipelineCore::ReadTarget PipelineCore::read_table(Slot& slot, const ReadTarget& 
   const uint64_t end = io::layers_end(slot.header, options_.layers, reader_.header().attributes.size());
   const uint64_t wanted = into + end;
   if (slot.relayed) return chunks_to_read(slot, {}, end, table);
-  if (slot.checked_on_read) return chunks_to_read(slot, whole.record.first(end), end, table);
+  if (slot.checked_on_read || reads_by_demand()) return chunks_to_read(slot, whole.record.first(end), end, table);
   ReadTarget rest;
   rest.offset = whole.offset + first;
   rest.record = whole.record.first(end);
@@ -119,6 +125,7 @@ PipelineCore::ReadTarget PipelineCore::read_table(Slot& slot, const ReadTarget& 
 PipelineCore::ReadTarget PipelineCore::chunks_to_read(Slot& slot, std::span<std::byte> record, uint64_t record_bytes,
                                                       uint64_t table) {
   io::keep_layers(slot.header, options_.layers);
+  take_demand(slot);
   const std::vector<io::ChunkDesc>& chunks = slot.header.chunks;
   uint64_t total = 0;
   for (size_t c = 0; c < chunks.size(); ++c) {

@@ -239,7 +239,12 @@ void PipelineCore::reevaluate(ReaderState& rs) {
 PipelineCore::Start PipelineCore::start_entry(ReaderState& rs, uint64_t k, uint64_t frame) {
   // A decoded copy kept behind the playhead (the newest, if several).
   const auto hit = std::find_if(rs.cached.rbegin(), rs.cached.rend(), [&](uint32_t s) { return slots_[s].frame == frame; });
-  if (hit != rs.cached.rend()) {
+  if (hit != rs.cached.rend() && short_of_latest(slots_[*hit])) {
+    // Read for a smaller demand than today's: read it again (refinement).
+    const uint32_t s = *hit;
+    rs.cached.erase(std::next(hit).base());
+    free_slot(rs, s);
+  } else if (hit != rs.cached.rend()) {
     const uint32_t s = *hit;
     rs.cached.erase(std::next(hit).base());
     settle_all_pending(rs);  // entries go out in schedule order
@@ -300,7 +305,8 @@ PipelineCore::Start PipelineCore::start_entry(ReaderState& rs, uint64_t k, uint6
              : reads_in_place() ? staged_target(rs, slot)
                                 : record_target(rs, slot, record);
     slot.checked_on_read = reads_in_place();
-    slot.table_parsed = slot.checked_on_read || reads_prefix(reader_.index().frames[frame]);
+    slot.demand_applied = false;
+    slot.table_parsed = slot.checked_on_read || reads_prefix(reader_.index().frames[frame]) || reads_by_demand();
     if (slot.table_parsed) target = read_table(slot, target);
   } catch (const io::Error& e) {
     settle_all_pending(rs);  // entries go out in schedule order
@@ -361,6 +367,7 @@ PipelineCore::ReadOutcome PipelineCore::join_pending(ReaderState& rs, FrameError
   if (!completed) return ReadOutcome::Cancelled;
   slot.record_bytes = record;
   counters_.frames_read.fetch_add(1, kRelaxed);
+  counters_.record_bytes.fetch_add(reader_.index().frames[frame].bytes, kRelaxed);
   return ReadOutcome::Read;
 }
 
@@ -408,6 +415,7 @@ void PipelineCore::finish_entry(ReaderState& rs, uint32_t s, uint64_t k) {
     record_where_.frame = frame;
     if (!slot.table_parsed) reader_.parse_record(frame, slot.record_bytes, slot.header, record_where_);  // no allocation per frame
     io::keep_layers(slot.header, options_.layers);  // the chunks read (decode checks their payloads lie in the prefix)
+    if (!slot.demand_applied) take_demand(slot);    // read whole: only the demanded tiers are decoded
     slot.where.frame = frame;  // its file was set with its chunk table
     if (slot.relayed && slot.relay_refused.load(std::memory_order_acquire)) read_again_on_host(rs, slot);
     prepare_decode(rs, slot);
@@ -525,6 +533,19 @@ void PipelineCore::prepare_decode(ReaderState& rs, Slot& slot) {
   for (size_t a = 0; a < stream_of_attribute_.size(); ++a) {
     if (stream_of_attribute_[a] != ~0u) slot.attribute_targets[a] = slot.buffers.attributes[stream_of_attribute_[a]].data();
   }
+}
+
+void PipelineCore::take_demand(Slot& slot) {
+  const ViewDemand& demand = demand_.latest();
+  const size_t before = slot.header.chunks.size();
+  if (slot.cells.capacity() < most_chunks_) slot.cells.reserve(most_chunks_);  // once per slot
+  apply_demand(demand, slot.header, slot.cells);
+  slot.demand_applied = true;
+  if (slot.header.chunks.size() != before) counters_.frames_by_demand.fetch_add(1, kRelaxed);
+}
+
+bool PipelineCore::short_of_latest(const Slot& slot) {
+  return slot.demand_applied && short_of(demand_.latest(), slot.cells, slot.header.blob_voxel);
 }
 
 void PipelineCore::fail(ReaderState& rs, uint32_t s, uint64_t k, FrameError error) {

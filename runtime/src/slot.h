@@ -24,6 +24,7 @@
 
 #include "sluice/io/format.h"
 #include "sluice/io/gpu_decode_plan.h"
+#include "sluice/runtime/demand.h"
 #include "sluice/runtime/frame_allocator.h"
 #include "sluice/runtime/frame_error.h"
 
@@ -69,6 +70,8 @@ struct Slot {
   bool relayed = false;                          // ... and sent to a resident area through the relay (relay.h)
   std::vector<uint32_t> piece_cuts;              // checked reads: piece p reads chunks [cuts[p], cuts[p + 1])
   io::GpuDecodePlan plan;                        // PipelineOptions::keep_encoded: what the workers stage
+  std::vector<CellRead> cells;                   // every cell of the frame and the tiers read of it (demand.h)
+  bool demand_applied = false;                   // `header` holds the demanded tiers only, `cells` is filled
 
   // Written by the reader (read errors) or the chunk that won error_claimed.
   FrameError error;

@@ -34,6 +34,7 @@ struct SynthOptions {
   int zstd_level = 1;
   bool pack_planes = true;             // false: zstd wherever smaller (EncodeOptions)
   bool zstd_planes = true;             // false: planes only stored or bit-packed (EncodeOptions)
+  bool lod_tiers = true;               // chunks written as LOD tiers (EncodeOptions::lod_tiers)
   bool layers = true;                  // narrow band: surface, blob and interior chunks (EncodeOptions::layers)
   int jobs = 0;                        // frames encoded at once; 0: one per core
   uint32_t seed = 1;

@@ -36,6 +36,11 @@ struct EncodeOptions {
   // record. Needs the header's particle spacing (> 0); without it, or for
   // float32 positions, the frame is written as one layer (All).
   bool layers = false;
+  // Write each chunk of particles as LOD tiers (format 1.4, lod.h): one
+  // record per tier, tier 0 first, all with the chunk's box, so a reader
+  // reads only the tiers a view keeps. Blob chunks stay one record (their
+  // LOD value is a count). false: one record per chunk, as format 1.3.
+  bool lod_tiers = true;
   float band_voxel = 0;  // voxel side d of the classification and the blobs; 0: twice the particle spacing
   F2Test band_f2 = F2Test::All;  // which particles of a selected L2 voxel are surface (narrow_band.h)
 };

@@ -17,7 +17,7 @@
 namespace sluice::io {
 
 inline constexpr uint16_t kFormatMajor = 1;  // readers reject other majors
-inline constexpr uint16_t kFormatMinor = 3;  // readers accept any minor of their major
+inline constexpr uint16_t kFormatMinor = 4;  // readers accept any minor of their major
 
 // Hard limits. A header that claims more is rejected before any allocation.
 inline constexpr uint32_t kMaxHeaderBytes = 1u << 20;
@@ -106,7 +106,13 @@ struct ChunkDesc {
   uint32_t particle_count = 0;
   Layer layer = Layer::All;
   ChunkCodec codec = ChunkCodec::Zstd;
-  Aabb bounds;                   // every particle of the chunk lies inside (inclusive)
+  // LOD tier (format 1.4, lod.h): the record holds the particles of its
+  // cell whose LOD values lie in tier `tier`. A cell is a run of records:
+  // one with continues_cell false, then those with it true, tiers rising,
+  // same layer and box. Older files: every record its own cell, tier 0.
+  uint8_t tier = 0;
+  bool continues_cell = false;
+  Aabb bounds;                   // every particle of the chunk lies inside (inclusive); the cell's box
   uint64_t checksum = 0;         // XXH3-64 of the compressed bytes
   // Per attribute: the range its 16-bit values are quantized against (held
   // inline: re-parsing a chunk table into the same vector allocates nothing).
@@ -134,6 +140,36 @@ void keep_layers(FrameHeader& frame, LayerSet set);
 // Bytes from the start of the record that hold its table and every payload
 // of `set`'s chunks: a reader that wants only those reads this many.
 uint64_t layers_end(const FrameHeader& frame, LayerSet set, size_t attribute_count);
+
+// The records of the cell whose first record is chunks[first]: returns the
+// index one past its last record.
+inline size_t cell_end(const std::vector<ChunkDesc>& chunks, size_t first) {
+  size_t end = first + 1;
+  while (end < chunks.size() && chunks[end].continues_cell) ++end;
+  return end;
+}
+// Keeps, of each cell, the records of tiers below `tiers_of(first record of
+// the cell)` (uint32_t; 0 drops the cell) and recounts the particles. The
+// records kept stay in file order, so a cell's kept tiers are one
+// contiguous byte range of the record. No allocation.
+template <class TiersOf>
+void keep_tiers(FrameHeader& frame, TiersOf&& tiers_of) {
+  std::vector<ChunkDesc>& chunks = frame.chunks;
+  size_t out = 0;
+  frame.particle_count = 0;
+  for (size_t first = 0; first < chunks.size();) {
+    const size_t end = cell_end(chunks, first);
+    const uint32_t tiers = tiers_of(chunks[first]);
+    for (size_t c = first; c < end; ++c) {
+      if (chunks[c].tier >= tiers) continue;
+      frame.particle_count += chunks[c].particle_count;
+      if (out != c) chunks[out] = chunks[c];
+      ++out;
+    }
+    first = end;
+  }
+  chunks.resize(out);
+}
 
 struct FrameIndexEntry {
   uint64_t offset = 0;           // of the frame record, from the start of the file

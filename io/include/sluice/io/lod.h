@@ -19,4 +19,32 @@ uint16_t lod_value_from_id(uint64_t id);
 // index (stable only if the source keeps its particle order).
 std::vector<uint16_t> lod_values(std::span<const uint64_t> ids, uint64_t count);
 
+// LOD tiers (format 1.4, docs/format.md "LOD tiers"). The renderer keeps a
+// particle of importance w at level L when u >= 1 - L^(1/w), u = (value +
+// 0.5) / 65536 (render/lod.h): what it can keep of a chunk is always the
+// particles with the largest values. A chunk is therefore written as up to
+// kLodTiers records, tier 0 holding the largest values, so that the
+// particles kept at any level are a prefix of tiers: one contiguous byte
+// range. Tier t holds the values v with kTierFloor[t] <= v < kTierFloor[t-1]
+// (65536 for t = 0): the top 1/64, 1/32, 1/16, 0.1, 0.2, 0.3, 0.5 and 1 of
+// the values, cumulatively (and 40 values more, the reader's rounding margin),
+// so that the levels 0.1-0.5 of a particle of importance 1 fall on tier
+// boundaries and far views (small importance) read a few percent.
+inline constexpr uint32_t kLodTiers = 8;
+inline constexpr uint32_t kTierFloor[kLodTiers] = {64472, 63448, 61400, 58942, 52389, 45835, 32728, 0};
+
+// The tier a value belongs to, 0 .. kLodTiers - 1.
+inline uint32_t lod_tier(uint16_t value) {
+  uint32_t t = 0;
+  while (value < kTierFloor[t]) ++t;
+  return t;
+}
+
+// How many tiers hold every value v with (v + 0.5) / 65536 >= 1 - keep:
+// what a reader must read of a chunk whose particles are kept with
+// probability at most `keep` (0..1; values outside are clamped). The bound
+// is widened by a relative 1e-4 and one value against float rounding in the
+// renderer's test (the tier floors leave room for it). 0 only for keep <= 0.
+uint32_t tiers_for_keep(double keep);
+
 }  // namespace sluice::io

@@ -21,6 +21,7 @@ struct Aabb {
   void extend(float x, float y, float z);
   void extend(const Aabb& other);
   bool contains(float x, float y, float z) const;
+  bool operator==(const Aabb&) const = default;
 };
 
 // One frame of particles as an importer hands it over, before encoding.

@@ -36,6 +36,7 @@
 #include "sluice/io/gpu_decode_plan.h"
 #include "sluice/io/reader.h"
 #include "sluice/runtime/budget.h"
+#include "sluice/runtime/demand.h"
 #include "sluice/runtime/frame_allocator.h"
 #include "sluice/runtime/frame_error.h"
 #include "sluice/runtime/record_source.h"
@@ -65,6 +66,12 @@ struct PipelineOptions {
   // skipped on disk (its payloads come last in the record). Frames without
   // layers are read whole whatever the set.
   io::LayerSet layers = io::LayerSet::particles();
+  // What the views draw (demand.h): of each frame it starts reading, the
+  // reader reads only the LOD tiers of each cell this demand needs (cells
+  // no view sees not at all). set_demand() replaces it while playing. The
+  // default (no views) reads every tier. Reads by O_DIRECT read whole
+  // records and decode only the demanded tiers.
+  ViewDemand demand;
   // Keep frames encoded for a GPU decoder (io/gpu_decode_plan.h, the
   // renderer's commit_encoded) instead of decoding them: the workers check
   // each chunk's checksum, copy its payload into the frame's buffer and
@@ -174,6 +181,7 @@ class FrameHandle {
 
  private:
   friend class detail::PipelineCore;
+  friend class Pipeline;
   detail::PipelineCore* owner_ = nullptr;
   uint32_t slot_ = 0;
   uint64_t frame_ = 0, generation_ = 0, sequence_ = 0;
@@ -232,6 +240,15 @@ class Pipeline {
   // Set if the reader thread stopped on an error outside any frame (out of
   // memory for its own bookkeeping). Consumer.
   std::optional<FrameError> fatal_error() const;
+
+  // Any thread: the demand of frames started from now on (latest wins; no
+  // allocation, and the reader thread takes it without a lock). Frames
+  // already read keep the tiers they were read with: short_of() tells, and
+  // a player reads the frame on screen again when it is (refinement).
+  void set_demand(const ViewDemand& demand);
+  // Consumer: whether `demand` needs a tier of `frame` (a handle of this
+  // pipeline, not empty or failed) that it was read without.
+  bool short_of(const FrameHandle& frame, const ViewDemand& demand) const;
 
  private:
   std::unique_ptr<detail::PipelineCore> core_;

@@ -66,6 +66,7 @@ struct PlaybackStats {
   uint64_t stalls = 0;         // updates at which the due frame was not ready
   uint64_t drops = 0;          // frames passed over because a newer one was due (SkipToNewest)
   uint64_t errors = 0;         // frames that failed
+  uint64_t refinements = 0;    // frames on screen read again for a larger demand (paused)
   PipelineStats pipeline;
 };
 
@@ -100,6 +101,14 @@ class Player {
   // runs; a real-time loop just calls update().
   void wait_for_due();
 
+  // What the views draw (demand.h; Pipeline::set_demand): frames read from
+  // now on hold only the tiers it needs. While paused, the frame on screen
+  // is read again with the tiers it lacks whenever the demand outgrows what
+  // it was read with (the camera came closer, the level went up), and shown
+  // once read: the picture converges to the full read's.
+  void set_demand(const ViewDemand& demand);
+  const ViewDemand& demand() const { return demand_; }
+
   std::optional<FrameError> pop_error();
   PlayerState state() const { return state_; }
   double rate() const { return clock_state_.rate(); }
@@ -122,6 +131,7 @@ class Player {
   void show(FrameHandle frame, double now);
   bool handle_failure(FrameHandle failed, double now);  // true: playback stopped
   void tick_paused(double now);
+  void refine();  // paused: read the frame on screen again if the demand outgrew it
   void tick_hold(double now);
   void tick_skip(double now);
   bool catch_up(double now);
@@ -149,6 +159,8 @@ class Player {
 
   std::atomic<PlayerState> stat_state_{PlayerState::Paused};
   std::atomic<uint64_t> stat_frame_{0}, stat_shown_{0}, stat_stalls_{0}, stat_drops_{0}, stat_errors_{0};
+  std::atomic<uint64_t> stat_refinements_{0};
+  ViewDemand demand_;
 };
 
 }  // namespace sluice::runtime

@@ -31,6 +31,10 @@ struct PipelineStats {
   double read_thread_seconds = 0;  // time the read threads spent copying, summed over them
   uint32_t read_threads = 0;       // threads that read (the reader thread and its helpers)
   uint64_t frames_read = 0;
+  // The whole records of the frames read (the index's sizes): bytes_read /
+  // record_bytes is the share of the file a view's demand (demand.h) reads.
+  uint64_t record_bytes = 0;
+  uint64_t frames_by_demand = 0;  // frames read with some tier or cell left out
   // Kept-encoded frames read straight into their staged area and staged
   // there (no copy on the CPU; PipelineOptions::keep_encoded).
   uint64_t frames_in_place = 0;

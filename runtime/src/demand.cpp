@@ -1,0 +1,173 @@
+// The view's demand: tiers per cell from the views' frusta and the cLOD
+// bound (demand.h). Mirrors shaders/cull_chunks.comp and cull_particles.comp.
+#include "sluice/runtime/demand.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "sluice/io/lod.h"
+
+namespace sluice::runtime {
+namespace {
+
+// Element (row r, column c) of a column-major matrix.
+float at(const std::array<float, 16>& m, int r, int c) { return m[size_t(c) * 4 + size_t(r)]; }
+
+// Row r of projection * view.
+std::array<float, 4> vp_row(const DemandView& v, int r) {
+  std::array<float, 4> out{};
+  for (int c = 0; c < 4; ++c) {
+    float sum = 0;
+    for (int k = 0; k < 4; ++k) sum += at(v.projection, r, k) * at(v.view, k, c);
+    out[size_t(c)] = sum;
+  }
+  return out;
+}
+
+struct Box {
+  float lo[3], hi[3];
+};
+
+Box grown(const io::Aabb& b, float by) {
+  Box out{};
+  for (int a = 0; a < 3; ++a) {
+    out.lo[a] = b.min[size_t(a)] - by;
+    out.hi[a] = b.max[size_t(a)] + by;
+  }
+  return out;
+}
+
+// The box (grown by `reach`) lies on the inner side of the left, right,
+// bottom, top and near planes, as the chunk pass tests it (positive vertex).
+bool visible(const DemandView& v, const Box& b) {
+  const std::array<float, 4> r0 = vp_row(v, 0), r1 = vp_row(v, 1), r2 = vp_row(v, 2), r3 = vp_row(v, 3);
+  const bool reversed = at(v.projection, 2, 3) > 0;
+  std::array<std::array<float, 4>, 5> planes{};
+  for (size_t i = 0; i < 4; ++i) {
+    planes[0][i] = r3[i] + r0[i];
+    planes[1][i] = r3[i] - r0[i];
+    planes[2][i] = r3[i] + r1[i];
+    planes[3][i] = r3[i] - r1[i];
+    planes[4][i] = reversed ? r3[i] - r2[i] : r2[i];
+  }
+  for (const auto& p : planes) {
+    double d = p[3];
+    for (int a = 0; a < 3; ++a) d += double(p[size_t(a)]) * (p[size_t(a)] >= 0 ? b.hi[a] : b.lo[a]);
+    // A tolerance for the shader's float arithmetic and plane normalisation.
+    const double len = std::sqrt(double(p[0]) * p[0] + double(p[1]) * p[1] + double(p[2]) * p[2]);
+    if (d < -1e-5 * len * (1.0 + std::abs(b.hi[0]) + std::abs(b.hi[1]) + std::abs(b.hi[2]))) return false;
+  }
+  return true;
+}
+
+// The largest importance w any point of the box can have in this view:
+// c / d * d_ref with c from the smallest |ndc| and d the smallest eye
+// distance, each bounded over the eye-space box of the corners.
+double largest_importance(const DemandView& v, const Box& b, double d_ref) {
+  double elo[3] = {1e300, 1e300, 1e300}, ehi[3] = {-1e300, -1e300, -1e300};
+  double nlo[2] = {1e300, 1e300}, nhi[2] = {-1e300, -1e300};
+  bool behind = false;
+  for (int corner = 0; corner < 8; ++corner) {
+    const double p[3] = {(corner & 1) ? b.hi[0] : b.lo[0], (corner & 2) ? b.hi[1] : b.lo[1], (corner & 4) ? b.hi[2] : b.lo[2]};
+    double e[3];
+    for (int r = 0; r < 3; ++r) e[r] = at(v.view, r, 0) * p[0] + at(v.view, r, 1) * p[1] + at(v.view, r, 2) * p[2] + at(v.view, r, 3);
+    for (int r = 0; r < 3; ++r) {
+      elo[r] = std::min(elo[r], e[r]);
+      ehi[r] = std::max(ehi[r], e[r]);
+    }
+    const double depth = -e[2];
+    if (depth <= 1e-12) {
+      behind = true;
+      continue;
+    }
+    // As cull_particles.comp: ndc = (P00 x, P11 y) / depth - (P02, P12).
+    const double nx = at(v.projection, 0, 0) * e[0] / depth - at(v.projection, 0, 2);
+    const double ny = at(v.projection, 1, 1) * e[1] / depth - at(v.projection, 1, 2);
+    nlo[0] = std::min(nlo[0], nx);
+    nhi[0] = std::max(nhi[0], nx);
+    nlo[1] = std::min(nlo[1], ny);
+    nhi[1] = std::max(nhi[1], ny);
+  }
+  double d2 = 0;
+  for (int r = 0; r < 3; ++r) {
+    const double gap = elo[r] > 0 ? elo[r] : ehi[r] < 0 ? -ehi[r] : 0;
+    d2 += gap * gap;
+  }
+  const double distance = std::sqrt(d2);
+  if (distance <= 0) return std::numeric_limits<double>::infinity();
+  double centre = 1;
+  if (!behind) {
+    const double gx = nlo[0] > 0 ? nlo[0] : nhi[0] < 0 ? -nhi[0] : 0;
+    const double gy = nlo[1] > 0 ? nlo[1] : nhi[1] < 0 ? -nhi[1] : 0;
+    const double radius = std::sqrt(gx * gx + gy * gy) * 0.70710678118654752;
+    centre = std::max(1.0 - 0.7 * std::min(radius, 1.0), 0.3);
+  }
+  return centre * d_ref / distance;
+}
+
+// The reach of a blob's splat (render's common.glsl: kBlobReach sigmas).
+float blob_reach(float voxel, float radius) {
+  const float sigma = std::sqrt(std::max(voxel * voxel / 12.0f + radius * radius / 5.0f, 0.25f * voxel * voxel));
+  return 3.0f * sigma;
+}
+
+}  // namespace
+
+uint32_t tiers_needed(const ViewDemand& demand, const io::Aabb& box, io::Layer layer, float blob_voxel) {
+  if (demand.everything()) return io::kLodTiers;
+  const bool blob = layer == io::Layer::Blobs;
+  const float reach = blob ? blob_reach(blob_voxel, demand.particle_radius) : demand.particle_reach;
+  const Box seen = grown(box, reach + demand.margin);
+  bool any = false;
+  for (size_t i = 0; i < demand.views.size() && !any; ++i) any = visible(demand.views[i], seen);
+  if (!any) return 0;
+  if (!demand.lod || blob) return io::kLodTiers;
+  if (!(demand.level < 1)) return io::kLodTiers;
+  if (!(demand.level > 0)) return 1;  // nothing is kept; the first tier keeps a visible cell from being empty
+  const Box near = grown(box, demand.margin);
+  const double d_ref = std::max<double>(demand.reference_distance, 1e-30);
+  double w = 0;
+  for (size_t i = 0; i < demand.views.size(); ++i) w = std::max(w, largest_importance(demand.views[i], near, d_ref));
+  if (!std::isfinite(w)) return io::kLodTiers;
+  w *= 1.0 + 1e-4;  // the shader's float arithmetic
+  const double keep = std::pow(double(demand.level), 1.0 / std::max(w, 1e-30));
+  return std::max<uint32_t>(1, io::tiers_for_keep(keep));
+}
+
+void apply_demand(const ViewDemand& demand, io::FrameHeader& frame) {
+  if (demand.everything()) return;
+  const float voxel = frame.blob_voxel;
+  io::keep_tiers(frame, [&](const io::ChunkDesc& c) { return tiers_needed(demand, c.bounds, c.layer, voxel); });
+}
+
+void apply_demand(const ViewDemand& demand, io::FrameHeader& frame, std::vector<CellRead>& out) {
+  out.clear();
+  const std::vector<io::ChunkDesc>& chunks = frame.chunks;
+  for (size_t first = 0; first < chunks.size();) {
+    const size_t end = io::cell_end(chunks, first);
+    CellRead cell;
+    cell.box = chunks[first].bounds;
+    cell.layer = chunks[first].layer;
+    for (size_t c = first; c < end; ++c) cell.tiers_in_file |= uint8_t(1u << chunks[c].tier);
+    cell.tiers_read = static_cast<uint8_t>(tiers_needed(demand, cell.box, cell.layer, frame.blob_voxel));
+    out.push_back(cell);
+    first = end;
+  }
+  if (demand.everything()) return;
+  size_t cell = 0;
+  io::keep_tiers(frame, [&](const io::ChunkDesc&) { return out[cell++].tiers_read; });
+}
+
+bool short_of(const ViewDemand& demand, const std::vector<CellRead>& read, float blob_voxel) {
+  for (const CellRead& cell : read) {
+    if (cell.tiers_read >= io::kLodTiers) continue;
+    const uint32_t need = tiers_needed(demand, cell.box, cell.layer, blob_voxel);
+    if (need <= cell.tiers_read) continue;
+    const uint32_t missing = ((1u << need) - 1u) & ~((1u << cell.tiers_read) - 1u);
+    if (cell.tiers_in_file & missing) return true;
+  }
+  return false;
+}
+
+}  // namespace sluice::runtime

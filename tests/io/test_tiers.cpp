@@ -1,0 +1,270 @@
+// LOD tiers (format 1.4): each chunk written as records by tier, any prefix
+// of tiers one byte range, what cLOD can keep always a prefix, decoding the
+// same particles as the untiered file, older layouts read as one tier.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <array>
+#include <cstring>
+#include <map>
+#include <random>
+#include <tuple>
+
+#include "records.h"
+#include "sluice/io/checksum.h"
+#include "sluice/io/codec.h"
+#include "sluice/io/lod.h"
+#include "sluice/io/reader.h"
+#include "sluice/io/writer.h"
+#include "test_util.h"
+
+using namespace sluice;
+
+namespace {
+
+// Scattered particles (not a lattice: tiers pay there) with random ids.
+io::ParticleFrame scattered_frame(uint64_t n, uint32_t seed) {
+  io::ParticleFrame f;
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> u(0.f, 1.f);
+  f.attributes.resize(1);
+  for (uint64_t i = 0; i < n; ++i) {
+    const float x = u(rng), y = u(rng), z = 0.5f * u(rng);
+    f.positions.insert(f.positions.end(), {x, y, z});
+    f.ids.push_back(rng());
+    f.attributes[0].push_back(1000.f + 10.f * std::sin(x * 7.f) + y);
+  }
+  return f;
+}
+
+struct Variant {
+  const char* name;
+  io::PositionCoding coding;
+  bool pack, zstd, compress;
+};
+
+io::EncodedFrame encode(const io::ParticleFrame& f, const io::FileHeader& h, const Variant& v, bool tiers) {
+  const std::vector<uint16_t> lod = io::lod_values(f.ids, f.count());
+  io::FrameInput in;
+  in.positions = f.positions;
+  in.lod = lod;
+  in.attributes.push_back(f.attributes[0]);
+  io::EncodeOptions o;
+  o.chunk_particles = 8192;
+  o.pack_planes = v.pack;
+  o.zstd_planes = v.zstd;
+  o.compress = v.compress;
+  o.lod_tiers = tiers;
+  return io::encode_frame(in, h, o);
+}
+
+// Every decoded particle as (lod value, x, y, z bits, attribute value), sorted.
+using Particle = std::tuple<uint16_t, uint32_t, uint32_t, uint32_t, float>;
+std::vector<Particle> decoded(const io::EncodedFrame& e, const io::FileHeader& h) {
+  const io::FrameHeader& fh = e.header;
+  std::vector<uint64_t> starts(fh.chunks.size());
+  const uint64_t n = io::chunk_starts(fh, starts);
+  const size_t stride = io::decoded_particle_bytes(h.position_coding);
+  std::vector<std::byte> particles(n * stride);
+  std::vector<uint16_t> attr(n);
+  std::vector<uint16_t*> attrs{attr.data()};
+  io::decode_record(e.record, fh, h, starts, particles, attrs, {});
+  std::vector<Particle> out;
+  for (size_t c = 0; c < fh.chunks.size(); ++c) {
+    const io::ChunkDesc& ch = fh.chunks[c];
+    for (uint64_t i = starts[c]; i < starts[c] + ch.particle_count; ++i) {
+      float p[3];
+      uint16_t lod;
+      if (h.position_coding == io::PositionCoding::Quantized16) {
+        uint16_t q[4];
+        std::memcpy(q, particles.data() + i * stride, 8);
+        for (int a = 0; a < 3; ++a) p[a] = io::dequantize(q[a], ch.bounds.min[size_t(a)], ch.bounds.max[size_t(a)]);
+        lod = q[3];
+      } else {
+        uint32_t w[4];
+        std::memcpy(w, particles.data() + i * stride, 16);
+        std::memcpy(p, w, 12);
+        lod = uint16_t(w[3]);
+      }
+      const auto& r = ch.attribute_ranges[0];
+      const float value = io::dequantize(attr[i], r[0], r[1]);
+      uint32_t bits[3];
+      std::memcpy(bits, p, 12);
+      out.emplace_back(lod, bits[0], bits[1], bits[2], value);
+    }
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+const Variant kVariants[] = {
+    {"packed", io::PositionCoding::Quantized16, true, true, true},
+    {"zstd only", io::PositionCoding::Quantized16, false, true, true},
+    {"gpu-decodable", io::PositionCoding::Quantized16, true, false, true},
+    {"stored", io::PositionCoding::Quantized16, true, true, false},
+    {"float32", io::PositionCoding::Float32, true, true, true},
+};
+
+}  // namespace
+
+TEST(Tiers, EveryCodecDecodesTheSameParticlesAsUntiered) {
+  const io::ParticleFrame f = scattered_frame(60000, 5);
+  for (const Variant& v : kVariants) {
+    SCOPED_TRACE(v.name);
+    const io::FileHeader h = test::test_header(v.coding);
+    const io::EncodedFrame tiered = encode(f, h, v, true), flat = encode(f, h, v, false);
+    EXPECT_GT(tiered.header.chunks.size(), flat.header.chunks.size());
+    // Positions: each tier is quantized in its cell's box, so they agree bit for bit.
+    const std::vector<Particle> a = decoded(tiered, h), b = decoded(flat, h);
+    ASSERT_EQ(a.size(), b.size());
+    for (size_t i = 0; i < a.size(); ++i) {
+      ASSERT_EQ(std::get<0>(a[i]), std::get<0>(b[i])) << i;
+      ASSERT_EQ(std::get<1>(a[i]), std::get<1>(b[i])) << i;
+      ASSERT_EQ(std::get<2>(a[i]), std::get<2>(b[i])) << i;
+      ASSERT_EQ(std::get<3>(a[i]), std::get<3>(b[i])) << i;
+      // Attributes are quantized per record (its own range): within a step of the cell's.
+      const float step = (h.attributes.empty() ? 1.f : 20.f) / 65535.f;
+      ASSERT_NEAR(std::get<4>(a[i]), std::get<4>(b[i]), 2 * step + 1e-3f) << i;
+    }
+    // The table round-trips through its bytes.
+    const io::FrameHeader parsed = io::parse_frame_table(tiered.record, h.attributes.size(), {});
+    ASSERT_EQ(parsed.chunks.size(), tiered.header.chunks.size());
+    for (size_t c = 0; c < parsed.chunks.size(); ++c) {
+      EXPECT_EQ(parsed.chunks[c].tier, tiered.header.chunks[c].tier);
+      EXPECT_EQ(parsed.chunks[c].continues_cell, tiered.header.chunks[c].continues_cell);
+    }
+  }
+}
+
+TEST(Tiers, RecordsHoldTheirTiersInOrderAndEveryPrefixIsOneRange) {
+  const io::FileHeader h = test::test_header(io::PositionCoding::Quantized16);
+  const io::EncodedFrame e = encode(scattered_frame(60000, 9), h, kVariants[0], true);
+  const io::FrameHeader& fh = e.header;
+  std::vector<uint64_t> starts(fh.chunks.size());
+  const uint64_t n = io::chunk_starts(fh, starts);
+  std::vector<std::byte> particles(n * 8);
+  io::decode_record(e.record, fh, h, starts, particles, {}, {});
+  size_t cells = 0;
+  for (size_t first = 0; first < fh.chunks.size(); first = io::cell_end(fh.chunks, first)) {
+    ++cells;
+    const size_t end = io::cell_end(fh.chunks, first);
+    EXPECT_FALSE(fh.chunks[first].continues_cell);
+    for (size_t c = first; c < end; ++c) {
+      const io::ChunkDesc& ch = fh.chunks[c];
+      EXPECT_EQ(ch.bounds, fh.chunks[first].bounds);
+      if (c > first) {
+        EXPECT_GT(ch.tier, fh.chunks[c - 1].tier);
+        // Contiguous: the record begins where the one before ends.
+        EXPECT_EQ(ch.offset, fh.chunks[c - 1].offset + fh.chunks[c - 1].compressed_size);
+      }
+      // Its values lie in its tier or, where small tiers were joined, in the tiers after it.
+      const uint32_t next = c + 1 < end ? fh.chunks[c + 1].tier : io::kLodTiers;
+      const uint32_t top = ch.tier == 0 ? 65536 : io::kTierFloor[ch.tier - 1];
+      for (uint64_t i = starts[c]; i < starts[c] + ch.particle_count; ++i) {
+        uint16_t lod;
+        std::memcpy(&lod, particles.data() + i * 8 + 6, 2);
+        ASSERT_LT(lod, top);
+        ASSERT_GE(lod, io::kTierFloor[next - 1]);
+      }
+    }
+  }
+  EXPECT_EQ(cells, 8u);  // 60000 particles in chunks of at most 8192
+}
+
+TEST(Tiers, TiersForKeepHoldEveryValueCLodCanKeep) {
+  // The renderer keeps value v when u = (v + 0.5) / 65536 >= 1 - p (lod.h).
+  for (double p = 0; p <= 1.0; p += 1.0 / 4096) {
+    const uint32_t tiers = io::tiers_for_keep(p);
+    ASSERT_LE(tiers, io::kLodTiers);
+    if (p > 0) ASSERT_GE(tiers, 1u);
+    const double lowest_kept = 65536.0 * (1.0 - p) - 0.5;
+    for (uint32_t v = 0; v < 65536; v += 7) {
+      if (double(v) >= lowest_kept) ASSERT_LT(io::lod_tier(uint16_t(v)), tiers) << "p " << p << " v " << v;
+    }
+  }
+  // At importance 1 the levels 0.1-0.5 fall on boundaries: exactly the tiers that hold them.
+  EXPECT_EQ(io::tiers_for_keep(0.1), 4u);
+  EXPECT_EQ(io::tiers_for_keep(0.3), 6u);
+  EXPECT_EQ(io::tiers_for_keep(0.5), 7u);
+  EXPECT_EQ(io::tiers_for_keep(0.01), 1u);
+  EXPECT_EQ(io::tiers_for_keep(1.0), io::kLodTiers);
+}
+
+TEST(Tiers, KeepTiersKeepsAPrefixOfEachCell) {
+  const io::FileHeader h = test::test_header(io::PositionCoding::Quantized16);
+  const io::EncodedFrame e = encode(scattered_frame(60000, 11), h, kVariants[0], true);
+  for (uint32_t t = 0; t <= io::kLodTiers; ++t) {
+    io::FrameHeader fh = e.header;
+    io::keep_tiers(fh, [&](const io::ChunkDesc&) { return t; });
+    uint64_t count = 0;
+    for (const io::ChunkDesc& c : fh.chunks) {
+      EXPECT_LT(c.tier, t);
+      count += c.particle_count;
+    }
+    EXPECT_EQ(count, fh.particle_count);
+    // Every particle whose value lies in the first t tiers is kept.
+    uint64_t want = 0;
+    for (uint64_t id : scattered_frame(60000, 11).ids) want += t > 0 && io::lod_tier(io::lod_value_from_id(id)) < t;
+    EXPECT_GE(count, want);
+    if (t == io::kLodTiers) EXPECT_EQ(count, 60000u);
+  }
+}
+
+TEST(Tiers, UntieredFilesReadAsOneTierPerChunk) {
+  const io::FileHeader h = test::test_header(io::PositionCoding::Quantized16);
+  const io::EncodedFrame e = encode(scattered_frame(30000, 3), h, kVariants[0], false);
+  const io::FrameHeader parsed = io::parse_frame_table(e.record, h.attributes.size(), {});
+  for (const io::ChunkDesc& c : parsed.chunks) {
+    EXPECT_EQ(c.tier, 0);
+    EXPECT_FALSE(c.continues_cell);
+  }
+  io::FrameHeader kept = parsed;
+  io::keep_tiers(kept, [](const io::ChunkDesc&) { return 1u; });
+  EXPECT_EQ(kept.chunks.size(), parsed.chunks.size());
+}
+
+TEST(Tiers, LatticeCellsThatTiersWouldBloatStayWhole) {
+  // A regular lattice: tiers cost far more than 8% there (sparse deltas of
+  // a structure zstd codes in a few bits), so cells stay one record each.
+  const io::FileHeader h = test::test_header(io::PositionCoding::Quantized16, false);
+  io::ParticleFrame f;
+  for (uint32_t i = 0; i < 32768; ++i) {
+    f.positions.insert(f.positions.end(), {float(i % 32) * 0.01f, float(i / 32 % 32) * 0.01f, float(i / 1024) * 0.01f});
+    f.ids.push_back(i);
+  }
+  f.attributes.resize(1);
+  const std::vector<uint16_t> lod = io::lod_values(f.ids, f.count());
+  io::FrameInput in;
+  in.positions = f.positions;
+  in.lod = lod;
+  io::EncodeOptions o;
+  o.chunk_particles = 8192;
+  const io::EncodedFrame tiered = io::encode_frame(in, h, o);
+  o.lod_tiers = false;
+  const io::EncodedFrame flat = io::encode_frame(in, h, o);
+  EXPECT_LE(double(tiered.record.size()), 1.09 * double(flat.record.size()));
+}
+
+TEST(Tiers, TablesThatBreakTheTierRulesAreRejected) {
+  const io::FileHeader h = test::test_header(io::PositionCoding::Quantized16);
+  const io::EncodedFrame e = encode(scattered_frame(20000, 2), h, kVariants[0], true);
+  const size_t desc = io::chunk_desc_bytes(h.attributes.size());
+  const size_t table = io::frame_table_bytes(e.header.chunks.size(), h.attributes.size());
+  auto reject = [&](size_t chunk, size_t byte, uint8_t value, const char* what) {
+    std::vector<std::byte> record = e.record;
+    record[io::kFrameHeaderFixedBytes + chunk * desc + byte] = std::byte(value);
+    const uint64_t sum = io::chunk_checksum(std::span(record).first(table - 8));
+    std::memcpy(record.data() + table - 8, &sum, 8);  // a valid table checksum: the rules themselves must catch it
+    try {
+      io::parse_frame_table(record, h.attributes.size(), {"f.sluice", 0, {}});
+      ADD_FAILURE() << "accepted: " << what;
+    } catch (const io::Error& error) {
+      EXPECT_NE(std::string(error.what()).find("f.sluice"), std::string::npos) << error.what();
+    }
+  };
+  reject(0, 18, 8, "tier 8");
+  reject(0, 19, 1, "the first record continuing a cell");
+  reject(1, 19, 2, "unknown cell flags");
+  ASSERT_TRUE(e.header.chunks[1].continues_cell);
+  reject(1, 18, 0, "a continuing record whose tier does not rise");
+}
