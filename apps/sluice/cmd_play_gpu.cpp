@@ -21,6 +21,7 @@
 #include "sluice/render/renderer.h"
 #include "sluice/render/staging_allocator.h"
 #include "sluice/runtime/player.h"
+#include "view_demand.h"
 #include "view_options.h"
 
 namespace sluice::app {
@@ -60,6 +61,9 @@ void run_play_gpu(const PlayOptions& o, const WindowPlayOptions& w) {
   runtime::PlayerOptions po = player_options(o, false);
   const int color = fluid.scalar_visibility ? fluid.color_attribute : -1;
   render::FrameFeed::configure(po, staging, color, reader.header(), decode_site(o.decode));
+  // The camera stays where it is: frames hold what it draws, with no margin.
+  const render::View view = render::camera_view(camera, {0, 0, width, height});
+  po.pipeline.demand = app_demand({&view, 1}, scene, fluid, lod, reads_by_view(o.layers, lod), false);
   const runtime::SteadyClock clock;
   runtime::Player player(reader, staging, clock, po);
   render::FrameFeed feed(renderer, player, &staging, color);

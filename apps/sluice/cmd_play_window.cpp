@@ -24,6 +24,7 @@
 #include "sluice/render/renderer.h"
 #include "sluice/desktop/window.h"
 #include "sluice/render/frame_feed.h"
+#include "view_demand.h"
 #include "view_options.h"
 
 namespace sluice::app {
@@ -336,6 +337,13 @@ void run_play_window(const PlayOptions& o, const WindowPlayOptions& wo) {
   po.display_rate = o.display_hz > 0 ? o.display_hz : display_refresh_hz();
   const int color = p.fluid.scalar_visibility ? p.fluid.color_attribute : -1;
   render::FrameFeed::configure(po, staging, color, reader.header(), decode_site(o.decode));
+  // Frames hold the tiers the window's view draws, with a margin for the
+  // camera's moves; a paused frame is read again when the view needs more.
+  const auto window_view = [&] {
+    return render::camera_view(p.camera, {0, 0, std::max(window.width(), 1u), std::max(window.height(), 1u)});
+  };
+  const render::View first_view = window_view();
+  po.pipeline.demand = app_demand({&first_view, 1}, scene, p.fluid, p.lod, reads_by_view(o.layers, p.lod), true);
   const runtime::SteadyClock clock;
   runtime::Player playback(reader, staging, clock, po);
   p.playback = &playback;
@@ -369,6 +377,8 @@ void run_play_window(const PlayOptions& o, const WindowPlayOptions& wo) {
       stats_before = p.stream;
     }
 
+    const render::View view = window_view();
+    playback.set_demand(app_demand({&view, 1}, scene, p.fluid, p.lod, reads_by_view(o.layers, p.lod), true));
     const render::FeedUpdate fed = feed.update();
     if (fed.changed) {
       p.upload_wall_ms = fed.commit_wall_ms;

@@ -10,6 +10,7 @@
 #include "decode_option.h"
 #include "layers_option.h"
 #include "playable.h"
+#include "view_demand.h"
 #include "view_options.h"
 #include "progress.h"
 #include "sluice/bench/layers_bench.h"
@@ -102,6 +103,10 @@ void run_render(const RenderCommand& o, const ViewSettings& v) {
   po.pipeline.layers = layer_set(o.layers);
   const int color = fluid.scalar_visibility ? fluid.color_attribute : -1;
   render::FrameFeed::configure(po, staging, color, reader.header(), decode_site(o.decode));
+  // One fixed camera: frames hold the tiers it draws (the same pixels as a
+  // full read), nothing more.
+  const render::View view = render::camera_view(camera, {0, 0, width, height});
+  po.pipeline.demand = app_demand({&view, 1}, scene, fluid, lod, reads_by_view(o.layers, lod), false);
   const runtime::SteadyClock clock;
   runtime::Player player(reader, staging, clock, po);
   render::FrameFeed feed(renderer, player, &staging, color);

@@ -11,6 +11,7 @@
 #include "commands.h"
 #include "human.h"
 #include "layers_option.h"
+#include "view_demand.h"
 #include "play.h"
 #include "playable.h"
 #include "sluice/io/reader.h"
@@ -144,6 +145,9 @@ void run_xr(const XrOptions& o) {
         const xr::Eye& eye = frame.eyes[e];
         views[e] = xr::eye_view(eye.pose, eye.fov, controls.placement(), so.near, so.far, eye.viewport);
       }
+      // Both eyes' demand, with a margin for head motion until the frames
+      // read now are shown.
+      player.set_demand(app_demand(views, scene, fluid, lod, reads_by_view(p.layers, lod), true));
       if (frame.stereo) {
         sync = renderer.record(frame.command_buffer, frame.stereo_target, views, fluid, lod);  // both eyes, one pass
       } else {

@@ -335,35 +335,56 @@ struct Cell {
 // frame per plane and a table entry per record): on lattice-like data up
 // to 2.3x (the bundled dam break's first frame). Where that cost exceeds
 // kMostTierCost the cell is written whole, as one record of tier 0: a
-// reader then reads all of it when it reads any.
+// reader then reads all of it when it reads any. The sizes compared are
+// those of the default coding whatever the options, so a file's layout
+// depends on its data only (--smallest and --gpu-decodable files of the
+// same frames hold the same records).
 constexpr double kMostTierCost = 0.08;
+
+bool default_coding(const EncodeOptions& o) { return o.pack_planes && o.zstd_planes && o.compress; }
 
 std::vector<EncodedChunk> keep_tiers_that_pay(std::vector<EncodedChunk> records, const std::vector<Job>& jobs,
                                               const std::vector<Cell>& cells, const FileHeader& header,
                                               const EncodeOptions& options) {
   const size_t desc = chunk_desc_bytes(header.attributes.size());
-  std::vector<uint64_t> tiered(cells.size(), 0);
+  EncodeOptions reference = options;
+  reference.pack_planes = reference.zstd_planes = reference.compress = true;
+  const bool same = default_coding(options);
   std::vector<uint32_t> count(cells.size(), 0);
-  for (size_t r = 0; r < records.size(); ++r) {
-    tiered[jobs[r].cell] += records[r].payload.size() + desc;
-    ++count[jobs[r].cell];
-  }
+  for (const Job& j : jobs) ++count[j.cell];
   std::vector<uint32_t> split;  // cells of more than one record
   for (uint32_t c = 0; c < cells.size(); ++c) {
     if (count[c] > 1) split.push_back(c);
   }
   if (split.empty()) return records;
+  // Record sizes in the reference coding.
+  std::vector<uint64_t> sizes(records.size());
+  tbb::parallel_for(size_t(0), records.size(), [&](size_t r) {
+    if (same || count[jobs[r].cell] < 2) {
+      sizes[r] = records[r].payload.size();
+      return;
+    }
+    const Job& j = jobs[r];
+    sizes[r] = encode_chunk(*j.group->in, std::span(j.group->order).subspan(j.range.begin, j.range.end - j.range.begin),
+                            cells[j.cell].box, header.position_coding, reference)
+                   .payload.size();
+  });
+  std::vector<uint64_t> tiered(cells.size(), 0);
+  for (size_t r = 0; r < records.size(); ++r) tiered[jobs[r].cell] += sizes[r] + desc;
   std::vector<EncodedChunk> whole(split.size());
+  std::vector<uint8_t> chosen(split.size(), 0);
   tbb::parallel_for(size_t(0), split.size(), [&](size_t k) {
     const Cell& cell = cells[split[k]];
-    whole[k] = encode_chunk(*cell.group->in,
-                            std::span(cell.group->order).subspan(cell.range.begin, cell.range.end - cell.range.begin),
-                            cell.box, header.position_coding, options);
+    const std::span<const uint32_t> members =
+        std::span(cell.group->order).subspan(cell.range.begin, cell.range.end - cell.range.begin);
+    whole[k] = encode_chunk(*cell.group->in, members, cell.box, header.position_coding, reference);
+    chosen[k] = double(tiered[split[k]]) > double(whole[k].payload.size() + desc) * (1.0 + kMostTierCost);
+    if (chosen[k] && !same) whole[k] = encode_chunk(*cell.group->in, members, cell.box, header.position_coding, options);
     whole[k].desc.layer = cell.group->layer;
   });
   std::vector<int64_t> replacement(cells.size(), -1);
   for (size_t k = 0; k < split.size(); ++k) {
-    if (double(tiered[split[k]]) > double(whole[k].payload.size() + desc) * (1.0 + kMostTierCost)) replacement[split[k]] = int64_t(k);
+    if (chosen[k]) replacement[split[k]] = int64_t(k);
   }
   std::vector<EncodedChunk> out;
   out.reserve(records.size());
@@ -417,7 +438,8 @@ EncodedFrame encode_frame(const FrameInput& in, const FileHeader& header, const 
     const FrameInput& source = *cell.group->in;
     const std::span<uint32_t> members = std::span(cell.group->order).subspan(cell.range.begin, cell.range.end - cell.range.begin);
     cell.box = box_of(source, members);
-    if (!options.lod_tiers || cell.group->layer == Layer::Blobs) {
+    // Stored frames (not kept: decoded at once) gain nothing from tiers.
+    if (!options.lod_tiers || !options.compress || cell.group->layer == Layer::Blobs) {
       cell.first.fill(uint32_t(members.size()));
       cell.first[0] = 0;
       return;

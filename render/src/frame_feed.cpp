@@ -26,6 +26,12 @@ StagingOptions FrameFeed::staging_options(const Context& context, const io::File
   return o;
 }
 
+void FrameFeed::set_views(std::span<const View> views, const FluidOptions& fluid, const LodOptions& lod, float margin) {
+  player_.set_demand(view_demand(views, renderer_.scene(), fluid, lod, margin));
+}
+
+void FrameFeed::read_everything() { player_.set_demand({}); }
+
 FeedUpdate FrameFeed::update() {
   renderer_.wait_upload(pending_);  // the player may now take those buffers back
   const runtime::Tick tick = player_.update();

@@ -38,8 +38,11 @@ struct EncodeOptions {
   bool layers = false;
   // Write each chunk of particles as LOD tiers (format 1.4, lod.h): one
   // record per tier, tier 0 first, all with the chunk's box, so a reader
-  // reads only the tiers a view keeps. Blob chunks stay one record (their
-  // LOD value is a count). false: one record per chunk, as format 1.3.
+  // reads only the tiers a view keeps. Tiers under 1,024 particles join the
+  // next; a cell whose tiers would take over 8% more bytes (lattice-like
+  // data) stays one record. Blob chunks stay one record (their LOD value is
+  // a count), as do frames not compressed. false: one record per chunk, as
+  // format 1.3.
   bool lod_tiers = true;
   float band_voxel = 0;  // voxel side d of the classification and the blobs; 0: twice the particle spacing
   F2Test band_f2 = F2Test::All;  // which particles of a selected L2 voxel are surface (narrow_band.h)

@@ -16,6 +16,7 @@
 
 #include <cstdint>
 
+#include "sluice/render/demand.h"
 #include "sluice/render/renderer.h"
 #include "sluice/render/staging_allocator.h"
 #include "sluice/runtime/player.h"
@@ -55,6 +56,18 @@ class FrameFeed {
   // `color_attribute`: the attribute's index in the file header (-1: none);
   // the player must decode only that attribute (PipelineOptions::attributes).
   FrameFeed(Renderer& renderer, runtime::Player& player, const StagingAllocator* staging, int color_attribute);
+
+  // The views and options the next frames are drawn with, as the player's
+  // demand (demand.h, runtime::Player::set_demand): frames are read with
+  // only the LOD tiers of the cells these views can keep, and a paused
+  // frame is read again with the tiers it lacks when the views need more.
+  // `margin`: world units the views may move before a frame read now is
+  // drawn (view_margin()). Call it when the views or options change (once
+  // per displayed frame is fine), before update(). Never called: every
+  // tier is read.
+  void set_views(std::span<const View> views, const FluidOptions& fluid, const LodOptions& lod, float margin);
+  // Read every tier again (the demand of no views): `--layers all`, LOD off.
+  void read_everything();
 
   FeedUpdate update();
   const FeedUpdate& last() const { return last_; }

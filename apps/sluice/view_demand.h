@@ -1,0 +1,26 @@
+// What the players read of each frame: only the LOD tiers of the cells
+// their views can keep (render/demand.h), unless `--layers all` or
+// `--lod off` asks for everything.
+#pragma once
+
+#include <span>
+#include <string>
+
+#include "sluice/render/demand.h"
+
+namespace sluice::app {
+
+// Whether frames are read by the view: not with --layers all or --lod off.
+bool reads_by_view(const std::string& layers, const render::LodOptions& lod);
+
+// The demand of `views` (render::view_demand), or every tier when frames
+// are not read by the view. `moving`: the camera may move before frames
+// read now are drawn (a window, a headset): boxes grow by a tenth of the
+// scene's diagonal; a fixed camera needs no margin. Set it as the
+// pipeline's first demand (PlayerOptions) and, as the views change,
+// through Player::set_demand.
+runtime::ViewDemand app_demand(std::span<const render::View> views, const render::SceneInfo& scene,
+                               const render::FluidOptions& fluid, const render::LodOptions& lod, bool by_view,
+                               bool moving);
+
+}  // namespace sluice::app
