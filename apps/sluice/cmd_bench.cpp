@@ -3,6 +3,7 @@
 #include "sluice/bench/band_bench.h"
 #include "sluice/bench/io_bench.h"
 #include "sluice/bench/stream_bench.h"
+#include "sluice/bench/view_bench.h"
 #include "sluice/runtime/budget.h"
 
 namespace sluice::app {
@@ -86,6 +87,48 @@ void add_bench(CLI::App& app) {
     } else {
       bench::run_stream_bench(*stream);
     }
+  });
+
+  auto view = std::make_shared<bench::ViewBenchOptions>();
+  auto view_size = std::make_shared<std::string>("1920x1080");
+  auto view_memory = std::make_shared<std::string>();
+  CLI::App* vw = bench->add_subcommand(
+      "view", "Reading only what the view draws (LOD tiers) against the full read, on a scripted camera path");
+  vw->footer(
+      "The path: a quarter orbit of the overview, a fly-in to a close-up inside the pool, and a pause on the\n"
+      "overview while the LOD level rises to 1. Each is played through the players' own path as fast as frames\n"
+      "arrive, from storage (the file dropped from the page cache) and from the page cache, reading by the view\n"
+      "and reading every tier of the surface and blobs, side by side; then each streamed picture is compared\n"
+      "with the full read's (PSNR).\n"
+      "Examples: sluice synth -n 10M --frames 48 --gpu-decodable -o pool.sluice && sluice bench view pool.sluice\n"
+      "          sluice bench view pool.sluice --stereo --size 2064x2208 --memory 16G");
+  vw->add_option("file", view->file, ".sluice file to stream")->required()->check(CLI::ExistingFile);
+  vw->add_option("--size", *view_size, "Image size WxH (per eye with --stereo)")->capture_default_str();
+  vw->add_flag("--stereo", view->stereo, "Both eyes in one pass (a headset's view)");
+  vw->add_option("--lod", view->lod, "clod or density")->capture_default_str()->check(CLI::IsMember({"clod", "density"}));
+  vw->add_option("--lod-level", view->level, "LOD level, 0..1")->capture_default_str()->check(CLI::Range(0.0f, 1.0f));
+  vw->add_option("--steps", view->steps, "Frames of the orbit and of the fly-in each")->capture_default_str()
+      ->check(CLI::Range(2u, 100000u));
+  vw->add_option("--memory", *view_memory, "Memory cap of the pipeline, e.g. 16G (default: 4G)");
+  vw->add_flag("!--no-storage", view->storage, "Skip the storage passes (they drop the file from the page cache)");
+  vw->add_flag("!--no-psnr", view->psnr, "Skip the quality pass");
+  vw->add_option("--decode", view->decode, "auto, cpu or gpu")->capture_default_str()->check(CLI::IsMember({"auto", "cpu", "gpu"}));
+  vw->add_option("--device", view->device, "Vulkan device (index or name; default: the first GPU)");
+  vw->callback([view, view_size, view_memory] {
+#if SLUICE_WITH_RENDER
+    const auto x = view_size->find('x');
+    if (x == std::string::npos) throw std::runtime_error("--size: give WxH, e.g. 1920x1080");
+    view->width = static_cast<uint32_t>(std::stoul(view_size->substr(0, x)));
+    view->height = static_cast<uint32_t>(std::stoul(view_size->substr(x + 1)));
+    if (!view_memory->empty()) {
+      const auto bytes = runtime::parse_byte_size(*view_memory);
+      if (!bytes) throw std::runtime_error("--memory: cannot read '" + *view_memory + "' as a size (try 16G)");
+      view->memory = *bytes;
+    }
+    bench::run_view_bench(*view);
+#else
+    throw std::runtime_error("bench view: this build has no renderer (SLUICE_WITH_RENDER=OFF)");
+#endif
   });
 }
 

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Runs on the GPU machine (see bench/device/README.md): every benchmark the
 # issues ask GPU-machine figures for, in one call. Results go to $OUT.
-#   bash bench/device/run.sh [io] [import] [layers] [band] [render] [stream] [split] [codec] [huge] [embed] [compare] [live] [stereo] [xrsize] [firsthour] [streamcmp] [gpudecode] [gpuquick] [gpupair] [gpuab] [gpu100] [egl] [vtkpeer] [readpath] [importprobe] [relayprobe] [storeab] [gpusplit] [gpuplay] [gpuflight] [gpu100ab] [damf2] [gpusweep] [gpuvar] [relay] [relaytests] [relay100] [gpuplayall]   (default: io render stream)
+#   bash bench/device/run.sh [io] [import] [layers] [band] [render] [stream] [split] [codec] [huge] [embed] [compare] [live] [stereo] [xrsize] [firsthour] [streamcmp] [gpudecode] [gpuquick] [gpupair] [gpuab] [gpu100] [egl] [vtkpeer] [readpath] [importprobe] [relayprobe] [storeab] [gpusplit] [gpuplay] [gpuflight] [gpu100ab] [damf2] [gpusweep] [gpuvar] [relay] [relaytests] [relay100] [gpuplayall] [view] [tiersize]   (default: io render stream)
 set -uo pipefail
 OUT=${OUT:-/tmp/out}
 mkdir -p "$OUT" /tmp/s
@@ -385,6 +385,26 @@ for stage in $stages; do
       run $S bench stream --gpu /tmp/synth10m.sluice --memory 16G
       run $S synth -n 100M --frames ${SYNTH100_FRAMES:-12} -o /tmp/synth100m_gpu.sluice --force -q --gpu-decodable
       run $S bench stream --gpu /tmp/synth100m_gpu.sluice --memory 48G
+      ;;
+    view)  # reading only what the view draws (issue 30): the 100M pool by view against the full read, mono and stereo
+      run $S bench render --sizes 10M --repeats 3 >/dev/null  # warm-up
+      run $S synth -n 100M --frames ${VIEW_FRAMES:-24} -o /tmp/v100m.sluice --force -q --gpu-decodable
+      run $S info /tmp/v100m.sluice
+      run $S bench view /tmp/v100m.sluice --steps ${VIEW_STEPS:-12} --memory 24G
+      run $S bench view /tmp/v100m.sluice --steps ${VIEW_STEPS:-12} --memory 24G --stereo --size 2064x2208 --no-psnr
+      rm -f /tmp/v100m.sluice
+      ;;
+    tiersize)  # tiers against one record per chunk (--no-tiers): size, and the page-cache read of everything, alternated
+      run $S synth -n 10M --frames 48 -o /tmp/t10m.sluice --force -q --gpu-decodable
+      run $S synth -n 10M --frames 48 -o /tmp/f10m.sluice --force -q --gpu-decodable --no-tiers
+      run $S synth -n 10M --frames 8 -o /tmp/t10mz.sluice --force -q
+      run $S synth -n 10M --frames 8 -o /tmp/f10mz.sluice --force -q --no-tiers
+      ls -l /tmp/t10m.sluice /tmp/f10m.sluice /tmp/t10mz.sluice /tmp/f10mz.sluice | tee -a "$OUT/summary.txt"
+      for i in 1 2; do
+        run $S bench stream /tmp/f10m.sluice --no-storage --memory 16G --min-time 2
+        run $S bench stream /tmp/t10m.sluice --no-storage --memory 16G --min-time 2
+      done
+      rm -f /tmp/t10m.sluice /tmp/f10m.sluice /tmp/t10mz.sluice /tmp/f10mz.sluice
       ;;
     codec)  # after stream: the same sequence with zstd on every plane (--smallest)
       run $S synth -n 10M --frames ${SYNTH_FRAMES:-120} -o /tmp/synth10m_zstd.sluice --force --smallest -q

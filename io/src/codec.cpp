@@ -180,10 +180,17 @@ void locate_planes(std::span<const std::byte> payload, ChunkCodec codec, size_t 
   if (at != payload.size()) throw Error(where, "chunk payload has trailing bytes");
 }
 
-// The box of `members`' positions.
+// The box of `members`' positions, its top widened until the decoder's
+// float arithmetic maps the largest code inside it: then every decoded
+// particle lies in the box.
 Aabb box_of(const FrameInput& in, std::span<const uint32_t> members) {
   Aabb box;
   for (uint32_t p : members) box.extend(in.positions[3 * p], in.positions[3 * p + 1], in.positions[3 * p + 2]);
+  for (int a = 0; a < 3; ++a) {
+    while (dequantize(65535, box.min[a], box.max[a]) > box.max[a]) {
+      box.max[a] = std::nextafter(box.max[a], std::numeric_limits<float>::infinity());
+    }
+  }
   return box;
 }
 
@@ -197,15 +204,7 @@ EncodedChunk encode_chunk(const FrameInput& in, std::span<const uint32_t> member
   EncodedChunk out;
   ChunkDesc& desc = out.desc;
   desc.particle_count = static_cast<uint32_t>(n);
-  desc.bounds = box;
-
-  // Widen the top of the box until the decoder's float arithmetic maps the
-  // largest code inside it: then every decoded particle lies in the box.
-  for (int a = 0; a < 3; ++a) {
-    while (dequantize(65535, desc.bounds.min[a], desc.bounds.max[a]) > desc.bounds.max[a]) {
-      desc.bounds.max[a] = std::nextafter(desc.bounds.max[a], std::numeric_limits<float>::infinity());
-    }
-  }
+  desc.bounds = box;  // box_of(): already widened
 
   // Order the chunk by its own 48-bit Morton code so code deltas are non-negative.
   std::array<double, 3> inv{};
@@ -429,6 +428,7 @@ EncodedFrame encode_frame(const FrameInput& in, const FileHeader& header, const 
 
   // One job per record: a chunk, or one LOD tier of it. Tiers reorder the
   // chunk's members by tier (counting sort, stable) so each is a range.
+  const float voxel = fh.blob_voxel;
   std::vector<Cell> cells;
   for (Group& g : groups) {
     for (const auto& r : g.chunks) cells.push_back({&g, r, {}, {}});
@@ -439,17 +439,33 @@ EncodedFrame encode_frame(const FrameInput& in, const FileHeader& header, const 
     const std::span<uint32_t> members = std::span(cell.group->order).subspan(cell.range.begin, cell.range.end - cell.range.begin);
     cell.box = box_of(source, members);
     // Stored frames (not kept: decoded at once) gain nothing from tiers.
-    if (!options.lod_tiers || !options.compress || cell.group->layer == Layer::Blobs) {
+    if (!options.lod_tiers || !options.compress) {
       cell.first.fill(uint32_t(members.size()));
       cell.first[0] = 0;
       return;
     }
-    for (uint32_t p : members) ++cell.first[lod_tier(source.lod[p]) + 1];
+    std::vector<uint8_t> tiers(members.size());
+    if (cell.group->layer == Layer::Blobs) {
+      // A blob's random term hashes the world cell of its decoded centroid.
+      std::array<double, 3> inv{};
+      for (int a = 0; a < 3; ++a) inv[size_t(a)] = inverse_step(cell.box.min[size_t(a)], cell.box.max[size_t(a)]);
+      for (size_t k = 0; k < members.size(); ++k) {
+        float p[3];
+        for (int a = 0; a < 3; ++a) {
+          const uint16_t q = quantize(source.positions[3 * size_t(members[k]) + size_t(a)], cell.box.min[size_t(a)], inv[size_t(a)]);
+          p[a] = dequantize(q, cell.box.min[size_t(a)], cell.box.max[size_t(a)]);
+        }
+        tiers[k] = static_cast<uint8_t>(lod_tier_of_uniform(blob_lod_uniform_bound(p[0], p[1], p[2], voxel)));
+      }
+    } else {
+      for (size_t k = 0; k < members.size(); ++k) tiers[k] = static_cast<uint8_t>(lod_tier(source.lod[members[k]]));
+    }
+    for (uint8_t t : tiers) ++cell.first[t + 1u];
     for (uint32_t t = 0; t < kLodTiers; ++t) cell.first[t + 1] += cell.first[t];
     std::vector<uint32_t> sorted(members.size());
     std::array<uint32_t, kLodTiers> at{};
     std::copy(cell.first.begin(), cell.first.begin() + kLodTiers, at.begin());
-    for (uint32_t p : members) sorted[at[lod_tier(source.lod[p])]++] = p;
+    for (size_t k = 0; k < members.size(); ++k) sorted[at[tiers[k]]++] = members[k];
     std::copy(sorted.begin(), sorted.end(), members.begin());
   });
   // Tiers smaller than kLeastTierRecord particles join the tiers after them

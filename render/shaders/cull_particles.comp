@@ -15,7 +15,8 @@ float position_hash(vec3 p) {
 }
 
 // A blob's random term, 0..1: an integer hash of the world cell of side
-// `voxel` its centroid lies in.
+// `voxel` its centroid lies in. io::blob_lod_uniform() computes the same on
+// the host: files tier their blobs by it (format 1.4), so the two must agree.
 float cell_hash(vec3 p, float voxel) {
   ivec3 c = ivec3(floor(p / voxel));
   uint h = uint(c.x) * 73856093u ^ uint(c.y) * 19349663u ^ uint(c.z) * 83492791u;

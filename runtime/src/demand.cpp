@@ -122,7 +122,7 @@ uint32_t tiers_needed(const ViewDemand& demand, const io::Aabb& box, io::Layer l
   bool any = false;
   for (size_t i = 0; i < demand.views.size() && !any; ++i) any = visible(demand.views[i], seen);
   if (!any) return 0;
-  if (!demand.lod || blob) return io::kLodTiers;
+  if (!demand.lod) return io::kLodTiers;
   if (!(demand.level < 1)) return io::kLodTiers;
   if (!(demand.level > 0)) return 1;  // nothing is kept; the first tier keeps a visible cell from being empty
   const Box near = grown(box, demand.margin);

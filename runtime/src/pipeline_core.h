@@ -179,6 +179,7 @@ class PipelineCore {
   ReadTarget staged_target(ReaderState& rs, Slot& slot);
   bool reads_in_place() const;
   bool reads_by_demand();  // the latest demand leaves something out, and chunks can be read one by one
+  void hint_chunks(const Slot& slot);  // will_need for the slot's wanted chunks, close runs joined
   // Whether the layers left out of options_.layers let the frame be read as
   // a prefix of its record: they include the layer written last.
   bool reads_prefix(const io::FrameIndexEntry& e) const;

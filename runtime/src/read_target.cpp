@@ -44,6 +44,25 @@ bool PipelineCore::reads_in_place() const {
   return options_.keep_encoded && source_->alignment() <= 1;
 }
 
+// The kernel is asked for every wanted chunk at once, runs less than
+// kHintGap apart joined, so that storage has them all queued (the read
+// threads then copy pages already on their way) and reads nothing else.
+void PipelineCore::hint_chunks(const Slot& slot) {
+  constexpr uint64_t kHintGap = 128 << 10;
+  const uint64_t base = reader_.index().frames[slot.frame].offset;
+  uint64_t from = 0, to = 0;
+  for (const io::ChunkDesc& c : slot.header.chunks) {
+    if (to > from && c.offset <= to + kHintGap && c.offset >= from) {
+      to = std::max(to, c.offset + c.compressed_size);
+      continue;
+    }
+    if (to > from) source_->will_need(base + from, to - from);
+    from = c.offset;
+    to = c.offset + c.compressed_size;
+  }
+  if (to > from) source_->will_need(base + from, to - from);
+}
+
 // A demand that leaves tiers out is read chunk by chunk (table first), the
 // CPU decode path too; O_DIRECT reads whole records (its offsets are aligned).
 bool PipelineCore::reads_by_demand() {
@@ -108,6 +127,7 @@ PipelineCore::ReadTarget PipelineCore::read_table(Slot& slot, const ReadTarget& 
   reader_.parse_table(slot.frame, whole.record.first(table), slot.header, record_where_);
   const uint64_t end = io::layers_end(slot.header, options_.layers, reader_.header().attributes.size());
   const uint64_t wanted = into + end;
+  if (!slot.relayed && !slot.checked_on_read && !reads_by_demand()) source_->will_need(whole.offset + first, wanted - std::min(wanted, first));
   if (slot.relayed) return chunks_to_read(slot, {}, end, table);
   if (slot.checked_on_read || reads_by_demand()) return chunks_to_read(slot, whole.record.first(end), end, table);
   ReadTarget rest;
@@ -140,6 +160,7 @@ PipelineCore::ReadTarget PipelineCore::chunks_to_read(Slot& slot, std::span<std:
     }
     total += chunks[c].compressed_size;
   }
+  hint_chunks(slot);
   if (slot.relayed) {
     io::plan_gpu_frame(slot.header, reader_.header(), {.color_attribute = options_.encoded_color_attribute}, slot.plan,
                        reader_.location(slot.frame));

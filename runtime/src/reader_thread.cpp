@@ -280,10 +280,14 @@ PipelineCore::Start PipelineCore::start_entry(ReaderState& rs, uint64_t k, uint6
   slot.state.store(SlotState::Reading, kRelaxed);
   ++rs.frames_started;
 
-  // Ask the kernel for the next entry's bytes while this one is read.
+  // Ask the kernel for the next entry's bytes while this one is read: the
+  // whole record when it is read whole, else its table (what else it needs
+  // is hinted once the table is parsed: read_table), so that storage reads
+  // no bytes the frame leaves out.
   if (const auto next = rs.schedule.frame_at(k + 1)) {
     const io::FrameIndexEntry& e = reader_.index().frames[*next];
-    source_->will_need(e.offset, e.bytes);
+    const bool whole = !reads_in_place() && !reads_prefix(e) && !reads_by_demand();
+    source_->will_need(e.offset, whole ? e.bytes : io::frame_table_bytes(e.chunk_count, reader_.header().attributes.size()));
   }
 
   ReadTarget target;

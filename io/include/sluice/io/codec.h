@@ -40,8 +40,9 @@ struct EncodeOptions {
   // record per tier, tier 0 first, all with the chunk's box, so a reader
   // reads only the tiers a view keeps. Tiers under 1,024 particles join the
   // next; a cell whose tiers would take over 8% more bytes (lattice-like
-  // data) stays one record. Blob chunks stay one record (their LOD value is
-  // a count), as do frames not compressed. false: one record per chunk, as
+  // data) stays one record. Blob chunks are tiered by their random term
+  // (io::blob_lod_uniform_bound: their LOD value is a count). Frames not
+  // compressed stay one record per chunk. false: one record per chunk, as
   // format 1.3.
   bool lod_tiers = true;
   float band_voxel = 0;  // voxel side d of the classification and the blobs; 0: twice the particle spacing

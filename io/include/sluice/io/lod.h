@@ -6,6 +6,7 @@
 // and nothing flickers during playback.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -39,6 +40,25 @@ inline uint32_t lod_tier(uint16_t value) {
   while (value < kTierFloor[t]) ++t;
   return t;
 }
+
+// The tier of a random term u in [0, 1): the tier of the 16-bit values
+// u * 65536 falls among (so a demand's tiers_for_keep() holds it too).
+inline uint32_t lod_tier_of_uniform(double u) {
+  const double scaled = std::floor(u * 65536.0);
+  return lod_tier(static_cast<uint16_t>(scaled < 0 ? 0 : scaled > 65535 ? 65535 : scaled));
+}
+
+// A voxel blob's random term (its LOD value is a count, not a hash): an
+// integer hash of the world cell of side `voxel` its centroid lies in, as
+// the renderer computes it (shaders/cull_particles.comp, cell_hash), 24 bits
+// in (0, 1). Stable while the voxel stays occupied.
+double blob_lod_uniform(int32_t cx, int32_t cy, int32_t cz);
+// The largest blob_lod_uniform() of the cells a decoded centroid may be
+// taken to lie in: its own and, on each axis where it lies within 1e-3 of a
+// cell's side from a face, the neighbour's too (the GPU's division need not
+// round as the host's does). A blob is written in the tier of this value,
+// so a reader that reads that tier has it whichever cell the GPU finds.
+double blob_lod_uniform_bound(float x, float y, float z, float voxel);
 
 // How many tiers hold every value v with (v + 0.5) / 65536 >= 1 - keep:
 // what a reader must read of a chunk whose particles are kept with

@@ -53,8 +53,9 @@ struct ViewDemand {
 
 // Tiers (0 .. io::kLodTiers) of a cell with box `box` and layer `layer` the
 // demand needs: 0 when no view can see any splat of it; io::kLodTiers
-// without LOD, for blobs (one record: a count, not a stable value, is their
-// LOD value) and when no view is known. `blob_voxel` is the frame's
+// without LOD and when no view is known. Blobs follow the particles' rule
+// with their own reach (their tiers hold their random term,
+// io::blob_lod_uniform). `blob_voxel` is the frame's
 // (io::FrameHeader::blob_voxel), for the blobs' reach.
 uint32_t tiers_needed(const ViewDemand& demand, const io::Aabb& box, io::Layer layer, float blob_voxel);
 

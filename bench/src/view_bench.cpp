@@ -1,0 +1,366 @@
+// `sluice bench view`: the players' path (Player -> FrameFeed -> Renderer)
+// on a scripted camera path, reading by the view's demand against the full
+// read of the surface and blobs (view_bench.h).
+#include "sluice/bench/view_bench.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <filesystem>
+#include <stdexcept>
+#include <thread>
+
+#include "bounds.h"
+#include "machine.h"
+#include "sluice/io/reader.h"
+#include "sluice/render/demand.h"
+#include "sluice/render/frame_feed.h"
+#include "sluice/render/image_io.h"
+#include "sluice/render/offscreen.h"
+#include "sluice/render/renderer.h"
+#include "sluice/render/staging_allocator.h"
+#include "sluice/runtime/player.h"
+#include "table.h"
+
+namespace sluice::bench {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+enum class Segment { Orbit, FlyIn, Pause };
+const char* segment_name(Segment s) {
+  switch (s) {
+    case Segment::Orbit: return "overview orbit";
+    case Segment::FlyIn: return "fly-in to a close-up";
+    case Segment::Pause: return "pause on the overview, level to 1";
+  }
+  return "?";
+}
+
+struct Step {
+  std::vector<render::View> views;
+};
+
+// One camera, or two eyes 6.4 cm apart at human scale (the scene's extent
+// taken as 1.5 m), as in `bench render --stereo`.
+std::vector<render::View> views_of(const render::Camera& cam, const ViewBenchOptions& o, float extent) {
+  if (!o.stereo) return {render::camera_view(cam, {0, 0, o.width, o.height})};
+  const render::Vec3 forward = render::normalize(cam.target - cam.eye);
+  const render::Vec3 right = render::normalize(render::cross(forward, cam.up));
+  std::vector<render::View> v;
+  for (int e = 0; e < 2; ++e) {
+    render::Camera c = cam;
+    const render::Vec3 shift = right * ((e == 0 ? -0.5f : 0.5f) * extent * 0.064f / 1.5f);
+    c.eye = c.eye + shift;
+    c.target = c.target + shift;
+    v.push_back(render::camera_view(c, {0, 0, o.width, o.height}));
+  }
+  return v;
+}
+
+render::Vec3 lerp(render::Vec3 a, render::Vec3 b, float t) { return a + (b - a) * t; }
+
+// The orbit turns the overview a quarter around the up axis; the fly-in goes
+// from where it ends to a close-up: an eye a fifth of the diagonal from a
+// point a quarter of the way along the pool, near its surface, looking
+// along the pool so that much of it lies outside the view.
+struct Path {
+  std::vector<Step> orbit, fly_in;
+};
+
+Path make_path(const render::SceneInfo& scene, const ViewBenchOptions& o) {
+  const render::Bounds& b = scene.bounds;
+  const render::Vec3 up = scene.up;
+  const float extent = std::max({b.max.x - b.min.x, b.max.y - b.min.y, b.max.z - b.min.z});
+  const render::Camera overview = render::Camera::framing(b, up, float(o.width) / float(o.height));
+  Path p;
+  const render::Vec3 axis = render::normalize(up);
+  const auto turned = [&](render::Vec3 v, float angle) {  // Rodrigues about the up axis
+    return v * std::cos(angle) + render::cross(axis, v) * std::sin(angle) + axis * (render::dot(axis, v) * (1 - std::cos(angle)));
+  };
+  render::Camera last = overview;
+  for (uint32_t k = 0; k < o.steps; ++k) {
+    render::Camera c = overview;
+    c.eye = overview.target + turned(overview.eye - overview.target, 1.5707963f * float(k) / float(o.steps));
+    p.orbit.push_back({views_of(c, o, extent)});
+    last = c;
+  }
+  // The close-up: a quarter of the way along the longest horizontal axis.
+  const render::Vec3 size = b.max - b.min;
+  render::Vec3 along{0, 0, 0};
+  if (std::abs(axis.x) < 0.5f && size.x >= size.y && size.x >= size.z) along = {1, 0, 0};
+  else if (std::abs(axis.y) < 0.5f && size.y >= size.z) along = {0, 1, 0};
+  else along = {0, 0, 1};
+  if (std::abs(render::dot(along, axis)) > 0.5f) along = std::abs(axis.x) < 0.5f ? render::Vec3{1, 0, 0} : render::Vec3{0, 1, 0};
+  const render::Vec3 centre = b.center();
+  const float length = std::abs(render::dot(size, along));
+  const float height = std::abs(render::dot(size, axis));
+  render::Camera close = overview;
+  close.target = centre - along * (0.25f * length) + axis * (0.1f * height);
+  close.eye = close.target - along * (0.2f * b.diagonal()) + axis * (0.12f * b.diagonal());
+  for (uint32_t k = 0; k < o.steps; ++k) {
+    const float t = float(k + 1) / float(o.steps);
+    const float s = t * t * (3 - 2 * t);
+    render::Camera c = last;
+    c.eye = lerp(last.eye, close.eye, s);
+    c.target = lerp(last.target, close.target, s);
+    p.fly_in.push_back({views_of(c, o, extent)});
+  }
+  return p;
+}
+
+render::LodOptions lod_options(const ViewBenchOptions& o, float level) {
+  render::LodOptions lod;
+  lod.mode = o.lod == "density" ? render::LodMode::DensityPreserving : render::LodMode::Clod;
+  lod.level = level;
+  return lod;
+}
+
+render::DecodeSite decode_site(const std::string& s) {
+  if (s == "cpu") return render::DecodeSite::Cpu;
+  if (s == "gpu") return render::DecodeSite::Gpu;
+  return render::DecodeSite::Auto;
+}
+
+struct Run {
+  uint64_t frames_shown = 0, frames_read = 0, bytes_read = 0, record_bytes = 0, refinements = 0;
+  double seconds = 0;
+  double worst_psnr = std::numeric_limits<double>::infinity();
+  double median_psnr = std::numeric_limits<double>::infinity();
+};
+
+// The full read's picture of `frame` for `views` (quality pass only).
+struct Reference {
+  render::Renderer renderer;
+  render::OffscreenTarget target;
+  const io::ContainerReader& reader;
+  Reference(render::Context& c, const render::SceneInfo& scene, const io::ContainerReader& r, const ViewBenchOptions& o)
+      : renderer(c, scene), target(c, o.width, o.height, {.layers = o.stereo ? 2u : 1u}), reader(r) {}
+  render::Image picture(uint64_t frame, const std::vector<render::View>& views, const render::FluidOptions& fluid,
+                        const render::LodOptions& lod) {
+    renderer.load_frame(reader, frame, -1, io::LayerSet::surface());
+    target.render(renderer, views, fluid, lod);
+    return {target.width(), target.height(), target.read_rgba8()};
+  }
+};
+
+class Bench {
+ public:
+  Bench(const ViewBenchOptions& o, render::Context& context, const io::ContainerReader& reader)
+      : o_(o), context_(context), reader_(reader), scene_(render::scene_info(reader)), path_(make_path(scene_, o)) {
+    fluid_.scalar_visibility = false;
+  }
+
+  // Plays `steps` from `first`; by_view: the views' demand, else every tier.
+  Run play(const std::vector<Step>& steps, uint64_t first, bool by_view, bool quality) {
+    Player p(*this, first, by_view);
+    const render::LodOptions lod = lod_options(o_, o_.level);
+    std::unique_ptr<Reference> ref;
+    if (quality) ref = std::make_unique<Reference>(context_, scene_, reader_, o_);
+    std::vector<double> db;
+    const runtime::PlaybackStats before = p.player.stats();
+    const auto t0 = Clock::now();
+    p.player.play();
+    for (const Step& step : steps) {
+      p.player.set_demand(demand(step.views, lod, by_view));
+      const render::FeedUpdate fed = p.next_frame();
+      p.target.render(p.renderer, step.views, fluid_, lod);
+      if (ref) {
+        const render::Image shown{p.target.width(), p.target.height(), p.target.read_rgba8()};
+        db.push_back(render::psnr(shown, ref->picture(fed.frame, step.views, fluid_, lod)));
+      }
+    }
+    p.target.finish();
+    const double seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+    return finish(p, before, seconds, uint64_t(steps.size()), db);
+  }
+
+  // Paused on the overview at the bench's level, then the level raised to
+  // 1: the frame on screen is read again with the tiers it lacks.
+  Run pause(uint64_t frame, bool by_view, bool quality) {
+    Player p(*this, frame, by_view);
+    const std::vector<render::View>& views = path_.orbit.front().views;
+    p.player.set_demand(demand(views, lod_options(o_, o_.level), by_view));
+    p.next_frame();  // paused: the start frame is shown once read
+    const render::LodOptions full = lod_options(o_, 1.0f);
+    const runtime::PlaybackStats before = p.player.stats();
+    const auto t0 = Clock::now();
+    p.player.set_demand(demand(views, full, by_view));
+    // Until the frame on screen holds what the view needs (its new read is
+    // shown; the full read never falls short).
+    const auto deadline = Clock::now() + std::chrono::seconds(60);
+    while (true) {
+      p.feed.update();
+      if (const auto error = p.player.pop_error()) throw std::runtime_error(error->text());
+      const runtime::FrameHandle* shown = p.player.shown();
+      if (shown && !p.player.pipeline().short_of(*shown, p.player.demand())) break;
+      if (Clock::now() > deadline) throw std::runtime_error("bench view: the paused frame was not refined within 60 s");
+      std::this_thread::sleep_for(std::chrono::microseconds(200));
+    }
+    p.renderer.wait_upload(p.feed.last().ticket);
+    p.target.render(p.renderer, views, fluid_, full);
+    std::vector<double> db;
+    if (quality) {
+      Reference ref(context_, scene_, reader_, o_);
+      const render::Image shown{p.target.width(), p.target.height(), p.target.read_rgba8()};
+      db.push_back(render::psnr(shown, ref.picture(frame, views, fluid_, full)));
+    }
+    p.target.finish();
+    const double seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+    return finish(p, before, seconds, 1, db);
+  }
+
+  const Path& path() const { return path_; }
+
+ private:
+  // A player over the file as the players make it (FrameFeed::configure,
+  // staging_options), every frame due at once, looping.
+  struct Player {
+    render::StagingAllocator staging;
+    render::Renderer renderer;
+    render::OffscreenTarget target;
+    runtime::SteadyClock clock;
+    runtime::Player player;
+    render::FrameFeed feed;
+
+    Player(Bench& b, uint64_t first, bool by_view)
+        : staging(b.context_, render::FrameFeed::staging_options(b.context_, b.reader_.header(), decode_site(b.o_.decode), true)),
+          renderer(b.context_, b.scene_),
+          target(b.context_, b.o_.width, b.o_.height, {.layers = b.o_.stereo ? 2u : 1u}),
+          player(b.reader_, staging, clock, b.player_options(first, staging, by_view)),
+          feed(renderer, player, &staging, -1) {}
+
+    render::FeedUpdate next_frame() {
+      const auto deadline = Clock::now() + std::chrono::seconds(120);
+      while (true) {
+        player.wait_for_due();
+        const render::FeedUpdate fed = feed.update();
+        if (const auto error = player.pop_error()) throw std::runtime_error(error->text());
+        if (fed.changed) {
+          renderer.wait_upload(fed.ticket);
+          return fed;
+        }
+        if (Clock::now() > deadline) throw std::runtime_error("bench view: no frame arrived within 120 s");
+      }
+    }
+  };
+
+  runtime::PlayerOptions player_options(uint64_t first, const render::StagingAllocator& staging, bool by_view) const {
+    runtime::PlayerOptions po;
+    po.frame_rate = 1e9;  // every frame due at once: as fast as frames arrive
+    po.start_frame = first;
+    po.end = runtime::EndMode::Loop;
+    po.policy = runtime::RealTimePolicy::HoldLastFrame;
+    po.on_error = runtime::ErrorPolicy::Stop;
+    po.pipeline.layers = io::LayerSet::surface();
+    po.pipeline.budget.memory_cap = o_.memory > 0 ? o_.memory : (uint64_t(4) << 30);
+    render::FrameFeed::configure(po, staging, -1, reader_.header(), decode_site(o_.decode));
+    (void)by_view;
+    return po;
+  }
+
+  runtime::ViewDemand demand(const std::vector<render::View>& views, const render::LodOptions& lod, bool by_view) const {
+    if (!by_view) return {};
+    return render::view_demand(views, scene_, fluid_, lod, render::view_margin(scene_.bounds.diagonal(), 0, 0));
+  }
+
+  float extent() const {
+    const render::Bounds& b = scene_.bounds;
+    return std::max({b.max.x - b.min.x, b.max.y - b.min.y, b.max.z - b.min.z});
+  }
+
+  static Run finish(Player& p, const runtime::PlaybackStats& before, double seconds, uint64_t shown,
+                    std::vector<double>& db) {
+    const runtime::PlaybackStats after = p.player.stats();
+    Run r;
+    r.seconds = seconds;
+    r.frames_shown = shown;
+    r.frames_read = after.pipeline.frames_read - before.pipeline.frames_read;
+    r.bytes_read = after.pipeline.bytes_read - before.pipeline.bytes_read;
+    r.record_bytes = after.pipeline.record_bytes - before.pipeline.record_bytes;
+    r.refinements = after.refinements - before.refinements;
+    if (!db.empty()) {
+      r.worst_psnr = *std::min_element(db.begin(), db.end());
+      r.median_psnr = median(db);
+    }
+    return r;
+  }
+
+  const ViewBenchOptions& o_;
+  render::Context& context_;
+  const io::ContainerReader& reader_;
+  render::SceneInfo scene_;
+  Path path_;
+  render::FluidOptions fluid_;
+};
+
+std::string mb(double bytes) { return num(bytes / 1e6, 1) + " MB"; }
+std::string db_text(double v) { return std::isinf(v) ? "identical" : num(v, 1) + " dB"; }
+
+}  // namespace
+
+void run_view_bench(const ViewBenchOptions& o) {
+  const io::ContainerReader reader(o.file);
+  if (reader.frame_count() == 0) throw io::Error({o.file}, "no frames");
+  render::ContextOptions co;
+  co.device = o.device;
+  render::Context context(co);
+  Bench bench(o, context, reader);
+  const render::DeviceInfo& dev = context.device();
+  uint64_t file_bytes = 0;
+  for (const io::FrameIndexEntry& e : reader.index().frames) file_bytes += e.bytes;
+  std::printf("sluice bench view %s: %llu frames, %s a frame on average, format %u.%u\n", o.file.c_str(),
+              (unsigned long long)reader.frame_count(), mb(double(file_bytes) / double(reader.frame_count())).c_str(),
+              reader.header().version_major, reader.header().version_minor);
+  std::printf("device: %s (%s); host: %s, %d cores\n", dev.name.c_str(), dev.type.c_str(), cpu_model().c_str(), core_count());
+  std::printf("view: %ux%u%s, %s %.2f; %u frames per moving segment; the surface and blobs (players' default)\n", o.width,
+              o.height, o.stereo ? " per eye, two eyes" : "", o.lod.c_str(), double(o.level), o.steps);
+
+  const uint64_t frames = reader.frame_count();
+  const uint64_t fly_first = o.steps % frames;
+  const uint64_t pause_frame = (2 * uint64_t(o.steps)) % frames;
+  Table table({"segment", "read", "from", "frames/s", "read per frame", "of the records", "refinements"});
+  const auto add = [&](Segment s, bool by_view, const char* from, const Run& r) {
+    const double per = r.frames_read ? double(r.bytes_read) / double(r.frames_read) : double(r.bytes_read);
+    const double fps = s == Segment::Pause ? 0 : double(r.frames_shown) / r.seconds;
+    table.row({segment_name(s), by_view ? "by view" : "full", from,
+               s == Segment::Pause ? num(r.seconds * 1e3, 1) + " ms to converge" : num(fps, 1),
+               s == Segment::Pause ? mb(double(r.bytes_read)) + " (refinement)" : mb(per),
+               r.record_bytes ? num(100.0 * double(r.bytes_read) / double(r.record_bytes), 1) + "%" : "-",
+               std::to_string(r.refinements)});
+  };
+  const auto drop = [&] { drop_from_page_cache(o.file, 0, std::filesystem::file_size(o.file)); };
+  const auto segments = [&](const char* from, bool cold) {
+    for (const bool by_view : {false, true}) {
+      if (cold) drop();
+      add(Segment::Orbit, by_view, from, bench.play(bench.path().orbit, 0, by_view, false));
+      if (cold) drop();
+      add(Segment::FlyIn, by_view, from, bench.play(bench.path().fly_in, fly_first, by_view, false));
+      if (cold) drop();
+      add(Segment::Pause, by_view, from, bench.pause(pause_frame, by_view, false));
+    }
+  };
+  if (o.storage) segments("storage, cache dropped", true);
+  // Warm: every frame read once, then both reads from the page cache.
+  bench.play(bench.path().orbit, 0, false, false);
+  segments("page cache", false);
+  table.print("Frames through the players' path, full read against reading by the view (the time of a pause is its "
+              "refinement's)");
+
+  if (o.psnr) {
+    Table quality({"segment", "read", "frames", "PSNR worst", "PSNR median", "read per frame"});
+    const auto row = [&](Segment s, const Run& r) {
+      const double per = r.frames_read ? double(r.bytes_read) / double(r.frames_read) : double(r.bytes_read);
+      quality.row({segment_name(s), "by view", std::to_string(r.frames_shown), db_text(r.worst_psnr),
+                   db_text(r.median_psnr), mb(per)});
+    };
+    row(Segment::Orbit, bench.play(bench.path().orbit, 0, true, true));
+    row(Segment::FlyIn, bench.play(bench.path().fly_in, fly_first, true, true));
+    row(Segment::Pause, bench.pause(pause_frame, true, true));
+    quality.print("Quality: each streamed picture against the full read of the same frame and view (not timed)");
+  }
+}
+
+}  // namespace sluice::bench
