@@ -508,6 +508,7 @@ EncodedFrame encode_frame(const FrameInput& in, const FileHeader& header, const 
 
   uint64_t offset = frame_table_bytes(chunks.size(), attributes);
   for (EncodedChunk& c : chunks) {
+    c.desc.index = static_cast<uint32_t>(fh.chunks.size());
     c.desc.offset = offset;
     offset += c.desc.compressed_size;
     frame.raw_bytes += c.raw_bytes;

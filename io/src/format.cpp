@@ -223,7 +223,9 @@ void parse_frame_table(std::span<const std::byte> record, size_t attribute_count
   if (!std::isfinite(f.blob_voxel) || f.blob_voxel < 0) r.fail("blob voxel side is not a finite size");
   f.chunks.resize(prefix.chunk_count);
   uint64_t particles = 0;
+  uint32_t index = 0;
   for (ChunkDesc& c : f.chunks) {
+    c.index = index++;
     c.offset = r.u64();
     c.compressed_size = r.u32();
     c.particle_count = r.u32();

@@ -247,8 +247,17 @@ FrameHandle PipelineCore::take() {
   h.generation_ = entry.generation;
   h.sequence_ = entry.sequence;
   if (state == SlotState::Failed) {
-    h.error_ = std::make_unique<FrameError>(slots_[entry.slot].error);
+    const Slot& slot = slots_[entry.slot];
+    h.error_ = std::make_unique<FrameError>(slot.error);
     if (h.error_->message.empty()) h.error_->message = "failed, and there was no memory left to say why";
+    // Errors count chunks among those read: name the file's record, and its
+    // LOD tier where the file has tiers.
+    std::optional<uint64_t>& chunk = h.error_->where.chunk;
+    if (slot.demand_applied && chunk && *chunk < slot.header.chunks.size()) {
+      const io::ChunkDesc& c = slot.header.chunks[*chunk];
+      chunk = c.index;
+      if (c.tier > 0 || c.continues_cell) h.error_->message += " (LOD tier " + std::to_string(c.tier) + " of its cell)";
+    }
     give_back(entry.slot);
   } else {
     slots_[entry.slot].state.store(SlotState::Shown, kRelaxed);

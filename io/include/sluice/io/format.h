@@ -112,6 +112,10 @@ struct ChunkDesc {
   // same layer and box. Older files: every record its own cell, tier 0.
   uint8_t tier = 0;
   bool continues_cell = false;
+  // Not stored: the record's place in the frame's chunk table as written
+  // (parse_frame_table sets it), kept when keep_layers or keep_tiers drop
+  // records, so errors name the chunk the file holds.
+  uint32_t index = 0;
   Aabb bounds;                   // every particle of the chunk lies inside (inclusive); the cell's box
   uint64_t checksum = 0;         // XXH3-64 of the compressed bytes
   // Per attribute: the range its 16-bit values are quantized against (held

@@ -1,0 +1,395 @@
+// The view's demand (demand.h): tiers per cell against the renderer's rule
+// evaluated particle by particle, the pipeline reading only those tiers on
+// the CPU and the kept-encoded paths, a paused player reading the missing
+// ones, errors naming the file's record, and demands racing with seeks and
+// delivery (run under TSan with the rest of the runtime suite).
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <map>
+#include <random>
+#include <thread>
+
+#include "runtime_test_util.h"
+#include "sluice/io/lod.h"
+#include "sluice/io/reader.h"
+#include "sluice/runtime/clock.h"
+#include "sluice/runtime/demand.h"
+#include "sluice/runtime/pipeline.h"
+#include "sluice/runtime/player.h"
+
+namespace sluice::runtime {
+namespace {
+
+namespace fs = std::filesystem;
+using Mat = std::array<float, 16>;  // column-major
+
+float& at(Mat& m, int r, int c) { return m[size_t(c) * 4 + size_t(r)]; }
+
+// World -> eye, looking from `eye` at `target` with +z up.
+Mat look_at(std::array<float, 3> eye, std::array<float, 3> target) {
+  auto sub = [](auto a, auto b) { return std::array<float, 3>{a[0] - b[0], a[1] - b[1], a[2] - b[2]}; };
+  auto norm = [](std::array<float, 3> v) {
+    const float l = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+    return std::array<float, 3>{v[0] / l, v[1] / l, v[2] / l};
+  };
+  auto cross = [](auto a, auto b) {
+    return std::array<float, 3>{a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+  };
+  auto dot = [](auto a, auto b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; };
+  const auto f = norm(sub(target, eye));
+  const auto s = norm(cross(f, std::array<float, 3>{0, 0, 1}));
+  const auto u = cross(s, f);
+  Mat m{};
+  for (int c = 0; c < 3; ++c) {
+    at(m, 0, c) = s[size_t(c)];
+    at(m, 1, c) = u[size_t(c)];
+    at(m, 2, c) = -f[size_t(c)];
+  }
+  at(m, 0, 3) = -dot(s, eye);
+  at(m, 1, 3) = -dot(u, eye);
+  at(m, 2, 3) = dot(f, eye);
+  at(m, 3, 3) = 1;
+  return m;
+}
+
+// Eye -> Vulkan clip (y down, depth 0..1, standard), vertical fov 45 degrees.
+Mat perspective(float aspect, float near_plane, float far_plane) {
+  const float t = 1.0f / std::tan(0.5f * 45.0f * 3.14159265f / 180.0f);
+  Mat m{};
+  at(m, 0, 0) = t / aspect;
+  at(m, 1, 1) = -t;
+  at(m, 2, 2) = far_plane / (near_plane - far_plane);
+  at(m, 2, 3) = near_plane * far_plane / (near_plane - far_plane);
+  at(m, 3, 2) = -1;
+  return m;
+}
+
+ViewDemand demand_of(std::array<float, 3> eye, std::array<float, 3> target, float level, bool lod = true) {
+  ViewDemand d;
+  d.views.push_back({look_at(eye, target), perspective(16.0f / 9.0f, 0.01f, 100.0f)});
+  d.lod = lod;
+  d.level = level;
+  d.reference_distance = 1.5f;  // about the data's diagonal
+  d.particle_radius = 0.005f;
+  d.particle_reach = 0.005f;
+  return d;
+}
+
+// A scattered block (1 x 0.6 x 0.3) with random ids: chunks of 8192 written
+// as LOD tiers (scattered data: tiers pay).
+fs::path write_scattered(const fs::path& path, uint64_t frames, uint32_t n) {
+  io::FileHeader header;
+  header.particle_spacing = 0.01f;
+  header.particle_radius = 0.005f;
+  header.frame_rate = 30;
+  io::ContainerWriter writer(path, header);
+  for (uint64_t f = 0; f < frames; ++f) {
+    std::mt19937 rng(uint32_t(f) + 11);
+    std::uniform_real_distribution<float> u(0, 1);
+    std::vector<float> xyz;
+    std::vector<uint16_t> lod;
+    for (uint32_t i = 0; i < n; ++i) {
+      xyz.insert(xyz.end(), {u(rng), 0.6f * u(rng), 0.3f * u(rng) + 0.01f * float(f)});
+      lod.push_back(io::lod_value_from_id(i));
+    }
+    io::FrameInput in;
+    in.positions = xyz;
+    in.lod = lod;
+    in.time = double(f) / 30;
+    io::EncodeOptions o;
+    o.chunk_particles = 8192;
+    writer.append(io::encode_frame(in, header, o));
+  }
+  writer.finish();
+  return path;
+}
+
+class DemandTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = new test::TempDir;
+    path_ = write_scattered(*dir_ / "scattered.sluice", 8, 40000);
+  }
+  static void TearDownTestSuite() { delete dir_; }
+  static test::TempDir* dir_;
+  static fs::path path_;
+};
+test::TempDir* DemandTest::dir_ = nullptr;
+fs::path DemandTest::path_;
+
+const std::array<float, 3> kFarEye{0.5f, -2.5f, 1.2f}, kNearEye{0.15f, 0.05f, 0.35f}, kCentre{0.5f, 0.3f, 0.15f};
+
+TEST_F(DemandTest, FarViewsNeedFewTiersNearViewsAllAndUnseenCellsNone) {
+  const io::ContainerReader reader(path_);
+  const io::FrameHeader table = reader.read_table(0);
+  ASSERT_GT(table.chunks.size(), 8u) << "the file must hold tiers";
+  const ViewDemand far = demand_of(kFarEye, kCentre, 0.3f), near = demand_of(kNearEye, {0.9f, 0.55f, 0.1f}, 0.3f);
+  const ViewDemand away = demand_of({0.5f, -2.5f, 1.2f}, {0.5f, -5.0f, 1.2f}, 0.3f);  // looking away from the block
+  uint64_t far_tiers = 0, near_tiers = 0, cells = 0;
+  for (size_t first = 0; first < table.chunks.size(); first = io::cell_end(table.chunks, first)) {
+    const io::ChunkDesc& c = table.chunks[first];
+    ++cells;
+    far_tiers += tiers_needed(far, c.bounds, c.layer, 0);
+    near_tiers += tiers_needed(near, c.bounds, c.layer, 0);
+    EXPECT_EQ(tiers_needed(away, c.bounds, c.layer, 0), 0u);
+    EXPECT_EQ(tiers_needed({}, c.bounds, c.layer, 0), io::kLodTiers);  // no views: everything
+    EXPECT_EQ(tiers_needed(demand_of(kFarEye, kCentre, 0.3f, false), c.bounds, c.layer, 0), io::kLodTiers);  // LOD off
+    EXPECT_GE(tiers_needed(far, c.bounds, c.layer, 0), 1u);  // the far view sees the whole block
+  }
+  EXPECT_LT(far_tiers, near_tiers);
+  EXPECT_LE(far_tiers, 6 * cells) << "a far view at level 0.3 keeps at most 30% of any cell";
+}
+
+// The renderer's rule (cull_particles.comp; render/lod.h), particle by
+// particle in float as the shader computes it: every particle some view
+// keeps lies in a tier its cell's demand reads.
+TEST_F(DemandTest, EveryParticleTheRuleKeepsIsInADemandedTier) {
+  const io::ContainerReader reader(path_);
+  const io::DecodedFrame frame = io::decode_frame(reader, 2);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> u(0, 1);
+  uint64_t checked = 0, kept = 0;
+  for (int trial = 0; trial < 24; ++trial) {
+    const std::array<float, 3> eye{-1.0f + 3.0f * u(rng), -1.5f + 3.0f * u(rng), 0.05f + 1.5f * u(rng)};
+    const std::array<float, 3> target{u(rng), 0.6f * u(rng), 0.3f * u(rng)};
+    const float level = 0.05f + 0.9f * u(rng);
+    const ViewDemand d = demand_of(eye, target, level);
+    const Mat& v = d.views[0].view;
+    const Mat& p = d.views[0].projection;
+    const float threshold = -std::log(level);
+    for (size_t c = 0; c < frame.header.chunks.size(); ++c) {
+      const io::ChunkDesc& chunk = frame.header.chunks[c];
+      // This record's cell: the first record at or before it that starts one.
+      size_t first = c;
+      while (frame.header.chunks[first].continues_cell) --first;
+      const uint32_t tiers = tiers_needed(d, frame.header.chunks[first].bounds, chunk.layer, 0);
+      for (uint64_t i = frame.chunk_first[c]; i < frame.chunk_first[c] + chunk.particle_count; ++i) {
+        uint16_t q[4];
+        std::memcpy(q, frame.particles.data() + i * 8, 8);
+        float w_pos[3];
+        for (int a = 0; a < 3; ++a) w_pos[a] = io::dequantize(q[a], chunk.bounds.min[size_t(a)], chunk.bounds.max[size_t(a)]);
+        float e[3];
+        Mat vv = v;
+        for (int r = 0; r < 3; ++r) e[r] = at(vv, r, 0) * w_pos[0] + at(vv, r, 1) * w_pos[1] + at(vv, r, 2) * w_pos[2] + at(vv, r, 3);
+        if (-e[2] <= 0.02f) continue;  // behind or at the near plane: not drawn
+        Mat pp = p;
+        const float nx = at(pp, 0, 0) * e[0] / -e[2] - at(pp, 0, 2), ny = at(pp, 1, 1) * e[1] / -e[2] - at(pp, 1, 2);
+        if (std::abs(nx) > 1 || std::abs(ny) > 1) continue;  // outside the frustum
+        const float centre = std::max(1.0f - 0.7f * std::min(std::sqrt(nx * nx + ny * ny) * 0.70710678f, 1.0f), 0.3f);
+        const float w = centre / (std::sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]) * (1.0f / d.reference_distance));
+        const float uu = (float(q[3]) + 0.5f) * (1.0f / 65536.0f);
+        ++checked;
+        if (!(w * -std::log(1.0f - uu) >= threshold)) continue;
+        ++kept;
+        ASSERT_LT(chunk.tier, tiers) << "trial " << trial << ": a kept particle (value " << q[3] << ", w " << w
+                                      << ", level " << level << ") in tier " << int(chunk.tier) << " of a cell read to "
+                                      << tiers;
+      }
+    }
+  }
+  EXPECT_GT(kept, 10000u);
+  EXPECT_GT(checked, kept);
+}
+
+struct Streamed {
+  std::vector<io::FrameHeader> headers;
+  PipelineStats stats;
+};
+
+Streamed stream(const io::ContainerReader& reader, const ViewDemand& demand, bool encoded) {
+  HostFrameAllocator allocator;
+  PipelineOptions po;
+  po.decode_threads = 2;
+  po.read_threads = 2;
+  po.demand = demand;
+  po.keep_encoded = encoded;
+  Pipeline pipeline(reader, allocator, po);
+  pipeline.restart({reader.frame_count(), 0, 1, 1, EndMode::Stop});
+  Streamed out;
+  while (true) {
+    const NextEntry next = pipeline.wait_next();
+    if (next.end) break;
+    FrameHandle h = pipeline.take();
+    EXPECT_FALSE(h.failed()) << (h.failed() ? h.error()->text() : "");
+    if (h.failed()) break;
+    out.headers.push_back(h.header());
+    if (!encoded) {
+      // The decoded particles are those of the records kept, in their order.
+      const io::DecodedFrame whole = io::decode_frame(reader, h.frame());
+      for (size_t c = 0; c < h.header().chunks.size(); ++c) {
+        const io::ChunkDesc& chunk = h.header().chunks[c];
+        const uint64_t from = whole.chunk_first[chunk.index];
+        EXPECT_EQ(0, std::memcmp(h.buffers().particles.data() + h.chunk_first()[c] * 8,
+                                 whole.particles.data() + from * 8, size_t(chunk.particle_count) * 8));
+      }
+    }
+  }
+  out.stats = pipeline.stats();
+  return out;
+}
+
+TEST_F(DemandTest, ThePipelineReadsOnlyTheDemandedTiers) {
+  const io::ContainerReader reader(path_);
+  const ViewDemand far = demand_of(kFarEye, kCentre, 0.2f);
+  for (const bool encoded : {false, true}) {
+    SCOPED_TRACE(encoded ? "kept encoded" : "decoded on the CPU");
+    const Streamed s = stream(reader, far, encoded);
+    ASSERT_EQ(s.headers.size(), reader.frame_count());
+    for (uint64_t f = 0; f < reader.frame_count(); ++f) {
+      io::FrameHeader expected = reader.read_table(f);
+      apply_demand(far, expected);
+      ASSERT_EQ(s.headers[f].chunks.size(), expected.chunks.size()) << "frame " << f;
+      for (size_t c = 0; c < expected.chunks.size(); ++c) EXPECT_EQ(s.headers[f].chunks[c].index, expected.chunks[c].index);
+      EXPECT_EQ(s.headers[f].particle_count, expected.particle_count);
+    }
+    EXPECT_EQ(s.stats.frames_by_demand, reader.frame_count());
+    EXPECT_LT(double(s.stats.bytes_read), 0.5 * double(s.stats.record_bytes)) << "a far view at 0.2 reads little";
+    // Every tier, no views: the whole records.
+    const Streamed all = stream(reader, {}, encoded);
+    EXPECT_EQ(all.stats.frames_by_demand, 0u);
+    EXPECT_GE(all.stats.bytes_read, all.stats.record_bytes);
+  }
+}
+
+TEST_F(DemandTest, APausedPlayerReadsWhatTheLargerDemandLacks) {
+  const io::ContainerReader reader(path_);
+  HostFrameAllocator allocator;
+  VirtualClock clock;
+  PlayerOptions po;
+  po.start_frame = 3;
+  po.pipeline.decode_threads = 2;
+  po.pipeline.demand = demand_of(kFarEye, kCentre, 0.1f);
+  Player player(reader, allocator, clock, po);
+  const auto shown_after = [&](auto done) {
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+    while (std::chrono::steady_clock::now() < deadline) {
+      player.wait_for_due();
+      player.update();
+      if (done()) return true;
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+    return false;
+  };
+  ASSERT_TRUE(shown_after([&] { return player.shown() != nullptr; }));
+  const size_t far_records = player.shown()->header().chunks.size();
+  const ViewDemand closer = demand_of(kFarEye, kCentre, 0.9f);
+  EXPECT_TRUE(player.pipeline().short_of(*player.shown(), closer));
+  player.set_demand(closer);
+  ASSERT_TRUE(shown_after([&] { return !player.pipeline().short_of(*player.shown(), closer); }));
+  EXPECT_EQ(player.shown()->frame(), 3u);
+  EXPECT_EQ(player.stats().refinements, 1u);
+  io::FrameHeader expected = reader.read_table(3);
+  apply_demand(closer, expected);
+  EXPECT_EQ(player.shown()->header().chunks.size(), expected.chunks.size());
+  EXPECT_GT(expected.chunks.size(), far_records);
+  // Nothing more to read: no second refinement.
+  for (int i = 0; i < 20; ++i) player.update();
+  EXPECT_EQ(player.stats().refinements, 1u);
+}
+
+TEST_F(DemandTest, ABadRecordIsNamedAsTheFileNumbersIt) {
+  const io::ContainerReader clean(path_);
+  const ViewDemand far = demand_of(kFarEye, kCentre, 0.05f);
+  // The last cell's first record: read by the far view, after records the view leaves out.
+  io::FrameHeader table = clean.read_table(1);
+  size_t last = table.chunks.size() - 1;
+  while (table.chunks[last].continues_cell) --last;
+  io::FrameHeader kept = table;
+  apply_demand(far, kept);
+  ASSERT_LT(kept.chunks.size(), table.chunks.size());
+  ASSERT_GT(tiers_needed(far, table.chunks[last].bounds, table.chunks[last].layer, 0), 0u);
+  const fs::path bad = *dir_ / "bad.sluice";
+  fs::copy_file(path_, bad, fs::copy_options::overwrite_existing);
+  {
+    std::fstream f(bad, std::ios::in | std::ios::out | std::ios::binary);
+    f.seekp(std::streamoff(clean.index().frames[1].offset + table.chunks[last].offset + 5));
+    const char flip = 0x5a;
+    f.write(&flip, 1);
+  }
+  const io::ContainerReader reader(bad);
+  for (const bool encoded : {false, true}) {
+    HostFrameAllocator allocator;
+    PipelineOptions po;
+    po.decode_threads = 2;
+    po.demand = far;
+    po.keep_encoded = encoded;
+    Pipeline pipeline(reader, allocator, po);
+    pipeline.restart({reader.frame_count(), 0, 1, 1, EndMode::Stop});
+    bool failed = false;
+    while (true) {
+      if (pipeline.wait_next().end) break;
+      FrameHandle h = pipeline.take();
+      if (!h.failed()) continue;
+      failed = true;
+      EXPECT_EQ(h.frame(), 1u);
+      EXPECT_EQ(h.error()->where.frame, 1u);
+      EXPECT_EQ(h.error()->where.chunk, uint64_t(last)) << h.error()->text();
+      EXPECT_NE(h.error()->text().find("bad.sluice"), std::string::npos) << h.error()->text();
+    }
+    EXPECT_TRUE(failed);
+  }
+}
+
+// Demands set from another thread while the consumer seeks and takes
+// frames: every frame holds, of each cell, a prefix of its tiers, and
+// nothing fails (TSan checks the hand-off).
+TEST_F(DemandTest, DemandsRaceWithSeeksAndDelivery) {
+  const io::ContainerReader reader(path_);
+  std::vector<io::FrameHeader> tables;
+  for (uint64_t f = 0; f < reader.frame_count(); ++f) tables.push_back(reader.read_table(f));
+  const std::vector<ViewDemand> demands{{}, demand_of(kFarEye, kCentre, 0.1f), demand_of(kNearEye, kCentre, 0.5f),
+                                        demand_of({0.5f, -2.5f, 1.2f}, {0.5f, -5.0f, 1.2f}, 0.3f)};
+  for (const bool encoded : {false, true}) {
+    HostFrameAllocator allocator;
+    PipelineOptions po;
+    po.decode_threads = 2;
+    po.read_threads = 2;
+    po.keep_encoded = encoded;
+    Pipeline pipeline(reader, allocator, po);
+    std::atomic<bool> stop{false};
+    std::thread setter([&] {
+      for (uint32_t i = 0; !stop.load(); ++i) {
+        pipeline.set_demand(demands[i % demands.size()]);
+        std::this_thread::yield();
+      }
+    });
+    std::mt19937 rng(3);
+    uint64_t taken = 0;
+    for (int round = 0; round < 30; ++round) {
+      pipeline.restart({reader.frame_count(), int64_t(rng() % reader.frame_count()), 1, 1, EndMode::Loop});
+      for (int k = 0; k < 3; ++k) {
+        const NextEntry next = pipeline.wait_next();
+        ASSERT_FALSE(next.end);
+        FrameHandle h = pipeline.take();
+        ASSERT_FALSE(h.failed()) << h.error()->text();
+        ++taken;
+        const io::FrameHeader& got = h.header();
+        const io::FrameHeader& all = tables[h.frame()];
+        uint64_t particles = 0;
+        for (size_t c = 0; c < got.chunks.size(); ++c) {
+          const io::ChunkDesc& chunk = got.chunks[c];
+          particles += chunk.particle_count;
+          // The record before it in the file, if of the same cell, was read too.
+          if (chunk.continues_cell) {
+            ASSERT_GT(c, 0u);
+            EXPECT_EQ(got.chunks[c - 1].index + 1, chunk.index) << "a cell's tiers are read as a prefix";
+          }
+          EXPECT_EQ(all.chunks[chunk.index].checksum, chunk.checksum);
+        }
+        EXPECT_EQ(particles, got.particle_count);
+      }
+    }
+    stop = true;
+    setter.join();
+    EXPECT_EQ(taken, 90u);
+    EXPECT_EQ(pipeline.stats().frames_failed, 0u);
+  }
+}
+
+}  // namespace
+}  // namespace sluice::runtime
