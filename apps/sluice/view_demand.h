@@ -15,8 +15,8 @@ bool reads_by_view(const std::string& layers, const render::LodOptions& lod);
 
 // The demand of `views` (render::view_demand), or every tier when frames
 // are not read by the view. `moving`: the camera may move before frames
-// read now are drawn (a window, a headset): boxes grow by a tenth of the
-// scene's diagonal; a fixed camera needs no margin. Set it as the
+// read now are drawn (a window, a headset): boxes grow by a twentieth of
+// the scene's diagonal (render::view_margin); a fixed camera needs none. Set it as the
 // pipeline's first demand (PlayerOptions) and, as the views change,
 // through Player::set_demand.
 runtime::ViewDemand app_demand(std::span<const render::View> views, const render::SceneInfo& scene,

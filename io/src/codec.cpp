@@ -339,6 +339,10 @@ struct Cell {
 // depends on its data only (--smallest and --gpu-decodable files of the
 // same frames hold the same records).
 constexpr double kMostTierCost = 0.08;
+// Blobs sit on the voxel grid, lattice-like: tiers cost them 10-15%, but
+// they are a third of what a player reads (the sloshing pool), so they are
+// tiered unless that doubles them.
+constexpr double kMostBlobTierCost = 1.0;
 
 bool default_coding(const EncodeOptions& o) { return o.pack_planes && o.zstd_planes && o.compress; }
 
@@ -377,7 +381,8 @@ std::vector<EncodedChunk> keep_tiers_that_pay(std::vector<EncodedChunk> records,
     const std::span<const uint32_t> members =
         std::span(cell.group->order).subspan(cell.range.begin, cell.range.end - cell.range.begin);
     whole[k] = encode_chunk(*cell.group->in, members, cell.box, header.position_coding, reference);
-    chosen[k] = double(tiered[split[k]]) > double(whole[k].payload.size() + desc) * (1.0 + kMostTierCost);
+    const double most = cell.group->layer == Layer::Blobs ? kMostBlobTierCost : kMostTierCost;
+    chosen[k] = double(tiered[split[k]]) > double(whole[k].payload.size() + desc) * (1.0 + most);
     if (chosen[k] && !same) whole[k] = encode_chunk(*cell.group->in, members, cell.box, header.position_coding, options);
     whole[k].desc.layer = cell.group->layer;
   });

@@ -25,7 +25,7 @@ runtime::ViewDemand view_demand(std::span<const View> views, const SceneInfo& sc
 }
 
 float view_margin(float diagonal, float speed, float seconds) {
-  return std::max(0.1f * diagonal, std::max(speed, 0.0f) * std::max(seconds, 0.0f));
+  return std::max(0.05f * diagonal, std::max(speed, 0.0f) * std::max(seconds, 0.0f));
 }
 
 }  // namespace sluice::render

@@ -149,7 +149,7 @@ void apply_demand(const ViewDemand& demand, io::FrameHeader& frame, std::vector<
     CellRead cell;
     cell.box = chunks[first].bounds;
     cell.layer = chunks[first].layer;
-    for (size_t c = first; c < end; ++c) cell.tiers_in_file |= uint8_t(1u << chunks[c].tier);
+    for (size_t c = first; c < end; ++c) cell.tiers_in_file |= uint16_t(1u << chunks[c].tier);
     cell.tiers_read = static_cast<uint8_t>(tiers_needed(demand, cell.box, cell.layer, frame.blob_voxel));
     out.push_back(cell);
     first = end;

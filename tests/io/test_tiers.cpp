@@ -186,8 +186,9 @@ TEST(Tiers, TiersForKeepHoldEveryValueCLodCanKeep) {
   }
   // At importance 1 the levels 0.1-0.5 fall on boundaries: exactly the tiers that hold them.
   EXPECT_EQ(io::tiers_for_keep(0.1), 4u);
-  EXPECT_EQ(io::tiers_for_keep(0.3), 6u);
-  EXPECT_EQ(io::tiers_for_keep(0.5), 7u);
+  EXPECT_EQ(io::tiers_for_keep(0.2), 6u);
+  EXPECT_EQ(io::tiers_for_keep(0.3), 8u);
+  EXPECT_EQ(io::tiers_for_keep(0.5), 10u);
   EXPECT_EQ(io::tiers_for_keep(0.01), 1u);
   EXPECT_EQ(io::tiers_for_keep(1.0), io::kLodTiers);
 }
@@ -280,7 +281,7 @@ TEST(Tiers, TablesThatBreakTheTierRulesAreRejected) {
       EXPECT_NE(std::string(error.what()).find("f.sluice"), std::string::npos) << error.what();
     }
   };
-  reject(0, 18, 8, "tier 8");
+  reject(0, 18, uint8_t(io::kLodTiers), "a tier past the last");
   reject(0, 19, 1, "the first record continuing a cell");
   reject(1, 19, 2, "unknown cell flags");
   ASSERT_TRUE(e.header.chunks[1].continues_cell);

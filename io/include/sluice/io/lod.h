@@ -27,12 +27,15 @@ std::vector<uint16_t> lod_values(std::span<const uint64_t> ids, uint64_t count);
 // kLodTiers records, tier 0 holding the largest values, so that the
 // particles kept at any level are a prefix of tiers: one contiguous byte
 // range. Tier t holds the values v with kTierFloor[t] <= v < kTierFloor[t-1]
-// (65536 for t = 0): the top 1/64, 1/32, 1/16, 0.1, 0.2, 0.3, 0.5 and 1 of
-// the values, cumulatively (and 40 values more, the reader's rounding margin),
-// so that the levels 0.1-0.5 of a particle of importance 1 fall on tier
-// boundaries and far views (small importance) read a few percent.
-inline constexpr uint32_t kLodTiers = 8;
-inline constexpr uint32_t kTierFloor[kLodTiers] = {64472, 63448, 61400, 58942, 52389, 45835, 32728, 0};
+// (65536 for t = 0): the top 1/64, 1/32, 1/16, 0.1, 0.15, 0.2, 0.25, 0.3,
+// 0.4, 0.5, 0.7 and 1 of the values, cumulatively (and 40 values more, the
+// reader's rounding margin), so that the levels 0.1-0.5 of a particle of
+// importance 1 fall on tier boundaries, a view never reads more than 1.5
+// times what it keeps above 1/64, and far views (small importance) read a
+// few percent (docs/format.md, "LOD tiers", measured).
+inline constexpr uint32_t kLodTiers = 12;
+inline constexpr uint32_t kTierFloor[kLodTiers] = {64472, 63448, 61400, 58942, 55666, 52389,
+                                                   49112, 45835, 39282, 32728, 19621, 0};
 
 // The tier a value belongs to, 0 .. kLodTiers - 1.
 inline uint32_t lod_tier(uint16_t value) {

@@ -68,7 +68,7 @@ void apply_demand(const ViewDemand& demand, io::FrameHeader& frame);
 struct CellRead {
   io::Aabb box;
   io::Layer layer = io::Layer::All;
-  uint8_t tiers_in_file = 0;  // bit t: the file has a record of tier t for this cell
+  uint16_t tiers_in_file = 0;  // bit t: the file has a record of tier t for this cell
   uint8_t tiers_read = 0;     // the demand's tier count when read (tiers below it are present)
 };
 // Records `frame`'s cells (before the demand drops any) with the tiers the
