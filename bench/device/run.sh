@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Runs on the GPU machine (see bench/device/README.md): every benchmark the
 # issues ask GPU-machine figures for, in one call. Results go to $OUT.
-#   bash bench/device/run.sh [io] [import] [layers] [band] [render] [stream] [split] [codec] [huge] [embed] [compare] [live] [stereo] [xrsize] [firsthour] [streamcmp] [gpudecode] [gpuquick] [gpupair] [gpuab] [gpu100] [egl] [vtkpeer] [readpath] [importprobe] [relayprobe] [storeab] [gpusplit] [gpuplay] [gpuflight] [gpu100ab] [damf2] [gpusweep] [gpuvar] [relay] [relaytests] [relay100] [gpuplayall] [view] [tiersize]   (default: io render stream)
+#   bash bench/device/run.sh [io] [import] [layers] [band] [render] [stream] [split] [codec] [huge] [embed] [compare] [live] [stereo] [xrsize] [firsthour] [streamcmp] [gpudecode] [gpuquick] [gpupair] [gpuab] [gpu100] [egl] [vtkpeer] [readpath] [importprobe] [relayprobe] [storeab] [gpusplit] [gpuplay] [gpuflight] [gpu100ab] [damf2] [gpusweep] [gpuvar] [relay] [relaytests] [relay100] [gpuplayall] [view] [tiersize] [tiergpu]   (default: io render stream)
 set -uo pipefail
 OUT=${OUT:-/tmp/out}
 mkdir -p "$OUT" /tmp/s
@@ -405,6 +405,15 @@ for stage in $stages; do
         run $S bench stream /tmp/t10m.sluice --no-storage --memory 16G --min-time 2
       done
       rm -f /tmp/t10m.sluice /tmp/f10m.sluice /tmp/t10mz.sluice /tmp/f10mz.sluice
+      ;;
+    tiergpu)  # tiers against one record per chunk, reading everything through the GPU path, alternated
+      run $S synth -n 10M --frames 48 -o /tmp/t10m.sluice --force -q --gpu-decodable
+      run $S synth -n 10M --frames 48 -o /tmp/f10m.sluice --force -q --gpu-decodable --no-tiers
+      for i in 1 2; do
+        run $S bench stream --gpu /tmp/f10m.sluice --no-storage --memory 16G --min-time 1
+        run $S bench stream --gpu /tmp/t10m.sluice --no-storage --memory 16G --min-time 1
+      done
+      rm -f /tmp/t10m.sluice /tmp/f10m.sluice
       ;;
     codec)  # after stream: the same sequence with zstd on every plane (--smallest)
       run $S synth -n 10M --frames ${SYNTH_FRAMES:-120} -o /tmp/synth10m_zstd.sluice --force --smallest -q
