@@ -111,9 +111,9 @@ void run_play_gpu(const PlayOptions& o, const WindowPlayOptions& w) {
     }
     const double elapsed = std::chrono::duration<double>(now - start).count();
     if (o.stats && elapsed >= next_stats) {
-      std::fprintf(stderr, "%7.1f s  frame %llu  new frames %llu  render %.2f ms  upload %.2f ms  decode %.2f ms (GPU)\n",
+      std::fprintf(stderr, "%7.1f s  frame %llu  new frames %llu  render %.2f ms  upload %.2f ms  decode %.2f ms (GPU); %s\n",
                    elapsed, (unsigned long long)fed.frame, (unsigned long long)new_frames, stats.gpu_ms, stats.upload_ms,
-                   stats.decode_ms);
+                   stats.decode_ms, reads_text(player.stats().pipeline).c_str());
       next_stats += o.stats_every;
     }
     const runtime::PlayerState state = player.state();
@@ -136,6 +136,7 @@ void run_play_gpu(const PlayOptions& o, const WindowPlayOptions& w) {
               o.file.c_str(), (unsigned long long)new_frames, human_duration(elapsed).c_str(),
               fixed(double(new_frames) / elapsed, 1).c_str(), (unsigned long long)ticks, (unsigned long long)s.stalls,
               (unsigned long long)s.drops, (unsigned long long)s.errors, (unsigned long long)s.pipeline.cache_hits);
+  std::printf("  %s\n", reads_text(s.pipeline).c_str());
   if (po.pipeline.keep_encoded) {
     std::printf("  frames relayed to device memory as read (the window in device memory): %llu of %llu read\n",
                 (unsigned long long)s.pipeline.frames_relayed, (unsigned long long)s.pipeline.frames_read);

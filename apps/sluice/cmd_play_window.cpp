@@ -233,6 +233,7 @@ void draw_hud(Player& p, const std::string& file) {
     const runtime::PlaybackStats& st = p.stream;
     ImGui::Text("stream: read %s/s, decode %s/s, %zu workers (%s)", human_bytes(p.rates.read_mbps * 1e6).c_str(),
                 human_bytes(p.rates.decode_mbps * 1e6).c_str(), p.rates.worker_decode_mbps.size(), p.io_mode.c_str());
+    ImGui::TextUnformatted(reads_text(st.pipeline).c_str());
     ImGui::Text("window %u/%u frames, %u ready, %s held", st.pipeline.active_frames, st.pipeline.window_frames,
                 st.pipeline.frames_ready, human_bytes(double(st.pipeline.held_bytes)).c_str());
     ImGui::Text("stalls %llu  drops %llu  errors %llu   upload %.2f ms GPU, %.2f ms wall", (unsigned long long)st.stalls,

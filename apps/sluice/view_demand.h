@@ -7,6 +7,7 @@
 #include <string>
 
 #include "sluice/render/demand.h"
+#include "sluice/runtime/stats.h"
 
 namespace sluice::app {
 
@@ -19,6 +20,11 @@ bool reads_by_view(const std::string& layers, const render::LodOptions& lod);
 // the scene's diagonal (render::view_margin); a fixed camera needs none. Set it as the
 // pipeline's first demand (PlayerOptions) and, as the views change,
 // through Player::set_demand.
+// For the HUD and summaries: "read 23.8 MB a frame, 3.2% of the records;
+// 120 of 120 frames by the view" (bytes read per frame read and their
+// share of those frames' whole records).
+std::string reads_text(const runtime::PipelineStats& stats);
+
 runtime::ViewDemand app_demand(std::span<const render::View> views, const render::SceneInfo& scene,
                                const render::FluidOptions& fluid, const render::LodOptions& lod, bool by_view,
                                bool moving);
