@@ -63,7 +63,7 @@ void run_play_gpu(const PlayOptions& o, const WindowPlayOptions& w) {
   render::FrameFeed::configure(po, staging, color, reader.header(), decode_site(o.decode));
   // The camera stays where it is: frames hold what it draws, with no margin.
   const render::View view = render::camera_view(camera, {0, 0, width, height});
-  po.pipeline.demand = app_demand({&view, 1}, scene, fluid, lod, reads_by_view(o.layers, lod), false);
+  po.pipeline.demand = app_demand({&view, 1}, scene, fluid, lod, reads_by_view(o.layers, lod, reader), false);
   const runtime::SteadyClock clock;
   runtime::Player player(reader, staging, clock, po);
   render::FrameFeed feed(renderer, player, &staging, color);

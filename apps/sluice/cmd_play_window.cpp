@@ -344,7 +344,7 @@ void run_play_window(const PlayOptions& o, const WindowPlayOptions& wo) {
     return render::camera_view(p.camera, {0, 0, std::max(window.width(), 1u), std::max(window.height(), 1u)});
   };
   const render::View first_view = window_view();
-  po.pipeline.demand = app_demand({&first_view, 1}, scene, p.fluid, p.lod, reads_by_view(o.layers, p.lod), true);
+  po.pipeline.demand = app_demand({&first_view, 1}, scene, p.fluid, p.lod, reads_by_view(o.layers, p.lod, reader), true);
   const runtime::SteadyClock clock;
   runtime::Player playback(reader, staging, clock, po);
   p.playback = &playback;
@@ -379,7 +379,7 @@ void run_play_window(const PlayOptions& o, const WindowPlayOptions& wo) {
     }
 
     const render::View view = window_view();
-    playback.set_demand(app_demand({&view, 1}, scene, p.fluid, p.lod, reads_by_view(o.layers, p.lod), true));
+    playback.set_demand(app_demand({&view, 1}, scene, p.fluid, p.lod, reads_by_view(o.layers, p.lod, reader), true));
     const render::FeedUpdate fed = feed.update();
     if (fed.changed) {
       p.upload_wall_ms = fed.commit_wall_ms;

@@ -106,7 +106,7 @@ void run_render(const RenderCommand& o, const ViewSettings& v) {
   // One fixed camera: frames hold the tiers it draws (the same pixels as a
   // full read), nothing more.
   const render::View view = render::camera_view(camera, {0, 0, width, height});
-  po.pipeline.demand = app_demand({&view, 1}, scene, fluid, lod, reads_by_view(o.layers, lod), false);
+  po.pipeline.demand = app_demand({&view, 1}, scene, fluid, lod, reads_by_view(o.layers, lod, reader), false);
   const runtime::SteadyClock clock;
   runtime::Player player(reader, staging, clock, po);
   render::FrameFeed feed(renderer, player, &staging, color);

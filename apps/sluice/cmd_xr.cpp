@@ -147,7 +147,7 @@ void run_xr(const XrOptions& o) {
       }
       // Both eyes' demand, with a margin for head motion until the frames
       // read now are shown.
-      player.set_demand(app_demand(views, scene, fluid, lod, reads_by_view(p.layers, lod), true));
+      player.set_demand(app_demand(views, scene, fluid, lod, reads_by_view(p.layers, lod, reader), true));
       if (frame.stereo) {
         sync = renderer.record(frame.command_buffer, frame.stereo_target, views, fluid, lod);  // both eyes, one pass
       } else {

@@ -14,8 +14,9 @@ std::string reads_text(const runtime::PipelineStats& s) {
   return text;
 }
 
-bool reads_by_view(const std::string& layers, const render::LodOptions& lod) {
-  return layers != "all" && lod.mode != render::LodMode::Off;
+bool reads_by_view(const std::string& layers, const render::LodOptions& lod, const io::ContainerReader& reader) {
+  const bool layered = reader.frame_count() > 0 && reader.index().frames[0].layered();
+  return layers != "all" && lod.mode != render::LodMode::Off && layered;
 }
 
 runtime::ViewDemand app_demand(std::span<const render::View> views, const render::SceneInfo& scene,

@@ -6,13 +6,17 @@
 #include <span>
 #include <string>
 
+#include "sluice/io/reader.h"
 #include "sluice/render/demand.h"
 #include "sluice/runtime/stats.h"
 
 namespace sluice::app {
 
-// Whether frames are read by the view: not with --layers all or --lod off.
-bool reads_by_view(const std::string& layers, const render::LodOptions& lod);
+// Whether frames are read by the view: not with --layers all or --lod off,
+// and not for a file without layers drawn as its narrow band (the GPU
+// classifies each frame whole: a frame thinned by the view would give
+// another narrow band).
+bool reads_by_view(const std::string& layers, const render::LodOptions& lod, const io::ContainerReader& reader);
 
 // The demand of `views` (render::view_demand), or every tier when frames
 // are not read by the view. `moving`: the camera may move before frames
