@@ -262,15 +262,18 @@ void stage_frame(std::span<const std::byte> record, const FrameHeader& header, c
 
 void write_tables(const GpuDecodePlan& plan, std::span<std::byte> staged) {
   if (staged.size() < plan.staged_bytes()) throw std::invalid_argument("write_tables: the staged area is too small");
-  std::memcpy(staged.data() + plan.plans_offset(), plan.chunks.data(), plan.chunks.size() * sizeof(GpuChunkPlan));
-  std::memcpy(staged.data() + plan.tiles_offset(), plan.tile_chunk.data(), plan.tile_chunk.size() * 4);
+  // A frame may have no chunk at all (every cell out of view): no copy.
+  if (!plan.chunks.empty()) {
+    std::memcpy(staged.data() + plan.plans_offset(), plan.chunks.data(), plan.chunks.size() * sizeof(GpuChunkPlan));
+  }
+  if (!plan.tile_chunk.empty()) std::memcpy(staged.data() + plan.tiles_offset(), plan.tile_chunk.data(), plan.tile_chunk.size() * 4);
 }
 
 void write_table_block(const GpuDecodePlan& plan, std::span<std::byte> out) {
   const uint64_t plans = plan.chunks.size() * sizeof(GpuChunkPlan);
   if (out.size() < plans + plan.tile_chunk.size() * 4) throw std::invalid_argument("write_table_block: too small");
-  std::memcpy(out.data(), plan.chunks.data(), plans);
-  std::memcpy(out.data() + plans, plan.tile_chunk.data(), plan.tile_chunk.size() * 4);
+  if (plans > 0) std::memcpy(out.data(), plan.chunks.data(), plans);
+  if (!plan.tile_chunk.empty()) std::memcpy(out.data() + plans, plan.tile_chunk.data(), plan.tile_chunk.size() * 4);
 }
 
 namespace {
