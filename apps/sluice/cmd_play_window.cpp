@@ -353,6 +353,7 @@ void run_play_window(const PlayOptions& o, const WindowPlayOptions& wo) {
   render::FrameFeed feed(renderer, playback, &staging, color);
 
   auto last = Clock::now(), fps_since = last;
+  CameraSpeed camera_speed;
   runtime::PlaybackStats stats_before = playback.stats();
   int presented = 0, fps_frames = 0;
   uint64_t errors_printed = 0;
@@ -378,8 +379,13 @@ void run_play_window(const PlayOptions& o, const WindowPlayOptions& wo) {
       stats_before = p.stream;
     }
 
+    // The margin covers how far the camera moves while the frames read now
+    // wait in the window (at least a twentieth of the diagonal).
     const render::View view = window_view();
-    playback.set_demand(app_demand({&view, 1}, scene, p.fluid, p.lod, reads_by_view(o.layers, p.lod, reader), true));
+    const float speed = camera_speed.update(view, std::chrono::duration<double>(now.time_since_epoch()).count());
+    const float horizon = float(playback.pipeline().most_ahead()) / float(std::max(playback.frame_rate(), 1.0));
+    playback.set_demand(app_demand({&view, 1}, scene, p.fluid, p.lod, reads_by_view(o.layers, p.lod, reader), true, speed,
+                                   horizon));
     const render::FeedUpdate fed = feed.update();
     if (fed.changed) {
       p.upload_wall_ms = fed.commit_wall_ms;

@@ -113,6 +113,7 @@ void run_xr(const XrOptions& o) {
   if (!p.paused) player.play();
 
   uint64_t drawn = 0, ended = 0, errors_printed = 0;
+  CameraSpeed head_speed;
   bool exit_asked = false;
   double last_display = -1;
   std::vector<double> gpu_ms;
@@ -147,7 +148,9 @@ void run_xr(const XrOptions& o) {
       }
       // Both eyes' demand, with a margin for head motion until the frames
       // read now are shown.
-      player.set_demand(app_demand(views, scene, fluid, lod, reads_by_view(p.layers, lod, reader), true));
+      const float speed = head_speed.update(views[0], frame.display_seconds);
+      const float horizon = float(player.pipeline().most_ahead()) / float(std::max(player.frame_rate(), 1.0));
+      player.set_demand(app_demand(views, scene, fluid, lod, reads_by_view(p.layers, lod, reader), true, speed, horizon));
       if (frame.stereo) {
         sync = renderer.record(frame.command_buffer, frame.stereo_target, views, fluid, lod);  // both eyes, one pass
       } else {

@@ -1,5 +1,7 @@
 #include "view_demand.h"
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 
 namespace sluice::app {
@@ -21,10 +23,24 @@ bool reads_by_view(const std::string& layers, const render::LodOptions& lod, con
 
 runtime::ViewDemand app_demand(std::span<const render::View> views, const render::SceneInfo& scene,
                                const render::FluidOptions& fluid, const render::LodOptions& lod, bool by_view,
-                               bool moving) {
+                               bool moving, float speed, float horizon_seconds) {
   if (!by_view) return {};
-  const float margin = moving ? render::view_margin(scene.bounds.diagonal(), 0, 0) : 0.0f;
+  const float margin = moving ? render::view_margin(scene.bounds.diagonal(), speed, horizon_seconds) : 0.0f;
   return render::view_demand(views, scene, fluid, lod, margin);
+}
+
+float CameraSpeed::update(const render::View& view, double seconds) {
+  const render::Vec4 eye4 = render::inverse(view.view) * render::Vec4{0, 0, 0, 1};
+  const render::Vec3 eye{eye4.x, eye4.y, eye4.z};
+  if (seen_ && seconds > at_) {
+    const float now = render::length(eye - eye_) / float(seconds - at_);
+    // The fastest recent move, decaying by half every 0.25 s.
+    speed_ = std::max(now, speed_ * float(std::exp2(-(seconds - at_) / 0.25)));
+  }
+  seen_ = true;
+  eye_ = eye;
+  at_ = seconds;
+  return speed_;
 }
 
 }  // namespace sluice::app
