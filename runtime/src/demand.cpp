@@ -15,11 +15,11 @@ namespace {
 float at(const std::array<float, 16>& m, int r, int c) { return m[size_t(c) * 4 + size_t(r)]; }
 
 // Row r of projection * view.
-std::array<float, 4> vp_row(const DemandView& v, int r) {
-  std::array<float, 4> out{};
+std::array<double, 4> vp_row(const DemandView& v, int r) {
+  std::array<double, 4> out{};
   for (int c = 0; c < 4; ++c) {
-    float sum = 0;
-    for (int k = 0; k < 4; ++k) sum += at(v.projection, r, k) * at(v.view, k, c);
+    double sum = 0;
+    for (int k = 0; k < 4; ++k) sum += double(at(v.projection, r, k)) * at(v.view, k, c);
     out[size_t(c)] = sum;
   }
   return out;
@@ -38,12 +38,14 @@ Box grown(const io::Aabb& b, float by) {
   return out;
 }
 
-// The box (grown by `reach`) lies on the inner side of the left, right,
-// bottom, top and near planes, as the chunk pass tests it (positive vertex).
-bool visible(const DemandView& v, const Box& b) {
-  const std::array<float, 4> r0 = vp_row(v, 0), r1 = vp_row(v, 1), r2 = vp_row(v, 2), r3 = vp_row(v, 3);
+// A view's left, right, bottom, top and near planes (as globals.cpp makes
+// them for the chunk pass), normalised: made once per demand, not per cell.
+using Frustum = std::array<std::array<double, 4>, 5>;
+
+Frustum frustum_of(const DemandView& v) {
+  const std::array<double, 4> r0 = vp_row(v, 0), r1 = vp_row(v, 1), r2 = vp_row(v, 2), r3 = vp_row(v, 3);
   const bool reversed = at(v.projection, 2, 3) > 0;
-  std::array<std::array<float, 4>, 5> planes{};
+  Frustum planes{};
   for (size_t i = 0; i < 4; ++i) {
     planes[0][i] = r3[i] + r0[i];
     planes[1][i] = r3[i] - r0[i];
@@ -51,14 +53,34 @@ bool visible(const DemandView& v, const Box& b) {
     planes[3][i] = r3[i] - r1[i];
     planes[4][i] = reversed ? r3[i] - r2[i] : r2[i];
   }
+  for (auto& p : planes) {
+    const double len = std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
+    for (double& x : p) x = len > 0 ? x / len : 0;
+  }
+  return planes;
+}
+
+// The box lies on the inner side of every plane, as the chunk pass tests it
+// (positive vertex), within a tolerance for the shader's float arithmetic.
+bool visible(const Frustum& planes, const Box& b) {
+  const double tolerance = 1e-5 * (1.0 + std::abs(b.hi[0]) + std::abs(b.hi[1]) + std::abs(b.hi[2]));
   for (const auto& p : planes) {
     double d = p[3];
-    for (int a = 0; a < 3; ++a) d += double(p[size_t(a)]) * (p[size_t(a)] >= 0 ? b.hi[a] : b.lo[a]);
-    // A tolerance for the shader's float arithmetic and plane normalisation.
-    const double len = std::sqrt(double(p[0]) * p[0] + double(p[1]) * p[1] + double(p[2]) * p[2]);
-    if (d < -1e-5 * len * (1.0 + std::abs(b.hi[0]) + std::abs(b.hi[1]) + std::abs(b.hi[2]))) return false;
+    for (int a = 0; a < 3; ++a) d += p[size_t(a)] * (p[size_t(a)] >= 0 ? b.hi[a] : b.lo[a]);
+    if (d < -tolerance) return false;
   }
   return true;
+}
+
+// What the rule needs of a demand beyond its fields: each view's frustum.
+struct Prepared {
+  io::InlineVector<Frustum, 4> frusta;
+};
+
+Prepared prepare(const ViewDemand& demand) {
+  Prepared p;
+  for (size_t i = 0; i < demand.views.size(); ++i) p.frusta.push_back(frustum_of(demand.views[i]));
+  return p;
 }
 
 // The largest importance w any point of the box can have in this view:
@@ -112,15 +134,14 @@ float blob_reach(float voxel, float radius) {
   return 3.0f * sigma;
 }
 
-}  // namespace
-
-uint32_t tiers_needed(const ViewDemand& demand, const io::Aabb& box, io::Layer layer, float blob_voxel) {
+uint32_t tiers_needed(const ViewDemand& demand, const Prepared& prepared, const io::Aabb& box, io::Layer layer,
+                      float blob_voxel) {
   if (demand.everything()) return io::kLodTiers;
   const bool blob = layer == io::Layer::Blobs;
   const float reach = blob ? blob_reach(blob_voxel, demand.particle_radius) : demand.particle_reach;
   const Box seen = grown(box, reach + demand.margin);
   bool any = false;
-  for (size_t i = 0; i < demand.views.size() && !any; ++i) any = visible(demand.views[i], seen);
+  for (size_t i = 0; i < prepared.frusta.size() && !any; ++i) any = visible(prepared.frusta[i], seen);
   if (!any) return 0;
   if (!demand.lod) return io::kLodTiers;
   if (!(demand.level < 1)) return io::kLodTiers;
@@ -135,14 +156,22 @@ uint32_t tiers_needed(const ViewDemand& demand, const io::Aabb& box, io::Layer l
   return std::max<uint32_t>(1, io::tiers_for_keep(keep));
 }
 
+}  // namespace
+
+uint32_t tiers_needed(const ViewDemand& demand, const io::Aabb& box, io::Layer layer, float blob_voxel) {
+  return tiers_needed(demand, prepare(demand), box, layer, blob_voxel);
+}
+
 void apply_demand(const ViewDemand& demand, io::FrameHeader& frame) {
   if (demand.everything()) return;
   const float voxel = frame.blob_voxel;
-  io::keep_tiers(frame, [&](const io::ChunkDesc& c) { return tiers_needed(demand, c.bounds, c.layer, voxel); });
+  const Prepared prepared = prepare(demand);
+  io::keep_tiers(frame, [&](const io::ChunkDesc& c) { return tiers_needed(demand, prepared, c.bounds, c.layer, voxel); });
 }
 
 void apply_demand(const ViewDemand& demand, io::FrameHeader& frame, std::vector<CellRead>& out) {
   out.clear();
+  const Prepared prepared = prepare(demand);
   const std::vector<io::ChunkDesc>& chunks = frame.chunks;
   for (size_t first = 0; first < chunks.size();) {
     const size_t end = io::cell_end(chunks, first);
@@ -150,7 +179,7 @@ void apply_demand(const ViewDemand& demand, io::FrameHeader& frame, std::vector<
     cell.box = chunks[first].bounds;
     cell.layer = chunks[first].layer;
     for (size_t c = first; c < end; ++c) cell.tiers_in_file |= uint16_t(1u << chunks[c].tier);
-    cell.tiers_read = static_cast<uint8_t>(tiers_needed(demand, cell.box, cell.layer, frame.blob_voxel));
+    cell.tiers_read = static_cast<uint8_t>(tiers_needed(demand, prepared, cell.box, cell.layer, frame.blob_voxel));
     out.push_back(cell);
     first = end;
   }
@@ -160,9 +189,10 @@ void apply_demand(const ViewDemand& demand, io::FrameHeader& frame, std::vector<
 }
 
 bool short_of(const ViewDemand& demand, const std::vector<CellRead>& read, float blob_voxel) {
+  const Prepared prepared = prepare(demand);
   for (const CellRead& cell : read) {
     if (cell.tiers_read >= io::kLodTiers) continue;
-    const uint32_t need = tiers_needed(demand, cell.box, cell.layer, blob_voxel);
+    const uint32_t need = tiers_needed(demand, prepared, cell.box, cell.layer, blob_voxel);
     if (need <= cell.tiers_read) continue;
     const uint32_t missing = ((1u << need) - 1u) & ~((1u << cell.tiers_read) - 1u);
     if (cell.tiers_in_file & missing) return true;

@@ -379,8 +379,9 @@ std::optional<FrameError> Pipeline::fatal_error() const {
 }
 
 void Pipeline::set_demand(const ViewDemand& demand) {
+  // No wake: the reader takes it when it next starts a frame, whatever
+  // woke it (players call this every displayed frame).
   core_->demand_.set(demand);
-  core_->wake_reader();  // a cached frame short of it is read again when next due
 }
 
 bool Pipeline::short_of(const FrameHandle& frame, const ViewDemand& demand) const {

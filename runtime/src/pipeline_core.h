@@ -68,6 +68,7 @@ struct PieceRound {
   std::span<const uint32_t> cuts;  // empty: byte pieces
   bool by_chunks() const { return !cuts.empty(); }
   Slot* relayed = nullptr;  // a relayed read (relay.h): the chunks go through the relay into this slot's area, not dst
+  bool check = true;        // a checked read hashes each chunk as read; false: the decode workers check them
   mutable std::atomic<bool> gave_up{false};  // a newer schedule (or stop) came first: the pieces left are skipped
   void operator()(uint64_t p) const;
 };

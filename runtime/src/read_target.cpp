@@ -127,9 +127,9 @@ PipelineCore::ReadTarget PipelineCore::read_table(Slot& slot, const ReadTarget& 
   reader_.parse_table(slot.frame, whole.record.first(table), slot.header, record_where_);
   const uint64_t end = io::layers_end(slot.header, options_.layers, reader_.header().attributes.size());
   const uint64_t wanted = into + end;
-  if (!slot.relayed && !slot.checked_on_read && !reads_by_demand()) source_->will_need(whole.offset + first, wanted - std::min(wanted, first));
   if (slot.relayed) return chunks_to_read(slot, {}, end, table);
-  if (slot.checked_on_read || reads_by_demand()) return chunks_to_read(slot, whole.record.first(end), end, table);
+  if (slot.checked_on_read || slot.by_demand) return chunks_to_read(slot, whole.record.first(end), end, table);
+  source_->will_need(whole.offset + first, wanted - std::min(wanted, first));
   ReadTarget rest;
   rest.offset = whole.offset + first;
   rest.record = whole.record.first(end);

@@ -280,13 +280,16 @@ PipelineCore::Start PipelineCore::start_entry(ReaderState& rs, uint64_t k, uint6
   slot.state.store(SlotState::Reading, kRelaxed);
   ++rs.frames_started;
 
+  // Whether this frame is read by the demand, decided once (set_demand may
+  // change the latest demand while it is read).
+  const bool by_demand = reads_by_demand();
   // Ask the kernel for the next entry's bytes while this one is read: the
   // whole record when it is read whole, else its table (what else it needs
   // is hinted once the table is parsed: read_table), so that storage reads
   // no bytes the frame leaves out.
   if (const auto next = rs.schedule.frame_at(k + 1)) {
     const io::FrameIndexEntry& e = reader_.index().frames[*next];
-    const bool whole = !reads_in_place() && !reads_prefix(e) && !reads_by_demand();
+    const bool whole = !reads_in_place() && !reads_prefix(e) && !by_demand;
     source_->will_need(e.offset, whole ? e.bytes : io::frame_table_bytes(e.chunk_count, reader_.header().attributes.size()));
   }
 
@@ -310,7 +313,8 @@ PipelineCore::Start PipelineCore::start_entry(ReaderState& rs, uint64_t k, uint6
                                 : record_target(rs, slot, record);
     slot.checked_on_read = reads_in_place();
     slot.demand_applied = false;
-    slot.table_parsed = slot.checked_on_read || reads_prefix(reader_.index().frames[frame]) || reads_by_demand();
+    slot.by_demand = by_demand;
+    slot.table_parsed = slot.checked_on_read || reads_prefix(reader_.index().frames[frame]) || by_demand;
     if (slot.table_parsed) target = read_table(slot, target);
   } catch (const io::Error& e) {
     settle_all_pending(rs);  // entries go out in schedule order

@@ -81,6 +81,7 @@ void PipelineCore::begin_chunk_pieces(PieceRound& round, Slot& slot, const ReadT
   round.cuts = slot.piece_cuts;
   round.count = slot.piece_cuts.size() - 1;
   round.relayed = slot.relayed ? &slot : nullptr;
+  round.check = slot.checked_on_read;
   begin_round(round);
 }
 
@@ -114,7 +115,13 @@ void PieceRound::operator()(uint64_t p) const {
   if (by_chunks()) {
     for (uint32_t c = cuts[p]; c < cuts[p + 1]; ++c) {
       const io::ChunkDesc& chunk = chunks[c];
-      core->read_chunk(dst.subspan(chunk.offset, chunk.compressed_size), offset + chunk.offset, frame, c, chunk.checksum);
+      const std::span<std::byte> into = dst.subspan(chunk.offset, chunk.compressed_size);
+      if (check) {
+        core->read_chunk(into, offset + chunk.offset, frame, c, chunk.checksum);
+      } else {  // decode_chunk checks it: hashing it here too would read it twice
+        const uint64_t at = offset + chunk.offset;
+        core->read_piece(into, at, into.size(), frame, at + into.size());
+      }
     }
     return;
   }

@@ -72,6 +72,7 @@ struct Slot {
   io::GpuDecodePlan plan;                        // PipelineOptions::keep_encoded: what the workers stage
   std::vector<CellRead> cells;                   // every cell of the frame and the tiers read of it (demand.h)
   bool demand_applied = false;                   // `header` holds the demanded tiers only, `cells` is filled
+  bool by_demand = false;                        // read chunk by chunk for a demand that leaves tiers out
 
   // Written by the reader (read errors) or the chunk that won error_claimed.
   FrameError error;

@@ -8,8 +8,10 @@
 // the overview during which the LOD level rises to 1 (the picture must
 // converge to the full read's). Each segment is played as fast as frames
 // arrive (every frame due at once, none skipped) through the players' own
-// path (Player -> FrameFeed -> Renderer), from storage with the file dropped
-// from the page cache and from the page cache. Printed per segment and read:
+// path (Player -> FrameFeed -> Renderer; one renderer, warmed up first, for
+// every run), from storage with the file dropped from the page cache and
+// from the page cache; each player reads by its first step's demand from
+// its start, and is timed from its start. Printed per segment and read:
 // frames/s, bytes read per frame and their share of the whole records, and
 // the PSNR of each streamed picture against the full read of the same frame
 // and view (a separate pass, not timed). Tables only: nothing passes or fails.
