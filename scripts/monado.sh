@@ -78,11 +78,8 @@ work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 apt_dir=$work/apt
 mkdir -p "$apt_dir/lists/partial" "$apt_dir/cache/archives/partial"
-cat > "$apt_dir/sources.list" <<LIST
-deb-src http://deb.debian.org/debian trixie main
-deb-src http://deb.debian.org/debian trixie-updates main
-deb-src http://deb.debian.org/debian-security trixie-security main
-LIST
+source "$(dirname "${BASH_SOURCE[0]}")/debian_mirrors.sh"
+debian_source_list trixie > "$apt_dir/sources.list"
 o=(-o "Dir::Etc::SourceList=$apt_dir/sources.list" -o Dir::Etc::SourceParts=/dev/null
    -o "Dir::State::Lists=$apt_dir/lists" -o "Dir::Cache=$apt_dir/cache")
 # (apt warns that it downloads as root, unsandboxed, into a private folder.)

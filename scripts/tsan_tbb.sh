@@ -18,11 +18,8 @@ trap 'rm -rf "$work"' EXIT
 apt_dir=$work/apt
 mkdir -p "$apt_dir/lists/partial" "$apt_dir/cache/archives/partial"
 codename=$(. /etc/os-release && echo "$VERSION_CODENAME")
-cat > "$apt_dir/sources.list" <<LIST
-deb-src http://deb.debian.org/debian $codename main
-deb-src http://deb.debian.org/debian $codename-updates main
-deb-src http://deb.debian.org/debian-security $codename-security main
-LIST
+source "$(dirname "${BASH_SOURCE[0]}")/debian_mirrors.sh"
+debian_source_list "$codename" > "$apt_dir/sources.list"
 o=(-o "Dir::Etc::SourceList=$apt_dir/sources.list" -o Dir::Etc::SourceParts=/dev/null
    -o "Dir::State::Lists=$apt_dir/lists" -o "Dir::Cache=$apt_dir/cache")
 # (apt warns that it downloads as root, unsandboxed, into a private folder.)

@@ -40,10 +40,8 @@ fi
 # Debian 12's sources through a private apt configuration (the system's is not touched).
 src=$prefix/src
 mkdir -p "$src/apt/lists/partial" "$src/apt/cache/archives/partial"
-cat > "$src/apt/sources.list" <<LIST
-deb-src http://deb.debian.org/debian bookworm main
-deb-src http://deb.debian.org/debian-security bookworm-security main
-LIST
+source "$(dirname "${BASH_SOURCE[0]}")/../../scripts/debian_mirrors.sh"
+debian_source_list bookworm > "$src/apt/sources.list"
 o=(-o "Dir::Etc::SourceList=$src/apt/sources.list" -o Dir::Etc::SourceParts=/dev/null
    -o "Dir::State::Lists=$src/apt/lists" -o "Dir::Cache=$src/apt/cache")
 if [[ ! -d "$src/vtk9" || ! -d "$src/glew" ]]; then
