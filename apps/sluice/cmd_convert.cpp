@@ -78,6 +78,16 @@ void add_convert(CLI::App& app) {
   cmd->add_flag("--lossless", o->lossless, "Store float32 positions instead of 16-bit quantized ones");
   cmd->add_option("--spacing", o->spacing, "Particle rest spacing in world units (default: estimated)");
   cmd->add_option("--radius", o->radius, "Render radius in world units (default: spacing / 2)");
+  cmd->add_option("--precision", o->precision,
+                  "Largest position error as a fraction of the spacing, rounded down to a power of two\n"
+                  "(default 1/2048 = 0.00049); stated in the file, kept for every particle whatever lies\n"
+                  "far away (chunks are kept narrow enough)")
+      ->check(CLI::Range(1e-12, 0.5));
+  cmd->add_option("--drop-outliers", o->drop_outliers,
+                  "Leave out particles more than DIST spacings outside the rest of their frame (escaped or\n"
+                  "corrupt ones), listed. Without it they are kept in chunks of their own and warned about")
+      ->type_name("DIST")
+      ->check(CLI::PositiveNumber);
   cmd->add_option("--fps", o->fps,
                   "Playback frames per second (default 30); for an input without times also the time step 1/N");
   cmd->add_option("--dt", o->dt, "Seconds of simulation between frames, for an input without times");

@@ -112,6 +112,8 @@ void print_json(const io::ContainerReader& r) {
   std::printf("  \"particle_spacing\": %s,\n  \"particle_radius\": %s,\n  \"frame_rate\": %s,\n  \"source\": %s,\n",
               json_number(h.particle_spacing).c_str(), json_number(h.particle_radius).c_str(),
               json_number(h.frame_rate).c_str(), json_string(h.source).c_str());
+  std::printf("  \"precision_bits\": %u,\n  \"position_bound\": %s,\n", unsigned(h.precision_bits),
+              std::isfinite(io::position_bound(h)) ? json_number(io::position_bound(h)).c_str() : "null");
   std::printf("  \"up\": \"%s\",\n  \"up_evidence\": \"%s\",\n  \"time_source\": \"%s\",\n",
               io::up_axis_name(h.up).c_str(), io::up_evidence_name(h.up_evidence), io::time_source_name(h.time_source));
   std::printf("  \"bounds\": %s,\n  \"attributes\": [", json_box(r.index().bounds).c_str());
@@ -172,6 +174,7 @@ void print_text(const io::ContainerReader& r, bool all_frames) {
                                          ? ("hash of id array '" + h.lod_id_array + "' (stable across frames)").c_str()
                                          : "hash of particle order (stable only if the source keeps its order)");
   std::printf("  spacing       %g (radius %g)\n", h.particle_spacing, h.particle_radius);
+  std::printf("  precision     %s\n", precision_text(h).c_str());
   std::printf("  up            %s (%s)\n", io::up_axis_name(h.up).c_str(), evidence_text(h.up_evidence));
   std::printf("  bounds        %s\n", text_box(r.index().bounds).c_str());
   for (size_t a = 0; a < h.attributes.size(); ++a) {

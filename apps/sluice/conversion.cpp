@@ -15,6 +15,7 @@
 #include "sluice/io/convert.h"
 #include "sluice/io/freed_memory.h"
 #include "sluice/io/import.h"
+#include "sluice/io/outliers.h"
 #include "sluice/io/spacing.h"
 #include "sluice/io/up_axis.h"
 #include "sluice/io/writer.h"
@@ -108,6 +109,34 @@ io::UpFinding find_up(const ConversionOptions& o, const std::vector<io::FrameSha
   return f;
 }
 
+// precision (relative to the spacing) -> the exponent k of 2^-k at or below it.
+uint8_t precision_bits(double precision) {
+  if (!(precision > 0)) return io::kDefaultPrecisionBits;
+  const int k = int(std::ceil(-std::log2(precision) - 1e-9));
+  return uint8_t(std::clamp(k, 1, 40));
+}
+
+std::string number(double v) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.4g", v);
+  return text;
+}
+
+// One line per frame with far particles (outliers.h), e.g. "frame 12: 5
+// particles lie more than 100 spacings outside the rest (the farthest:
+// particle 812, at (1e+06, 0.2, 0.3)); kept in chunks of their own ...".
+std::string far_warning(const std::string& frame, const io::FarReport& far, float spacing) {
+  const std::string distance =
+      spacing > 0 ? number(far.threshold / spacing) + " spacings" : number(far.threshold) + " (world units)";
+  std::string line = frame + ": " + std::to_string(far.count) + (far.count == 1 ? " particle lies" : " particles lie") +
+                     " more than " + distance + " outside the rest (the farthest: particle " +
+                     std::to_string(far.farthest) + ", at (" + number(far.position[0]) + ", " +
+                     number(far.position[1]) + ", " + number(far.position[2]) + "))";
+  if (far.dropped) return line + "; dropped (--drop-outliers)";
+  return line + "; kept in chunks of their own, left out of the framing" +
+         (spacing > 0 ? "; --drop-outliers " + number(far.threshold / spacing) + " removes them" : "");
+}
+
 }  // namespace
 
 ConversionSummary convert_input(const ConversionOptions& o, const std::string& output) {
@@ -142,6 +171,11 @@ ConversionSummary convert_input(const ConversionOptions& o, const std::string& o
   header.position_coding = o.lossless ? io::PositionCoding::Float32 : io::PositionCoding::Quantized16;
   header.particle_spacing = o.spacing > 0 ? o.spacing : io::estimate_spacing(first->positions);
   header.particle_radius = o.radius > 0 ? o.radius : header.particle_spacing * 0.5f;
+  header.precision_bits = o.lossless ? 0 : precision_bits(o.precision);
+  if (o.drop_outliers > 0 && !(header.particle_spacing > 0)) {
+    throw std::runtime_error("--drop-outliers counts in particle spacings, and the spacing of " + o.input +
+                             " is unknown: pass --spacing too");
+  }
   for (const std::string& a : import.attributes) header.attributes.push_back({a});
   header.lod_id_array = source->info().id_array;
   header.lod_source = header.lod_id_array.empty() ? io::LodSource::ParticleOrder : io::LodSource::IdHash;
@@ -150,9 +184,8 @@ ConversionSummary convert_input(const ConversionOptions& o, const std::string& o
   choose_times(o, *first, header, settings.time_step);
   // Until the frames have shown which way is up, the header says what the
   // first frame's shape says (what a recovered, cut-off file keeps).
-  for (size_t i = 0; i + 2 < first->positions.size(); i += 3) {
-    settings.shape_grid.box.extend(first->positions[i], first->positions[i + 1], first->positions[i + 2]);
-  }
+  // (without far particles: one at 1e6 would make every column one cell)
+  settings.shape_grid.box = io::find_far_particles(first->positions, header.particle_spacing).bulk;
   settings.shape_grid.cell = 2 * header.particle_spacing;
   // Extent only (sampled): the columns of frame 0 are measured in the pipeline.
   const io::FrameShape first_shape = io::measure_shape(first->positions);
@@ -176,6 +209,7 @@ ConversionSummary convert_input(const ConversionOptions& o, const std::string& o
 
   const std::string partial = output + ".partial";
   io::ContainerWriter writer(partial, header);
+  settings.drop_far = o.drop_outliers * header.particle_spacing;
   settings.encode.chunk_particles = o.chunk;
   settings.encode.zstd_level = o.level;
   settings.encode.pack_planes = !o.smallest;
@@ -187,13 +221,19 @@ ConversionSummary convert_input(const ConversionOptions& o, const std::string& o
   settings.max_in_flight = size_t(jobs) + 1;
   ProgressBar bar("frames", frames, o.quiet);
   size_t warnings = 0, suppressed = 0;
-  uint64_t bytes_in = 0, untimed = 0;
+  uint64_t bytes_in = 0, untimed = 0, far_particles = 0, far_frames = 0;
   std::vector<io::FrameShape> first_frames;
   io::FrameShape last_shape;
   settings.skip_bad = o.skip_bad;
   const auto on_frame = [&](const io::ConvertProgress& p) {
     for (const std::string& r : p.repairs) {
       if (warnings++ < o.max_warnings) bar.warn(source->frame_name(p.frame) + ": " + r);
+      else ++suppressed;
+    }
+    if (p.far.count > 0) {
+      far_particles += p.far.count;
+      ++far_frames;
+      if (warnings++ < o.max_warnings) bar.warn(far_warning(source->frame_name(p.frame), p.far, header.particle_spacing));
       else ++suppressed;
     }
     if (p.shape && p.frame < settings.shape_frames) first_frames.push_back(*p.shape);
@@ -219,7 +259,12 @@ ConversionSummary convert_input(const ConversionOptions& o, const std::string& o
   skipped.insert(skipped.end(), result.skipped.begin(), result.skipped.end());
   bar.finish();
   report_skipped(skipped);
-  if (suppressed) std::fprintf(stderr, "warning: %zu more repairs not shown\n", suppressed);
+  if (suppressed) std::fprintf(stderr, "warning: %zu more warnings not shown\n", suppressed);
+  if (far_particles > 0) {
+    note(o, "warning: " + std::to_string(far_particles) + " far particle" + (far_particles == 1 ? "" : "s") + " in " +
+                std::to_string(far_frames) + " frame" + (far_frames == 1 ? "" : "s") +
+                (o.drop_outliers > 0 ? " dropped" : " kept (every other particle keeps its precision)"));
+  }
   if (untimed) {
     note(o, "warning: " + std::to_string(untimed) + " frames state no time while the others do: their time is "
                 "their frame number");
@@ -243,6 +288,8 @@ ConversionSummary convert_input(const ConversionOptions& o, const std::string& o
   s.frames = result.frames;
   s.skipped = std::move(skipped);
   s.particles = result.particles;
+  s.far_particles = far_particles;
+  s.far_frames = far_frames;
   s.input_bytes = result.input_bytes;
   s.seconds = bar.elapsed();
   s.header = header;

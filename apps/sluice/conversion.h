@@ -21,6 +21,12 @@ struct ConversionOptions {
   bool no_ids = false;
   bool lossless = false;
   float spacing = 0, radius = 0;
+  // The largest position error, relative to the spacing, rounded down to a
+  // power of two (io::FileHeader::precision_bits); 0: 1/2048.
+  double precision = 0;
+  // > 0: particles more than this many spacings outside the rest of their
+  // frame are left out (listed); otherwise they are kept, warned about.
+  float drop_outliers = 0;
   double fps = 0;  // playback frames/s; also the time step 1/fps for inputs without times (0: unset)
   double dt = 0;   // seconds between frames for inputs without times (0: unset)
   std::string up;  // "", or x|y|z|-x|-y|-z: overrides detection
@@ -48,6 +54,7 @@ struct ConversionOptions {
 
 struct ConversionSummary {
   uint64_t frames = 0, particles = 0, input_bytes = 0;  // frames written
+  uint64_t far_particles = 0, far_frames = 0;          // far outside the rest (kept or dropped)
   std::vector<io::SkippedFrame> skipped;              // with skip_bad
   double seconds = 0;
   io::FileHeader header;  // as finally written

@@ -3,6 +3,8 @@
 #include <cmath>
 #include <cstdio>
 
+#include "sluice/io/format.h"
+
 namespace sluice::app {
 
 std::string fixed(double v, int decimals) {
@@ -44,5 +46,15 @@ std::string human_duration(double s) {
 namespace sluice::app {
 
 std::string percent(double fraction) { return fixed(100.0 * fraction, 1) + "%"; }
+
+std::string precision_text(const io::FileHeader& h) {
+  const float bound = io::position_bound(h);
+  if (bound == 0) return "exact (float32 positions)";
+  if (!std::isfinite(bound)) return "16 bits per chunk box; no error bound stated (a file older than format 1.5, or no spacing)";
+  char text[200];
+  std::snprintf(text, sizeof text, "every position within %.3g of its source on each axis (1/%.0f of the spacing)",
+                double(bound), std::ldexp(1.0, h.precision_bits));
+  return text;
+}
 
 }  // namespace sluice::app

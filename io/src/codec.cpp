@@ -15,6 +15,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <optional>
 
 #include "bytes.h"
 #include "chunking.h"
@@ -24,6 +25,7 @@
 #include "quantized_unpack.h"
 #include "records.h"
 #include "sluice/io/lod.h"
+#include "sluice/io/outliers.h"
 
 namespace sluice::io {
 
@@ -289,6 +291,34 @@ void check_input(const FrameInput& in, const FileHeader& header) {
 }
 
 
+// A frame without some of its particles (a copy: the far particles are
+// rare, and only frames that have some pay for it).
+struct FrameCopy {
+  std::vector<float> positions;
+  std::vector<uint16_t> lod;
+  std::vector<std::vector<float>> attributes;
+  FrameInput input;
+
+  FrameCopy(const FrameInput& in, std::span<const uint32_t> dropped) {
+    const size_t n = in.positions.size() / 3;
+    std::vector<bool> drop(n);
+    for (uint32_t i : dropped) drop[i] = true;
+    positions.reserve(3 * (n - dropped.size()));
+    lod.reserve(n - dropped.size());
+    attributes.resize(in.attributes.size());
+    for (size_t i = 0; i < n; ++i) {
+      if (drop[i]) continue;
+      positions.insert(positions.end(), &in.positions[3 * i], &in.positions[3 * i] + 3);
+      lod.push_back(in.lod[i]);
+      for (size_t a = 0; a < attributes.size(); ++a) attributes[a].push_back(in.attributes[a][i]);
+    }
+    input.positions = positions;
+    input.lod = lod;
+    for (const auto& a : attributes) input.attributes.emplace_back(a);
+    input.time = in.time;
+  }
+};
+
 // One layer's records: which of `in`'s particles, in which chunks.
 struct Group {
   const FrameInput* in;
@@ -297,20 +327,20 @@ struct Group {
   Layer layer;
 };
 
-Group plan_group(const FrameInput& in, std::span<const uint32_t> members, Layer layer, uint32_t limit) {
+Group plan_group(const FrameInput& in, std::span<const uint32_t> members, Layer layer, uint32_t limit, float extent) {
   std::vector<float> xyz(3 * members.size());
   Aabb box;
   for (size_t k = 0; k < members.size(); ++k) {
     for (int a = 0; a < 3; ++a) xyz[3 * k + a] = in.positions[3 * size_t(members[k]) + a];
     box.extend(xyz[3 * k], xyz[3 * k + 1], xyz[3 * k + 2]);
   }
-  ChunkPlan plan = plan_chunks(xyz, box, limit);
+  ChunkPlan plan = plan_chunks(xyz, box, limit, extent);
   for (uint32_t& i : plan.order) i = members[i];
   return {&in, std::move(plan.order), std::move(plan.chunks), layer};
 }
 
-Group plan_all(const FrameInput& in, const Aabb& bounds, uint32_t limit) {
-  ChunkPlan plan = plan_chunks(in.positions, bounds, limit);
+Group plan_all(const FrameInput& in, const Aabb& bounds, uint32_t limit, float extent) {
+  ChunkPlan plan = plan_chunks(in.positions, bounds, limit, extent);
   return {&in, std::move(plan.order), std::move(plan.chunks), Layer::All};
 }
 
@@ -411,24 +441,43 @@ EncodedFrame encode_frame(const FrameInput& in, const FileHeader& header, const 
   EncodedFrame frame;
   FrameHeader& fh = frame.header;
   fh.time = in.time;
-  for (size_t i = 0; i < n; ++i) fh.bounds.extend(in.positions[3 * i], in.positions[3 * i + 1], in.positions[3 * i + 2]);
+  // Far particles (outliers.h) are chunked, and kept out of the frame's
+  // display bounds and of the narrow band's grid, on their own: among the
+  // rest they would widen a chunk's box, and so its quantization step.
+  const FarParticles far = find_far_particles(in.positions, header.particle_spacing);
+  fh.bounds = far.bulk;
+  frame.far_particles = far.far.size();
+  frame.far_threshold = far.threshold;
+  if (!far.far.empty()) {
+    frame.farthest = far.farthest;
+    for (size_t a = 0; a < 3; ++a) frame.farthest_position[a] = in.positions[3 * size_t(far.farthest) + a];
+  }
+  std::optional<FrameCopy> bulk;
+  if (!far.far.empty()) bulk.emplace(in, far.far);
+  const FrameInput& body = bulk ? bulk->input : in;
+  const size_t body_count = body.positions.size() / 3;
 
   const uint32_t limit = std::clamp<uint32_t>(options.chunk_particles, 1, kMaxChunkParticles);
+  const float extent = chunk_extent_limit(header);
   std::vector<Group> groups;
   LayeredFrame layered;
   FrameInput blobs;
-  if (options.layers && header.particle_spacing > 0 && header.position_coding == PositionCoding::Quantized16 && n > 0) {
-    layered = split_layers(in, header.particle_spacing, options.band_voxel, options.band_f2);
+  if (options.layers && header.particle_spacing > 0 && header.position_coding == PositionCoding::Quantized16 &&
+      body_count > 0) {
+    layered = split_layers(body, header.particle_spacing, options.band_voxel, options.band_f2);
     blobs = layered.blobs.input();
     fh.blob_voxel = layered.blobs.counts.empty() ? 0.f : layered.voxel;
-    // Payload order: surface, blobs, interior (what is read by default first).
-    groups.push_back(plan_group(in, layered.surface, Layer::Surface, limit));
+    // Payload order: surface, far particles (alone: surface too), blobs,
+    // interior (what is read by default first).
+    groups.push_back(plan_group(body, layered.surface, Layer::Surface, limit, extent));
+    if (!far.far.empty()) groups.push_back(plan_group(in, far.far, Layer::Surface, limit, extent));
     std::vector<uint32_t> every_blob(layered.blobs.counts.size());
     for (uint32_t b = 0; b < every_blob.size(); ++b) every_blob[b] = b;
-    groups.push_back(plan_group(blobs, every_blob, Layer::Blobs, limit));
-    groups.push_back(plan_group(in, layered.interior, Layer::Interior, limit));
+    groups.push_back(plan_group(blobs, every_blob, Layer::Blobs, limit, extent));
+    groups.push_back(plan_group(body, layered.interior, Layer::Interior, limit, extent));
   } else {
-    groups.push_back(plan_all(in, fh.bounds, limit));
+    groups.push_back(plan_all(body, far.bulk, limit, extent));
+    if (!far.far.empty()) groups.push_back(plan_group(in, far.far, Layer::All, limit, extent));
   }
 
   // One job per record: a chunk, or one LOD tier of it. Tiers reorder the

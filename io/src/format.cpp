@@ -37,9 +37,11 @@ void check_range(const ByteReader& r, const std::array<float, 2>& range) {
 }
 
 // The header's flags word (format 1.2): bits 0-2 up axis, 3-5 how it was
-// found, 6-7 the time source; the rest stays 0 for later minor versions.
+// found, 6-7 the time source; format 1.5: bits 8-13 the position bound's
+// exponent; the rest stays 0 for later minor versions.
 uint32_t header_flags(const FileHeader& h) {
-  return uint32_t(h.up) | uint32_t(h.up_evidence) << 3 | uint32_t(h.time_source) << 6;
+  return uint32_t(h.up) | uint32_t(h.up_evidence) << 3 | uint32_t(h.time_source) << 6 |
+         uint32_t(h.precision_bits & 63) << 8;
 }
 
 void read_header_flags(ByteReader& r, FileHeader& h) {
@@ -50,9 +52,21 @@ void read_header_flags(ByteReader& r, FileHeader& h) {
   h.up = static_cast<UpAxis>(up);
   h.up_evidence = static_cast<UpEvidence>(evidence);
   h.time_source = static_cast<TimeSource>(time);
+  h.precision_bits = static_cast<uint8_t>((flags >> 8) & 63);
 }
 
 }  // namespace
+
+float position_bound(const FileHeader& h) {
+  if (h.position_coding == PositionCoding::Float32) return 0.0f;
+  if (h.precision_bits == 0 || !(h.particle_spacing > 0)) return INFINITY;
+  return std::ldexp(h.particle_spacing, -int(h.precision_bits));
+}
+
+float chunk_extent_limit(const FileHeader& h) {
+  const float bound = position_bound(h);
+  return bound > 0 ? bound * 131070.0f : INFINITY;
+}
 
 const char* time_source_name(TimeSource t) {
   switch (t) {

@@ -1,23 +1,51 @@
 #include <tbb/parallel_for.h>
 
+#include <cmath>
+#include <cstdio>
 #include <mutex>
+#include <optional>
 
 #include "sluice/io/maintenance.h"
 #include "sluice/io/reader.h"
 
 namespace sluice::io {
 
+namespace {
+
+// A chunk's quantization step, per axis, must stay within the file's bound
+// (two ulps of the coordinate aside: float32 input is no finer).
+std::optional<std::string> too_wide(const ChunkDesc& chunk, float bound) {
+  static const char* const kAxis[] = {"x", "y", "z"};
+  for (size_t a = 0; a < 3; ++a) {
+    const float lo = chunk.bounds.min[a], hi = chunk.bounds.max[a];
+    const float ulp = std::nextafter(std::max(std::fabs(lo), std::fabs(hi)), INFINITY) - std::max(std::fabs(lo), std::fabs(hi));
+    const double step = (double(hi) - double(lo)) / 131070.0;
+    if (step > double(bound) + 2.0 * double(ulp)) {
+      char text[200];
+      std::snprintf(text, sizeof text, "its box is %g wide along %s: positions may be off by %g, more than the file's bound %g",
+                    double(hi) - double(lo), kAxis[a], step, double(bound));
+      return text;
+    }
+  }
+  return std::nullopt;
+}
+
+}  // namespace
+
 VerifyReport verify_container(const std::filesystem::path& path, const ProgressFn& progress) {
   const ContainerReader reader(path);
   const FileHeader& fh = reader.header();
   VerifyReport report;
+  report.position_bound = position_bound(fh);
+  const bool bounded = fh.position_coding == PositionCoding::Quantized16 && std::isfinite(report.position_bound);
   const uint64_t frames = reader.frame_count();
   for (uint64_t f = 0; f < frames; ++f) {
     try {
       const std::vector<std::byte> record = reader.read_record(f);
       const FrameHeader h = reader.parse_record(f, record);
       report.chunks += h.chunks.size();
-      report.particles += h.particle_count;
+      report.particles += count_in(h, LayerSet::particles());
+      report.blobs += h.particle_count - count_in(h, LayerSet::particles());
       report.bytes += record.size();
       std::mutex problems_mutex;  // only taken when a chunk is bad
       tbb::parallel_for(size_t(0), h.chunks.size(), [&](size_t c) {
@@ -25,6 +53,9 @@ VerifyReport verify_container(const std::filesystem::path& path, const ProgressF
         const ChunkDesc& chunk = h.chunks[c];
         std::vector<std::byte> particles(chunk.particle_count * decoded_particle_bytes(fh.position_coding));
         try {
+          if (bounded) {
+            if (const auto wide = too_wide(chunk, report.position_bound)) throw Error(reader.location(f, c), *wide);
+          }
           decode_chunk(record, chunk, fh, {particles, {}}, scratch, reader.location(f, c));
         } catch (const Error& e) {
           const std::lock_guard lock(problems_mutex);

@@ -7,6 +7,7 @@
 #include <filesystem>
 
 #include "sluice/io/lod.h"
+#include "sluice/io/outliers.h"
 
 namespace sluice::io {
 namespace {
@@ -18,6 +19,7 @@ struct Work {
   std::optional<FrameShape> shape;
   bool time_given = false;
   EncodedFrame encoded;
+  FarReport far;
   std::optional<Error> error;  // the frame could not be read or encoded
 };
 
@@ -27,11 +29,38 @@ uint64_t source_file_bytes(const FrameSource& source, uint64_t frame) {
   return ec ? 0 : size;
 }
 
+// Removes frame's particles `gone` (ascending indices) from every array.
+void remove_particles(ParticleFrame& frame, std::span<const uint32_t> gone) {
+  const size_t n = frame.count();
+  size_t next = 0, kept = 0;
+  for (size_t i = 0; i < n; ++i) {
+    if (next < gone.size() && gone[next] == i) {
+      ++next;
+      continue;
+    }
+    for (size_t a = 0; a < 3; ++a) frame.positions[3 * kept + a] = frame.positions[3 * i + a];
+    if (!frame.ids.empty()) frame.ids[kept] = frame.ids[i];
+    for (auto& values : frame.attributes) values[kept] = values[i];
+    ++kept;
+  }
+  frame.positions.resize(3 * kept);
+  if (!frame.ids.empty()) frame.ids.resize(kept);
+  for (auto& values : frame.attributes) values.resize(kept);
+}
+
 Work encode_one(const FrameSource& source, ParticleFrame frame, uint64_t index, const FileHeader& header,
                 const ConvertSettings& settings) {
   Work w;
   w.frame = index;
   w.time_given = frame.time_given;
+  if (settings.drop_far > 0) {
+    const FarParticles far = find_far_particles(frame.positions, header.particle_spacing, settings.drop_far);
+    if (!far.far.empty()) {
+      w.far = {far.far.size(), true, far.threshold, far.farthest, {}};
+      for (size_t a = 0; a < 3; ++a) w.far.position[a] = frame.positions[3 * size_t(far.farthest) + a];
+      remove_particles(frame, far.far);
+    }
+  }
   const uint64_t last = source.frame_count() - 1;
   if (settings.shape_frames > 0 && (index < settings.shape_frames || index == last)) w.shape = measure_shape(frame.positions, &settings.shape_grid);
   if (!frame.time_given && settings.time_step > 0) frame.time = double(index) * settings.time_step;
@@ -45,6 +74,9 @@ Work encode_one(const FrameSource& source, ParticleFrame frame, uint64_t index, 
   in.time = frame.time;
   try {
     w.encoded = encode_frame(in, header, settings.encode);
+    if (w.encoded.far_particles > 0) {
+      w.far = {w.encoded.far_particles, false, w.encoded.far_threshold, w.encoded.farthest, w.encoded.farthest_position};
+    }
   } catch (const Error& e) {
     throw Error({source.frame_name(index), index}, e.message());
   }
@@ -99,7 +131,7 @@ ConvertResult convert_frames(const FrameSource& source, std::optional<ParticleFr
             result.raw_bytes += w.encoded.raw_bytes;
             result.input_bytes += w.input_bytes;
             writer.append(std::move(w.encoded));
-            if (on_frame) on_frame({w.frame, w.input_bytes, w.repairs, w.shape, w.time_given});
+            if (on_frame) on_frame({w.frame, w.input_bytes, w.repairs, w.shape, w.time_given, w.far});
           }));
   if (stopped) throw *stopped;
   return result;

@@ -3,6 +3,7 @@
 // decodes straight into buffers it was handed (e.g. mapped staging memory).
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -62,6 +63,12 @@ struct EncodedFrame {
   FrameHeader header;             // frame_number is patched by the writer
   std::vector<std::byte> record;  // header, chunk table, payloads
   uint64_t raw_bytes = 0;         // filtered size before zstd, for statistics
+  // Particles far outside the rest (outliers.h): in chunks of their own,
+  // outside header.bounds. The farthest, by its index in the input.
+  uint64_t far_particles = 0;
+  float far_threshold = 0;  // world units outside the frame's core
+  uint32_t farthest = 0;
+  std::array<float, 3> farthest_position{};
 };
 
 // Chunks, quantizes, filters and compresses one frame. Parallel over chunks

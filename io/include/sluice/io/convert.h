@@ -4,6 +4,7 @@
 // `max_in_flight` frames are in memory at once, whatever the sequence length.
 #pragma once
 
+#include <array>
 #include <functional>
 #include <optional>
 #include <string>
@@ -16,12 +17,23 @@
 
 namespace sluice::io {
 
+// Far particles of one frame (outliers.h): written in chunks of their own,
+// or left out with ConvertSettings::drop_far.
+struct FarReport {
+  uint64_t count = 0;
+  bool dropped = false;
+  float threshold = 0;              // world units outside the frame's core
+  uint64_t farthest = 0;            // the farthest one's index in the source frame
+  std::array<float, 3> position{};  // and where it lies
+};
+
 struct ConvertProgress {
   uint64_t frame;                            // just written
   uint64_t input_bytes;                      // size of its source file (0 if unknown)
   const std::vector<std::string>& repairs;   // what the importer repaired in it
   const std::optional<FrameShape>& shape;    // measured for the first `shape_frames` frames and the last
   bool time_given;                           // the input stated this frame's time
+  const FarReport& far;                      // its far particles
 };
 
 struct ConvertSettings {
@@ -37,6 +49,10 @@ struct ConvertSettings {
   // A frame that cannot be read (io::Error) is left out and listed in
   // ConvertResult::skipped instead of stopping the conversion.
   bool skip_bad = false;
+  // > 0: particles more than this far (world units) outside their frame's
+  // core box (outliers.h) are left out before the frame is measured and
+  // encoded, and reported as dropped.
+  float drop_far = 0;
 };
 
 struct SkippedFrame {

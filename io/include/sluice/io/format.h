@@ -17,7 +17,7 @@
 namespace sluice::io {
 
 inline constexpr uint16_t kFormatMajor = 1;  // readers reject other majors
-inline constexpr uint16_t kFormatMinor = 4;  // readers accept any minor of their major
+inline constexpr uint16_t kFormatMinor = 5;  // readers accept any minor of their major
 
 // Hard limits. A header that claims more is rejected before any allocation.
 inline constexpr uint32_t kMaxHeaderBytes = 1u << 20;
@@ -95,10 +95,28 @@ struct FileHeader {
   UpAxis up = UpAxis::Unstated;                  // which world direction points up
   UpEvidence up_evidence = UpEvidence::Unstated;  // how that was found
   TimeSource time_source = TimeSource::Unstated;  // what the frames' time fields hold
+  // Format 1.5, in the flags word: every quantized position decodes within
+  // particle_spacing x 2^-precision_bits of its source on each axis (plus
+  // two float32 ulps of the coordinate): the writer keeps every chunk's box
+  // at most 131070 times that wide. 0: not stated (older files, no spacing).
+  // 1 ... 63. Writers default to kDefaultPrecisionBits.
+  uint8_t precision_bits = 0;
   std::vector<AttributeInfo> attributes;
   std::string lod_id_array;      // the id array hashed for LOD values, if any
   std::string source;            // free text: what the file was converted from
 };
+
+// About 1/2000 of the spacing: boxes of at most 64 spacings, the size the
+// default 65,536-particle chunks of a fluid body have anyway.
+inline constexpr uint8_t kDefaultPrecisionBits = 11;
+
+// The largest error of a decoded position on one axis, world units, not
+// counting two ulps of the coordinate: 0 for float32 files, infinity where
+// the file states none (FileHeader::precision_bits).
+float position_bound(const FileHeader& h);
+// The widest a chunk's box may be on any axis to keep position_bound:
+// 131070 x the bound (infinity: no limit).
+float chunk_extent_limit(const FileHeader& h);
 
 struct ChunkDesc {
   uint64_t offset = 0;           // from the start of the frame record
@@ -128,6 +146,9 @@ struct FrameHeader {
   uint64_t frame_bytes = 0;      // the whole record: header, chunk table, payloads
   double time = 0.0;             // simulation time, seconds
   uint64_t particle_count = 0;
+  // The frame's display bounds: every particle's box but for far particles
+  // (format 1.5, outliers.h), which lie in chunks of their own outside it.
+  // Cameras frame it; chunk boxes, not this, bound what is drawn.
   Aabb bounds;
   // Format 1.3: side of the voxels whose blobs the Blobs chunks hold (world
   // units; 0 when the frame has none). A blob's LOD value is its count.

@@ -16,13 +16,18 @@ using ProgressFn = std::function<void(uint64_t, uint64_t)>;
 struct VerifyReport {
   uint64_t frames = 0;
   uint64_t chunks = 0;
-  uint64_t particles = 0;
+  uint64_t particles = 0;  // layers all, surface and interior
+  uint64_t blobs = 0;      // voxel blobs (layer 3), not particles
   uint64_t bytes = 0;
+  // The file's position bound (position_bound(): 0 lossless, infinity not
+  // stated), checked against every chunk's box.
+  float position_bound = 0;
   std::vector<std::string> problems;  // each names file, frame and chunk
   bool ok() const { return problems.empty(); }
 };
 
-// Checks every checksum (header, index, frame tables, chunks) and decodes
+// Checks every checksum (header, index, frame tables, chunks), that every
+// chunk's box is narrow enough for the file's position bound, and decodes
 // every chunk. Does not stop at the first problem. Throws io::Error only when
 // the file cannot be opened at all (bad header, no index).
 VerifyReport verify_container(const std::filesystem::path& path, const ProgressFn& progress = {});

@@ -1,0 +1,42 @@
+// sluice/io/outliers.h: particles far outside the rest of their frame.
+//
+// SPH runs fling the odd particle away (an escaped particle, a corrupt
+// value): left in, one such particle widens the frame's box by orders of
+// magnitude. The writer keeps far particles in chunks of their own (so
+// every other chunk stays compact and quantizes within the file's bound)
+// and leaves them out of the frame's display bounds; `convert` warns about
+// them and `--drop-outliers` removes them.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "sluice/io/types.h"
+
+namespace sluice::io {
+
+// A particle is far when it lies more than this many particle spacings
+// outside the frame's core box, and also more than the core's own diagonal.
+inline constexpr float kFarSpacings = 100.0f;
+
+struct FarParticles {
+  Aabb bulk;                  // box of the particles that are not far (empty: none)
+  std::vector<uint32_t> far;  // indices of the far particles, ascending
+  float threshold = 0;        // world units outside the core beyond which a particle is far
+  // The far particle farthest outside the core (when `far` is not empty).
+  uint32_t farthest = 0;
+  float farthest_distance = 0;
+};
+
+// The core box spans the 1st to the 99th percentile of each axis, taken from
+// at most 65,536 particles evenly spread over the frame. A particle is far
+// when it lies more than `threshold` outside the core on some axis:
+// `distance` when it is > 0 (world units), otherwise the larger of
+// kFarSpacings x `spacing` and the core's diagonal. Frames of fewer than 64
+// particles have no far particles (their percentiles say nothing). `xyz`
+// holds finite x,y,z triples. Parallel (TBB); O(n).
+FarParticles find_far_particles(std::span<const float> xyz, float spacing, float distance = 0);
+
+}  // namespace sluice::io
