@@ -80,7 +80,7 @@ void add_convert(CLI::App& app) {
   cmd->add_option("--radius", o->radius, "Render radius in world units (default: spacing / 2)");
   cmd->add_option("--precision", o->precision,
                   "Largest position error as a fraction of the spacing, rounded down to a power of two\n"
-                  "(default 1/2048 = 0.00049); stated in the file, kept for every particle whatever lies\n"
+                  "(default 1/1024 = 0.00098); stated in the file, kept for every particle whatever lies\n"
                   "far away (chunks are kept narrow enough)")
       ->check(CLI::Range(1e-12, 0.5));
   cmd->add_option("--drop-outliers", o->drop_outliers,

@@ -1,5 +1,6 @@
 // `sluice synth`: a synthetic fluid sequence for scale runs (10M particles x
 // 200 frames and up) without any solver output at hand.
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <filesystem>
@@ -63,6 +64,10 @@ void add_synth(CLI::App& app) {
   cmd->add_option("--level", o->zstd_level, "zstd level")->capture_default_str();
   cmd->add_flag("--no-layers", [o](int64_t) { o->layers = false; },
                 "Do not classify the narrow band: every frame one layer of all its particles");
+  cmd->add_option_function<double>(
+         "--precision", [o](double p) { o->precision_bits = uint8_t(std::clamp(int(std::ceil(-std::log2(p) - 1e-9)), 1, 40)); },
+         "Largest position error as a fraction of the spacing, rounded down to a power of two (default 1/1024)")
+      ->check(CLI::Range(1e-12, 0.5));
   cmd->add_flag("--no-tiers", [o](int64_t) { o->lod_tiers = false; },
                 "One record per chunk, not one per LOD tier (format 1.3's layout): smaller, always read whole");
   cmd->add_flag("--smallest", [o](int64_t) { o->pack_planes = false; },

@@ -22,7 +22,7 @@ struct ConversionOptions {
   bool lossless = false;
   float spacing = 0, radius = 0;
   // The largest position error, relative to the spacing, rounded down to a
-  // power of two (io::FileHeader::precision_bits); 0: 1/2048.
+  // power of two (io::FileHeader::precision_bits); 0: 1/1024.
   double precision = 0;
   // > 0: particles more than this many spacings outside the rest of their
   // frame are left out (listed); otherwise they are kept, warned about.

@@ -12,6 +12,7 @@
 #include <memory>
 #include <string>
 
+#include "sluice/io/format.h"
 #include "sluice/io/import.h"
 
 namespace sluice::bench {
@@ -35,6 +36,8 @@ struct SynthOptions {
   bool pack_planes = true;             // false: zstd wherever smaller (EncodeOptions)
   bool zstd_planes = true;             // false: planes only stored or bit-packed (EncodeOptions)
   bool lod_tiers = true;               // chunks written as LOD tiers (EncodeOptions::lod_tiers)
+  // The file's position bound, spacing x 2^-precision_bits (io::FileHeader).
+  uint8_t precision_bits = io::kDefaultPrecisionBits;
   bool layers = true;                  // narrow band: surface, blob and interior chunks (EncodeOptions::layers)
   int jobs = 0;                        // frames encoded at once; 0: one per core
   uint32_t seed = 1;

@@ -106,9 +106,9 @@ struct FileHeader {
   std::string source;            // free text: what the file was converted from
 };
 
-// About 1/2000 of the spacing: boxes of at most 64 spacings, the size the
-// default 65,536-particle chunks of a fluid body have anyway.
-inline constexpr uint8_t kDefaultPrecisionBits = 11;
+// 1/1024 of the spacing: boxes of at most 128 spacings, about what the
+// default 65,536-particle chunks had before the bound (docs/format.md).
+inline constexpr uint8_t kDefaultPrecisionBits = 10;
 
 // The largest error of a decoded position on one axis, world units, not
 // counting two ulps of the coordinate: 0 for float32 files, infinity where
