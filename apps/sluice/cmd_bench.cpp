@@ -114,6 +114,9 @@ void add_bench(CLI::App& app) {
   vw->add_flag("!--no-psnr", view->psnr, "Skip the quality pass");
   vw->add_option("--decode", view->decode, "auto, cpu or gpu")->capture_default_str()->check(CLI::IsMember({"auto", "cpu", "gpu"}));
   vw->add_option("--device", view->device, "Vulkan device (index or name; default: the first GPU)");
+  vw->add_option("--read-threads", view->read_threads, "Threads reading a frame's pieces at once (default: the pipeline's)")
+      ->check(CLI::Range(1, 64));
+  vw->add_flag("!--pread", view->mapped_reads, "Read with pread instead of copying out of the file's mapping");
   vw->callback([view, view_size, view_memory] {
 #if SLUICE_WITH_RENDER
     const auto x = view_size->find('x');

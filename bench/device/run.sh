@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Runs on the GPU machine (see bench/device/README.md): every benchmark the
 # issues ask GPU-machine figures for, in one call. Results go to $OUT.
-#   bash bench/device/run.sh [io] [import] [layers] [band] [render] [stream] [split] [codec] [huge] [embed] [compare] [live] [stereo] [xrsize] [firsthour] [streamcmp] [gpudecode] [gpuquick] [gpupair] [gpuab] [gpu100] [egl] [vtkpeer] [readpath] [importprobe] [relayprobe] [storeab] [gpusplit] [gpuplay] [gpuflight] [gpu100ab] [damf2] [gpusweep] [gpuvar] [relay] [relaytests] [relay100] [gpuplayall] [view] [tiersize] [tiergpu] [viewfull]   (default: io render stream)
+#   bash bench/device/run.sh [io] [import] [layers] [band] [render] [stream] [split] [codec] [huge] [embed] [compare] [live] [stereo] [xrsize] [firsthour] [streamcmp] [gpudecode] [gpuquick] [gpupair] [gpuab] [gpu100] [egl] [vtkpeer] [readpath] [importprobe] [relayprobe] [storeab] [gpusplit] [gpuplay] [gpuflight] [gpu100ab] [damf2] [gpusweep] [gpuvar] [relay] [relaytests] [relay100] [gpuplayall] [view] [viewall] [viewio] [tiersize] [tiergpu] [viewfull]   (default: io render stream)
 set -uo pipefail
 OUT=${OUT:-/tmp/out}
 mkdir -p "$OUT" /tmp/s
@@ -397,6 +397,21 @@ for stage in $stages; do
     viewfull)  # the same path at full detail (level 1): what the view leaves out when LOD keeps everything
       run $S synth -n 100M --frames ${VIEW_FRAMES:-24} -o /tmp/v100m.sluice --force -q --gpu-decodable
       run $S bench view /tmp/v100m.sluice --steps ${VIEW_STEPS:-12} --memory 24G --lod-level 1 --no-psnr
+      rm -f /tmp/v100m.sluice
+      ;;
+    viewall)  # the view stages on one synthetic file: mono with PSNR, stereo, full detail
+      run $S bench render --sizes 10M --repeats 3 >/dev/null  # warm-up
+      run $S synth -n 100M --frames ${VIEW_FRAMES:-24} -o /tmp/v100m.sluice --force -q --gpu-decodable
+      run $S bench view /tmp/v100m.sluice --steps ${VIEW_STEPS:-12} --memory 24G
+      run $S bench view /tmp/v100m.sluice --steps ${VIEW_STEPS:-12} --memory 24G --stereo --size 2064x2208 --no-psnr
+      run $S bench view /tmp/v100m.sluice --steps ${VIEW_STEPS:-12} --memory 24G --lod-level 1 --no-psnr
+      rm -f /tmp/v100m.sluice
+      ;;
+    viewio)  # how the view's scattered reads go from storage: read threads, mapped or pread (overview and fly-in)
+      run $S synth -n 100M --frames ${VIEW_FRAMES:-24} -o /tmp/v100m.sluice --force -q --gpu-decodable
+      for args in "" "--pread" "--read-threads 32" "--read-threads 32 --pread" "--read-threads 4"; do
+        run $S bench view /tmp/v100m.sluice --steps ${VIEW_STEPS:-12} --memory 24G --no-psnr $args
+      done
       rm -f /tmp/v100m.sluice
       ;;
     tiersize)  # tiers against one record per chunk (--no-tiers): size, and the page-cache read of everything, alternated
