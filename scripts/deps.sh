@@ -12,7 +12,8 @@ packages=(
 # The renderer's packages, when the tree has a renderer.
 if [[ -d "$(dirname "$0")/../render/src" ]]; then
   packages+=(libvulkan-dev glslc mesa-vulkan-drivers vulkan-validationlayers libglfw3-dev libimgui-dev
-             libpng-dev xvfb xauth libopenxr-dev libopenxr-loader1)
+             libpng-dev xvfb xauth libopenxr-dev libopenxr-loader1
+             ffmpeg)  # render --out x.mp4, and its tests (a full disk, a video read back)
 fi
 
 missing=()

@@ -37,12 +37,17 @@ void run_convert(const ConvertCommand& c) {
   const ConversionSummary s = convert_input(o, output);
   const double out = double(std::filesystem::file_size(output));
   const double per = s.particles ? out / double(s.particles) : 0;
-  std::printf("wrote %s: %llu frames, %s particles, %s in -> %s out in %s (%s frames/s)\n", output.c_str(),
-              (unsigned long long)s.frames, human_count(double(s.particles)).c_str(),
+  std::printf("wrote %s: %llu frame%s, %s particle%s, %s in -> %s out in %s (%s frames/s)\n", output.c_str(),
+              (unsigned long long)s.frames, s.frames == 1 ? "" : "s", human_count(double(s.particles)).c_str(),
+              s.particles == 1 ? "" : "s",
               human_bytes(double(s.input_bytes)).c_str(), human_bytes(out).c_str(), human_duration(s.seconds).c_str(),
               fixed(double(s.frames) / std::max(s.seconds, 1e-9), 1).c_str());
-  std::printf("  %s bytes/particle with the LOD value%s: %sx smaller than raw float32 xyz (12 bytes)\n",
-              fixed(per, 2).c_str(), s.header.attributes.empty() ? "" : " and attributes", fixed(12.0 / per, 2).c_str());
+  if (s.particles == 0) return;
+  // Tiny inputs cost more than 12 bytes a particle (header, index, tables).
+  const bool smaller = per <= 12.0;
+  std::printf("  %s bytes/particle with the LOD value%s: %sx %s than raw float32 xyz (12 bytes)\n", fixed(per, 2).c_str(),
+              s.header.attributes.empty() ? "" : " and attributes", fixed(smaller ? 12.0 / per : per / 12.0, 2).c_str(),
+              smaller ? "smaller" : "larger");
 }
 
 }  // namespace

@@ -244,6 +244,7 @@ void run_export(const ExportCommand& o) {
                 fixed(total.particles ? 100.0 * double(total.kept) / double(total.particles) : 0.0, 1) +
                 "%, --lod-level " + level + ")";
   }
+  if (o.quiet) return;
   std::printf("wrote %llu file%s (%s): %llu frame%s, %s, %s in %s\n", (unsigned long long)files, files == 1 ? "" : "s",
               where.c_str(), (unsigned long long)count, count == 1 ? "" : "s", particles.c_str(),
               human_bytes(double(total.bytes_out)).c_str(), human_duration(bar.elapsed()).c_str());

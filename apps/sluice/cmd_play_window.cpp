@@ -195,11 +195,12 @@ void draw_hud(Player& p, const std::string& file) {
   ImGui::Begin("sluice", nullptr, ImGuiWindowFlags_AlwaysAutoResize);
   ImGui::TextUnformatted(std::filesystem::path(file).filename().c_str());
   if (p.times_known) {
-    ImGui::Text("frame %llu / %llu   t = %.4g s   %s", (unsigned long long)p.frame + 1, (unsigned long long)p.frames,
+    // 0-based, as the timeline and --frames count: frame 14 / 50 of 51.
+    ImGui::Text("frame %llu / %llu   t = %.4g s   %s", (unsigned long long)p.frame, (unsigned long long)p.frames - 1,
                 p.reader->index().frames[p.frame].time, runtime::state_name(p.playback->state()));
   } else {
-    ImGui::Text("frame %llu / %llu (no simulation times)   %s", (unsigned long long)p.frame + 1,
-                (unsigned long long)p.frames, runtime::state_name(p.playback->state()));
+    ImGui::Text("frame %llu / %llu (no simulation times)   %s", (unsigned long long)p.frame,
+                (unsigned long long)p.frames - 1, runtime::state_name(p.playback->state()));
   }
   ImGui::TextUnformatted(("layers: " + layers_text(*p.reader, p.frame, p.layers)).c_str());
   if (!p.classification.empty()) ImGui::TextUnformatted(("  newest frame " + p.classification).c_str());

@@ -33,7 +33,7 @@ struct RenderCommand {
   std::string out = "frames";
   std::string size = "1280x720";
   double fps = 0;
-  bool quiet = false, stats = false, no_cache = false;
+  bool quiet = false, stats = false, no_cache = false, force = false;
   std::string layers = "surface";
   std::string decode = "auto";
 };
@@ -64,6 +64,12 @@ void run_render(const RenderCommand& o, const ViewSettings& v) {
   const auto [width, height] = parse_size(o.size);
   const bool video = fs::path(o.out).extension() == ".mp4";
   const bool single = first == last;
+  // Like convert and export: nothing is overwritten unless asked.
+  for (const std::string& taken : {video ? o.out : frame_path(o.out, first, single), video ? std::string() : frame_path(o.out, last, single)}) {
+    if (!taken.empty() && fs::exists(taken) && !o.force) {
+      throw std::runtime_error(taken + " exists; pass --force to overwrite it, or -o to write elsewhere");
+    }
+  }
   if (!video && fs::path(o.out).extension() != ".png" && o.out.find('%') == std::string::npos) {
     fs::create_directories(o.out);
   }
@@ -172,6 +178,7 @@ void add_render(CLI::App& app) {
   cmd->add_option("--size", o->size, "Image size WIDTHxHEIGHT")->capture_default_str();
   cmd->add_option("--fps", o->fps, "MP4 frame rate (default: the file's)");
   cmd->add_flag("--stats", o->stats, "Print particles drawn and GPU ms per pass for every frame");
+  cmd->add_flag("-f,--force", o->force, "Overwrite images or a video that exist");
   cmd->add_flag("-q,--quiet", o->quiet, "No progress bar or notes");
   add_layers_option(*cmd, o->layers);
   add_decode_option(*cmd, o->decode);

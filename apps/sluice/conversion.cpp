@@ -16,6 +16,7 @@
 #include "sluice/io/freed_memory.h"
 #include "sluice/io/import.h"
 #include "sluice/io/outliers.h"
+#include "sluice/io/output_lock.h"
 #include "sluice/io/spacing.h"
 #include "sluice/io/up_axis.h"
 #include "sluice/io/writer.h"
@@ -137,6 +138,57 @@ std::string far_warning(const std::string& frame, const io::FarReport& far, floa
          (spacing > 0 ? "; --drop-outliers " + number(far.threshold / spacing) + " removes them" : "");
 }
 
+// The first of frames `from`, `from` + 1, ... (at most 16) with particles
+// enough to show a spacing (an empty or one-particle first frame, or one
+// gathered at a point, shows none), and that spacing; the first frame and 0
+// when none does. `held` keeps a frame read here.
+std::pair<const io::ParticleFrame*, float> populated_frame(const ConversionOptions& o, const io::FrameSource& source,
+                                                           const io::ParticleFrame& first, uint64_t from,
+                                                           std::optional<io::ParticleFrame>& held) {
+  if (const float s = io::estimate_spacing(first.positions); s > 0) return {&first, s};
+  const uint64_t last = std::min<uint64_t>(source.frame_count(), from + 16);
+  for (uint64_t f = from + 1; f < last; ++f) {
+    try {
+      held = source.read(f);
+      if (const float s = io::estimate_spacing(held->positions); s > 0) {
+        note(o, "note: frame " + std::to_string(from) + " shows no particle spacing (too few distinct particles); " +
+                    "frame " + std::to_string(f) + "'s is used");
+        return {&*held, s};
+      }
+    } catch (const io::Error&) {
+      // a bad frame: the conversion reports it in its turn
+    }
+  }
+  if (o.spacing <= 0) {
+    note(o, "warning: none of the first frames has particles enough to show the spacing: the file states none\n"
+            "         (no narrow band, no position bound, radius from the extent). Pass --spacing to give it.");
+  }
+  return {&first, 0.0f};
+}
+
+// A radius never 0: spacing / 2, else a thousandth of the first frame's
+// extent, else 1.
+float radius_for(const ConversionOptions& o, float spacing, const io::ParticleFrame& first) {
+  if (o.radius > 0) return o.radius;
+  if (spacing > 0) return spacing * 0.5f;
+  io::Aabb box;
+  for (size_t i = 0; i + 2 < first.positions.size(); i += 3) box.extend(first.positions[i], first.positions[i + 1], first.positions[i + 2]);
+  float extent = 0;
+  for (int a = 0; a < 3 && !box.empty(); ++a) extent = std::max(extent, box.max[size_t(a)] - box.min[size_t(a)]);
+  return extent > 0 ? extent * 1e-3f : 1.0f;
+}
+
+// Ids that repeat give repeated LOD values (export --lod-level 0.9 kept 0 of
+// 52,780 particles whose ids were all equal): more than 1% repeats and the
+// ids are not used.
+bool ids_repeat(const io::ParticleFrame& frame) {
+  if (frame.ids.size() < 2) return false;
+  std::vector<uint64_t> ids = frame.ids;
+  std::sort(ids.begin(), ids.end());
+  const size_t distinct = size_t(std::unique(ids.begin(), ids.end()) - ids.begin());
+  return double(ids.size() - distinct) > 0.01 * double(ids.size());
+}
+
 }  // namespace
 
 ConversionSummary convert_input(const ConversionOptions& o, const std::string& output) {
@@ -167,10 +219,19 @@ ConversionSummary convert_input(const ConversionOptions& o, const std::string& o
   std::optional<io::ParticleFrame> first;
   std::vector<io::SkippedFrame> skipped;
   const uint64_t from = read_first(o, *source, first, skipped);
+  std::optional<io::ParticleFrame> held;
+  const auto [populated, found_spacing] = populated_frame(o, *source, *first, from, held);
+  if (ids_repeat(*populated)) {
+    note(o, "warning: the id array '" + source->info().id_array + "' repeats ids" +
+                ": LOD values follow the particle order instead (pass --id-array NAME for another array)");
+    import.no_ids = true;
+    source = open_input(o, import);
+    first->ids.clear();
+  }
   io::FileHeader header;
   header.position_coding = o.lossless ? io::PositionCoding::Float32 : io::PositionCoding::Quantized16;
-  header.particle_spacing = o.spacing > 0 ? o.spacing : io::estimate_spacing(first->positions);
-  header.particle_radius = o.radius > 0 ? o.radius : header.particle_spacing * 0.5f;
+  header.particle_spacing = o.spacing > 0 ? o.spacing : found_spacing;
+  header.particle_radius = radius_for(o, header.particle_spacing, *populated);
   header.precision_bits = o.lossless ? 0 : precision_bits(o.precision);
   if (o.drop_outliers > 0 && !(header.particle_spacing > 0)) {
     throw std::runtime_error("--drop-outliers counts in particle spacings, and the spacing of " + o.input +
@@ -207,6 +268,9 @@ ConversionSummary convert_input(const ConversionOptions& o, const std::string& o
             "         frame. Pass --id-array NAME if the ids have another name.");
   }
 
+  // One writer per output: a second convert (or player filling the same
+  // cache entry) stops here, naming this one, instead of sharing the .partial.
+  const io::OutputLock lock(output);
   const std::string partial = output + ".partial";
   io::ContainerWriter writer(partial, header);
   settings.drop_far = o.drop_outliers * header.particle_spacing;
@@ -222,6 +286,7 @@ ConversionSummary convert_input(const ConversionOptions& o, const std::string& o
   ProgressBar bar("frames", frames, o.quiet);
   size_t warnings = 0, suppressed = 0;
   uint64_t bytes_in = 0, untimed = 0, far_particles = 0, far_frames = 0;
+  bool early_up = false;
   std::vector<io::FrameShape> first_frames;
   io::FrameShape last_shape;
   settings.skip_bad = o.skip_bad;
@@ -237,6 +302,16 @@ ConversionSummary convert_input(const ConversionOptions& o, const std::string& o
       else ++suppressed;
     }
     if (p.shape && p.frame < settings.shape_frames) first_frames.push_back(*p.shape);
+    // Once the first frames have shown a fall, the header says so: a file
+    // cut short (and recovered) then keeps it.
+    if (!given_up && !early_up && first_frames.size() == std::min<uint64_t>(settings.shape_frames, frames - from)) {
+      early_up = true;
+      if (const auto up = io::up_from_motion(first_frames, header.particle_spacing); up && up->up != header.up) {
+        header.up = up->up;
+        header.up_evidence = up->evidence;
+        writer.update_header(header);
+      }
+    }
     if (p.shape && p.frame + 1 == frames) last_shape = *p.shape;
     if (header.time_source == io::TimeSource::Input && !p.time_given) ++untimed;
     bytes_in += p.input_bytes;
@@ -246,8 +321,13 @@ ConversionSummary convert_input(const ConversionOptions& o, const std::string& o
   try {
     result = io::convert_frames(*source, std::move(first), writer, settings, on_frame, from);
   } catch (const io::Error& e) {
-    // Stop cleanly: the output keeps every frame before the bad one.
     bar.finish();
+    if (writer.failed()) {  // writing failed (disk full?): nothing is renamed into place
+      throw std::runtime_error(std::string(e.what()) + "\n  " + partial + " holds the " +
+                               std::to_string(writer.frames_written()) +
+                               " frames written before; `sluice recover` rebuilds a file of them once there is room");
+    }
+    // A bad frame: stop cleanly, the output keeps every frame before it.
     report_skipped(skipped);
     const uint64_t kept = writer.frames_written();
     writer.finish();

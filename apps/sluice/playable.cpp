@@ -14,6 +14,7 @@
 #include "conversion.h"
 #include "sluice/io/format.h"
 #include "sluice/io/import.h"
+#include "sluice/io/output_lock.h"
 
 namespace sluice::app {
 namespace fs = std::filesystem;
@@ -100,6 +101,13 @@ PlayableFile open_playable_in(const fs::path& dir, const std::string& name, cons
   const fs::path file = dir / (name + ".sluice");
   const fs::path key_file = dir / (name + ".sluice.key");
   std::error_code ec;
+  fs::create_directories(dir, ec);
+  // One player fills an entry; another of the same input waits for it and
+  // then reuses what it wrote.
+  const io::OutputLock entry(key_file, io::OutputLock::Wait::Yes, [](const fs::path& locked, long pid) {
+    std::fprintf(stderr, "waiting for another sluice%s converting into %s\n",
+                 pid > 0 ? (" (process " + std::to_string(pid) + ")").c_str() : "", locked.parent_path().c_str());
+  });
   if (is_sluice_file(file) && fs::exists(key_file, ec) && read_text(key_file) == key) {
     if (!o.quiet) std::fprintf(stderr, "%s: using its conversion %s (the input is unchanged)\n", input.c_str(), file.c_str());
     return PlayableFile(file.string(), false);

@@ -35,7 +35,9 @@ render::FluidOptions ViewSettings::fluid_options(const render::SceneInfo& scene)
       std::string names;
       for (const std::string& n : scene.attribute_names) names += (names.empty() ? "" : ", ") + n;
       throw std::runtime_error("--color-by " + color_by + ": the file has no such attribute (it has: " +
-                               (names.empty() ? "none" : names) + ")");
+                               (names.empty() ? "none" : names) +
+                               "). `sluice convert` keeps only the arrays it is asked for: convert again with -a " +
+                               color_by + " (play and render of solver output keep every array)");
     }
   }
   if (color_range.size() == 2) {

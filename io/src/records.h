@@ -13,6 +13,7 @@ namespace sluice::io {
 inline constexpr std::array<uint8_t, 8> kFileMagic = {0x89, 'S', 'L', 'U', 'I', 'C', 'E', '\n'};
 inline constexpr uint32_t kFrameMagic = 0x52464C53;  // "SLFR"
 inline constexpr uint32_t kIndexMagic = 0x58494C53;  // "SLIX"
+inline constexpr uint32_t kHeaderCopyMagic = 0x43484C53;  // "SLHC": the header again, right after it (format 1.5)
 inline constexpr std::array<uint8_t, 8> kFooterMagic = {'S', 'L', 'U', 'I', 'C', 'E', 'I', 'X'};
 inline constexpr size_t kFileHeaderFixedBytes = 36;
 

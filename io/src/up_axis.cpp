@@ -141,9 +141,16 @@ std::array<int, 3> ShapeGrid::cells() const {
 }
 
 std::optional<UpFinding> up_from_motion(std::span<const FrameShape> frames, float spacing) {
+  // Degenerate frames (a handful of particles, or all at one point: a
+  // solver's empty or broken output) say nothing about a fall.
+  const auto degenerate = [](const FrameShape& f) {
+    float extent = 0;
+    for (int a = 0; a < 3; ++a) extent = std::max(extent, f.high[a] - f.low[a]);
+    return f.particles < kLeastShapeParticles || !(extent > 0);
+  };
   std::vector<const FrameShape*> used;
   for (const FrameShape& f : frames) {
-    if (f.particles > 0 && !f.column_low[0].empty()) used.push_back(&f);
+    if (!degenerate(f) && !f.column_low[0].empty()) used.push_back(&f);
   }
   if (used.size() < 2) return std::nullopt;
   const FrameShape& first = *used.front();

@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cstring>
 
 #include "file.h"
 #include "records.h"
@@ -17,7 +18,19 @@ ContainerWriter::ContainerWriter(const std::filesystem::path& path, FileHeader h
     if (a.name.empty() || a.name.size() > kMaxNameBytes) throw Error({path_}, "attribute name is empty or too long");
   }
   fd_ = open_or_throw(path_, O_WRONLY | O_CREAT | O_TRUNC);
-  write_all(serialize_file_header(header_));
+  const std::vector<std::byte> bytes = serialize_file_header(header_);
+  write_all(bytes);
+  write_all(header_copy(bytes));
+}
+
+// The copy `sluice recover` rebuilds a damaged header from: a magic word,
+// then the header's bytes again (they carry their own size and checksum).
+std::vector<std::byte> ContainerWriter::header_copy(std::span<const std::byte> header) {
+  std::vector<std::byte> out(4 + header.size());
+  const uint32_t magic = kHeaderCopyMagic;
+  std::memcpy(out.data(), &magic, 4);
+  std::memcpy(out.data() + 4, header.data(), header.size());
+  return out;
 }
 
 ContainerWriter::~ContainerWriter() {
@@ -25,7 +38,13 @@ ContainerWriter::~ContainerWriter() {
 }
 
 void ContainerWriter::write_all(std::span<const std::byte> bytes) {
-  write_all_or_throw(fd_, bytes, path_);
+  if (failed_) throw Error({path_}, "an earlier write to this file failed; nothing more is written");
+  try {
+    write_all_or_throw(fd_, bytes, path_);
+  } catch (...) {
+    failed_ = true;  // the file now ends inside a record: no index may follow it
+    throw;
+  }
   offset_ += bytes.size();
 }
 
@@ -33,18 +52,22 @@ void ContainerWriter::append(EncodedFrame frame) {
   if (fd_ < 0) throw Error({path_}, "append after finish");
   const auto number = static_cast<uint32_t>(frames_written());
   if (frame.header.frame_number != number) set_frame_number(frame, number, header_.attributes.size());
-  index_.add(frame.header, offset_);
+  const uint64_t at = offset_;
   write_all(frame.record);
+  index_.add(frame.header, at);  // only frames wholly written are indexed
 }
 
 void ContainerWriter::update_header(const FileHeader& header) {
   if (fd_ < 0) throw Error({path_}, "header update after finish");
+  if (failed_) throw Error({path_}, "an earlier write to this file failed; the header is not rewritten");
   const std::vector<std::byte> bytes = serialize_file_header(header);
   if (bytes.size() != serialize_file_header(header_).size() || header.attributes.size() != header_.attributes.size() ||
       header.position_coding != header_.position_coding) {
     throw Error({path_}, "header update would change its size or the frames' layout");
   }
-  if (::pwrite(fd_, bytes.data(), bytes.size(), 0) != ssize_t(bytes.size())) {
+  const std::vector<std::byte> copy = header_copy(bytes);
+  if (::pwrite(fd_, bytes.data(), bytes.size(), 0) != ssize_t(bytes.size()) ||
+      ::pwrite(fd_, copy.data(), copy.size(), off_t(bytes.size())) != ssize_t(copy.size())) {
     throw Error({path_}, "could not rewrite the file header");
   }
   header_ = header;

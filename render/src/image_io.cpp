@@ -4,22 +4,20 @@
 #include <png.h>
 #include <sys/wait.h>
 
+#include <unistd.h>
+
+#include <cerrno>
 #include <cmath>
 #include <csignal>
+#include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <limits>
 #include <memory>
 #include <stdexcept>
 
 namespace sluice::render {
 namespace {
-
-struct FileCloser {
-  void operator()(FILE* f) const {
-    if (f) std::fclose(f);
-  }
-};
-using File = std::unique_ptr<FILE, FileCloser>;
 
 std::string shell_quote(const std::string& s) {
   std::string out = "'";
@@ -29,10 +27,10 @@ std::string shell_quote(const std::string& s) {
 
 }  // namespace
 
-void write_png(const std::string& path, const Image& image) {
-  if (image.rgba.size() != size_t(image.width) * image.height * 4) throw std::runtime_error(path + ": image has the wrong size");
-  File f(std::fopen(path.c_str(), "wb"));
-  if (!f) throw std::runtime_error(path + ": cannot create the file");
+namespace {
+
+// The PNG's bytes into an open file; throws on any failed write.
+void write_png_to(FILE* file, const std::string& path, const Image& image) {
   png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
   png_infop info = png ? png_create_info_struct(png) : nullptr;
   if (!info) {
@@ -43,7 +41,7 @@ void write_png(const std::string& path, const Image& image) {
     png_destroy_write_struct(&png, &info);
     throw std::runtime_error(path + ": writing the PNG failed (disk full?)");
   }
-  png_init_io(png, f.get());
+  png_init_io(png, file);
   // Level 6 is within a few percent of 9 on renders and much faster.
   png_set_compression_level(png, 6);
   png_set_IHDR(png, info, image.width, image.height, 8, PNG_COLOR_TYPE_RGBA, PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT,
@@ -54,7 +52,39 @@ void write_png(const std::string& path, const Image& image) {
   }
   png_write_end(png, nullptr);
   png_destroy_write_struct(&png, &info);
-  if (std::fflush(f.get()) != 0) throw std::runtime_error(path + ": writing the PNG failed");
+}
+
+}  // namespace
+
+void write_png(const std::string& path, const Image& image) {
+  if (image.rgba.size() != size_t(image.width) * image.height * 4) throw std::runtime_error(path + ": image has the wrong size");
+  // Written beside it and renamed when whole: a failed write (disk full)
+  // never leaves an empty or cut image under the real name.
+  const std::string partial = path + ".partial";
+  FILE* f = std::fopen(partial.c_str(), "wb");
+  if (!f) throw std::runtime_error(path + ": cannot create the file (" + std::strerror(errno) + ")");
+  try {
+    write_png_to(f, path, image);
+  } catch (...) {
+    std::fclose(f);
+    std::remove(partial.c_str());
+    throw;
+  }
+  bool written = std::fflush(f) == 0 && ::fsync(::fileno(f)) == 0;
+  int error = written ? 0 : errno;
+  if (std::fclose(f) != 0 && written) {
+    written = false;
+    error = errno;
+  }
+  if (!written) {
+    std::remove(partial.c_str());
+    throw std::runtime_error(path + ": writing the PNG failed (" + std::strerror(error) + ")");
+  }
+  if (std::rename(partial.c_str(), path.c_str()) != 0) {
+    const std::string reason = std::strerror(errno);
+    std::remove(partial.c_str());
+    throw std::runtime_error(path + ": cannot move the finished PNG into place (" + reason + ")");
+  }
 }
 
 Image read_png(const std::string& path) {
@@ -107,29 +137,56 @@ VideoWriter::VideoWriter(const std::string& path, uint32_t width, uint32_t heigh
   const std::string cmd = "ffmpeg -loglevel error -y -f rawvideo -pix_fmt rgba -s " + std::to_string(width) + "x" +
                           std::to_string(height) + " -r " + std::to_string(fps) +
                           " -i - -vf 'pad=ceil(iw/2)*2:ceil(ih/2)*2' -c:v libx264 -preset medium -crf 18 -pix_fmt yuv420p "
-                          "-movflags +faststart " + shell_quote(path);
+                          "-movflags +faststart -f mp4 " + shell_quote(partial_path());
   // A dying ffmpeg must surface as a write error, not kill us with SIGPIPE.
   std::signal(SIGPIPE, SIG_IGN);
   pipe_ = popen(cmd.c_str(), "w");
   if (!pipe_) throw std::runtime_error(path + ": cannot start ffmpeg");
 }
 
+std::string VideoWriter::partial_path() const { return path_ + ".partial"; }
+
 VideoWriter::~VideoWriter() {
   if (pipe_) pclose(pipe_);
+  if (!finished_) std::remove(partial_path().c_str());  // never left looking like a video
 }
 
 void VideoWriter::add(const Image& frame) {
   if (frame.width != width_ || frame.height != height_) throw std::runtime_error(path_ + ": frame size changed");
   if (std::fwrite(frame.rgba.data(), 1, frame.rgba.size(), pipe_) != frame.rgba.size()) {
-    throw std::runtime_error(path_ + ": ffmpeg stopped taking frames");
+    throw std::runtime_error(path_ + ": ffmpeg stopped taking frames (its message is above)");
   }
+  ++frames_;
 }
 
 void VideoWriter::finish() {
   if (!pipe_) return;
   const int status = pclose(pipe_);
   pipe_ = nullptr;
-  if (status == -1 || !WIFEXITED(status) || WEXITSTATUS(status) != 0) throw std::runtime_error(path_ + ": ffmpeg failed");
+  if (status == -1 || !WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+    throw std::runtime_error(path_ + ": ffmpeg failed (its message is above)");
+  }
+  // ffmpeg has exited 0 on a full disk with a file nothing can open: the
+  // result counts only when ffprobe reads back every frame.
+  const std::string probe = "ffprobe -v error -select_streams v:0 -count_packets -show_entries stream=nb_read_packets "
+                            "-of csv=p=0 " + shell_quote(partial_path()) + " 2>&1";
+  FILE* p = popen(probe.c_str(), "r");
+  std::string said;
+  if (p) {
+    char line[256];
+    while (std::fgets(line, sizeof line, p)) said += line;
+  }
+  const int probed = p ? pclose(p) : -1;
+  const long frames = std::strtol(said.c_str(), nullptr, 10);
+  if (probed != 0 || frames != long(frames_)) {
+    while (!said.empty() && (said.back() == '\n' || said.back() == ' ')) said.pop_back();
+    throw std::runtime_error(path_ + ": the video ffmpeg wrote is not readable back (ffprobe: " +
+                             (said.empty() ? "no answer" : said) + "; " + std::to_string(frames_) + " frames sent)");
+  }
+  if (std::rename(partial_path().c_str(), path_.c_str()) != 0) {
+    throw std::runtime_error(path_ + ": cannot move the finished video into place (" + std::strerror(errno) + ")");
+  }
+  finished_ = true;
 }
 
 }  // namespace sluice::render

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <exception>
 #include <filesystem>
 
 #include "sluice/io/lod.h"
@@ -95,6 +96,10 @@ ConvertResult convert_frames(const FrameSource& source, std::optional<ParticleFr
   // bad one is written before the conversion stops.
   std::atomic<bool> stop{false};
   std::optional<Error> stopped;
+  // A failed write (disk full) or callback stops the pipeline the same way,
+  // as a value: thrown, it would cancel the frames being encoded mid-way
+  // (TBB cancels their nested parallel loops, which then return unfinished).
+  std::exception_ptr failed;
   tbb::parallel_pipeline(
       std::max<size_t>(2, settings.max_in_flight),
       tbb::make_filter<void, uint64_t>(tbb::filter_mode::serial_in_order,
@@ -126,13 +131,22 @@ ConvertResult convert_frames(const FrameSource& source, std::optional<ParticleFr
               stop = true;
               return;
             }
-            result.frames++;
-            result.particles += count_in(w.encoded.header, LayerSet::particles());
-            result.raw_bytes += w.encoded.raw_bytes;
-            result.input_bytes += w.input_bytes;
-            writer.append(std::move(w.encoded));
-            if (on_frame) on_frame({w.frame, w.input_bytes, w.repairs, w.shape, w.time_given, w.far});
+            if (failed) return;
+            try {
+              const uint64_t particles = count_in(w.encoded.header, LayerSet::particles());
+              const uint64_t raw = w.encoded.raw_bytes;
+              writer.append(std::move(w.encoded));
+              result.frames++;
+              result.particles += particles;
+              result.raw_bytes += raw;
+              result.input_bytes += w.input_bytes;
+              if (on_frame) on_frame({w.frame, w.input_bytes, w.repairs, w.shape, w.time_given, w.far});
+            } catch (...) {
+              failed = std::current_exception();
+              stop = true;
+            }
           }));
+  if (failed) std::rethrow_exception(failed);
   if (stopped) throw *stopped;
   return result;
 }

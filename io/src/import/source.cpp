@@ -74,6 +74,10 @@ const char* format_name(Format f) {
 Format require_readable(const std::string& path) {
   const std::optional<Format> f = format_of(path);
   const std::string ext = extension(path).empty() ? "(no extension)" : extension(path);
+  if (!f && ext == ".sluice") {
+    throw Error({path}, "not a readable .sluice file (its first bytes are not the format's magic): damaged, or another "
+                        "format under this name. `sluice recover` rebuilds a damaged one from its frames");
+  }
   if (!f) throw Error({path}, "unsupported file type " + ext + "; supported: " + kSupported);
 #ifndef SLUICE_WITH_VTK
   if (needs_vtk(*f)) {
@@ -262,8 +266,8 @@ void note_duplicate_ids(ParticleFrame& f) {
     }
   }
   if (extra == 0) return;
-  f.repairs.push_back(std::to_string(distinct) + " particle id" + (distinct == 1 ? "" : "s") +
-                      " occur more than once (" + std::to_string(extra) + " extra particles, e.g. id " +
+  f.repairs.push_back(std::to_string(distinct) + " particle id" + (distinct == 1 ? " occurs" : "s occur") +
+                      " more than once (" + std::to_string(extra) + " extra particles, e.g. id " +
                       std::to_string(example) + "): kept all particles");
 }
 

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+
 namespace sluice::io {
 
 // Called with (frames done, frames total) as work progresses.
@@ -33,17 +34,22 @@ struct VerifyReport {
 VerifyReport verify_container(const std::filesystem::path& path, const ProgressFn& progress = {});
 
 struct RecoveryReport {
-  uint64_t frames = 0;        // frames kept
-  uint64_t bytes_kept = 0;    // header + kept frames
-  uint64_t bytes_dropped = 0; // of the input, after the last good frame (old index included)
-  std::string stopped_because;
+  uint64_t frames = 0;         // frames kept
+  uint64_t bytes_kept = 0;     // of the kept frames' records
+  uint64_t bytes_dropped = 0;  // of the input's other bytes but the header (damaged frames, old index and footer)
+  std::vector<std::string> dropped;  // each damaged frame left out, with its error and byte range
+  bool header_rebuilt = false;       // the header was damaged and its copy used
+  std::string stopped_because;       // why the scan ended ("end of file" when it read to the end)
 };
 
-// Scans the frame records that follow the header, keeps every complete frame
-// whose checksums hold, up to the first that does not, and writes them with a
-// new index to `output`. If `output` is `input`, the file is truncated after
-// the last good frame and the index appended in place. Throws io::Error if
-// the file header itself is unreadable (nothing can be recovered then).
+// Scans the frame records that follow the header and keeps every complete
+// frame whose checksums hold: past a damaged frame the scan goes on at the
+// next record that checks out (frames after it are renumbered to close the
+// gap, their times kept). A damaged header is rebuilt from the copy format
+// 1.5 writers put after it. The result goes to `output` through
+// `output.recovering`, renamed when whole; with `output` equal to `input`
+// and nothing dropped, the tail is cut and the index appended in place.
+// Throws io::Error when neither the header nor its copy is readable.
 RecoveryReport recover_container(const std::filesystem::path& input, const std::filesystem::path& output,
                                  const ProgressFn& progress = {});
 

@@ -78,7 +78,10 @@ struct UpFinding {
 // other direction's, and the columns' leading ends (the floor) must move
 // less than a third of it: a fluid moving as a whole (sway, drift, free fall)
 // is not evidence. nullopt: no clear fall.
+// Frames of fewer than kLeastShapeParticles particles, or with no extent,
+// are left out.
 std::optional<UpFinding> up_from_motion(std::span<const FrameShape> first_frames, float spacing);
+inline constexpr uint64_t kLeastShapeParticles = 64;
 
 // From a pressure-like array (pressure or density: both grow with depth at
 // rest) of one frame: a linear fit against position whose gradient lies

@@ -36,11 +36,18 @@ class ContainerWriter {
   const FileHeader& header() const { return header_; }
   uint64_t frames_written() const { return index_.index().frames.size(); }
   uint64_t bytes_written() const { return offset_; }
+  // A write failed (disk full, I/O error): every later append, header update
+  // and finish throws, so the file never gains an index after a torn
+  // record. Its complete frames can still be rebuilt by `sluice recover`.
+  bool failed() const { return failed_; }
 
  private:
   void write_all(std::span<const std::byte> bytes);
+  static std::vector<std::byte> header_copy(std::span<const std::byte> header);
 
   std::string path_;
+
+  bool failed_ = false;
   FileHeader header_;
   IndexBuilder index_;
   int fd_ = -1;

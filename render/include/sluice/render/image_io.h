@@ -27,7 +27,9 @@ double psnr(const Image& a, const Image& b);
 // True when an `ffmpeg` executable is on PATH.
 bool ffmpeg_available();
 
-// Streams raw RGBA frames into `ffmpeg` (H.264, yuv420p) writing `path`.
+// Streams raw RGBA frames into `ffmpeg` (H.264, yuv420p) writing
+// `path`.partial, renamed to `path` by finish() once ffmpeg has exited 0 and
+// `ffprobe` reads back every frame; otherwise nothing is left at either name.
 class VideoWriter {
  public:
   VideoWriter(const std::string& path, uint32_t width, uint32_t height, double fps);
@@ -35,12 +37,16 @@ class VideoWriter {
   VideoWriter(const VideoWriter&) = delete;
   VideoWriter& operator=(const VideoWriter&) = delete;
   void add(const Image& frame);
-  void finish();  // waits for ffmpeg; throws if it failed
+  void finish();  // waits for ffmpeg; throws if it failed or its file does not read back
 
  private:
+  std::string partial_path() const;
+
   std::string path_;
   uint32_t width_, height_;
   FILE* pipe_ = nullptr;
+  uint64_t frames_ = 0;
+  bool finished_ = false;
 };
 
 }  // namespace sluice::render
