@@ -91,11 +91,15 @@ class Splitter {
     return b;
   }
   // Particles with one code (their cell is still too wide, or too full):
-  // halves along the widest axis, by count, until both limits hold. Codes
-  // stay sorted (they are all equal).
+  // too full only, cut into runs of max_; too wide, halved along the
+  // widest axis, by count, until both limits hold. Codes stay sorted (they
+  // are all equal).
   void halve(uint32_t begin, uint32_t end) {
     const Aabb b = box(begin, end);
-    if (end - begin <= max_ && narrow(b)) return emit(begin, end);
+    if (narrow(b)) {  // only too full: cut evenly, as few chunks as the count needs
+      for (uint32_t at = begin; at < end; at += max_) emit(at, std::min(end, at + max_));
+      return;
+    }
     int axis = 0;
     for (int a = 1; a < 3; ++a) {
       if (b.max[size_t(a)] - b.min[size_t(a)] > b.max[size_t(axis)] - b.min[size_t(axis)]) axis = a;

@@ -5,6 +5,11 @@
 #include <mutex>
 #include <optional>
 
+#include <unistd.h>
+
+#include <cstring>
+
+#include "records.h"
 #include "sluice/io/maintenance.h"
 #include "sluice/io/reader.h"
 
@@ -30,6 +35,23 @@ std::optional<std::string> too_wide(const ChunkDesc& chunk, float bound) {
   return std::nullopt;
 }
 
+// Format 1.5 puts a copy of the header before frame 0 (for `recover`);
+// readers never look at it, so verify does: it must be the header again.
+std::optional<std::string> damaged_header_copy(const ContainerReader& reader) {
+  const uint64_t header_bytes = serialize_file_header(reader.header()).size();
+  const uint64_t first = reader.frame_count() ? reader.index().frames[0].offset : header_bytes;
+  if (first <= header_bytes) return std::nullopt;  // older files have none
+  std::vector<std::byte> head(first);
+  if (::pread(reader.descriptor(), head.data(), head.size(), 0) != ssize_t(head.size())) return "the header's copy cannot be read";
+  uint32_t magic = 0;
+  std::memcpy(&magic, head.data() + header_bytes, 4);
+  const bool same = first == 2 * header_bytes + 4 && magic == kHeaderCopyMagic &&
+                    std::memcmp(head.data(), head.data() + header_bytes + 4, header_bytes) == 0;
+  if (same) return std::nullopt;
+  return "the copy of the header (bytes " + std::to_string(header_bytes) + " to " + std::to_string(first) +
+         ", what `sluice recover` rebuilds a damaged header from) differs from the header";
+}
+
 }  // namespace
 
 VerifyReport verify_container(const std::filesystem::path& path, const ProgressFn& progress) {
@@ -39,6 +61,7 @@ VerifyReport verify_container(const std::filesystem::path& path, const ProgressF
   report.position_bound = position_bound(fh);
   const bool bounded = fh.position_coding == PositionCoding::Quantized16 && std::isfinite(report.position_bound);
   const uint64_t frames = reader.frame_count();
+  if (const auto copy = damaged_header_copy(reader)) report.problems.push_back(Error(reader.location(0), *copy).what());
   for (uint64_t f = 0; f < frames; ++f) {
     try {
       const std::vector<std::byte> record = reader.read_record(f);

@@ -211,7 +211,7 @@ TEST(FirstHour, RenderStraightFromAPvd) {
   ASSERT_EQ(r.status, 0) << r.out;
   EXPECT_TRUE(fs::exists(dir / "shot.png"));
   EXPECT_TRUE(fs::exists(dir / ".sluice-cache" / "dam_break_3d.sluice"));
-  r = sluice(render);
+  r = sluice(render + " --force");  // an image there: render asks before it overwrites
   EXPECT_EQ(r.status, 0) << r.out;
   EXPECT_NE(r.out.find("using its conversion"), std::string::npos) << r.out;
 }
