@@ -67,9 +67,12 @@ void PassRecorder::push(uint32_t p0, uint32_t p1, uint32_t p2) {
   cmd_.pushConstants<PushConstants>(*r_.layout, kAllStages, 0, pc_);
 }
 
+// Storage writes before, storage and sampled reads after: the filter and
+// shading passes sample what the splat passes stored (synchronization
+// validation reports READ_AFTER_WRITE on thick_a_tex without the sampled read).
 void PassRecorder::compute_to_compute() {
   memory_barrier(cmd_, Stage::eComputeShader, Access::eShaderStorageWrite, Stage::eComputeShader,
-                 Access::eShaderStorageRead | Access::eShaderStorageWrite);
+                 Access::eShaderStorageRead | Access::eShaderStorageWrite | Access::eShaderSampledRead);
 }
 
 void PassRecorder::begin_frame(const RenderTarget& target, bool direct) {
