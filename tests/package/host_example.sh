@@ -12,8 +12,29 @@ flags=()
 if [[ -n "$sanitize" ]]; then
   flags=(-DCMAKE_CXX_FLAGS="-fsanitize=$sanitize -fno-omit-frame-pointer" -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=$sanitize")
 fi
+# GLFW and OpenXR hidden: a host that asks for the render component only
+# must configure without them.
 cmake -S "$src/examples/host_vulkan" -B "$scratch/build" -DCMAKE_PREFIX_PATH="$scratch/prefix" \
+  -DCMAKE_DISABLE_FIND_PACKAGE_glfw3=ON -DCMAKE_DISABLE_FIND_PACKAGE_OpenXR=ON \
   -DCMAKE_BUILD_TYPE=Release "${flags[@]}" >/dev/null
+# Asked for, the optional components load (their dependencies are there).
+mkdir -p "$scratch/components"
+cat > "$scratch/components/CMakeLists.txt" <<'CMAKE'
+cmake_minimum_required(VERSION 3.25)
+project(components LANGUAGES CXX)
+find_package(sluice REQUIRED COMPONENTS render desktop xr)
+foreach(t sluice::render sluice::desktop sluice::xr)
+  if(NOT TARGET ${t})
+    message(FATAL_ERROR "${t} missing")
+  endif()
+endforeach()
+CMAKE
+cmake -S "$scratch/components" -B "$scratch/components/build" -DCMAKE_PREFIX_PATH="$scratch/prefix" >/dev/null
+# And hidden, asking for desktop fails.
+if cmake -S "$scratch/components" -B "$scratch/components/hidden" -DCMAKE_PREFIX_PATH="$scratch/prefix" \
+     -DCMAKE_DISABLE_FIND_PACKAGE_glfw3=ON >/dev/null 2>&1; then
+  echo "find_package(sluice COMPONENTS desktop) succeeded without GLFW"; exit 1
+fi
 cmake --build "$scratch/build" -j 2 >/dev/null
 cd "$scratch"
 "$scratch/build/host_vulkan" --check --frames 4 --out "$scratch/host_vulkan.png"
