@@ -4,14 +4,16 @@
 # frames of the larger PySPH run, and the Vulkan loader packages.
 # Output: .gpu/ (ignored by git), carried by the device tool.
 #   [BASE=other/sluice] [VTK_PEER=PREFIX/bin/vtk_fluid_peer] bash bench/device/pack.sh [BIG_VTU_DIR]
+# BIG_VTU_DIR: a folder of solver-sized .vtu frames for the `io` stage (e.g.
+# PySPH's dam break at --dx 0.02, ../shared/DATA.md); without it none are packed.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/../.." && pwd)
-big=${1:-/work/bigdata/dam_break_3d_dx002}
+big=${1:-}
 stage=$(mktemp -d)
 mkdir -p "$stage/lib" "$stage/big" "$root/.gpu"
 ldd "$root/build/apps/sluice/sluice" | awk '{print $3}' | grep '^/' |
   grep -v -E '/(libc|libm|libpthread|libdl|libgcc_s|libstdc\+\+)\.so|ld-linux' | xargs -I{} cp -L {} "$stage/lib/"
-if [[ -d "$big" ]]; then
+if [[ -n "$big" && -d "$big" ]]; then
   ls "$big"/*.vtu | sort -V | awk 'NR % 4 == 0' | head -6 | xargs -I{} cp {} "$stage/big/"
 fi
 tar -C "$stage" -cf - lib big | xz -6 -T2 > "$root/.gpu/pack.tar.xz"

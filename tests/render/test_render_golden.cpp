@@ -1,8 +1,9 @@
 // Golden images of the bundled PySPH dam break (converted at test time) from
 // three viewpoints, 320x240, compared with committed PNGs: PSNR must reach
 // kMinPsnr dB. Regenerate the references (after an intended change of the
-// look) with SLUICE_UPDATE_GOLDEN=1; the images of the last run are kept in
-// the build tree as *_actual.png either way.
+// look) with SLUICE_UPDATE_GOLDEN=1 (the run then fails, so an update is
+// never taken for a pass); the images of the last run are kept in the test
+// temp folder as *_actual.png either way.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -91,16 +92,19 @@ TEST_P(GoldenImage, MatchesReference) {
   EXPECT_EQ(stats.particles, 9360u);
   EXPECT_GT(stats.drawn, 9000u);
   const Image actual{320, 240, r.read_rgba8()};
-  write_png(std::string(g.name) + "_actual.png", actual);
+  // Beside the test's other temporary files, not in the working directory.
+  const fs::path actual_path = fs::path(testing::TempDir()) / (std::string(g.name) + "_actual.png");
+  write_png(actual_path.string(), actual);
   const fs::path reference = fs::path(SLUICE_GOLDEN_DIR) / (std::string(g.name) + ".png");
   if (std::getenv("SLUICE_UPDATE_GOLDEN")) {
+    // Updating is not testing: the run fails so that it is never taken for a pass.
     write_png(reference.string(), actual);
-    GTEST_SKIP() << "wrote " << reference;
+    FAIL() << "wrote " << reference << " (SLUICE_UPDATE_GOLDEN is set: run again without it to test)";
   }
   ASSERT_TRUE(fs::exists(reference)) << reference << " is missing; run with SLUICE_UPDATE_GOLDEN=1 to create it";
   const double db = psnr(read_png(reference.string()), actual);
   std::printf("%s: PSNR %.2f dB against %s\n", g.name, db, reference.c_str());
-  EXPECT_GE(db, kMinPsnr) << "see " << fs::absolute(std::string(g.name) + "_actual.png");
+  EXPECT_GE(db, kMinPsnr) << "see " << actual_path;
 }
 
 INSTANTIATE_TEST_SUITE_P(PySPH, GoldenImage, ::testing::ValuesIn(kGoldens),
