@@ -23,6 +23,8 @@ SceneInfo live_scene(const Bounds& bounds, const LiveOptions& options, std::vect
   s.bounds = bounds;
   s.particle_spacing = options.particle_spacing;
   s.particle_radius = options.particle_radius;
+  const std::array<float, 3> up = io::up_vector(options.up);
+  s.up = {up[0], up[1], up[2]};
   s.coding = io::PositionCoding::Quantized16;
   s.attribute_names = options.attributes;
   attribute_ranges.resize(options.attributes.size(), {0.0f, 1.0f});
@@ -41,6 +43,10 @@ LiveSource::LiveSource(Renderer& renderer, const LiveOptions& options) : rendere
   header_.particle_spacing = options.particle_spacing;
   header_.particle_radius = options.particle_radius;
   header_.frame_rate = options.frame_rate;
+  header_.up = options.up;
+  header_.up_evidence = io::UpEvidence::Given;
+  header_.time_source = io::TimeSource::Input;  // the times pushed with the frames
+  if (options.particle_spacing > 0) header_.precision_bits = io::kDefaultPrecisionBits;
   header_.lod_source = options.ids ? io::LodSource::IdHash : io::LodSource::ParticleOrder;
   if (options.ids) header_.lod_id_array = "ids pushed with each frame";
   for (const std::string& name : options.attributes) header_.attributes.push_back({name});

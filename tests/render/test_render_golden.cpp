@@ -93,7 +93,7 @@ TEST_P(GoldenImage, MatchesReference) {
   EXPECT_GT(stats.drawn, 9000u);
   const Image actual{320, 240, r.read_rgba8()};
   // Beside the test's other temporary files, not in the working directory.
-  const fs::path actual_path = fs::path(testing::TempDir()) / (std::string(g.name) + "_actual.png");
+  const fs::path actual_path = fs::path(::testing::TempDir()) / (std::string(g.name) + "_actual.png");
   write_png(actual_path.string(), actual);
   const fs::path reference = fs::path(SLUICE_GOLDEN_DIR) / (std::string(g.name) + ".png");
   if (std::getenv("SLUICE_UPDATE_GOLDEN")) {

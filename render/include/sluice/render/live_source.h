@@ -41,6 +41,9 @@ struct LiveOptions {
   // Written into the recording's header: rest spacing and render radius
   // (0: unknown), nominal frame rate, and the attributes' names.
   float particle_spacing = 0, particle_radius = 0, frame_rate = 0;
+  // Which world direction points up (the scene's up and the recording's;
+  // a host drawing its own ground passes FluidOptions::ground = false).
+  io::UpAxis up = io::UpAxis::PosZ;
   std::vector<std::string> attributes;
   int color_attribute = -1;             // which attribute the renderer colours by (-1: none)
   bool ids = true;                      // frames carry stable ids; false: LOD values follow the particle index
