@@ -1,8 +1,9 @@
 // sluice/render/frame_feed.h: the one path from the streaming runtime to the
 // renderer. Once per displayed frame, update() asks the runtime::Player which
-// frame is due and, when it changed, commits it to the Renderer (a copy on
-// the transfer queue, overlapped with rendering; record() shows it once the
-// copy is done).
+// frame is due and, when it changed, commits it to the Renderer: a copy
+// (on the transfer queue, the graphics queue without one) and, for frames
+// the GPU decodes, a compute pass on the graphics queue; overlapped with
+// rendering, record() shows the frame once they are done.
 //
 // The player gives a frame's buffers back at its next update(); the copy out
 // of them must be finished by then, so update() first waits for the previous
