@@ -181,6 +181,28 @@ TEST(Recover, SavesEveryGoodFrame) {
   EXPECT_EQ(sluice("recover " + (dir / "junk.sluice").string()).status, 1);
 }
 
+// The fall is written into the header once the first frames show it: a
+// conversion cut short by a bad frame keeps a y-up run's up axis.
+TEST(Recover, CutShortConversionKeepsTheUpAxis) {
+  const fs::path dir = fresh_dir("up");
+  fs::create_directories(dir / "in");
+  for (int f = 0; f < 20; ++f) {
+    char name[32];
+    std::snprintf(name, sizeof name, "in/f_%03d.csv", f);
+    std::ofstream out(dir / name);
+    out << "x,y,z\n";
+    for (int i = 0; i < 6000; ++i) {  // columns whose tops fall along -y, the floor staying
+      const int x = i % 20, y = i / 20 % 15, z = i / 300;
+      out << x * 0.02 + (i % 7) * 1e-4 << ',' << y * 0.02 * (1 - 0.02 * f) << ',' << z * 0.02 << '\n';
+    }
+  }
+  std::ofstream(dir / "in/f_020.csv") << "x,y,z\n1,2\n";
+  const Result c = sluice("convert \"" + (dir / "in/f_*.csv").string() + "\" -o " + (dir / "cut.sluice").string() + " -q");
+  EXPECT_NE(c.status, 0) << c.out;
+  const Result info = sluice("info " + (dir / "cut.sluice").string());
+  EXPECT_NE(info.out.find("+y (found from the fluid's fall"), std::string::npos) << info.out;
+}
+
 // Degenerate frames and repeated ids: spacing from a frame that shows it,
 // a radius, and LOD values that still thin.
 TEST(Degenerate, EmptyFirstFrameAndRepeatedIds) {
