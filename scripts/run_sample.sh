@@ -15,7 +15,7 @@ mkdir -p "$out"
 "$sluice" verify "$out/dam_break_3d.sluice"
 "$sluice" play --headless --quiet "$out/dam_break_3d.sluice"
 if "$sluice" render --help >/dev/null 2>&1; then
-  "$sluice" render "$out/dam_break_3d.sluice" --out "$out/frames" --size 1280x720
+  "$sluice" render "$out/dam_break_3d.sluice" --out "$out/frames" --size 1280x720 --force
   echo "images: $out/frames/"
   if [[ -n "${DISPLAY:-}${WAYLAND_DISPLAY:-}" ]]; then
     "$sluice" play "$out/dam_break_3d.sluice"
