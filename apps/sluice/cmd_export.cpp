@@ -84,15 +84,15 @@ struct OutputPlan {
 
 // OUT is a printf pattern, a single file (one frame), or names a series:
 // out.vtp -> out_00000.vtp ... (frame numbers of the input) and out.pvd.
-OutputPlan plan_outputs(const std::string& out, uint64_t first, uint64_t last) {
+OutputPlan plan_outputs(const std::string& out, const std::vector<uint64_t>& frames) {
   const auto format = io::export_format_of(out);
   if (!format) throw std::runtime_error("-o " + out + ": the format comes from the extension: .vtp, .csv or .ply");
   OutputPlan plan{*format, {}, {}};
-  const bool several = last > first;
+  const bool several = frames.size() > 1;
   std::string series_name;  // the .pvd's path without the extension
   if (out.find('%') != std::string::npos) {
     const FramePattern pattern = parse_pattern(out);
-    for (uint64_t f = first; f <= last; ++f) plan.files[f] = expand(pattern, f);
+    for (uint64_t f : frames) plan.files[f] = expand(pattern, f);
     // "frames/shot_%04d.vtp" -> "frames/shot"; a pattern with no name before the number -> "series".
     const fs::path prefix(pattern.before);
     std::string name = prefix.filename().string();
@@ -101,7 +101,7 @@ OutputPlan plan_outputs(const std::string& out, uint64_t first, uint64_t last) {
   } else {
     const fs::path p(out);
     series_name = (p.parent_path() / p.stem()).string();
-    for (uint64_t f = first; f <= last; ++f) {
+    for (uint64_t f : frames) {
       char number[32];
       std::snprintf(number, sizeof number, "_%05llu", (unsigned long long)f);
       plan.files[f] = several ? series_name + number + p.extension().string() : out;
@@ -158,10 +158,10 @@ std::string pvd_member(const std::string& pvd, const std::string& file) {
 
 // Frames decoded at once: one per core (small frames), but within a memory
 // budget for big ones (a frame is decoded, then copied out as floats).
-size_t frames_in_flight(const io::ContainerReader& reader, uint64_t first, uint64_t last, size_t attributes) {
+size_t frames_in_flight(const io::ContainerReader& reader, const std::vector<uint64_t>& frames, size_t attributes) {
   constexpr double kBudgetBytes = 4e9;
   uint64_t largest = 1;
-  for (uint64_t f = first; f <= last; ++f) largest = std::max(largest, reader.index().frames[f].particle_count);
+  for (uint64_t f : frames) largest = std::max(largest, reader.index().frames[f].particle_count);
   const double per_particle = double(io::decoded_particle_bytes(reader.header().position_coding)) + 14.0 +
                               2.0 * double(reader.header().attributes.size()) + 4.0 * double(attributes);
   const double fit = kBudgetBytes / (per_particle * double(largest));
@@ -191,9 +191,9 @@ FrameWritten export_frame(const io::ContainerReader& reader, uint64_t f, const s
 
 void run_export(const ExportCommand& o) {
   const io::ContainerReader reader(o.input);
-  const auto [first, last] = parse_frame_range(o.frames, reader.frame_count());
+  const std::vector<uint64_t> frames = parse_frame_list(o.frames, reader.frame_count());
   const std::vector<size_t> attributes = attribute_indices(reader.header(), o.attributes, o.input);
-  const OutputPlan plan = plan_outputs(o.out, first, last);
+  const OutputPlan plan = plan_outputs(o.out, frames);
   prepare_outputs(plan, o.force);
   const bool thin = o.lod_level < 1;
   if (thin && !o.quiet && reader.header().lod_source == io::LodSource::ParticleOrder) {
@@ -205,17 +205,21 @@ void run_export(const ExportCommand& o) {
 
   // Frames are decoded, thinned and written in parallel (one file each), a
   // bounded number at a time; progress and the .pvd follow frame order.
-  const uint64_t count = last - first + 1;
+  const uint64_t count = frames.size();
   ProgressBar bar("frames", count, o.quiet);
   std::vector<io::PvdEntry> entries;
   FrameWritten total;
-  uint64_t next = first;
+  size_t next = 0;
+  uint64_t done = 0;
   tbb::parallel_pipeline(
-      frames_in_flight(reader, first, last, attributes.size()),
+      frames_in_flight(reader, frames, attributes.size()),
       tbb::make_filter<void, uint64_t>(tbb::filter_mode::serial_in_order,
                                        [&](tbb::flow_control& fc) -> uint64_t {
-                                         if (next > last) fc.stop();
-                                         return next++;
+                                         if (next == frames.size()) {
+                                           fc.stop();
+                                           return 0;
+                                         }
+                                         return frames[next++];
                                        }) &
           tbb::make_filter<uint64_t, FrameWritten>(
               tbb::filter_mode::parallel,
@@ -226,7 +230,7 @@ void run_export(const ExportCommand& o) {
             total.kept += w.kept;
             total.bytes_in += w.bytes_in;
             total.bytes_out += w.bytes_out;
-            bar.update(w.frame - first + 1, total.bytes_in, total.bytes_out);
+            bar.update(++done, total.bytes_in, total.bytes_out);
           }));
   if (!plan.pvd.empty()) total.bytes_out += io::write_pvd(plan.pvd, entries);
   bar.finish();
@@ -272,7 +276,7 @@ void add_export(CLI::App& app) {
       "  sluice export dam.sluice -o 'out/step_%04d.vtp' --frames 100: --force\n");
   cmd->add_option("input", o->input, ".sluice file")->required()->check(CLI::ExistingFile);
   cmd->add_option("-o,--out", o->out, "Output .vtp, .csv or .ply (a series pattern for several frames)")->required();
-  cmd->add_option("--frames", o->frames, "Frames A:B (inclusive), A, A: or :B (default: all)");
+  cmd->add_option("--frames", o->frames, "Frames A:B (inclusive), A, A: or :B, or a list of them: 0,25,50 (default: all)");
   cmd->add_option("--lod-level", o->lod_level,
                   "Keep this fraction of the particles, chosen by stable LOD value: the same ones every frame")
       ->capture_default_str()

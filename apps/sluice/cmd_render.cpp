@@ -60,13 +60,18 @@ void run_render(const RenderCommand& o, const ViewSettings& v) {
   namespace fs = std::filesystem;
   const PlayableFile input = open_playable(o.input, {o.no_cache, o.quiet});
   const io::ContainerReader reader(input.path());
-  const auto [first, last] = parse_frame_range(o.frames, reader.frame_count());
+  // A list (0,25,50) plays every frame between its first and last and draws those listed.
+  const std::vector<uint64_t> frames = parse_frame_list(o.frames, reader.frame_count());
+  const uint64_t first = frames.front(), last = frames.back();
   const auto [width, height] = parse_size(o.size);
   const bool video = fs::path(o.out).extension() == ".mp4";
-  const bool single = first == last;
+  const bool single = frames.size() == 1;
   // Like convert and export: nothing is overwritten unless asked.
-  for (const std::string& taken : {video ? o.out : frame_path(o.out, first, single), video ? std::string() : frame_path(o.out, last, single)}) {
-    if (!taken.empty() && fs::exists(taken) && !o.force) {
+  std::vector<std::string> outputs;
+  if (video) outputs.push_back(o.out);
+  else for (uint64_t f : frames) outputs.push_back(frame_path(o.out, f, single));
+  for (const std::string& taken : outputs) {
+    if (fs::exists(taken) && !o.force) {
       throw std::runtime_error(taken + " exists; pass --force to overwrite it, or -o to write elsewhere");
     }
   }
@@ -117,8 +122,9 @@ void run_render(const RenderCommand& o, const ViewSettings& v) {
   runtime::Player player(reader, staging, clock, po);
   render::FrameFeed feed(renderer, player, &staging, color);
   player.play();
-  ProgressBar bar("frames", last - first + 1, o.quiet);
+  ProgressBar bar("frames", frames.size(), o.quiet);
   render::Image image{width, height, {}};
+  size_t drawn = 0;  // of `frames`
   for (uint64_t f = first; f <= last;) {
     player.wait_for_due();
     const render::FeedUpdate fed = feed.update();
@@ -127,6 +133,10 @@ void run_render(const RenderCommand& o, const ViewSettings& v) {
       if (player.state() == runtime::PlayerState::Ended || player.state() == runtime::PlayerState::Stopped) {
         throw std::runtime_error(o.input + ": playback ended before frame " + std::to_string(f));
       }
+      continue;
+    }
+    if (f != frames[drawn]) {  // between two listed frames
+      ++f;
       continue;
     }
     renderer.wait_upload(fed.ticket);  // draw exactly this frame
@@ -141,7 +151,7 @@ void run_render(const RenderCommand& o, const ViewSettings& v) {
                " particles drawn; GPU ms:" + passes + "; total " + fixed(stats.gpu_ms, 2));
       if (stats.classification.ran) bar.print("  " + render::describe(stats.classification));
     }
-    bar.update(f - first + 1);
+    bar.update(++drawn);
     ++f;
   }
   if (writer) writer->finish();
@@ -152,7 +162,7 @@ void run_render(const RenderCommand& o, const ViewSettings& v) {
   }
   if (!o.quiet) {
     const std::string where = video ? o.out : single ? frame_path(o.out, first, true) : o.out;
-    std::printf("wrote %s (%llu frame%s, %s)\n", where.c_str(), (unsigned long long)(last - first + 1),
+    std::printf("wrote %s (%llu frame%s, %s)\n", where.c_str(), (unsigned long long)frames.size(),
                 single ? "" : "s", human_duration(bar.elapsed()).c_str());
   }
 }
@@ -173,7 +183,7 @@ void add_render(CLI::App& app) {
   cmd->add_option("input", o->input,
                   ".sluice file, or anything `convert` reads (converted once into a cache beside it)")->required();
   cmd->add_flag("--no-cache", o->no_cache, "Input that is not .sluice: convert into a temporary file, not the cache");
-  cmd->add_option("--frames", o->frames, "Frames A:B (inclusive), A, A: or :B (default: all)");
+  cmd->add_option("--frames", o->frames, "Frames A:B (inclusive), A, A: or :B, or a list of them: 0,25,50 (default: all)");
   cmd->add_option("-o,--out", o->out, "Output directory, .png, pattern or .mp4")->capture_default_str();
   cmd->add_option("--size", o->size, "Image size WIDTHxHEIGHT")->capture_default_str();
   cmd->add_option("--fps", o->fps, "MP4 frame rate (default: the file's)");

@@ -1,6 +1,7 @@
 // --frames A:B, shared by the commands that take a range of frames.
 #include "frame_range.h"
 
+#include <algorithm>
 #include <stdexcept>
 
 namespace sluice::app {
@@ -34,6 +35,22 @@ std::pair<uint64_t, uint64_t> parse_frame_range(const std::string& spec, uint64_
     throw std::runtime_error("--frames " + spec + ": the file has frames 0.." + std::to_string(count - 1));
   }
   return {a, b};
+}
+
+std::vector<uint64_t> parse_frame_list(const std::string& spec, uint64_t count) {
+  std::vector<uint64_t> frames;
+  size_t from = 0;
+  do {
+    const size_t comma = spec.find(',', from);
+    const std::string piece = spec.substr(from, comma == std::string::npos ? std::string::npos : comma - from);
+    if (piece.empty() && !spec.empty()) throw std::runtime_error("--frames: an empty item in '" + spec + "'");
+    const auto [a, b] = parse_frame_range(piece, count);
+    for (uint64_t f = a; f <= b; ++f) frames.push_back(f);
+    from = comma == std::string::npos ? std::string::npos : comma + 1;
+  } while (from != std::string::npos);
+  std::sort(frames.begin(), frames.end());
+  frames.erase(std::unique(frames.begin(), frames.end()), frames.end());
+  return frames;
 }
 
 }  // namespace sluice::app

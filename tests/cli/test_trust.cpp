@@ -147,6 +147,21 @@ TEST(EveryFailure, RenderRefusesToOverwrite) {
   EXPECT_EQ(sluice(render + " -f").status, 0);
 }
 
+// --frames takes a list: render and export write exactly the listed frames.
+TEST(Friction, FrameLists) {
+  const fs::path dir = fresh_dir("lists");
+  ASSERT_EQ(sluice("convert " + kSample + "/dam_break_3d.pvd -o " + (dir / "d.sluice").string() + " -q").status, 0);
+  const Result r = sluice("render " + (dir / "d.sluice").string() + " --frames 0,6,12 --size 96x64 -q -o " + (dir / "shots").string());
+  ASSERT_EQ(r.status, 0) << r.out;
+  for (const char* f : {"frame_00000.png", "frame_00006.png", "frame_00012.png"}) EXPECT_TRUE(fs::exists(dir / "shots" / f)) << f;
+  EXPECT_FALSE(fs::exists(dir / "shots/frame_00001.png"));
+  const Result e = sluice("export " + (dir / "d.sluice").string() + " --frames 3,9 -o " + (dir / "out/x.vtp").string());
+  ASSERT_EQ(e.status, 0) << e.out;
+  EXPECT_TRUE(fs::exists(dir / "out/x_00003.vtp"));
+  EXPECT_TRUE(fs::exists(dir / "out/x_00009.vtp"));
+  EXPECT_FALSE(fs::exists(dir / "out/x_00004.vtp"));
+}
+
 // Recover keeps the frames after a damaged one, rebuilds a damaged header
 // from its copy, and fails when there is nothing to save.
 TEST(Recover, SavesEveryGoodFrame) {

@@ -526,3 +526,20 @@ TEST(FrameRange, Errors) {
   }
   EXPECT_THROW(parse_frame_range("", 0), std::runtime_error);
 }
+
+TEST(FrameRange, Lists) {
+  using app::parse_frame_list;
+  using List = std::vector<uint64_t>;
+  EXPECT_EQ(parse_frame_list("", 3), List({0, 1, 2}));
+  EXPECT_EQ(parse_frame_list("0,25,50", 51), List({0, 25, 50}));
+  EXPECT_EQ(parse_frame_list("50,0,25,0", 51), List({0, 25, 50}));  // sorted, each once
+  EXPECT_EQ(parse_frame_list("0:2,48:", 51), List({0, 1, 2, 48, 49, 50}));
+  for (const char* bad : {"0,,2", "0,", ",1", "0,51", "0,4:2"}) {
+    try {
+      parse_frame_list(bad, 51);
+      ADD_FAILURE() << "accepted '" << bad << "'";
+    } catch (const std::runtime_error& e) {
+      EXPECT_NE(std::string(e.what()).find("--frames"), std::string::npos) << e.what();
+    }
+  }
+}
