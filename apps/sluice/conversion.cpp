@@ -189,6 +189,64 @@ bool ids_repeat(const io::ParticleFrame& frame) {
   return double(ids.size() - distinct) > 0.01 * double(ids.size());
 }
 
+std::optional<io::UpAxis> up_given(const ConversionOptions& o) {
+  if (o.up.empty()) return std::nullopt;
+  const std::optional<io::UpAxis> up = io::parse_up_axis(o.up);
+  if (!up) throw std::runtime_error("--up: expected x, y, z, -x, -y or -z, got '" + o.up + "'");
+  return up;
+}
+
+// The header from the options and the first frame with particles (times
+// and the up axis are decided after).
+io::FileHeader header_for(const ConversionOptions& o, const io::FrameSource& source, const io::ParticleFrame& populated,
+                          float found_spacing, const std::vector<std::string>& attributes) {
+  io::FileHeader header;
+  header.position_coding = o.lossless ? io::PositionCoding::Float32 : io::PositionCoding::Quantized16;
+  header.particle_spacing = o.spacing > 0 ? o.spacing : found_spacing;
+  header.particle_radius = radius_for(o, header.particle_spacing, populated);
+  header.precision_bits = o.lossless ? 0 : precision_bits(o.precision);
+  if (o.drop_outliers > 0 && !(header.particle_spacing > 0)) {
+    throw std::runtime_error("--drop-outliers counts in particle spacings, and the spacing of " + o.input +
+                             " is unknown: pass --spacing too");
+  }
+  for (const std::string& a : attributes) header.attributes.push_back({a});
+  header.lod_id_array = source.info().id_array;
+  header.lod_source = header.lod_id_array.empty() ? io::LodSource::ParticleOrder : io::LodSource::IdHash;
+  header.source = source.info().description;
+  return header;
+}
+
+// What is about to happen, on stderr (unless quiet).
+void describe_plan(const ConversionOptions& o, const io::FrameSource& source, uint64_t frames, const io::FileHeader& header) {
+  if (!o.quiet) {
+    std::fprintf(stderr, "converting %s\n  %llu frames, spacing %g (%s), radius %g, %s positions, LOD from %s\n",
+                 source.info().description.c_str(), (unsigned long long)frames, header.particle_spacing,
+                 o.spacing > 0 ? "given" : "estimated", header.particle_radius,
+                 o.lossless ? "float32 (lossless)" : "16-bit quantized",
+                 header.lod_id_array.empty() ? "particle order" : ("id array '" + header.lod_id_array + "'").c_str());
+  }
+  if (header.lod_id_array.empty()) {
+    note(o, "warning: no particle id array found (looked for id, Idp, gid, particle_id, ...): LOD values follow\n"
+            "         the particle order, stable only if the solver writes particles in the same order each\n"
+            "         frame. Pass --id-array NAME if the ids have another name.");
+  }
+}
+
+// The warnings counted over the frames, once at the end.
+void report_totals(const ConversionOptions& o, size_t suppressed, uint64_t far_particles, uint64_t far_frames,
+                   uint64_t untimed) {
+  if (suppressed) std::fprintf(stderr, "warning: %zu more warnings not shown\n", suppressed);
+  if (far_particles > 0) {
+    note(o, "warning: " + std::to_string(far_particles) + " far particle" + (far_particles == 1 ? "" : "s") + " in " +
+                std::to_string(far_frames) + " frame" + (far_frames == 1 ? "" : "s") +
+                (o.drop_outliers > 0 ? " dropped" : " kept (every other particle keeps its precision)"));
+  }
+  if (untimed) {
+    note(o, "warning: " + std::to_string(untimed) + " frames state no time while the others do: their time is "
+                "their frame number");
+  }
+}
+
 }  // namespace
 
 ConversionSummary convert_input(const ConversionOptions& o, const std::string& output) {
@@ -196,11 +254,7 @@ ConversionSummary convert_input(const ConversionOptions& o, const std::string& o
   std::optional<tbb::global_control> limit;
   if (o.jobs > 0) limit.emplace(tbb::global_control::max_allowed_parallelism, size_t(o.jobs));
   const int jobs = o.jobs > 0 ? o.jobs : tbb::info::default_concurrency();
-  std::optional<io::UpAxis> given_up;
-  if (!o.up.empty()) {
-    given_up = io::parse_up_axis(o.up);
-    if (!given_up) throw std::runtime_error("--up: expected x, y, z, -x, -y or -z, got '" + o.up + "'");
-  }
+  const std::optional<io::UpAxis> given_up = up_given(o);
 
   io::ImportOptions import;
   import.id_array = o.id_array;
@@ -228,45 +282,23 @@ ConversionSummary convert_input(const ConversionOptions& o, const std::string& o
     source = open_input(o, import);
     first->ids.clear();
   }
-  io::FileHeader header;
-  header.position_coding = o.lossless ? io::PositionCoding::Float32 : io::PositionCoding::Quantized16;
-  header.particle_spacing = o.spacing > 0 ? o.spacing : found_spacing;
-  header.particle_radius = radius_for(o, header.particle_spacing, *populated);
-  header.precision_bits = o.lossless ? 0 : precision_bits(o.precision);
-  if (o.drop_outliers > 0 && !(header.particle_spacing > 0)) {
-    throw std::runtime_error("--drop-outliers counts in particle spacings, and the spacing of " + o.input +
-                             " is unknown: pass --spacing too");
-  }
-  for (const std::string& a : import.attributes) header.attributes.push_back({a});
-  header.lod_id_array = source->info().id_array;
-  header.lod_source = header.lod_id_array.empty() ? io::LodSource::ParticleOrder : io::LodSource::IdHash;
-  header.source = source->info().description;
+  io::FileHeader header = header_for(o, *source, *populated, found_spacing, import.attributes);
   io::ConvertSettings settings;
   choose_times(o, *first, header, settings.time_step);
   // Until the frames have shown which way is up, the header says what the
   // first frame's shape says (what a recovered, cut-off file keeps).
-  // (without far particles: one at 1e6 would make every column one cell)
-  settings.shape_grid.box = io::find_far_particles(first->positions, header.particle_spacing).bulk;
+  // (a frame with particles; without far particles: one at 1e6 would make
+  // every column one cell)
+  settings.shape_grid.box = io::find_far_particles(populated->positions, header.particle_spacing).bulk;
   settings.shape_grid.cell = 2 * header.particle_spacing;
   // Extent only (sampled): the columns of frame 0 are measured in the pipeline.
-  const io::FrameShape first_shape = io::measure_shape(first->positions);
+  const io::FrameShape first_shape = io::measure_shape(populated->positions);
   const std::optional<io::UpFinding> provisional = io::up_from_shape(first_shape);
   header.up = given_up ? *given_up : provisional ? provisional->up : io::UpAxis::PosZ;
   header.up_evidence = given_up ? io::UpEvidence::Given : provisional ? provisional->evidence : io::UpEvidence::Default;
   settings.shape_frames = given_up ? 0 : 16;
 
-  if (!o.quiet) {
-    std::fprintf(stderr, "converting %s\n  %llu frames, spacing %g (%s), radius %g, %s positions, LOD from %s\n",
-                 source->info().description.c_str(), (unsigned long long)frames, header.particle_spacing,
-                 o.spacing > 0 ? "given" : "estimated", header.particle_radius,
-                 o.lossless ? "float32 (lossless)" : "16-bit quantized",
-                 header.lod_id_array.empty() ? "particle order" : ("id array '" + header.lod_id_array + "'").c_str());
-  }
-  if (header.lod_id_array.empty()) {
-    note(o, "warning: no particle id array found (looked for id, Idp, gid, particle_id, ...): LOD values follow\n"
-            "         the particle order, stable only if the solver writes particles in the same order each\n"
-            "         frame. Pass --id-array NAME if the ids have another name.");
-  }
+  describe_plan(o, *source, frames, header);
 
   // One writer per output: a second convert (or player filling the same
   // cache entry) stops here, naming this one, instead of sharing the .partial.
@@ -339,16 +371,7 @@ ConversionSummary convert_input(const ConversionOptions& o, const std::string& o
   skipped.insert(skipped.end(), result.skipped.begin(), result.skipped.end());
   bar.finish();
   report_skipped(skipped);
-  if (suppressed) std::fprintf(stderr, "warning: %zu more warnings not shown\n", suppressed);
-  if (far_particles > 0) {
-    note(o, "warning: " + std::to_string(far_particles) + " far particle" + (far_particles == 1 ? "" : "s") + " in " +
-                std::to_string(far_frames) + " frame" + (far_frames == 1 ? "" : "s") +
-                (o.drop_outliers > 0 ? " dropped" : " kept (every other particle keeps its precision)"));
-  }
-  if (untimed) {
-    note(o, "warning: " + std::to_string(untimed) + " frames state no time while the others do: their time is "
-                "their frame number");
-  }
+  report_totals(o, suppressed, far_particles, far_frames, untimed);
 
   if (given_up) {
     note(o, "up: " + io::up_axis_name(header.up) + " (given)");
