@@ -1,6 +1,5 @@
 // `sluice synth`: a synthetic fluid sequence for scale runs (10M particles x
 // 200 frames and up) without any solver output at hand.
-#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <filesystem>
@@ -65,7 +64,7 @@ void add_synth(CLI::App& app) {
   cmd->add_flag("--no-layers", [o](int64_t) { o->layers = false; },
                 "Do not classify the narrow band: every frame one layer of all its particles");
   cmd->add_option_function<double>(
-         "--precision", [o](double p) { o->precision_bits = uint8_t(std::clamp(int(std::ceil(-std::log2(p) - 1e-9)), 1, 40)); },
+         "--precision", [o](double p) { o->precision_bits = io::precision_bits_for(p); },
          "Largest position error as a fraction of the spacing, rounded down to a power of two (default 1/1024)")
       ->check(CLI::Range(1e-12, 0.5));
   cmd->add_flag("--no-tiers", [o](int64_t) { o->lod_tiers = false; },

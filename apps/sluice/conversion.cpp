@@ -110,13 +110,6 @@ io::UpFinding find_up(const ConversionOptions& o, const std::vector<io::FrameSha
   return f;
 }
 
-// precision (relative to the spacing) -> the exponent k of 2^-k at or below it.
-uint8_t precision_bits(double precision) {
-  if (!(precision > 0)) return io::kDefaultPrecisionBits;
-  const int k = int(std::ceil(-std::log2(precision) - 1e-9));
-  return uint8_t(std::clamp(k, 1, 40));
-}
-
 std::string number(double v) {
   char text[32];
   std::snprintf(text, sizeof text, "%.4g", v);
@@ -204,7 +197,7 @@ io::FileHeader header_for(const ConversionOptions& o, const io::FrameSource& sou
   header.position_coding = o.lossless ? io::PositionCoding::Float32 : io::PositionCoding::Quantized16;
   header.particle_spacing = o.spacing > 0 ? o.spacing : found_spacing;
   header.particle_radius = radius_for(o, header.particle_spacing, populated);
-  header.precision_bits = o.lossless ? 0 : precision_bits(o.precision);
+  header.precision_bits = o.lossless ? 0 : io::precision_bits_for(o.precision);
   if (o.drop_outliers > 0 && !(header.particle_spacing > 0)) {
     throw std::runtime_error("--drop-outliers counts in particle spacings, and the spacing of " + o.input +
                              " is unknown: pass --spacing too");

@@ -437,7 +437,6 @@ std::vector<EncodedChunk> keep_tiers_that_pay(std::vector<EncodedChunk> records,
 
 EncodedFrame encode_frame(const FrameInput& in, const FileHeader& header, const EncodeOptions& options) {
   check_input(in, header);
-  const size_t n = in.positions.size() / 3;
   EncodedFrame frame;
   FrameHeader& fh = frame.header;
   fh.time = in.time;
@@ -446,12 +445,7 @@ EncodedFrame encode_frame(const FrameInput& in, const FileHeader& header, const 
   // rest they would widen a chunk's box, and so its quantization step.
   const FarParticles far = find_far_particles(in.positions, header.particle_spacing);
   fh.bounds = far.bulk;
-  frame.far_particles = far.far.size();
-  frame.far_threshold = far.threshold;
-  if (!far.far.empty()) {
-    frame.farthest = far.farthest;
-    for (size_t a = 0; a < 3; ++a) frame.farthest_position[a] = in.positions[3 * size_t(far.farthest) + a];
-  }
+  frame.far = report_far(far, in.positions, false);
   std::optional<FrameCopy> bulk;
   if (!far.far.empty()) bulk.emplace(in, far.far);
   const FrameInput& body = bulk ? bulk->input : in;

@@ -68,6 +68,22 @@ float chunk_extent_limit(const FileHeader& h) {
   return bound > 0 ? bound * 131070.0f : INFINITY;
 }
 
+uint8_t precision_bits_for(double fraction) {
+  if (!(fraction > 0)) return kDefaultPrecisionBits;
+  const int k = int(std::ceil(-std::log2(fraction) - 1e-9));
+  return uint8_t(std::clamp(k, 1, 40));
+}
+
+int axis_over_bound(const Aabb& box, float bound) {
+  for (int a = 0; a < 3; ++a) {
+    const float lo = box.min[size_t(a)], hi = box.max[size_t(a)];
+    const float big = std::max(std::fabs(lo), std::fabs(hi));
+    const double ulp = double(std::nextafter(big, INFINITY) - big);
+    if ((double(hi) - double(lo)) / 131070.0 > double(bound) + 2.0 * ulp) return a;
+  }
+  return -1;
+}
+
 const char* time_source_name(TimeSource t) {
   switch (t) {
     case TimeSource::Input: return "input";
@@ -101,6 +117,15 @@ std::vector<std::byte> serialize_file_header(const FileHeader& h) {
   const auto total = static_cast<uint32_t>(out.size() + 8);
   std::memcpy(out.data() + 12, &total, 4);
   w.u64(checksum(out));
+  return out;
+}
+
+std::vector<std::byte> serialize_header_copy(std::span<const std::byte> header) {
+  std::vector<std::byte> out;
+  out.reserve(4 + header.size());
+  ByteWriter w(out);
+  w.u32(kHeaderCopyMagic);
+  w.bytes(header.data(), header.size());
   return out;
 }
 

@@ -43,6 +43,17 @@ struct Tally {
 
 }  // namespace
 
+FarReport report_far(const FarParticles& far, std::span<const float> xyz, bool dropped) {
+  FarReport r;
+  r.count = far.far.size();
+  r.dropped = dropped;
+  r.threshold = far.threshold;
+  if (far.far.empty()) return r;
+  r.farthest = far.farthest;
+  for (size_t a = 0; a < 3; ++a) r.position[a] = xyz[3 * size_t(far.farthest) + a];
+  return r;
+}
+
 FarParticles find_far_particles(std::span<const float> xyz, float spacing, float distance) {
   const size_t n = xyz.size() / 3;
   FarParticles out;

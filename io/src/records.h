@@ -18,6 +18,9 @@ inline constexpr std::array<uint8_t, 8> kFooterMagic = {'S', 'L', 'U', 'I', 'C',
 inline constexpr size_t kFileHeaderFixedBytes = 36;
 
 std::vector<std::byte> serialize_file_header(const FileHeader& header);
+// The copy of the header that follows it (format 1.5, what `recover`
+// rebuilds a damaged header from): kHeaderCopyMagic, then `header`'s bytes.
+std::vector<std::byte> serialize_header_copy(std::span<const std::byte> header);
 // Reads header_bytes from the fixed part (first kFileHeaderFixedBytes bytes).
 uint32_t peek_file_header_bytes(std::span<const std::byte> fixed, const ErrorLocation& where);
 FileHeader parse_file_header(std::span<const std::byte> bytes, const ErrorLocation& where);

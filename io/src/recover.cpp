@@ -193,9 +193,7 @@ void write_recovered(int in_fd, int out_fd, const Scan& scan, const std::string&
                      IndexBuilder& index) {
   const std::vector<std::byte> header = serialize_file_header(scan.header);
   write_all_or_throw(out_fd, header, out);
-  std::vector<std::byte> copy(4 + header.size());
-  std::memcpy(copy.data(), &kHeaderCopyMagic, 4);
-  std::memcpy(copy.data() + 4, header.data(), header.size());
+  const std::vector<std::byte> copy = serialize_header_copy(header);
   write_all_or_throw(out_fd, copy, out);
   uint64_t offset = header.size() + copy.size();
   const size_t attributes = scan.header.attributes.size();

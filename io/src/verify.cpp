@@ -1,13 +1,12 @@
 #include <tbb/parallel_for.h>
 
+#include <unistd.h>
+
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <mutex>
 #include <optional>
-
-#include <unistd.h>
-
-#include <cstring>
 
 #include "records.h"
 #include "sluice/io/maintenance.h"
@@ -17,22 +16,16 @@ namespace sluice::io {
 
 namespace {
 
-// A chunk's quantization step, per axis, must stay within the file's bound
-// (two ulps of the coordinate aside: float32 input is no finer).
+// Why a chunk's box breaks the file's bound (axis_over_bound), if it does.
 std::optional<std::string> too_wide(const ChunkDesc& chunk, float bound) {
+  const int a = axis_over_bound(chunk.bounds, bound);
+  if (a < 0) return std::nullopt;
   static const char* const kAxis[] = {"x", "y", "z"};
-  for (size_t a = 0; a < 3; ++a) {
-    const float lo = chunk.bounds.min[a], hi = chunk.bounds.max[a];
-    const float ulp = std::nextafter(std::max(std::fabs(lo), std::fabs(hi)), INFINITY) - std::max(std::fabs(lo), std::fabs(hi));
-    const double step = (double(hi) - double(lo)) / 131070.0;
-    if (step > double(bound) + 2.0 * double(ulp)) {
-      char text[200];
-      std::snprintf(text, sizeof text, "its box is %g wide along %s: positions may be off by %g, more than the file's bound %g",
-                    double(hi) - double(lo), kAxis[a], step, double(bound));
-      return text;
-    }
-  }
-  return std::nullopt;
+  const double width = double(chunk.bounds.max[size_t(a)]) - double(chunk.bounds.min[size_t(a)]);
+  char text[200];
+  std::snprintf(text, sizeof text, "its box is %g wide along %s: positions may be off by %g, more than the file's bound %g",
+                width, kAxis[a], width / 131070.0, double(bound));
+  return text;
 }
 
 // Format 1.5 puts a copy of the header before frame 0 (for `recover`);
@@ -43,11 +36,9 @@ std::optional<std::string> damaged_header_copy(const ContainerReader& reader) {
   if (first <= header_bytes) return std::nullopt;  // older files have none
   std::vector<std::byte> head(first);
   if (::pread(reader.descriptor(), head.data(), head.size(), 0) != ssize_t(head.size())) return "the header's copy cannot be read";
-  uint32_t magic = 0;
-  std::memcpy(&magic, head.data() + header_bytes, 4);
-  const bool same = first == 2 * header_bytes + 4 && magic == kHeaderCopyMagic &&
-                    std::memcmp(head.data(), head.data() + header_bytes + 4, header_bytes) == 0;
-  if (same) return std::nullopt;
+  const std::span<const std::byte> header = std::span(head).first(header_bytes);
+  const std::vector<std::byte> expected = serialize_header_copy(header);
+  if (std::ranges::equal(std::span(head).subspan(header_bytes), expected)) return std::nullopt;
   return "the copy of the header (bytes " + std::to_string(header_bytes) + " to " + std::to_string(first) +
          ", what `sluice recover` rebuilds a damaged header from) differs from the header";
 }

@@ -4,7 +4,6 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <cstring>
 
 #include "file.h"
 #include "records.h"
@@ -20,17 +19,7 @@ ContainerWriter::ContainerWriter(const std::filesystem::path& path, FileHeader h
   fd_ = open_or_throw(path_, O_WRONLY | O_CREAT | O_TRUNC);
   const std::vector<std::byte> bytes = serialize_file_header(header_);
   write_all(bytes);
-  write_all(header_copy(bytes));
-}
-
-// The copy `sluice recover` rebuilds a damaged header from: a magic word,
-// then the header's bytes again (they carry their own size and checksum).
-std::vector<std::byte> ContainerWriter::header_copy(std::span<const std::byte> header) {
-  std::vector<std::byte> out(4 + header.size());
-  const uint32_t magic = kHeaderCopyMagic;
-  std::memcpy(out.data(), &magic, 4);
-  std::memcpy(out.data() + 4, header.data(), header.size());
-  return out;
+  write_all(serialize_header_copy(bytes));
 }
 
 ContainerWriter::~ContainerWriter() {
@@ -65,7 +54,7 @@ void ContainerWriter::update_header(const FileHeader& header) {
       header.position_coding != header_.position_coding) {
     throw Error({path_}, "header update would change its size or the frames' layout");
   }
-  const std::vector<std::byte> copy = header_copy(bytes);
+  const std::vector<std::byte> copy = serialize_header_copy(bytes);
   if (::pwrite(fd_, bytes.data(), bytes.size(), 0) != ssize_t(bytes.size()) ||
       ::pwrite(fd_, copy.data(), copy.size(), off_t(bytes.size())) != ssize_t(copy.size())) {
     throw Error({path_}, "could not rewrite the file header");

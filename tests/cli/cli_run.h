@@ -17,9 +17,8 @@ struct Result {
   std::string out;  // stdout, then stderr when asked
 };
 
-// Runs `ENV sluice ARGS` through the shell; `both`: stderr joins stdout.
-inline Result run_sluice(const std::string& args, const std::string& env = "", bool both = true) {
-  const std::string command = env + " \"" + SLUICE_BINARY + "\" " + args + (both ? " 2>&1" : " 2>/dev/null");
+// Runs a shell command line; its stdout (with whatever redirection it asks) is the output.
+inline Result run_command(const std::string& command) {
   Result r;
   FILE* pipe = popen(command.c_str(), "r");
   if (!pipe) return r;
@@ -34,6 +33,11 @@ inline Result run_sluice(const std::string& args, const std::string& env = "", b
     r.signal = WTERMSIG(status);
   }
   return r;
+}
+
+// Runs `ENV sluice ARGS` through the shell; `both`: stderr joins stdout.
+inline Result run_sluice(const std::string& args, const std::string& env = "", bool both = true) {
+  return run_command(env + " \"" + SLUICE_BINARY + "\" " + args + (both ? " 2>&1" : " 2>/dev/null"));
 }
 
 // An empty folder under the test temp folder: `suite`/`name`.

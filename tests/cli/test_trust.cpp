@@ -21,20 +21,20 @@ const std::string kBinary = SLUICE_BINARY;
 
 // A bash script with $S the sluice binary and $D the sample folder.
 Result shell(const std::string& script) {
-  const std::string command = "S='" + kBinary + "' D='" + kSample + "' bash -c '" + script + "' 2>&1";
-  Result r;
-  FILE* pipe = popen(command.c_str(), "r");
-  if (!pipe) return r;
-  char buf[4096];
-  while (std::fgets(buf, sizeof buf, pipe)) r.out += buf;
-  const int status = pclose(pipe);
-  r.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
+  return sluice::cli_test::run_command("S='" + kBinary + "' D='" + kSample + "' bash -c '" + script + "' 2>&1");
 }
 
 Result sluice(const std::string& args) { return sluice::cli_test::run_sluice(args); }
 
 fs::path fresh_dir(const std::string& name) { return sluice::cli_test::fresh_dir("trust", name); }
+
+// A fresh folder holding the bundled sample converted to d.sluice.
+fs::path with_sample(const std::string& name) {
+  const fs::path dir = fresh_dir(name);
+  const Result c = sluice("convert " + kSample + "/dam_break_3d.pvd -o " + (dir / "d.sluice").string() + " -q");
+  EXPECT_EQ(c.status, 0) << c.out;
+  return dir;
+}
 
 std::string text_of(const fs::path& p) {
   std::ifstream in(p);
@@ -103,8 +103,7 @@ TEST(EveryFailure, FullDiskFailsConvert) {
 }
 
 TEST(EveryFailure, FullDiskFailsExport) {
-  const fs::path dir = fresh_dir("full_export");
-  ASSERT_EQ(sluice("convert " + kSample + "/dam_break_3d.pvd -o " + (dir / "d.sluice").string() + " -q").status, 0);
+  const fs::path dir = with_sample("full_export");
   const Result r = shell("cd " + dir.string() + " && trap \"\" XFSZ && ulimit -f 100 && $S export d.sluice -o out/x.vtp -q");
   EXPECT_NE(r.status, 0) << r.out;
   EXPECT_TRUE(leftovers(dir, ".partial").empty());
@@ -112,8 +111,7 @@ TEST(EveryFailure, FullDiskFailsExport) {
 }
 
 TEST(EveryFailure, FullDiskFailsRenderPng) {
-  const fs::path dir = fresh_dir("full_png");
-  ASSERT_EQ(sluice("convert " + kSample + "/dam_break_3d.pvd -o " + (dir / "d.sluice").string() + " -q").status, 0);
+  const fs::path dir = with_sample("full_png");
   const Result r = shell("cd " + dir.string() + " && trap \"\" XFSZ && ulimit -f 20 && "
                          "$S render d.sluice --frames 3 --size 640x360 -o shot.png -q");
   EXPECT_NE(r.status, 0) << r.out;
@@ -122,8 +120,7 @@ TEST(EveryFailure, FullDiskFailsRenderPng) {
 }
 
 TEST(EveryFailure, FullDiskFailsRenderMp4) {
-  const fs::path dir = fresh_dir("full_mp4");
-  ASSERT_EQ(sluice("convert " + kSample + "/dam_break_3d.pvd -o " + (dir / "d.sluice").string() + " -q").status, 0);
+  const fs::path dir = with_sample("full_mp4");
   const Result r = shell("cd " + dir.string() + " && trap \"\" XFSZ && ulimit -f 8 && "
                          "$S render d.sluice --size 640x360 -o movie.mp4 -q");
   EXPECT_NE(r.status, 0) << r.out;
@@ -137,8 +134,7 @@ TEST(EveryFailure, FullDiskFailsRenderMp4) {
 }
 
 TEST(EveryFailure, RenderRefusesToOverwrite) {
-  const fs::path dir = fresh_dir("overwrite");
-  ASSERT_EQ(sluice("convert " + kSample + "/dam_break_3d.pvd -o " + (dir / "d.sluice").string() + " -q").status, 0);
+  const fs::path dir = with_sample("overwrite");
   const std::string render = "render " + (dir / "d.sluice").string() + " --frames 2 --size 160x90 -q -o " + (dir / "a.png").string();
   ASSERT_EQ(sluice(render).status, 0);
   const Result again = sluice(render);
@@ -149,8 +145,7 @@ TEST(EveryFailure, RenderRefusesToOverwrite) {
 
 // --frames takes a list: render and export write exactly the listed frames.
 TEST(Friction, FrameLists) {
-  const fs::path dir = fresh_dir("lists");
-  ASSERT_EQ(sluice("convert " + kSample + "/dam_break_3d.pvd -o " + (dir / "d.sluice").string() + " -q").status, 0);
+  const fs::path dir = with_sample("lists");
   const Result r = sluice("render " + (dir / "d.sluice").string() + " --frames 0,6,12 --size 96x64 -q -o " + (dir / "shots").string());
   ASSERT_EQ(r.status, 0) << r.out;
   for (const char* f : {"frame_00000.png", "frame_00006.png", "frame_00012.png"}) EXPECT_TRUE(fs::exists(dir / "shots" / f)) << f;

@@ -97,7 +97,7 @@ TEST_P(FarParticlesInARealFrame, EveryOtherParticleKeepsTheBound) {
     {
       ContainerWriter w(path, h);
       io::EncodedFrame e = test::encode(f, h, 65536, layers);
-      EXPECT_EQ(e.far_particles, uint64_t(count));
+      EXPECT_EQ(e.far.count, uint64_t(count));
       w.append(std::move(e));
       w.finish();
     }

@@ -57,8 +57,7 @@ Work encode_one(const FrameSource& source, ParticleFrame frame, uint64_t index, 
   if (settings.drop_far > 0) {
     const FarParticles far = find_far_particles(frame.positions, header.particle_spacing, settings.drop_far);
     if (!far.far.empty()) {
-      w.far = {far.far.size(), true, far.threshold, far.farthest, {}};
-      for (size_t a = 0; a < 3; ++a) w.far.position[a] = frame.positions[3 * size_t(far.farthest) + a];
+      w.far = report_far(far, frame.positions, true);
       remove_particles(frame, far.far);
     }
   }
@@ -75,9 +74,7 @@ Work encode_one(const FrameSource& source, ParticleFrame frame, uint64_t index, 
   in.time = frame.time;
   try {
     w.encoded = encode_frame(in, header, settings.encode);
-    if (w.encoded.far_particles > 0) {
-      w.far = {w.encoded.far_particles, false, w.encoded.far_threshold, w.encoded.farthest, w.encoded.farthest_position};
-    }
+    if (w.encoded.far.count > 0) w.far = w.encoded.far;
   } catch (const Error& e) {
     throw Error({source.frame_name(index), index}, e.message());
   }

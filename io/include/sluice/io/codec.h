@@ -3,7 +3,6 @@
 // decodes straight into buffers it was handed (e.g. mapped staging memory).
 #pragma once
 
-#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -13,6 +12,7 @@
 #include "sluice/io/error.h"
 #include "sluice/io/format.h"
 #include "sluice/io/narrow_band.h"
+#include "sluice/io/outliers.h"
 
 namespace sluice::io {
 
@@ -64,11 +64,8 @@ struct EncodedFrame {
   std::vector<std::byte> record;  // header, chunk table, payloads
   uint64_t raw_bytes = 0;         // filtered size before zstd, for statistics
   // Particles far outside the rest (outliers.h): in chunks of their own,
-  // outside header.bounds. The farthest, by its index in the input.
-  uint64_t far_particles = 0;
-  float far_threshold = 0;  // world units outside the frame's core
-  uint32_t farthest = 0;
-  std::array<float, 3> farthest_position{};
+  // outside header.bounds.
+  FarReport far;
 };
 
 // Chunks, quantizes, filters and compresses one frame. Parallel over chunks

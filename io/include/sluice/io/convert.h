@@ -4,7 +4,6 @@
 // `max_in_flight` frames are in memory at once, whatever the sequence length.
 #pragma once
 
-#include <array>
 #include <functional>
 #include <optional>
 #include <string>
@@ -12,20 +11,11 @@
 
 #include "sluice/io/codec.h"
 #include "sluice/io/import.h"
+#include "sluice/io/outliers.h"
 #include "sluice/io/up_axis.h"
 #include "sluice/io/writer.h"
 
 namespace sluice::io {
-
-// Far particles of one frame (outliers.h): written in chunks of their own,
-// or left out with ConvertSettings::drop_far.
-struct FarReport {
-  uint64_t count = 0;
-  bool dropped = false;
-  float threshold = 0;              // world units outside the frame's core
-  uint64_t farthest = 0;            // the farthest one's index in the source frame
-  std::array<float, 3> position{};  // and where it lies
-};
 
 struct ConvertProgress {
   uint64_t frame;                            // just written

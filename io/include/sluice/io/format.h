@@ -110,6 +110,10 @@ struct FileHeader {
 // default 65,536-particle chunks had before the bound (docs/format.md).
 inline constexpr uint8_t kDefaultPrecisionBits = 10;
 
+// The precision exponent k for a bound of at most `fraction` of the spacing:
+// the smallest k (1 ... 40) with 2^-k <= fraction (`--precision`).
+uint8_t precision_bits_for(double fraction);
+
 // The largest error of a decoded position on one axis, world units, not
 // counting two ulps of the coordinate: 0 for float32 files, infinity where
 // the file states none (FileHeader::precision_bits).
@@ -117,6 +121,10 @@ float position_bound(const FileHeader& h);
 // The widest a chunk's box may be on any axis to keep position_bound:
 // 131070 x the bound (infinity: no limit).
 float chunk_extent_limit(const FileHeader& h);
+// The first axis (0 x, 1 y, 2 z) along which positions quantized in `box`
+// may be off by more than `bound` plus two ulps of the coordinate (float32
+// input is no finer); -1 when none: what `verify` checks of every chunk.
+int axis_over_bound(const Aabb& box, float bound);
 
 struct ChunkDesc {
   uint64_t offset = 0;           // from the start of the frame record

@@ -30,6 +30,18 @@ struct FarParticles {
   float farthest_distance = 0;
 };
 
+// What a frame's far particles were, for a warning: kept in chunks of their
+// own (encode_frame), or left out (ConvertSettings::drop_far).
+struct FarReport {
+  uint64_t count = 0;
+  bool dropped = false;
+  float threshold = 0;              // world units outside the frame's core
+  uint64_t farthest = 0;            // the farthest one's index in the frame
+  std::array<float, 3> position{};  // and where it lies
+};
+// `far` found in `xyz` (the positions it was found in).
+FarReport report_far(const FarParticles& far, std::span<const float> xyz, bool dropped);
+
 // The core box spans the 1st to the 99th percentile of each axis, taken from
 // at most 65,536 particles evenly spread over the frame. A particle is far
 // when it lies more than `threshold` outside the core on some axis:

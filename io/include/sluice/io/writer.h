@@ -43,7 +43,6 @@ class ContainerWriter {
 
  private:
   void write_all(std::span<const std::byte> bytes);
-  static std::vector<std::byte> header_copy(std::span<const std::byte> header);
 
   std::string path_;
 
