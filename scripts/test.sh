@@ -11,10 +11,13 @@
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 jobs=${JOBS:-$(nproc)}
-export CCACHE_DIR=${CCACHE_DIR:-$root/.cache/ccache}
+# ccache outside the checkout: CI's checkout is clean each run, the cache
+# folder beside it may survive on the same machine (never counted on).
+export CCACHE_DIR=${CCACHE_DIR:-${XDG_CACHE_HOME:-$HOME/.cache}/sluice/ccache}
 "$root/scripts/deps.sh"
 
-step() { printf '\n=== %s ===\n' "$*"; }
+started=$SECONDS
+step() { printf '\n=== %s (%d min in) ===\n' "$*" $(( (SECONDS - started) / 60 )); }
 
 step "Monado (OpenXR runtime for the XR tests)"
 monado=${SLUICE_MONADO:-${XDG_CACHE_HOME:-$HOME/.cache}/sluice/monado}
