@@ -14,10 +14,8 @@ jobs=${JOBS:-$(nproc)}
 # ccache outside the checkout: CI's checkout is clean each run, the cache
 # folder beside it may survive on the same machine (never counted on).
 export CCACHE_DIR=${CCACHE_DIR:-${XDG_CACHE_HOME:-$HOME/.cache}/sluice/ccache}
+step() { printf '\n=== %s (%d min in) ===\n' "$*" $(( SECONDS / 60 )); }
 "$root/scripts/deps.sh"
-
-started=$SECONDS
-step() { printf '\n=== %s (%d min in) ===\n' "$*" $(( (SECONDS - started) / 60 )); }
 
 step "Monado (OpenXR runtime for the XR tests)"
 monado=${SLUICE_MONADO:-${XDG_CACHE_HOME:-$HOME/.cache}/sluice/monado}

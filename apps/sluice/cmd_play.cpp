@@ -222,4 +222,15 @@ void add_play(CLI::App& app) {
 #endif
 }
 
+#if SLUICE_WITH_RENDER
+render::StreamOptions stream_options(const PlayOptions& o, const ViewSettings& v, bool window) {
+  render::StreamOptions so;
+  so.player = player_options(o, window);
+  so.layers = layer_set(o.layers);
+  so.decode = decode_site(o.decode);
+  so.up = v.up_override();
+  return so;
+}
+#endif
+
 }  // namespace sluice::app

@@ -12,16 +12,10 @@
 
 #include "commands.h"
 #include "human.h"
-#include "layers_option.h"
 #include "play.h"
-#include "sluice/io/reader.h"
-#include "decode_option.h"
-#include "sluice/render/frame_feed.h"
+#include "reads_text.h"
 #include "sluice/render/offscreen.h"
-#include "sluice/render/renderer.h"
-#include "sluice/render/staging_allocator.h"
-#include "sluice/runtime/player.h"
-#include "view_demand.h"
+#include "sluice/render/stream.h"
 #include "view_options.h"
 
 namespace sluice::app {
@@ -36,45 +30,34 @@ double median(std::vector<double> v) {
 }  // namespace
 
 void run_play_gpu(const PlayOptions& o, const WindowPlayOptions& w) {
-  const io::ContainerReader reader(o.file);
-  if (reader.frame_count() == 0) throw std::runtime_error(o.file + ": no frames to play");
   const auto [width, height] = parse_size(w.size);
   const ViewSettings& v = w.view;
   render::Context context(v.context_options());
-  const render::SceneInfo scene = render::scene_info(reader);
   constexpr uint32_t kInFlight = 2;
-  render::RendererOptions ro;
-  ro.frames_in_flight = kInFlight;
-  ro.classify_unlayered = classify_unlayered(o.layers);
-  render::Renderer renderer(context, scene, ro);
-  v.apply_environment(renderer);
-  const render::FluidOptions fluid = v.fluid_options(scene);
-  const render::LodOptions lod = v.lod_options();
-  const render::Camera camera = v.camera(scene, float(width) / float(height));
+  render::StreamOptions so = stream_options(o, v, false);
+  so.renderer.frames_in_flight = kInFlight;
+  so.motion = render::ViewMotion::Fixed;  // the camera stays where it is: frames hold what it draws
+  render::Stream stream(context, o.file, so);
+  const io::ContainerReader& reader = stream.reader();
+  v.apply_environment(stream.renderer());
+  stream.set_look(v.fluid_options(stream.scene()), v.lod_options());
+  const render::Camera camera = v.camera(stream.scene(), float(width) / float(height));
   render::OffscreenOptions oo;
   oo.frames_in_flight = kInFlight;
   oo.read_back = false;
   render::OffscreenTarget target(context, width, height, oo);
-
-  // Decoded straight into staging memory the transfer queue copies from.
-  render::StagingAllocator staging(context, render::FrameFeed::staging_options(context, reader.header(), decode_site(o.decode), true));
-  runtime::PlayerOptions po = player_options(o, false);
-  const int color = fluid.scalar_visibility ? fluid.color_attribute : -1;
-  render::FrameFeed::configure(po, staging, color, reader.header(), decode_site(o.decode));
-  // The camera stays where it is: frames hold what it draws, with no margin.
   const render::View view = render::camera_view(camera, {0, 0, width, height});
-  po.pipeline.demand = app_demand({&view, 1}, scene, fluid, lod, reads_by_view(o.layers, lod, reader), false);
-  const runtime::SteadyClock clock;
-  runtime::Player player(reader, staging, clock, po);
-  render::FrameFeed feed(renderer, player, &staging, color);
-  const double display_hz = o.display_hz > 0 ? o.display_hz : player.frame_rate() * std::max(std::abs(po.rate), 1e-3);
+  stream.set_views({&view, 1});
+  runtime::Player& player = stream.player();
+  const bool gpu_decode = stream.decodes_on_gpu();
+  const double display_hz = o.display_hz > 0 ? o.display_hz : player.frame_rate() * std::max(std::abs(o.rate), 1e-3);
   if (!o.quiet) {
     std::fprintf(stderr,
                  "playing %s through the renderer on %s (%s) at %ux%u: %llu frames at %.4g fps, display %.4g Hz, %s; "
                  "frames decoded on the %s\n",
                  o.file.c_str(), context.device().name.c_str(), context.device().type.c_str(), width, height,
                  (unsigned long long)reader.frame_count(), player.frame_rate(), display_hz,
-                 runtime::end_mode_name(po.end), po.pipeline.keep_encoded ? "GPU" : "CPU");
+                 runtime::end_mode_name(so.player.end), gpu_decode ? "GPU" : "CPU");
   }
 
   using Steady = std::chrono::steady_clock;
@@ -87,11 +70,11 @@ void run_play_gpu(const PlayOptions& o, const WindowPlayOptions& w) {
   double next_stats = o.stats_every;
   player.play();
   while (true) {
-    const render::FeedUpdate fed = feed.update();
+    const render::FeedUpdate fed = stream.update();
     while (const auto error = player.pop_error()) {
       if (errors_printed++ < 20) std::fprintf(stderr, "sluice: frame error: %s\n", error->text().c_str());
     }
-    const render::FrameStats stats = target.render(renderer, camera, fluid, lod);
+    const render::FrameStats stats = target.render(stream.renderer(), camera, stream.fluid(), stream.lod());
     ++ticks;
     const auto now = Steady::now();
     if (fed.changed) {
@@ -137,7 +120,7 @@ void run_play_gpu(const PlayOptions& o, const WindowPlayOptions& w) {
               fixed(double(new_frames) / elapsed, 1).c_str(), (unsigned long long)ticks, (unsigned long long)s.stalls,
               (unsigned long long)s.drops, (unsigned long long)s.errors, (unsigned long long)s.pipeline.cache_hits);
   std::printf("  %s\n", reads_text(s.pipeline).c_str());
-  if (po.pipeline.keep_encoded) {
+  if (gpu_decode) {
     std::printf("  frames relayed to device memory as read (the window in device memory): %llu of %llu read\n",
                 (unsigned long long)s.pipeline.frames_relayed, (unsigned long long)s.pipeline.frames_read);
   }
@@ -148,7 +131,7 @@ void run_play_gpu(const PlayOptions& o, const WindowPlayOptions& w) {
   std::printf("  per new frame after the first pass (medians of %zu): interval %s ms, GPU render %s ms, GPU upload copy %s ms, "
               "GPU decode %s ms (%s)\n",
               intervals.size(), fixed(frame, 2).c_str(), fixed(draw, 2).c_str(), fixed(copy, 2).c_str(), fixed(decode, 2).c_str(),
-              po.pipeline.keep_encoded ? "frames decoded on the GPU" : "frames decoded on the CPU");
+              gpu_decode ? "frames decoded on the GPU" : "frames decoded on the CPU");
   std::printf("  interval / (render + upload) = %s; interval / max(render, upload) = %s (1.0: the copy is hidden "
               "behind rendering or the other way round)\n",
               fixed(frame / std::max(draw + copy, 1e-9), 2).c_str(), fixed(frame / std::max(std::max(draw, copy), 1e-9), 2).c_str());

@@ -16,15 +16,10 @@
 #include "human.h"
 #include "layers_option.h"
 #include "play.h"
-#include "sluice/io/reader.h"
-#include "decode_option.h"
-#include "sluice/render/staging_allocator.h"
-#include "sluice/runtime/player.h"
-#include "sluice/render/image_io.h"
-#include "sluice/render/renderer.h"
 #include "sluice/desktop/window.h"
-#include "sluice/render/frame_feed.h"
-#include "view_demand.h"
+#include "sluice/render/image_io.h"
+#include "sluice/render/stream.h"
+#include "reads_text.h"
 #include "view_options.h"
 
 namespace sluice::app {
@@ -296,24 +291,31 @@ double display_refresh_hz() {
 
 void run_play_window(const PlayOptions& o, const WindowPlayOptions& wo) {
   const ViewSettings& v = wo.view;
-  const io::ContainerReader reader(o.file);
-  if (reader.frame_count() == 0) throw std::runtime_error(o.file + ": the file has no frames");
   const auto [w, h] = parse_size(wo.size);
   render::ContextOptions co = v.context_options();
   co.instance_extensions = desktop::window_instance_extensions();
   co.presentation = true;
   render::Context context(co);
-  const render::SceneInfo scene = render::scene_info(reader);
+  // Frames stream through the runtime: read ahead (only the tiers the
+  // window's view draws, with a margin for the camera's moves) and decoded
+  // into staging memory the GPU copies from. The window takes the context's
+  // queue lock (desktop/window.h).
+  render::StreamOptions so = stream_options(o, v, true);
+  so.player.display_rate = o.display_hz > 0 ? o.display_hz : display_refresh_hz();
+  render::Stream stream(context, o.file, so);
+  const io::ContainerReader& reader = stream.reader();
+  const render::SceneInfo& scene = stream.scene();
 
   Player p;
   p.reader = &reader;
-  p.layers = layer_set(o.layers);
+  p.layers = so.layers;
   p.frames = reader.frame_count();
   p.frame = std::min<uint64_t>(o.start, p.frames - 1);
   p.hud = !wo.no_hud;
   p.fluid = v.fluid_options(scene);
   p.lod = v.lod_options();
   p.device = context.device().name + " (" + context.device().type + ")";
+  p.times_known = reader.header().time_source != io::TimeSource::FrameNumber;
 
   desktop::WindowOptions options;
   options.width = w;
@@ -322,39 +324,21 @@ void run_play_window(const PlayOptions& o, const WindowPlayOptions& wo) {
   options.title = "sluice - " + std::filesystem::path(shown).filename().string();
   options.vsync = !wo.no_vsync;
   desktop::Window window(context, options, {on_key, on_mouse_button, on_cursor, on_scroll, &p});
-  render::RendererOptions ro;
-  ro.classify_unlayered = classify_unlayered(o.layers);
-  render::Renderer renderer(context, scene, ro);
-  v.apply_environment(renderer);
-  p.times_known = reader.header().time_source != io::TimeSource::FrameNumber;
+  v.apply_environment(stream.renderer());
   const auto aspect = [&] { return float(std::max(window.width(), 1u)) / float(std::max(window.height(), 1u)); };
   p.camera = p.home = v.camera(scene, aspect());
-
-  // The streaming runtime decodes the colour attribute only (if any), into
-  // staging memory the GPU copies from.
-  // The window takes the context's queue lock (desktop/window.h).
-  render::StagingAllocator staging(context, render::FrameFeed::staging_options(context, reader.header(), decode_site(o.decode), true));
-  runtime::PlayerOptions po = player_options(o, true);
-  po.start_frame = p.frame;
-  po.display_rate = o.display_hz > 0 ? o.display_hz : display_refresh_hz();
-  const int color = p.fluid.scalar_visibility ? p.fluid.color_attribute : -1;
-  render::FrameFeed::configure(po, staging, color, reader.header(), decode_site(o.decode));
-  // Frames hold the tiers the window's view draws, with a margin for the
-  // camera's moves; a paused frame is read again when the view needs more.
   const auto window_view = [&] {
     return render::camera_view(p.camera, {0, 0, std::max(window.width(), 1u), std::max(window.height(), 1u)});
   };
   const render::View first_view = window_view();
-  po.pipeline.demand = app_demand({&first_view, 1}, scene, p.fluid, p.lod, reads_by_view(o.layers, p.lod, reader), true);
-  const runtime::SteadyClock clock;
-  runtime::Player playback(reader, staging, clock, po);
+  stream.set_look(p.fluid, p.lod);
+  stream.set_views({&first_view, 1});
+  runtime::Player& playback = stream.player();
   p.playback = &playback;
   p.io_mode = playback.pipeline().io_mode();
   if (!o.paused) playback.play();
-  render::FrameFeed feed(renderer, playback, &staging, color);
 
   auto last = Clock::now(), fps_since = last;
-  CameraSpeed camera_speed;
   runtime::PlaybackStats stats_before = playback.stats();
   int presented = 0, fps_frames = 0;
   uint64_t errors_printed = 0;
@@ -380,14 +364,11 @@ void run_play_window(const PlayOptions& o, const WindowPlayOptions& wo) {
       stats_before = p.stream;
     }
 
-    // The margin covers how far the camera moves while the frames read now
-    // wait in the window (at least a twentieth of the diagonal).
+    // Frames are read for the view and look the next frames are drawn with.
     const render::View view = window_view();
-    const float speed = camera_speed.update(view, std::chrono::duration<double>(now.time_since_epoch()).count());
-    const float horizon = float(playback.pipeline().most_ahead()) / float(std::max(playback.frame_rate(), 1.0));
-    playback.set_demand(app_demand({&view, 1}, scene, p.fluid, p.lod, reads_by_view(o.layers, p.lod, reader), true, speed,
-                                   horizon));
-    const render::FeedUpdate fed = feed.update();
+    stream.set_look(p.fluid, p.lod);
+    stream.set_views({&view, 1});
+    const render::FeedUpdate fed = stream.update();
     if (fed.changed) {
       p.upload_wall_ms = fed.commit_wall_ms;
       p.frame = fed.frame;
@@ -401,7 +382,7 @@ void run_play_window(const PlayOptions& o, const WindowPlayOptions& wo) {
       throw std::runtime_error(o.file + ": playback stopped before any frame could be shown");
     }
 
-    p.stats = renderer.last_stats();
+    p.stats = stream.renderer().last_stats();
     if (p.stats.classification.ran) p.classification = render::describe(p.stats.classification);
     window.new_ui_frame();
     if (p.hud) draw_hud(p, shown);
@@ -413,7 +394,7 @@ void run_play_window(const PlayOptions& o, const WindowPlayOptions& wo) {
     // --exit-after counts frames that show data (the first may take a moment to decode).
     const bool last_for_exit = wo.exit_after > 0 && p.has_frame && presented + 1 >= wo.exit_after;
     const bool capture = p.screenshot || (last_for_exit && !wo.screenshot.empty());
-    if (!window.present(renderer, p.camera, p.fluid, p.lod, p.hud, capture)) continue;
+    if (!window.present(stream.renderer(), p.camera, p.fluid, p.lod, p.hud, capture)) continue;
     if (p.has_frame) ++presented;
     if (capture) {
       const render::Image shot{window.width(), window.height(), window.read_presented()};
@@ -436,8 +417,8 @@ void run_play_window(const PlayOptions& o, const WindowPlayOptions& wo) {
     std::printf("played %s: %llu frames shown, stalls %llu, drops %llu, errors %llu; staging held %s at most%s\n",
                 o.file.c_str(), (unsigned long long)s.frames_shown, (unsigned long long)s.stalls,
                 (unsigned long long)s.drops, (unsigned long long)s.errors,
-                human_bytes(double(staging.peak_held_bytes())).c_str(),
-                staging.fallback_allocations() ? " (some frames in host memory: the driver refused more staging)" : "");
+                human_bytes(double(stream.staging().peak_held_bytes())).c_str(),
+                stream.staging().fallback_allocations() ? " (some frames in host memory: the driver refused more staging)" : "");
     std::printf("  last view: --camera \"%s\"\n", p.camera.to_string().c_str());
   }
   if (context.validation_active() && context.validation_errors() > 0) {

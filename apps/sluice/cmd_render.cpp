@@ -10,7 +10,7 @@
 #include "decode_option.h"
 #include "layers_option.h"
 #include "playable.h"
-#include "view_demand.h"
+#include "reads_text.h"
 #include "view_options.h"
 #include "progress.h"
 #include "sluice/bench/layers_bench.h"
@@ -18,11 +18,8 @@
 #include "sluice/io/reader.h"
 #include "sluice/render/image_io.h"
 #include "sluice/bench/live_bench.h"
-#include "sluice/render/frame_feed.h"
 #include "sluice/render/offscreen.h"
-#include "sluice/render/staging_allocator.h"
-#include "sluice/runtime/player.h"
-#include "sluice/render/renderer.h"
+#include "sluice/render/stream.h"
 
 namespace sluice::app {
 namespace {
@@ -59,7 +56,22 @@ std::string frame_path(const std::string& out, uint64_t frame, bool single) {
 void run_render(const RenderCommand& o, const ViewSettings& v) {
   namespace fs = std::filesystem;
   const PlayableFile input = open_playable(o.input, {o.no_cache, o.quiet});
-  const io::ContainerReader reader(input.path());
+  render::Context context(v.context_options());
+  // Frames stream through the runtime (read ahead, decoded on every core
+  // into staging) like playback: every frame due at once, none skipped
+  // (hold), the first bad frame stops the render with its error; the one
+  // fixed camera reads the tiers it draws (the same pixels as a full read).
+  render::StreamOptions so;
+  so.player.frame_rate = 1e9;
+  so.player.end = runtime::EndMode::Stop;
+  so.player.policy = runtime::RealTimePolicy::HoldLastFrame;
+  so.player.on_error = runtime::ErrorPolicy::Stop;
+  so.layers = layer_set(o.layers);
+  so.decode = decode_site(o.decode);
+  so.motion = render::ViewMotion::Fixed;
+  so.up = v.up_override();
+  render::Stream stream(context, input.path(), so);
+  const io::ContainerReader& reader = stream.reader();
   // A list (0,25,50) plays every frame between its first and last and draws those listed.
   const std::vector<uint64_t> frames = parse_frame_list(o.frames, reader.frame_count());
   const uint64_t first = frames.front(), last = frames.back();
@@ -79,21 +91,18 @@ void run_render(const RenderCommand& o, const ViewSettings& v) {
     fs::create_directories(o.out);
   }
 
-  render::Context context(v.context_options());
-  render::SceneInfo scene = render::scene_info(reader);
-  render::RendererOptions ro;
-  ro.classify_unlayered = classify_unlayered(o.layers);
-  render::Renderer renderer(context, scene, ro);
+  render::Renderer& renderer = stream.renderer();
   render::OffscreenTarget target(context, width, height);
   v.apply_environment(renderer);
-  const render::FluidOptions fluid = v.fluid_options(scene);
-  const render::LodOptions lod = v.lod_options();
-  const render::Camera camera = v.camera(scene, float(width) / float(height));
+  stream.set_look(v.fluid_options(stream.scene()), v.lod_options());
+  const render::Camera camera = v.camera(stream.scene(), float(width) / float(height));
+  const render::View view = render::camera_view(camera, {0, 0, width, height});
+  stream.set_views({&view, 1});
   if (!o.quiet) {
     std::fprintf(stderr, "rendering %s frames %llu..%llu at %ux%u on %s (%s)\n  camera \"%s\"\n  layers: %s\n",
                  o.input.c_str(), (unsigned long long)first, (unsigned long long)last, width, height,
                  context.device().name.c_str(), context.device().type.c_str(), camera.to_string().c_str(),
-                 layers_text(reader, first, layer_set(o.layers)).c_str());
+                 layers_text(reader, first, so.layers).c_str());
   }
 
   std::unique_ptr<render::VideoWriter> writer;
@@ -101,33 +110,15 @@ void run_render(const RenderCommand& o, const ViewSettings& v) {
     const double fps = o.fps > 0 ? o.fps : (reader.header().frame_rate > 0 ? reader.header().frame_rate : 30.0);
     writer = std::make_unique<render::VideoWriter>(o.out, width, height, fps);
   }
-  // Frames stream through the runtime (read ahead, decoded on every core into
-  // staging) and the frame feed, like playback: every frame due at once, none
-  // skipped (hold), the first bad frame stops the render with its error.
-  render::StagingAllocator staging(context, render::FrameFeed::staging_options(context, reader.header(), decode_site(o.decode), true));
-  runtime::PlayerOptions po;
-  po.frame_rate = 1e9;
-  po.start_frame = first;
-  po.end = runtime::EndMode::Stop;
-  po.policy = runtime::RealTimePolicy::HoldLastFrame;
-  po.on_error = runtime::ErrorPolicy::Stop;
-  po.pipeline.layers = layer_set(o.layers);
-  const int color = fluid.scalar_visibility ? fluid.color_attribute : -1;
-  render::FrameFeed::configure(po, staging, color, reader.header(), decode_site(o.decode));
-  // One fixed camera: frames hold the tiers it draws (the same pixels as a
-  // full read), nothing more.
-  const render::View view = render::camera_view(camera, {0, 0, width, height});
-  po.pipeline.demand = app_demand({&view, 1}, scene, fluid, lod, reads_by_view(o.layers, lod, reader), false);
-  const runtime::SteadyClock clock;
-  runtime::Player player(reader, staging, clock, po);
-  render::FrameFeed feed(renderer, player, &staging, color);
+  runtime::Player& player = stream.player();
+  player.seek(first);
   player.play();
   ProgressBar bar("frames", frames.size(), o.quiet);
   render::Image image{width, height, {}};
   size_t drawn = 0;  // of `frames`
   for (uint64_t f = first; f <= last;) {
     player.wait_for_due();
-    const render::FeedUpdate fed = feed.update();
+    const render::FeedUpdate fed = stream.update();
     if (const auto error = player.pop_error()) throw std::runtime_error(error->text());
     if (!fed.changed || fed.frame != f) {
       if (player.state() == runtime::PlayerState::Ended || player.state() == runtime::PlayerState::Stopped) {
@@ -140,7 +131,7 @@ void run_render(const RenderCommand& o, const ViewSettings& v) {
       continue;
     }
     renderer.wait_upload(fed.ticket);  // draw exactly this frame
-    const render::FrameStats stats = target.render(renderer, camera, fluid, lod);
+    const render::FrameStats stats = target.render(renderer, camera, stream.fluid(), stream.lod());
     image.rgba = target.read_rgba8();
     if (writer) writer->add(image);
     else render::write_png(frame_path(o.out, f, single), image);

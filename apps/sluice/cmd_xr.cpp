@@ -1,7 +1,7 @@
 // `sluice xr FILE`: the sequence in a headset through OpenXR. A client of the
 // public API like any host: xr::Session (the runtime's Vulkan device, its
-// swapchains and frame loop), runtime::Player driven by the predicted display
-// time, render::FrameFeed and render::Renderer drawing each eye, and
+// swapchains and frame loop), render::Stream driven by the predicted display
+// time drawing both eyes, and
 // xr::Controls turning the controllers into playback and placement.
 #include <algorithm>
 #include <chrono>
@@ -10,16 +10,12 @@
 
 #include "commands.h"
 #include "human.h"
+#include "decode_option.h"
 #include "layers_option.h"
-#include "view_demand.h"
+#include "reads_text.h"
 #include "play.h"
 #include "playable.h"
-#include "sluice/io/reader.h"
-#include "decode_option.h"
-#include "sluice/render/frame_feed.h"
-#include "sluice/render/renderer.h"
-#include "sluice/render/staging_allocator.h"
-#include "sluice/runtime/player.h"
+#include "sluice/render/stream.h"
 #include "sluice/xr/controls.h"
 #include "sluice/xr/placement.h"
 #include "sluice/xr/session.h"
@@ -71,8 +67,6 @@ std::string states_text(uint32_t seen) {
 
 void run_xr(const XrOptions& o) {
   const PlayOptions& p = o.play;
-  const io::ContainerReader reader(p.file);
-  if (reader.frame_count() == 0) throw std::runtime_error(p.file + ": no frames to show");
   xr::SessionOptions so;
   so.validation = o.view.validation;
   so.quiet_validation = p.quiet;
@@ -87,33 +81,25 @@ void run_xr(const XrOptions& o) {
                  sys.floor == xr::Floor::Stage ? "STAGE" : "LOCAL");
   }
 
-  render::SceneInfo scene = render::scene_info(reader);
-  scene.up = o.view.up_direction(scene);
-  render::RendererOptions ro;
-  ro.frames_in_flight = xr::Session::kRecordsInFlight;  // one record() per eye
-  ro.classify_unlayered = classify_unlayered(p.layers);
-  render::Renderer renderer(session.context(), scene, ro);
-  o.view.apply_environment(renderer);
-  const render::FluidOptions fluid = o.view.fluid_options(scene);
-  render::LodOptions lod = o.view.lod_options();
-
-  // The session submits without the context's queue lock: relayed only
-  // where the relay has a queue of its own.
-  render::StagingAllocator staging(
-      session.context(), render::FrameFeed::staging_options(session.context(), reader.header(), decode_site(p.decode), false));
-  runtime::PlayerOptions po = player_options(p, true);
-  const int color = fluid.scalar_visibility ? fluid.color_attribute : -1;
-  render::FrameFeed::configure(po, staging, color, reader.header(), decode_site(p.decode));
+  // The session submits without the context's queue lock: frames are
+  // relayed only where the relay has a queue of its own.
   DisplayClock clock;
-  runtime::Player player(reader, staging, clock, po);
-  render::FrameFeed feed(renderer, player, &staging, color);
+  render::StreamOptions sopts = stream_options(p, o.view, true);
+  sopts.renderer.frames_in_flight = xr::Session::kRecordsInFlight;  // one record() per eye
+  sopts.queue_lock = render::QueueLock::HostDoesNot;
+  sopts.clock = &clock;
+  render::Stream stream(session.context(), p.file, sopts);
+  const render::SceneInfo& scene = stream.scene();
+  o.view.apply_environment(stream.renderer());
+  render::LodOptions lod = o.view.lod_options();
+  stream.set_look(o.view.fluid_options(scene), lod);
+  runtime::Player& player = stream.player();
   xr::PlacementOptions placement;
   placement.size = o.size;
   xr::Controls controls(xr::initial_placement(scene, sys.floor, placement));
   if (!p.paused) player.play();
 
   uint64_t drawn = 0, ended = 0, errors_printed = 0;
-  CameraSpeed head_speed;
   bool exit_asked = false;
   double last_display = -1;
   std::vector<double> gpu_ms;
@@ -135,7 +121,8 @@ void run_xr(const XrOptions& o) {
       lod.level = std::clamp(lod.level + c.lod_delta, 0.02f, 1.0f);
       if (lod.mode == render::LodMode::Off && lod.level < 1) lod.mode = render::LodMode::DensityPreserving;
     }
-    feed.update();
+    stream.set_look(stream.fluid(), lod);
+    stream.update();
     while (const auto error = player.pop_error()) {
       if (errors_printed++ < 20) std::fprintf(stderr, "sluice: frame error: %s\n", error->text().c_str());
     }
@@ -148,19 +135,17 @@ void run_xr(const XrOptions& o) {
       }
       // Both eyes' demand, with a margin for head motion until the frames
       // read now are shown.
-      const float speed = head_speed.update(views[0], frame.display_seconds);
-      const float horizon = float(player.pipeline().most_ahead()) / float(std::max(player.frame_rate(), 1.0));
-      player.set_demand(app_demand(views, scene, fluid, lod, reads_by_view(p.layers, lod, reader), true, speed, horizon));
+      stream.set_views(views);
       if (frame.stereo) {
-        sync = renderer.record(frame.command_buffer, frame.stereo_target, views, fluid, lod);  // both eyes, one pass
+        sync = stream.record(frame.command_buffer, frame.stereo_target, views);  // both eyes, one pass
       } else {
-        for (size_t e = 0; e < 2; ++e) sync = renderer.record(frame.command_buffer, frame.eyes[e].target, std::span(&views[e], 1), fluid, lod);
+        for (size_t e = 0; e < 2; ++e) sync = stream.record(frame.command_buffer, frame.eyes[e].target, std::span(&views[e], 1));
       }
     }
     session.end_frame(frame, sync);
     if (frame.render) ++drawn;
     ++ended;
-    const render::FrameStats stats = renderer.last_stats();
+    const render::FrameStats stats = stream.renderer().last_stats();
     if (stats.frame != last_stats && stats.particles > 0) {
       gpu_ms.push_back(stats.gpu_ms);
       last_stats = stats.frame;

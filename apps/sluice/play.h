@@ -9,7 +9,8 @@
 #include <string>
 
 #include "sluice/runtime/player.h"
-#if SLUICE_WITH_WINDOW
+#if SLUICE_WITH_RENDER
+#include "sluice/render/stream.h"
 #include "view_options.h"
 #endif
 
@@ -34,6 +35,11 @@ struct PlayOptions {
 runtime::EndMode end_mode(const PlayOptions& o, bool window);
 // Throws std::runtime_error on a --memory it cannot read.
 runtime::PlayerOptions player_options(const PlayOptions& o, bool window);
+#if SLUICE_WITH_RENDER
+// What a player through the renderer streams: player_options(), --layers,
+// --decode and --up. Throws std::runtime_error as those do.
+render::StreamOptions stream_options(const PlayOptions& o, const ViewSettings& v, bool window);
+#endif
 
 #if SLUICE_WITH_WINDOW
 // The window player (cmd_play_window.cpp) and headless playback through the

@@ -57,6 +57,11 @@ render::Vec3 ViewSettings::up_direction(const render::SceneInfo& scene) const {
   }
 }
 
+std::optional<render::Vec3> ViewSettings::up_override() const {
+  if (up.empty()) return std::nullopt;
+  return up_direction(render::SceneInfo{});
+}
+
 render::LodOptions ViewSettings::lod_options() const {
   render::LodOptions l = lod;
   l.mode = render::parse_lod_mode(lod_mode);

@@ -1,23 +1,26 @@
 // host_vulkan: an application that owns its Vulkan instance, device, queue and
 // images, draws its own opaque geometry (a floor and a box standing in the
-// fluid) and has sluice record the fluid into the same colour and depth
-// images, frames in flight, no idle waits. It reads top to bottom:
+// fluid) and has sluice stream a sequence and record the fluid into the same
+// colour and depth images, frames in flight, no idle waits. It reads top to
+// bottom:
 //
 //   1. instance      (sluice::render::required_instance_extensions)
 //   2. device        (required_device_extensions, required_device_features)
-//   3. sluice        (Context from the host's handles, Renderer, a frame)
+//   3. sluice        (a Context from the host's handles, a Stream of the file)
 //   4. host things   (images, the box pipeline, per-frame slots)
-//   5. frame loop    (host geometry, then Renderer::record into the same images)
+//   5. frame loop    (Stream::set_views, update; host geometry, then
+//                     Stream::record into the same images)
 //   6. output        (a PNG; with --check, the occlusion test below)
 //
-// Usage: host_vulkan [--frames N] [--out image.png] [--check] [--live [--record R.sluice]] [FILE.sluice]
-// Without a file it draws sluice's synthetic pool. With --live it runs a
-// small "simulation" of its own (a block of water with a travelling wave)
-// and pushes every frame from its memory (render::LiveSource), recording it
-// to R.sluice when asked. --check also renders the
-// host geometry alone and the fluid alone and verifies, pixel by pixel, that
-// where both are present the nearer one shows (both ways must occur); the
-// exit status says whether it held.
+// Usage: host_vulkan [--frames N] [--out image.png] [--check] FILE.sluice
+//        host_vulkan [--frames N] [--out image.png] [--check] --live [--record R.sluice]
+// With a file it plays the file from its first frame, one frame per drawn
+// frame at the file's rate. With --live it runs a small "simulation" of its
+// own (a block of water with a travelling wave) and pushes every frame from
+// its memory (Stream::push), recording it to R.sluice when asked. --check
+// also renders the host geometry alone and the fluid alone and verifies,
+// pixel by pixel, that where both are present the nearer one shows (both
+// ways must occur); the exit status says whether it held.
 #include <vulkan/vulkan_raii.hpp>
 
 #include <array>
@@ -29,12 +32,9 @@
 #include <string>
 #include <vector>
 
-#include "sluice/io/reader.h"
 #include "sluice/render/context.h"
 #include "sluice/render/image_io.h"
-#include "sluice/render/live_source.h"
-#include "sluice/render/renderer.h"
-#include "sluice/render/synthetic.h"
+#include "sluice/render/stream.h"
 
 namespace {
 
@@ -115,9 +115,13 @@ int main(int argc, char** argv) try {
     else if (a == "--live") live_mode = true;
     else if (a == "--record" && i + 1 < argc) record = argv[++i];
     else if (a == "--help") {
-      std::printf("usage: host_vulkan [--frames N] [--out image.png] [--check] [--live [--record R.sluice]] [FILE.sluice]\n");
+      std::printf("usage: host_vulkan [--frames N] [--out image.png] [--check] (FILE.sluice | --live [--record R.sluice])\n");
       return 0;
     } else file = a;
+  }
+  if (file.empty() == !live_mode) {
+    std::fprintf(stderr, "host_vulkan: give a .sluice file, or --live (--help)\n");
+    return 2;
   }
 
   // 1. Instance: Vulkan 1.3, what sluice asks for, and validation when installed.
@@ -161,37 +165,28 @@ int main(int argc, char** argv) try {
   vk::raii::Queue queue(device, family, 0);
   std::printf("host device: %s\n", physical.getProperties().deviceName.data());
 
-  // 3. sluice on the host's handles: a renderer and one frame of fluid.
+  // 3. sluice on the host's handles: a stream of the file's frames, or of
+  // frames the host computes (pushed from its memory, recorded when asked).
   sluice::render::HostVulkan host;
   host.handles = {*instance, *physical, *device, family, *queue};
   for (const char* e : device_extensions) host.memory_budget_enabled |= std::strcmp(e, VK_EXT_MEMORY_BUDGET_EXTENSION_NAME) == 0;
   sluice::render::Context context(host);
-  std::optional<sluice::io::ContainerReader> reader;
-  sluice::render::SceneInfo scene;
-  std::optional<sluice::render::SyntheticFluid> synthetic;
+  sluice::render::StreamOptions stream_options;
+  stream_options.renderer.frames_in_flight = kFramesInFlight;
+  stream_options.motion = sluice::render::ViewMotion::Fixed;  // the host's camera stays put
   sluice::render::LiveOptions live_options;
   live_options.particle_spacing = 0.02f;
   live_options.frame_rate = 30;
   live_options.record = record;
   live_options.ids = false;  // the host keeps its particle order: LOD values follow the index
-  if (live_mode) {
-    scene = sluice::render::live_scene({{0, 0, 0}, {2, 1, 1}}, live_options);
-  } else if (!file.empty()) {
-    reader.emplace(file);
-    scene = sluice::render::scene_info(*reader);
-  } else {
-    synthetic = sluice::render::synthetic_fluid(200000);
-    scene = synthetic->scene;
-  }
-  sluice::render::RendererOptions renderer_options;
-  renderer_options.frames_in_flight = kFramesInFlight;
-  sluice::render::Renderer renderer(context, scene, renderer_options);
-  std::optional<sluice::render::LiveSource> live;
-  if (live_mode) live.emplace(renderer, live_options);
-  else if (reader) renderer.load_frame(*reader, reader->frame_count() - 1, -1);
-  else sluice::render::upload_synthetic(renderer, *synthetic);
+  std::optional<sluice::render::Stream> stream;
+  if (live_mode) stream.emplace(context, sluice::render::Bounds{{0, 0, 0}, {2, 1, 1}}, live_options, stream_options);
+  else stream.emplace(context, file, stream_options);
+  sluice::render::FluidOptions fluid = stream->fluid();
+  fluid.ground = false;  // the host draws its own floor
+  stream->set_look(fluid, {});
   // The host's own "simulation": a 2 x 1 block of water, 0.5 deep, with a
-  // wave travelling along x; particle i keeps its id, so LOD is stable.
+  // wave travelling along x; particle i keeps its place, so LOD is stable.
   const auto simulate = [&](int step) {
     std::vector<float> xyz;
     const float h = live_options.particle_spacing;
@@ -204,8 +199,6 @@ int main(int argc, char** argv) try {
     }
     return xyz;
   };
-  sluice::render::FluidOptions fluid;
-  fluid.ground = false;  // the host draws its own floor
 
   // 4. The host's images, its box pipeline and one command buffer + fence per frame in flight.
   using U = vk::ImageUsageFlagBits;
@@ -255,7 +248,7 @@ int main(int argc, char** argv) try {
   };
 
   // The scene: the host's camera, a floor under the fluid and a box standing in its middle.
-  const sluice::render::Bounds& b = scene.bounds;
+  const sluice::render::Bounds& b = stream->scene().bounds;
   const sluice::render::Vec3 c = b.center(), e = b.max - b.min;
   const sluice::render::Vec3 eye{c.x - 0.35f * e.x, b.min.y - 1.3f * std::max(e.x, e.y), b.max.z + 0.9f * e.z};
   sluice::render::View view;
@@ -318,7 +311,7 @@ int main(int argc, char** argv) try {
     target.depth_layout_after = VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL;
     target.background = false;  // the host's clear colour stays where there is no fluid
     if (with_fluid) {
-      sync = renderer.record(static_cast<VkCommandBuffer>(cmd), target, {&view, 1}, fluid, {});
+      sync = stream->record(static_cast<VkCommandBuffer>(cmd), target, {&view, 1});
     } else {
       const std::array to_read{
           vk::ImageMemoryBarrier2(S::eColorAttachmentOutput, A::eColorAttachmentWrite, S::eAllCommands, A::eMemoryRead,
@@ -369,18 +362,23 @@ int main(int argc, char** argv) try {
     std::memcpy(z.data(), mapped + bytes, bytes);
   };
 
+  // The frame loop: the views, the frame due, the host's drawing and sluice's.
+  if (!live_mode) stream->player().play();
   for (int f = 0; f < frames; ++f) {
-    if (live) {
-      // A new frame from the host's memory each displayed frame; drawn once its copy is done.
-      const std::vector<float> xyz = simulate(f);
-      live->push({xyz, {}, {}, f / 30.0});
-    }
+    if (live_mode) stream->push({simulate(f), {}, {}, f / 30.0});  // a new frame from the host's memory
+    stream->set_views({&view, 1});
+    stream->update();
     draw_frame(slots[size_t(f) % slots.size()], true, true);
   }
-  if (live) {
-    live->finish();
-    std::printf("pushed %llu live frames%s%s\n", (unsigned long long)live->frames_pushed(), record.empty() ? "" : ", recorded to ",
-                record.c_str());
+  if (live_mode) {
+    stream->finish();
+    std::printf("pushed %d live frames%s%s\n", frames, record.empty() ? "" : ", recorded to ", record.c_str());
+  } else {
+    // Paused on the frame due, drawn once it is there (the checks below compare three draws of it).
+    stream->player().pause();
+    stream->player().wait_for_due();
+    stream->renderer().wait_upload(stream->update().ticket);
+    draw_frame(slots[0], true, true);
   }
   std::vector<uint32_t> both, host_only, fluid_only;
   std::vector<float> both_z, host_z, fluid_z;

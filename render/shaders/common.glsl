@@ -28,7 +28,7 @@ struct Globals {
   vec4 frustum;         // ndc offset x, y of an asymmetric frustum; target depth = z + w / distance
   vec4 ray;             // pixel centre -> eye ray (z = -1): x = px * ray.x + ray.y, y = py * ray.z + ray.w
   vec4 thick_ray;       // the same for the thickness buffer's pixels
-  uvec4 stereo;         // x: eyes drawn in one pass (1, or 2 with multiview targets)
+  uvec4 stereo;         // x: eyes drawn in one pass (1, or 2 with multiview targets); y: the host's scene colour given; z: it holds display values
 };
 // One Globals per eye (the second is unused in mono).
 layout(set = 0, binding = 0, std140) uniform Views { Globals views[2]; };

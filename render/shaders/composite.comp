@@ -11,6 +11,10 @@
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
+// The host's scene behind the fluid (RenderTarget::scene_color_image), one
+// layer per eye; read only when g.stereo.y says it was given.
+layout(set = 0, binding = 16) uniform sampler2DArray scene_color;
+
 uint depth_source() { return g.display.w != 0u ? 1u : 0u; }
 
 vec3 eye_point(ivec2 p, float z) { return eye_ray(vec2(p) + 0.5, g.ray) * z; }
@@ -33,6 +37,18 @@ vec3 surface_normal(ivec2 p, float z, vec3 pe) {
   if (dot(n, n) < 1e-30) return vec3(0.0, 0.0, 1.0);
   n = normalize(n);
   return dot(n, pe) > 0.0 ? -n : n;
+}
+
+// The host's scene seen along the bent ray: the point `depth` behind the
+// surface point `pe` (eye space), projected back into the image.
+vec3 scene_behind(vec3 pe, vec3 bent_world, float depth) {
+  vec3 q = pe + mat3(g.view) * bent_world * depth;
+  q.z = min(q.z, -1e-6);
+  vec2 r = q.xy / -q.z;
+  vec2 pixel = vec2((r.x - g.ray.y) / g.ray.x, (r.y - g.ray.w) / g.ray.z) + vec2(pc.param0, pc.param1);
+  vec2 uv = clamp(pixel / vec2(textureSize(scene_color, 0).xy), vec2(0.0), vec2(1.0));
+  vec3 c = textureLod(scene_color, vec3(uv, float(eye)), 0.0).rgb;
+  return g.stereo.z != 0u ? pow(c, vec3(2.2)) : c;
 }
 
 vec3 to_srgb(vec3 c) {
@@ -91,7 +107,7 @@ void main() {
       vec3 refr = refract(dir, nw, 1.0 / ior);
       if (dot(refr, refr) < 1e-6) refr = refl_dir;
       vec3 bent = normalize(dir + (refr - dir) * g.shade.y);
-      vec3 background = environment(pw, bent);
+      vec3 background = g.stereo.y != 0u ? scene_behind(pe, bent, max(thickness, g.radius.x)) : environment(pw, bent);
       vec3 absorb = (scalar ? (1.0 - tint) + 0.05 : g.attenuation.rgb) * g.shade.w;
       vec3 transmit = exp(-absorb * thickness);
       // A little in-scattering so deep liquid is not black.

@@ -31,7 +31,7 @@ struct Globals {
   float splat[4];
   float frustum[4];
   float ray[4], thick_ray[4];
-  uint32_t stereo[4];  // x: eyes drawn in one pass
+  uint32_t stereo[4];  // x: eyes drawn in one pass; y: the host's scene colour given; z: it holds display values
 };
 static_assert(sizeof(Globals) == 2 * 64 + 27 * 16);
 

@@ -363,6 +363,14 @@ void PassRecorder::end_frame(const RenderTarget& target, bool direct) {
   memory_barrier(cmd_, Stage::eComputeShader | Stage::eDrawIndirect, Access::eShaderStorageWrite | Access::eIndirectCommandRead,
                  Stage::eCopy, Access::eTransferRead);
   cmd_.copyBuffer(*r_.args.buffer, *slot_.readback.buffer, vk::BufferCopy(0, 0, sizeof(GpuArgs)));
+  if (r_.timestamps_valid) {
+    // The timestamps beside the counters, with availability: the host reads
+    // them from mapped memory without asking the driver (renderer_impl.h).
+    const uint32_t count = uint32_t(slot_.stamp_names.size()) + 1;
+    cmd_.copyQueryPoolResults(*r_.timestamps, first_stamp_, count, *slot_.readback.buffer, kStampsOffset, 16,
+                              vk::QueryResultFlagBits::e64 | vk::QueryResultFlagBits::eWait |
+                                  vk::QueryResultFlagBits::eWithAvailability);
+  }
   memory_barrier(cmd_, Stage::eCopy, Access::eTransferWrite, Stage::eHost, Access::eHostRead);
   std::vector<vk::ImageMemoryBarrier2> after;
   after.push_back(host_barrier(target.color_image, vk::ImageAspectFlagBits::eColor, target,

@@ -67,13 +67,14 @@ void Renderer::Impl::create_pipelines() {
   for (uint32_t b = 11; b <= 13; ++b) bindings.emplace_back(b, vk::DescriptorType::eStorageImage, 1, kAllStages);
   bindings.emplace_back(14, vk::DescriptorType::eCombinedImageSampler, 1, kAllStages);
   bindings.emplace_back(15, vk::DescriptorType::eStorageImage, 1, kAllStages);
+  bindings.emplace_back(16, vk::DescriptorType::eCombinedImageSampler, 1, kAllStages);  // the host's scene colour
   set_layout = vk::raii::DescriptorSetLayout(device, vk::DescriptorSetLayoutCreateInfo({}, bindings));
   vk::PushConstantRange push(kAllStages, 0, sizeof(PushConstants));
   layout = vk::raii::PipelineLayout(device, vk::PipelineLayoutCreateInfo({}, *set_layout, push));
   const uint32_t n = options.frames_in_flight;
   const std::array sizes{vk::DescriptorPoolSize(vk::DescriptorType::eUniformBufferDynamic, n),
                          vk::DescriptorPoolSize(vk::DescriptorType::eStorageImage, 12 * n),
-                         vk::DescriptorPoolSize(vk::DescriptorType::eCombinedImageSampler, 3 * n)};
+                         vk::DescriptorPoolSize(vk::DescriptorType::eCombinedImageSampler, 4 * n)};
   pool = vk::raii::DescriptorPool(device, vk::DescriptorPoolCreateInfo(vk::DescriptorPoolCreateFlagBits::eFreeDescriptorSet, n, sizes));
   for (FrameSlot& slot : slots) {
     slot.set = std::move(vk::raii::DescriptorSets(device, vk::DescriptorSetAllocateInfo(*pool, *set_layout))[0]);
@@ -202,6 +203,23 @@ void Renderer::Impl::bind_output(FrameSlot& slot, VkImageView view) {
   ctx.device.updateDescriptorSets(vk::WriteDescriptorSet(*slot.set, 9, 0, 1, vk::DescriptorType::eStorageImage, &image), {});
 }
 
+void Renderer::Impl::bind_scene_color(FrameSlot& slot, const RenderTarget& target) {
+  // Without the host's scene the binding holds the environment (never read).
+  vk::DescriptorImageInfo image(*sampler, *environment_array, vk::ImageLayout::eShaderReadOnlyOptimal);
+  if (target.scene_color_image) {
+    vk::raii::ImageView view(ctx.device,
+                             vk::ImageViewCreateInfo({}, vk::Image(target.scene_color_image), vk::ImageViewType::e2DArray,
+                                                     vk::Format(target.scene_color_format), {},
+                                                     vk::ImageSubresourceRange(vk::ImageAspectFlagBits::eColor, 0, 1,
+                                                                               target.base_layer, target.layer_count)));
+    image.imageView = *view;
+    image.imageLayout = vk::ImageLayout(target.scene_color_layout);
+    retire(std::move(view));  // lives as long as this frame's commands
+  }
+  ctx.device.updateDescriptorSets(
+      vk::WriteDescriptorSet(*slot.set, 16, 0, 1, vk::DescriptorType::eCombinedImageSampler, &image), {});
+}
+
 VkImageView Renderer::Impl::layer_view(VkImage image, VkFormat format, vk::ImageAspectFlags aspect, uint32_t layer) {
   vk::raii::ImageView view(ctx.device, vk::ImageViewCreateInfo({}, vk::Image(image), vk::ImageViewType::e2D, vk::Format(format), {},
                                                                vk::ImageSubresourceRange(aspect, 0, 1, layer, 1)));
@@ -268,7 +286,8 @@ Renderer::Renderer(Context& context, const SceneInfo& scene, const RendererOptio
                          kBufferUsage | vk::BufferUsageFlagBits::eIndirectBuffer | vk::BufferUsageFlagBits::eTransferSrc,
                          MemoryKind::DeviceLocal);
   for (FrameSlot& slot : r.slots) {
-    slot.readback = create_buffer(r.ctx, sizeof(GpuArgs) + sizeof(BandParams), vk::BufferUsageFlagBits::eTransferDst,
+    static_assert(sizeof(GpuArgs) + sizeof(BandParams) <= kStampsOffset);
+    slot.readback = create_buffer(r.ctx, kStampsOffset + 16 * kStampsPerSlot, vk::BufferUsageFlagBits::eTransferDst,
                                   MemoryKind::Readback);
   }
   r.create_pipelines();
@@ -314,7 +333,7 @@ Renderer::~Renderer() {
 const SceneInfo& Renderer::scene() const { return impl_->scene; }
 const RendererOptions& Renderer::options() const { return impl_->options; }
 
-void Renderer::Impl::collect_slot(FrameSlot& slot, uint32_t slot_index, bool finished) {
+void Renderer::Impl::collect_slot(FrameSlot& slot, bool finished) {
   if (slot.collected || slot.frame == UINT64_MAX) return;
   // Without timestamps nothing says whether the frame is done: only when
   // the frames-in-flight contract does.
@@ -322,10 +341,12 @@ void Renderer::Impl::collect_slot(FrameSlot& slot, uint32_t slot_index, bool fin
   const uint32_t count = uint32_t(slot.stamp_names.size()) + 1;
   std::array<uint64_t, kStampsPerSlot> stamps{};
   if (timestamps_valid) {
-    const vk::Result res = (*ctx.device).getQueryPoolResults(*timestamps, slot_index * kStampsPerSlot, count,
-                                                             count * sizeof(uint64_t), stamps.data(), sizeof(uint64_t),
-                                                             vk::QueryResultFlagBits::e64);
-    if (res != vk::Result::eSuccess) return;  // not back yet
+    // (value, availability) pairs the GPU copied at the end of the frame;
+    // the last one available means the frame's copies are all done.
+    uint64_t pairs[2 * kStampsPerSlot];
+    std::memcpy(pairs, static_cast<const std::byte*>(slot.readback.mapped) + kStampsOffset, 16 * count);
+    if (pairs[2 * (count - 1) + 1] == 0) return;  // not back yet (or never submitted)
+    for (uint32_t i = 0; i < count; ++i) stamps[i] = pairs[2 * i];
   }
   FrameStats s;
   s.frame = slot.frame;
@@ -388,7 +409,7 @@ std::string describe(const FrameStats::Classification& c) {
 
 FrameStats Renderer::last_stats() {
   Impl& r = *impl_;
-  for (uint32_t i = 0; i < r.slots.size(); ++i) r.collect_slot(r.slots[i], i, false);
+  for (FrameSlot& slot : r.slots) r.collect_slot(slot, false);
   return r.stats;
 }
 
@@ -420,7 +441,9 @@ FrameSync Renderer::record(VkCommandBuffer command_buffer, const RenderTarget& t
   r.collect_retired();
   const uint32_t slot_index = uint32_t(r.frames_recorded % r.slots.size());
   FrameSlot& slot = r.slots[slot_index];
-  r.collect_slot(slot, slot_index, true);  // its last use has finished (the frames-in-flight contract)
+  r.collect_slot(slot, true);  // its last use has finished (the frames-in-flight contract)
+  // Its timestamps' availability from the last use cleared: set again by this frame's copy.
+  std::memset(static_cast<std::byte*>(slot.readback.mapped) + kStampsOffset, 0, 16 * kStampsPerSlot);
   r.pick_shown_set();
   r.ensure_targets(size.width, size.height, options.half_resolution_thickness, layers);
   if (slot.set_generation != r.targets.generation + (r.environment_generation << 32)) r.write_descriptors(slot);
@@ -429,6 +452,7 @@ FrameSync Renderer::record(VkCommandBuffer command_buffer, const RenderTarget& t
   const bool direct = target.color_storage && !target.depth_view && !is_srgb(vk::Format(target.color_format)) &&
                       (target.background || target.color_layout_before != VK_IMAGE_LAYOUT_UNDEFINED);
   r.bind_output(slot, direct ? r.array_view_of(target) : static_cast<VkImageView>(*r.targets.color.view));
+  r.bind_scene_color(slot, target);
   FrameSet* frame = r.shown >= 0 ? &r.sets[size_t(r.shown)] : nullptr;
   if (frame) frame->last_drawn = r.frames_recorded;
 
@@ -461,6 +485,8 @@ FrameSync Renderer::record(VkCommandBuffer command_buffer, const RenderTarget& t
       Globals globals = make_globals(r.scene, views[v + e], options, lod, setup);
       globals.light[3] = r.has_environment ? 1.0f : 0.0f;
       globals.stereo[0] = layers;
+      globals.stereo[1] = target.scene_color_image ? 1u : 0u;
+      globals.stereo[2] = target.scene_color_image && !is_srgb(vk::Format(target.scene_color_format)) ? 1u : 0u;
       std::memcpy(static_cast<std::byte*>(r.globals.mapped) + offset + e * sizeof(Globals), &globals, sizeof globals);
     }
     pass.begin_view(uint32_t(offset), frame, layers);
@@ -545,6 +571,10 @@ void Renderer::Impl::upload_environment(const Image& equirect) {
   ++environment_generation;
   environment = create_texture(ctx, {width, height}, vk::Format::eR8G8B8A8Srgb,
                                vk::ImageUsageFlagBits::eSampled | vk::ImageUsageFlagBits::eTransferDst);
+  if (*environment_array) retire(std::move(environment_array));
+  environment_array = vk::raii::ImageView(
+      ctx.device, vk::ImageViewCreateInfo({}, *environment.image, vk::ImageViewType::e2DArray, environment.format, {},
+                                          vk::ImageSubresourceRange(vk::ImageAspectFlagBits::eColor, 0, 1, 0, 1)));
   ctx.run_once([&](vk::CommandBuffer c) {
     const auto to_dst = image_barrier(environment, vk::ImageLayout::eUndefined, vk::ImageLayout::eTransferDstOptimal,
                                       vk::PipelineStageFlagBits2::eNone, vk::AccessFlagBits2::eNone,

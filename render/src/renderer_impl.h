@@ -21,6 +21,8 @@ constexpr auto kAllStages = vk::ShaderStageFlagBits::eCompute | vk::ShaderStageF
                             vk::ShaderStageFlagBits::eFragment;
 // Timestamp slots per frame slot: one at the start and one after each pass of each view.
 constexpr uint32_t kStampsPerSlot = 64;
+// Where a FrameSlot's readback holds its timestamps (16 bytes each).
+constexpr vk::DeviceSize kStampsOffset = 256;
 
 // The screen-space targets of one view size (views of a frame share them).
 struct Targets {
@@ -70,7 +72,11 @@ struct FrameSet {
 struct FrameSlot {
   vk::raii::DescriptorSet set{nullptr};
   uint64_t set_generation = UINT64_MAX;  // targets generation the set was written for
-  Buffer readback;                        // GpuArgs of the last view
+  // GpuArgs of the last view, BandParams, then the frame's timestamps as
+  // (value, availability) pairs copied by the GPU (kStampsOffset): read
+  // from mapped memory, so reading figures never calls into the driver
+  // (lavapipe's vkGetQueryPoolResults waits for the device to go idle).
+  Buffer readback;
   uint64_t frame = UINT64_MAX;            // record() call that used it last
   std::vector<const char*> stamp_names;   // per timestamp after the first
   uint64_t particles = 0;
@@ -105,6 +111,7 @@ struct Renderer::Impl {
   Targets targets;
   // Equirectangular environment (sRGB); 1x1 placeholder while the procedural sky is used.
   Texture environment;
+  vk::raii::ImageView environment_array{nullptr};  // the same as a 1-layer array: the scene colour's stand-in
   uint64_t environment_generation = 0;
   vk::raii::Sampler environment_sampler{nullptr};
   bool has_environment = false;
@@ -171,7 +178,9 @@ struct Renderer::Impl {
   bool set_in_use(const FrameSet& s) const;
   // Reads a slot's figures into `stats` once they are back; `finished`: the
   // caller knows the slot's frame is done.
-  void collect_slot(FrameSlot& slot, uint32_t slot_index, bool finished);
+  void collect_slot(FrameSlot& slot, bool finished);
+  // Binding 16: the target's scene colour (a view made for this frame), or the environment.
+  void bind_scene_color(FrameSlot& slot, const RenderTarget& target);
   std::vector<std::byte> read_texture(const Texture& t, size_t texel_bytes);
 };
 

@@ -37,7 +37,9 @@ if cmake -S "$scratch/components" -B "$scratch/components/hidden" -DCMAKE_PREFIX
 fi
 cmake --build "$scratch/build" -j 2 >/dev/null
 cd "$scratch"
-"$scratch/build/host_vulkan" --check --frames 4 --out "$scratch/host_vulkan.png"
+# The bundled sample, streamed from its file.
+"$build/apps/sluice/sluice" convert "$src/data/dam_break_3d/dam_break_3d.pvd" -o "$scratch/dam.sluice" -q
+"$scratch/build/host_vulkan" --check --frames 8 --out "$scratch/host_vulkan.png" "$scratch/dam.sluice"
 # The same host pushing frames of its own simulation (render::LiveSource), recorded as it goes.
 "$scratch/build/host_vulkan" --live --check --frames 6 --record "$scratch/live.sluice" --out "$scratch/host_live.png"
 test -s "$scratch/live.sluice"

@@ -356,6 +356,72 @@ TEST(Embedding, PresentPassAndDirectShadingAgree) {
   expect_clean(host);
 }
 
+// The host's scene in the refraction: a red wall behind the water (the
+// host's scene colour, RenderTarget::scene_color_image) shows red through
+// it; without it the water refracts sluice's sky.
+TEST(Embedding, TheHostsSceneShowsThroughTheWater) {
+  TestHost host;
+  {
+    Context context(host.handles());
+    const SyntheticFluid f = synthetic_fluid(20000);
+    Renderer renderer(context, f.scene);
+    upload_synthetic(renderer, f);
+    const Camera cam = Camera::framing(f.scene.bounds, Vec3{0, 0, 1}, float(kW) / kH);
+    const View view = camera_view(cam, {0, 0, kW, kH});
+    using U = vk::ImageUsageFlagBits;
+    using S = vk::PipelineStageFlagBits2;
+    using A = vk::AccessFlagBits2;
+    const vk::ImageSubresourceRange all(vk::ImageAspectFlagBits::eColor, 0, 1, 0, 1);
+    TestHost::Image wall = host.image(kW, kH, vk::Format::eR8G8B8A8Unorm, U::eSampled | U::eTransferDst);
+    host.submit([&](vk::CommandBuffer c) {
+      const vk::ImageMemoryBarrier2 to_clear(S::eNone, {}, S::eClear, A::eTransferWrite, vk::ImageLayout::eUndefined,
+                                             vk::ImageLayout::eTransferDstOptimal, VK_QUEUE_FAMILY_IGNORED, VK_QUEUE_FAMILY_IGNORED,
+                                             *wall.image, all);
+      c.pipelineBarrier2(vk::DependencyInfo({}, {}, {}, to_clear));
+      c.clearColorImage(*wall.image, vk::ImageLayout::eTransferDstOptimal, vk::ClearColorValue(std::array<float, 4>{1, 0, 0, 1}),
+                        all);
+      const vk::ImageMemoryBarrier2 to_sample(S::eClear, A::eTransferWrite, S::eComputeShader, A::eShaderSampledRead,
+                                              vk::ImageLayout::eTransferDstOptimal, vk::ImageLayout::eShaderReadOnlyOptimal,
+                                              VK_QUEUE_FAMILY_IGNORED, VK_QUEUE_FAMILY_IGNORED, *wall.image, all);
+      c.pipelineBarrier2(vk::DependencyInfo({}, {}, {}, to_sample));
+    });
+    FluidOptions water;
+    water.ground = false;
+    const auto draw = [&](bool with_wall) {
+      TestHost::Image color = host.image(kW, kH, vk::Format::eR8G8B8A8Unorm, U::eColorAttachment | U::eTransferSrc);
+      RenderTarget target = color_target(color);
+      if (with_wall) {
+        target.scene_color_image = *wall.image;
+        target.scene_color_format = VK_FORMAT_R8G8B8A8_UNORM;
+        target.scene_color_layout = VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL;
+      }
+      host.submit([&](vk::CommandBuffer c) { renderer.record(static_cast<VkCommandBuffer>(c), target, {&view, 1}, water, {}); });
+      return host.read(color, kW, kH);
+    };
+    const std::vector<uint32_t> sky = draw(false), red = draw(true);
+    // Pixels without fluid are the same sky in both; the fluid's differ.
+    size_t fluid = 0;
+    std::array<double, 3> through_wall{}, through_sky{};
+    for (size_t i = 0; i < sky.size(); ++i) {
+      if (sky[i] == red[i]) continue;
+      ++fluid;
+      for (int k = 0; k < 3; ++k) {
+        through_wall[size_t(k)] += double((red[i] >> (8 * k)) & 0xff);
+        through_sky[size_t(k)] += double((sky[i] >> (8 * k)) & 0xff);
+      }
+    }
+    ASSERT_GT(fluid, 1000u) << "the water covers too little of the image";
+    for (double& c : through_wall) c /= double(fluid);
+    for (double& c : through_sky) c /= double(fluid);
+    std::printf("%zu water pixels: mean RGB through the wall %.0f %.0f %.0f, through the sky %.0f %.0f %.0f\n", fluid,
+                through_wall[0], through_wall[1], through_wall[2], through_sky[0], through_sky[1], through_sky[2]);
+    EXPECT_GT(through_wall[0], 1.5 * through_wall[1]) << "red shows through the water";
+    EXPECT_GT(through_wall[0], 1.5 * through_wall[2]) << "red shows through the water";
+    EXPECT_LT(through_sky[0], through_sky[2]) << "without the host's scene the water refracts the (blue) sky";
+  }
+  expect_clean(host);
+}
+
 TEST(Embedding, HostHandlesAreChecked) {
   EXPECT_THROW(Context(HostVulkan{}), std::invalid_argument);
   const DeviceFeatures f = required_device_features();

@@ -8,6 +8,7 @@
 #include <condition_variable>
 #include <fstream>
 #include <map>
+#include <memory>
 #include <mutex>
 #include <thread>
 #include <new>
@@ -414,16 +415,19 @@ TEST_F(FaultTest, NoMemoryToHandAFrameToTheDecodersIsAnErrorFrame) {
 // frame is decoding, on purpose.
 class DecodeGate {
  public:
+  // Waits here at most 30 s: a test that fails before opening the gate
+  // ends instead of hanging.
   void wait_here(uint64_t frame, size_t chunk) {
     if (frame != kBad || chunk != 0) return;
     std::unique_lock lock(mutex_);
     held_ = true;
     changed_.notify_all();
-    changed_.wait(lock, [&] { return open_; });
+    changed_.wait_for(lock, std::chrono::seconds(30), [&] { return open_; });
   }
-  void wait_until_held() {
+  // Whether the decode reached the gate within 30 s.
+  [[nodiscard]] bool wait_until_held() {
     std::unique_lock lock(mutex_);
-    changed_.wait(lock, [&] { return held_; });
+    return changed_.wait_for(lock, std::chrono::seconds(30), [&] { return held_; });
   }
   void open() {
     const std::lock_guard lock(mutex_);
@@ -445,12 +449,10 @@ TEST_F(FaultTest, SeekWhileAFrameIsDecodingDeliversTheNewScheduleOnly) {
   o.before_decode_chunk = [gate](uint64_t frame, size_t chunk) { gate->wait_here(frame, chunk); };
   Pipeline p(reader, allocator, o);
   p.restart({reader.frame_count(), int64_t(kBad), 1, 1, EndMode::Stop});
-  gate->wait_until_held();
+  ASSERT_TRUE(gate->wait_until_held()) << "frame kBad never reached the decoder";
   p.restart({reader.frame_count(), 2, 1, 1, EndMode::Stop});  // seek back while kBad decodes
-  std::thread opener([gate] {
-    std::this_thread::sleep_for(std::chrono::milliseconds(50));
-    gate->open();
-  });
+  // The new schedule's first frame arrives while kBad is still held (the
+  // other decode worker takes it); then kBad's decode may finish.
   std::vector<uint64_t> shown;
   for (int i = 0; i < 5; ++i) {
     ASSERT_FALSE(p.wait_next().end);
@@ -458,8 +460,8 @@ TEST_F(FaultTest, SeekWhileAFrameIsDecodingDeliversTheNewScheduleOnly) {
     EXPECT_FALSE(h.failed());
     EXPECT_TRUE(test::holds_frame(h, h.frame(), spec_));
     shown.push_back(h.frame());
+    if (i == 0) gate->open();
   }
-  opener.join();
   EXPECT_EQ(shown, (std::vector<uint64_t>{2, 3, 4, 5, 6}));
 }
 
@@ -469,16 +471,19 @@ TEST_F(FaultTest, DestroyingWhileAFrameIsDecodingWaitsForItAndEnds) {
   auto gate = std::make_shared<DecodeGate>();
   PipelineOptions o = decode_options();
   o.before_decode_chunk = [gate](uint64_t frame, size_t chunk) { gate->wait_here(frame, chunk); };
-  std::thread opener;
-  {
-    Pipeline p(reader, allocator, o);
-    p.restart({reader.frame_count(), int64_t(kBad), 1, 1, EndMode::Stop});
-    gate->wait_until_held();
-    opener = std::thread([gate] {
-      std::this_thread::sleep_for(std::chrono::milliseconds(100));
-      gate->open();  // the destructor below is waiting for this decode by now
-    });
-  }
+  auto p = std::make_unique<Pipeline>(reader, allocator, o);
+  p->restart({reader.frame_count(), int64_t(kBad), 1, 1, EndMode::Stop});
+  ASSERT_TRUE(gate->wait_until_held()) << "frame kBad never reached the decoder";
+  // The gate opens once the destruction has begun (no sleep: a flag set
+  // just before it), so the destructor meets the decode still running.
+  std::atomic<bool> destroying{false};
+  std::thread opener([&] {
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+    while (!destroying.load() && std::chrono::steady_clock::now() < deadline) std::this_thread::yield();
+    gate->open();
+  });
+  destroying.store(true);
+  p.reset();
   opener.join();
   EXPECT_EQ(allocator.in_use_buffers(), 0u) << "every buffer went back";
 }

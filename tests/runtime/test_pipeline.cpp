@@ -276,7 +276,9 @@ TEST_F(PipelineTest, ReadTimeCountsAReadStillInFlight) {
   o.source = gate;
   Pipeline p(reader, allocator, o);
   p.restart({reader.frame_count(), 0, 1, 1, EndMode::Stop});
-  while (gate->waiting() == 0) std::this_thread::yield();
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+  while (gate->waiting() == 0 && std::chrono::steady_clock::now() < deadline) std::this_thread::yield();
+  ASSERT_GT(gate->waiting(), 0u) << "no read reached the gate in 30 s";
   const auto waited = std::chrono::milliseconds(50);
   std::this_thread::sleep_for(waited);  // at least this long; the read began before it
   EXPECT_GE(p.stats().read_seconds, 0.05);

@@ -65,7 +65,8 @@ TEST(ReadCrew, HelpersGoOnToTheYoungerRoundWhileTheOlderWaitsForAStraggler) {
   std::atomic<int> older_done{0}, younger_done{0};
   const auto older = [&](uint64_t p) {
     if (p == 0) {
-      while (!release.load()) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+      const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(30);  // never forever
+      while (!release.load() && std::chrono::steady_clock::now() < until) std::this_thread::yield();
     }
     older_done.fetch_add(1);
   };

@@ -164,6 +164,19 @@ struct RenderTarget {
   // Draw sluice's sky and ground where the host's depth is still at the far
   // plane (everywhere without a host depth); off: only the fluid is drawn.
   bool background = true;
+  // Optional: the host's scene behind the fluid, refracted through it
+  // instead of sluice's environment (as engines hand a scene-colour texture
+  // to their transparent passes). A copy of the host's opaque colour, not
+  // color_image (which sluice writes): the target's size and layers
+  // (base_layer.., layer_count), VK_IMAGE_USAGE_SAMPLED_BIT, in
+  // scene_color_layout (SHADER_READ_ONLY_OPTIMAL or GENERAL) while the
+  // recorded commands run; the host makes its writes visible to compute
+  // shader sampled reads before record() (a barrier in its command buffer).
+  // *_SRGB formats are read as linear light, others as display
+  // (sRGB-encoded) values, as sluice writes UNORM targets.
+  VkImage scene_color_image = VK_NULL_HANDLE;
+  VkFormat scene_color_format = VK_FORMAT_UNDEFINED;
+  VkImageLayout scene_color_layout = VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL;
 };
 
 // What the caller's submission of the recorded command buffer must wait on:
@@ -263,8 +276,10 @@ class Renderer {
   FrameSync record(VkCommandBuffer cmd, const RenderTarget& target, std::span<const View> views,
                    const FluidOptions& options, const LodOptions& lod);
   // The figures of the newest recorded frame whose GPU results are back
-  // (read without waiting; frames_in_flight frames behind in a running loop,
-  // the last one after the host waited for it).
+  // (frames_in_flight frames behind in a running loop, the last one after
+  // the host waited for it). Never waits and never calls into the driver:
+  // the GPU copies each frame's timestamps and counters into mapped memory
+  // at its end, and this reads them there.
   FrameStats last_stats();
 
   // For tests, after the caller waited for the frame (with debug_surfaces):

@@ -1,0 +1,165 @@
+#include "sluice/render/stream.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <stdexcept>
+
+#include "sluice/render/demand.h"
+
+namespace sluice::render {
+namespace {
+
+int decoded_attribute(const FluidOptions& fluid) { return fluid.scalar_visibility ? fluid.color_attribute : -1; }
+
+double steady_seconds() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+// The eye of `view` in world space.
+Vec3 eye_of(const View& view) {
+  const Vec4 eye = inverse(view.view) * Vec4{0, 0, 0, 1};
+  return {eye.x, eye.y, eye.z};
+}
+
+}  // namespace
+
+Stream::Stream(Context& context, const std::filesystem::path& file, StreamOptions options)
+    : context_(context), options_(std::move(options)) {
+  reader_ = std::make_unique<io::ContainerReader>(file);
+  if (reader_->frame_count() == 0) throw std::invalid_argument(file.string() + ": the file has no frames to play");
+  SceneInfo scene = scene_info(*reader_);
+  if (options_.up) scene.up = *options_.up;
+  RendererOptions ro = options_.renderer;
+  ro.classify_unlayered = options_.layers == io::LayerSet::surface();
+  renderer_ = std::make_unique<Renderer>(context_, scene, ro);
+  fluid_.up = scene.up;
+  const io::FileHeader& header = reader_->header();
+  const bool host_locks = options_.queue_lock == QueueLock::HostTakesIt;
+  staging_ = std::make_unique<StagingAllocator>(context_, FrameFeed::staging_options(context_, header, options_.decode, host_locks));
+  const bool layered = reader_->frame_count() > 0 && reader_->index().frames[0].layered();
+  by_view_ = layered && options_.layers == io::LayerSet::surface();
+  if (options_.decode == DecodeSite::Gpu && !io::gpu_decodable(header)) {
+    throw std::invalid_argument(file.string() + ": frames with float32 positions are decoded on the CPU only");
+  }
+  gpu_decode_ = options_.decode != DecodeSite::Cpu && io::gpu_decodable(header);
+}
+
+Stream::Stream(Context& context, const Bounds& bounds, const LiveOptions& live, StreamOptions options)
+    : context_(context), options_(std::move(options)) {
+  SceneInfo scene = live_scene(bounds, live);
+  if (options_.up) scene.up = *options_.up;
+  RendererOptions ro = options_.renderer;
+  ro.classify_unlayered = options_.layers == io::LayerSet::surface();
+  renderer_ = std::make_unique<Renderer>(context_, scene, ro);
+  fluid_.up = scene.up;
+  fluid_.color_attribute = live.color_attribute;
+  fluid_.scalar_visibility = live.color_attribute >= 0;
+  live_ = std::make_unique<LiveSource>(*renderer_, live);
+}
+
+Stream::~Stream() = default;
+
+const SceneInfo& Stream::scene() const { return renderer_->scene(); }
+
+void Stream::require_file(const char* what) const {
+  if (!reader_) throw std::logic_error(std::string("Stream::") + what + ": a live stream has no file");
+}
+
+const io::ContainerReader& Stream::reader() const {
+  require_file("reader");
+  return *reader_;
+}
+
+const StagingAllocator& Stream::staging() const {
+  require_file("staging");
+  return *staging_;
+}
+
+runtime::Player& Stream::player() {
+  require_file("player");
+  if (!player_) start_player();
+  return *player_;
+}
+
+void Stream::set_look(const FluidOptions& fluid, const LodOptions& lod) {
+  if (player_ && decoded_attribute(fluid) != decoded_attribute(fluid_)) {
+    throw std::invalid_argument("Stream::set_look: the colour attribute is fixed once the player started");
+  }
+  fluid_ = fluid;
+  lod_ = lod;
+  if (player_) player_->set_demand(demand());
+}
+
+void Stream::set_views(std::span<const View> views) {
+  views_.assign(views.begin(), views.end());
+  if (views_.empty()) return;
+  // The fastest recent move of the (first) eye, decaying by half every 0.25 s.
+  const double now = steady_seconds();
+  const Vec3 eye = eye_of(views_.front());
+  if (eye_seconds_ >= 0 && now > eye_seconds_) {
+    const float moved = length(eye - eye_) / float(now - eye_seconds_);
+    speed_ = std::max(moved, speed_ * float(std::exp2(-(now - eye_seconds_) / 0.25)));
+  }
+  eye_ = eye;
+  eye_seconds_ = now;
+  if (player_) player_->set_demand(demand());
+}
+
+runtime::ViewDemand Stream::demand() const {
+  if (!reads_by_view() || views_.empty()) return {};
+  float margin = 0;
+  if (options_.motion == ViewMotion::Moving) {
+    // How far the views may move while frames read now wait in the window.
+    const double rate = player_ ? std::max(player_->frame_rate(), 1.0) : 30.0;
+    const float horizon = player_ ? float(double(player_->pipeline().most_ahead()) / rate) : 0.0f;
+    margin = view_margin(scene().bounds.diagonal(), speed_, horizon);
+  }
+  return view_demand(views_, scene(), fluid_, lod_, margin);
+}
+
+void Stream::start_player() {
+  runtime::PlayerOptions po = options_.player;
+  po.pipeline.layers = options_.layers;
+  const int color = decoded_attribute(fluid_);
+  FrameFeed::configure(po, *staging_, color, reader_->header(), options_.decode);
+  po.pipeline.demand = demand();
+  const runtime::Clock* clock = options_.clock;
+  if (!clock) {
+    own_clock_ = std::make_unique<runtime::SteadyClock>();
+    clock = own_clock_.get();
+  }
+  player_ = std::make_unique<runtime::Player>(*reader_, *staging_, *clock, po);
+  feed_ = std::make_unique<FrameFeed>(*renderer_, *player_, staging_.get(), color);
+}
+
+FeedUpdate Stream::update() {
+  if (live_) {
+    const FeedUpdate now = last_push_;
+    last_push_.changed = false;
+    return now;
+  }
+  if (!player_) start_player();
+  return feed_->update();
+}
+
+FrameSync Stream::record(VkCommandBuffer cmd, const RenderTarget& target, std::span<const View> views) {
+  return renderer_->record(cmd, target, views, fluid_, lod_);
+}
+
+uint64_t Stream::push(const LiveFrame& frame) {
+  if (!live_) throw std::logic_error("Stream::push: a file stream takes no pushed frames");
+  const uint64_t ticket = live_->push(frame);
+  last_push_.changed = true;
+  last_push_.has_frame = true;
+  last_push_.frame = live_->frames_pushed() - 1;
+  last_push_.ticket = ticket;
+  last_push_.commit_wall_ms = live_->last_encode_ms() + live_->last_decode_ms();
+  return ticket;
+}
+
+void Stream::finish() {
+  if (live_) live_->finish();
+}
+
+}  // namespace sluice::render
