@@ -374,12 +374,12 @@ int main(int argc, char** argv) try {
     stream->finish();
     std::printf("pushed %d live frames%s%s\n", frames, record.empty() ? "" : ", recorded to ", record.c_str());
   } else {
-    // Paused on the frame due, drawn once it is there (the checks below compare three draws of it).
-    stream->player().pause();
+    stream->player().pause();  // on the frame due
     stream->player().wait_for_due();
-    stream->renderer().wait_upload(stream->update().ticket);
-    draw_frame(slots[0], true, true);
   }
+  // The checks below compare three draws of one frame: drawn once its copy is done.
+  stream->renderer().wait_upload(stream->update().ticket);
+  draw_frame(slots[0], true, true);
   std::vector<uint32_t> both, host_only, fluid_only;
   std::vector<float> both_z, host_z, fluid_z;
   read_back(both, both_z);

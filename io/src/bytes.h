@@ -33,8 +33,11 @@ class ByteWriter {
   template <class T>
   void put(T v) {
     static_assert(std::endian::native == std::endian::little, "sluice assumes a little-endian host");
-    const auto* p = reinterpret_cast<const std::byte*>(&v);
-    out_.insert(out_.end(), p, p + sizeof(T));
+    // resize + memcpy, not insert: GCC 12 reports a false -Wstringop-overflow
+    // for vector::insert of a few bytes inlined here.
+    const size_t at = out_.size();
+    out_.resize(at + sizeof(T));
+    std::memcpy(out_.data() + at, &v, sizeof(T));
   }
   std::vector<std::byte>& out_;
 };

@@ -81,7 +81,7 @@ std::vector<float> lattice_box(int side, float h) {
   std::vector<float> xyz;
   for (int x = 0; x < side; ++x)
     for (int y = 0; y < side; ++y)
-      for (int z = 0; z < side; ++z) xyz.insert(xyz.end(), {x * h + 0.3f, y * h - 2.f, z * h + 5.f});
+      for (int z = 0; z < side; ++z) xyz.insert(xyz.end(), {float(x) * h + 0.3f, float(y) * h - 2.f, float(z) * h + 5.f});
   return xyz;
 }
 
@@ -90,7 +90,7 @@ std::vector<float> lattice_ball(int radius, float h) {
   for (int x = -radius; x <= radius; ++x)
     for (int y = -radius; y <= radius; ++y)
       for (int z = -radius; z <= radius; ++z) {
-        if (x * x + y * y + z * z <= radius * radius) xyz.insert(xyz.end(), {x * h, y * h, z * h});
+        if (x * x + y * y + z * z <= radius * radius) xyz.insert(xyz.end(), {float(x) * h, float(y) * h, float(z) * h});
       }
   return xyz;
 }
@@ -104,10 +104,10 @@ std::vector<float> jittered_pool_with_spray(float h, uint32_t seed) {
   const auto add = [&](float x, float y, float z) { xyz.insert(xyz.end(), {x + jitter(rng), y + jitter(rng), z + jitter(rng)}); };
   for (int x = 0; x < 60; ++x)
     for (int y = 0; y < 40; ++y)
-      for (int z = 0; z < 20; ++z) add(x * h, y * h, z * h);
+      for (int z = 0; z < 20; ++z) add(float(x) * h, float(y) * h, float(z) * h);
   for (int x = 0; x < 10; ++x)
     for (int y = 0; y < 10; ++y)
-      for (int z = 20; z < 48; ++z) add((x + 40) * h, (y + 5) * h, z * h);
+      for (int z = 20; z < 48; ++z) add(float(x + 40) * h, float(y + 5) * h, float(z) * h);
   for (int k = 0; k < 400; ++k) xyz.insert(xyz.end(), {60 * h * anywhere(rng), 40 * h * anywhere(rng), (22 + 40 * anywhere(rng)) * h});
   const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
   xyz.insert(xyz.end(), {nan, 0.1f, 0.1f, 0.2f, inf, 0.2f, 0.3f, 0.3f, -inf});
@@ -144,7 +144,7 @@ TEST(BandClassifierGpu, SameLayersAsTheCpuWhenVoxelsAreHashed) {
   ValidationGuard guard;
   const float h = 0.02f;
   std::vector<float> xyz = jittered_pool_with_spray(h, 4);
-  for (int k = 0; k < 20; ++k) xyz.insert(xyz.end(), {(300.f + 7 * k) * h, -250.f * h + k * h, (260.f - 3 * k) * h});
+  for (int k = 0; k < 20; ++k) xyz.insert(xyz.end(), {(300.f + 7.f * float(k)) * h, -250.f * h + float(k) * h, (260.f - 3.f * float(k)) * h});
   (void)classifier().classify(xyz, {.diameter = h});
   EXPECT_TRUE(classifier().last_hashed());
   expect_same_band(xyz, {.diameter = h, .blobs = true}, "pool with far droplets");

@@ -123,7 +123,9 @@ Shot by_demand(const io::ContainerReader& reader, const SceneInfo& scene, uint64
   runtime::FrameHandle h = pipeline.take();
   EXPECT_FALSE(h.failed()) << (h.failed() ? h.error()->text() : "");
   if (h.failed()) return {};
-  if (path == Path::Relayed) EXPECT_TRUE(h.layout().resident);
+  if (path == Path::Relayed) {
+    EXPECT_TRUE(h.layout().resident);
+  }
   if (h.gpu_plan()) {
     r.commit_encoded({&h.header(), h.chunk_first(), &h.buffers(), h.gpu_plan(), -1}, &staging);
   } else {

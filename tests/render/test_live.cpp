@@ -31,7 +31,7 @@ std::vector<float> ball(Vec3 centre, std::vector<float>* speed) {
   for (int i = -10; i <= 10; ++i) {
     for (int j = -10; j <= 10; ++j) {
       for (int k = -10; k <= 10; ++k) {
-        const Vec3 p{i * h, j * h, k * h};
+        const Vec3 p{float(i) * h, float(j) * h, float(k) * h};
         if (length(p) > 0.3f) continue;
         xyz.insert(xyz.end(), {centre.x + p.x + jitter(rng), centre.y + p.y + jitter(rng), centre.z + p.z + jitter(rng)});
         speed->push_back(length(p) / 0.3f);

@@ -101,18 +101,18 @@ TEST_P(Stereo, BothEyesInOnePassMatchEachEyeDrawnAlone) {
       const std::array<Drawn, 2> alone{draw(0, 1, lod), draw(1, 1, lod)};
       for (size_t e = 0; e < 2; ++e) {
         const double db = psnr(both.color[e], alone[e].color[0]);
-        size_t depth_differs = 0, fluid = 0;
+        size_t depth_differs = 0, fluid_pixels = 0;
         for (size_t i = 0; i < both.depth[e].size(); ++i) {
           depth_differs += both.depth[e][i] != alone[e].depth[0][i];
-          fluid += alone[e].depth[0][i] != 0;  // reversed depth: 0 is the far plane
+          fluid_pixels += alone[e].depth[0][i] != 0;  // reversed depth: 0 is the far plane
         }
         std::printf("%s, LOD %s, eye %zu: PSNR %.1f dB against the eye alone; depth differs at %zu of %zu fluid pixels\n",
-                    to_string(GetParam()), with_lod ? "density 0.4" : "off", e, db, depth_differs, fluid);
-        ASSERT_GT(fluid, size_t(kW) * kH / 20) << "the eye sees too little fluid for the comparison to mean much";
+                    to_string(GetParam()), with_lod ? "density 0.4" : "off", e, db, depth_differs, fluid_pixels);
+        ASSERT_GT(fluid_pixels, size_t(kW) * kH / 20) << "the eye sees too little fluid for the comparison to mean much";
         if (!with_lod) {
           // The same particles, the same passes: the same picture.
           EXPECT_GT(db, 60.0);
-          EXPECT_LE(depth_differs, fluid / 1000);
+          EXPECT_LE(depth_differs, fluid_pixels / 1000);
         } else {
           // One LOD decision for both eyes (the larger importance): each eye
           // keeps at least what it keeps alone, and kept splats grow a little
