@@ -29,6 +29,7 @@
 #include <cstring>
 #include <memory>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -101,31 +102,44 @@ struct BoxPush {
   float lo[4], size[4], color[4];
 };
 
-}  // namespace
-
-int main(int argc, char** argv) try {
+struct Args {
   int frames = 3;
-  bool check = false, live_mode = false;
+  bool check = false, live = false;
   std::string out = "host_vulkan.png", file, record;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a == "--frames" && i + 1 < argc) frames = std::max(1, std::atoi(argv[++i]));
-    else if (a == "--out" && i + 1 < argc) out = argv[++i];
-    else if (a == "--check") check = true;
-    else if (a == "--live") live_mode = true;
-    else if (a == "--record" && i + 1 < argc) record = argv[++i];
-    else if (a == "--help") {
-      std::printf("usage: host_vulkan [--frames N] [--out image.png] [--check] (FILE.sluice | --live [--record R.sluice])\n");
-      return 0;
-    } else file = a;
-  }
-  if (file.empty() == !live_mode) {
-    std::fprintf(stderr, "host_vulkan: give a .sluice file, or --live (--help)\n");
-    return 2;
-  }
+};
 
-  // 1. Instance: Vulkan 1.3, what sluice asks for, and validation when installed.
-  vk::raii::Context loader;
+// The command line; nullopt after --help or a usage error (`status` says which).
+std::optional<Args> parse_args(int argc, char** argv, int& status) {
+  Args a;
+  const char* usage = "usage: host_vulkan [--frames N] [--out image.png] [--check] (FILE.sluice | --live [--record R.sluice])\n";
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg == "--frames" && i + 1 < argc) a.frames = std::max(1, std::atoi(argv[++i]));
+    else if (arg == "--out" && i + 1 < argc) a.out = argv[++i];
+    else if (arg == "--check") a.check = true;
+    else if (arg == "--live") a.live = true;
+    else if (arg == "--record" && i + 1 < argc) a.record = argv[++i];
+    else if (arg == "--help") {
+      std::printf("%s", usage);
+      status = 0;
+      return std::nullopt;
+    } else a.file = arg;
+  }
+  if (a.file.empty() == !a.live) {
+    std::fprintf(stderr, "host_vulkan: give a .sluice file, or --live\n%s", usage);
+    status = 2;
+    return std::nullopt;
+  }
+  return a;
+}
+
+// 1. Instance: Vulkan 1.3, what sluice asks for, and validation when installed.
+struct Instance {
+  vk::raii::Instance instance{nullptr};
+  vk::raii::DebugUtilsMessengerEXT messenger{nullptr};
+};
+
+Instance make_instance(const vk::raii::Context& loader) {
   std::vector<const char*> layers, extensions = sluice::render::required_instance_extensions();
   for (const auto& l : loader.enumerateInstanceLayerProperties()) {
     if (std::strcmp(l.layerName, "VK_LAYER_KHRONOS_validation") == 0) {
@@ -134,225 +148,126 @@ int main(int argc, char** argv) try {
     }
   }
   const vk::ApplicationInfo app("host_vulkan", 1, nullptr, 0, VK_API_VERSION_1_3);
-  vk::raii::Instance instance(loader, vk::InstanceCreateInfo({}, &app, layers, extensions));
-  vk::raii::DebugUtilsMessengerEXT messenger{nullptr};
+  Instance i;
+  i.instance = vk::raii::Instance(loader, vk::InstanceCreateInfo({}, &app, layers, extensions));
   if (!layers.empty()) {
     using S = vk::DebugUtilsMessageSeverityFlagBitsEXT;
     using T = vk::DebugUtilsMessageTypeFlagBitsEXT;
-    messenger = vk::raii::DebugUtilsMessengerEXT(
-        instance, vk::DebugUtilsMessengerCreateInfoEXT({}, S::eError, T::eValidation | T::eGeneral, &on_validation));
+    i.messenger = vk::raii::DebugUtilsMessengerEXT(
+        i.instance, vk::DebugUtilsMessengerCreateInfoEXT({}, S::eError, T::eValidation | T::eGeneral, &on_validation));
   }
+  return i;
+}
 
-  // 2. Device: the first sluice can run on, one graphics+compute queue, sluice's extensions and features.
+// 2. Device: the first sluice can run on, one graphics+compute queue, sluice's extensions and features.
+struct Device {
   vk::raii::PhysicalDevice physical{nullptr};
+  vk::raii::Device device{nullptr};
+  vk::raii::Queue queue{nullptr};
+  uint32_t family = 0;
+  bool memory_budget = false;  // VK_EXT_memory_budget enabled
+};
+
+Device make_device(const vk::raii::Instance& instance) {
+  Device d;
   for (auto& pd : vk::raii::PhysicalDevices(instance)) {
     if (sluice::render::device_unusable_reason(*instance, *pd).empty()) {
-      physical = std::move(pd);
+      d.physical = std::move(pd);
       break;
     }
   }
-  if (!*physical) throw std::runtime_error("no Vulkan device can run sluice");
-  uint32_t family = 0;
-  const auto families = physical.getQueueFamilyProperties();
-  while (family < families.size() && !(families[family].queueFlags & vk::QueueFlagBits::eGraphics)) ++family;
+  if (!*d.physical) throw std::runtime_error("no Vulkan device can run sluice");
+  const auto families = d.physical.getQueueFamilyProperties();
+  while (d.family < families.size() && !(families[d.family].queueFlags & vk::QueueFlagBits::eGraphics)) ++d.family;
   const float priority = 1;
-  const vk::DeviceQueueCreateInfo queue_info({}, family, 1, &priority);
-  const std::vector<const char*> device_extensions = sluice::render::required_device_extensions(*physical);
+  const vk::DeviceQueueCreateInfo queue_info({}, d.family, 1, &priority);
+  const std::vector<const char*> extensions = sluice::render::required_device_extensions(*d.physical);
   sluice::render::DeviceFeatures features = sluice::render::required_device_features();
-  vk::DeviceCreateInfo device_info({}, queue_info, {}, device_extensions);
+  vk::DeviceCreateInfo device_info({}, queue_info, {}, extensions);
   device_info.pNext = &features.features2;
-  vk::raii::Device device(physical, device_info);
-  vk::raii::Queue queue(device, family, 0);
-  std::printf("host device: %s\n", physical.getProperties().deviceName.data());
+  d.device = vk::raii::Device(d.physical, device_info);
+  d.queue = vk::raii::Queue(d.device, d.family, 0);
+  for (const char* e : extensions) d.memory_budget |= std::strcmp(e, VK_EXT_MEMORY_BUDGET_EXTENSION_NAME) == 0;
+  std::printf("host device: %s\n", d.physical.getProperties().deviceName.data());
+  return d;
+}
 
-  // 3. sluice on the host's handles: a stream of the file's frames, or of
-  // frames the host computes (pushed from its memory, recorded when asked).
-  sluice::render::HostVulkan host;
-  host.handles = {*instance, *physical, *device, family, *queue};
-  for (const char* e : device_extensions) host.memory_budget_enabled |= std::strcmp(e, VK_EXT_MEMORY_BUDGET_EXTENSION_NAME) == 0;
-  sluice::render::Context context(host);
-  sluice::render::StreamOptions stream_options;
-  stream_options.renderer.frames_in_flight = kFramesInFlight;
-  stream_options.motion = sluice::render::ViewMotion::Fixed;  // the host's camera stays put
-  sluice::render::LiveOptions live_options;
-  live_options.particle_spacing = 0.02f;
-  live_options.frame_rate = 30;
-  live_options.record = record;
-  live_options.ids = false;  // the host keeps its particle order: LOD values follow the index
-  std::optional<sluice::render::Stream> stream;
-  if (live_mode) stream.emplace(context, sluice::render::Bounds{{0, 0, 0}, {2, 1, 1}}, live_options, stream_options);
-  else stream.emplace(context, file, stream_options);
-  sluice::render::FluidOptions fluid = stream->fluid();
-  fluid.ground = false;  // the host draws its own floor
-  stream->set_look(fluid, {});
-  // The host's own "simulation": a 2 x 1 block of water, 0.5 deep, with a
-  // wave travelling along x; particle i keeps its place, so LOD is stable.
-  const auto simulate = [&](int step) {
-    std::vector<float> xyz;
-    const float h = live_options.particle_spacing;
-    for (int i = 0; i < 100; ++i) {
-      for (int j = 0; j < 50; ++j) {
-        const float x = (i + 0.5f) * h, y = (j + 0.5f) * h;
-        const float top = 0.45f + 0.12f * std::sin(3.0f * x - 0.25f * float(step));
-        for (float z = 0.5f * h; z < top; z += h) xyz.insert(xyz.end(), {x, y, z});
-      }
+// The host's own "simulation": a 2 x 1 block of water, 0.5 deep, with a
+// wave travelling along x; particle i keeps its place, so LOD is stable.
+std::vector<float> simulate(int step, float h) {
+  std::vector<float> xyz;
+  for (int i = 0; i < 100; ++i) {
+    for (int j = 0; j < 50; ++j) {
+      const float x = (float(i) + 0.5f) * h, y = (float(j) + 0.5f) * h;
+      const float top = 0.45f + 0.12f * std::sin(3.0f * x - 0.25f * float(step));
+      for (float z = 0.5f * h; z < top; z += h) xyz.insert(xyz.end(), {x, y, z});
     }
-    return xyz;
-  };
-
-  // 4. The host's images, its box pipeline and one command buffer + fence per frame in flight.
-  using U = vk::ImageUsageFlagBits;
-  const Image color = make_image(device, physical, kColor, U::eColorAttachment | U::eTransferSrc, vk::ImageAspectFlagBits::eColor);
-  const Image depth = make_image(device, physical, kDepth, U::eDepthStencilAttachment | U::eTransferSrc, vk::ImageAspectFlagBits::eDepth);
-  const vk::PushConstantRange push_range(vk::ShaderStageFlagBits::eVertex | vk::ShaderStageFlagBits::eFragment, 0, sizeof(BoxPush));
-  vk::raii::PipelineLayout layout(device, vk::PipelineLayoutCreateInfo({}, {}, push_range));
-  const vk::raii::ShaderModule vs(device, vk::ShaderModuleCreateInfo({}, sizeof kBoxVert, kBoxVert));
-  const vk::raii::ShaderModule fs(device, vk::ShaderModuleCreateInfo({}, sizeof kBoxFrag, kBoxFrag));
-  const std::array stages{vk::PipelineShaderStageCreateInfo({}, vk::ShaderStageFlagBits::eVertex, *vs, "main"),
-                          vk::PipelineShaderStageCreateInfo({}, vk::ShaderStageFlagBits::eFragment, *fs, "main")};
-  const vk::PipelineVertexInputStateCreateInfo vertex_input;
-  const vk::PipelineInputAssemblyStateCreateInfo assembly({}, vk::PrimitiveTopology::eTriangleList);
-  const vk::Viewport viewport(0, 0, float(kWidth), float(kHeight), 0, 1);
-  const vk::Rect2D area({0, 0}, {kWidth, kHeight});
-  const vk::PipelineViewportStateCreateInfo viewport_state({}, viewport, area);
-  const vk::PipelineRasterizationStateCreateInfo raster({}, false, false, vk::PolygonMode::eFill, vk::CullModeFlagBits::eNone,
-                                                        vk::FrontFace::eCounterClockwise, false, 0, 0, 0, 1);
-  const vk::PipelineMultisampleStateCreateInfo multisample;
-  const vk::PipelineDepthStencilStateCreateInfo depth_state({}, true, true, vk::CompareOp::eLess);
-  vk::PipelineColorBlendAttachmentState blend;
-  blend.colorWriteMask = vk::ColorComponentFlagBits::eR | vk::ColorComponentFlagBits::eG | vk::ColorComponentFlagBits::eB |
-                         vk::ColorComponentFlagBits::eA;
-  const vk::PipelineColorBlendStateCreateInfo blend_state({}, false, vk::LogicOp::eCopy, blend);
-  vk::PipelineRenderingCreateInfo rendering(0, kColor, kDepth);
-  vk::GraphicsPipelineCreateInfo pipeline_info({}, stages, &vertex_input, &assembly, nullptr, &viewport_state, &raster,
-                                               &multisample, &depth_state, &blend_state, nullptr, *layout);
-  pipeline_info.pNext = &rendering;
-  vk::raii::Pipeline box_pipeline(device, nullptr, pipeline_info);
-  vk::raii::CommandPool pool(device, vk::CommandPoolCreateInfo(vk::CommandPoolCreateFlagBits::eResetCommandBuffer, family));
-  struct Slot {
-    vk::raii::CommandBuffer cmd{nullptr};
-    vk::raii::Fence fence{nullptr};
-    bool busy = false;
-  };
-  std::vector<Slot> slots(kFramesInFlight);
-  for (Slot& s : slots) {
-    s.cmd = std::move(vk::raii::CommandBuffers(device, vk::CommandBufferAllocateInfo(*pool, vk::CommandBufferLevel::ePrimary, 1))[0]);
-    s.fence = vk::raii::Fence(device, vk::FenceCreateInfo());
   }
-  const auto wait_for = [&](Slot& s) {
-    if (!s.busy) return;
-    while (device.waitForFences(*s.fence, true, UINT64_MAX) == vk::Result::eTimeout) {
+  return xyz;
+}
+
+// 4. The host's things: its colour and depth images, a pipeline drawing lit
+// boxes, a camera, and one command buffer + fence per frame in flight.
+class HostScene {
+ public:
+  HostScene(const Device& d, const sluice::render::Bounds& b) : d_(d) {
+    using U = vk::ImageUsageFlagBits;
+    color_ = make_image(d.device, d.physical, kColor, U::eColorAttachment | U::eTransferSrc, vk::ImageAspectFlagBits::eColor);
+    depth_ = make_image(d.device, d.physical, kDepth, U::eDepthStencilAttachment | U::eTransferSrc, vk::ImageAspectFlagBits::eDepth);
+    make_pipeline();
+    pool_ = vk::raii::CommandPool(d.device, vk::CommandPoolCreateInfo(vk::CommandPoolCreateFlagBits::eResetCommandBuffer, d.family));
+    slots_.resize(kFramesInFlight);
+    for (Slot& s : slots_) {
+      s.cmd = std::move(vk::raii::CommandBuffers(d.device, vk::CommandBufferAllocateInfo(*pool_, vk::CommandBufferLevel::ePrimary, 1))[0]);
+      s.fence = vk::raii::Fence(d.device, vk::FenceCreateInfo());
     }
-    device.resetFences(*s.fence);
-    s.busy = false;
-  };
+    place_camera_and_boxes(b);
+  }
 
-  // The scene: the host's camera, a floor under the fluid and a box standing in its middle.
-  const sluice::render::Bounds& b = stream->scene().bounds;
-  const sluice::render::Vec3 c = b.center(), e = b.max - b.min;
-  const sluice::render::Vec3 eye{c.x - 0.35f * e.x, b.min.y - 1.3f * std::max(e.x, e.y), b.max.z + 0.9f * e.z};
-  sluice::render::View view;
-  view.view = sluice::render::look_at(eye, {c.x, c.y, b.min.z + 0.3f * e.z}, {0, 0, 1});
-  view.projection = projection(45, float(kWidth) / kHeight, 0.05f * e.x, 20 * (e.x + e.y + e.z));
-  view.viewport = {0, 0, kWidth, kHeight};
-  const sluice::render::Mat4 clip_from_world = view.projection * view.view;
-  const BoxPush floor_push{clip_from_world, {b.min.x - 0.3f * e.x, b.min.y - 0.3f * e.y, b.min.z - 0.02f * e.z, 0},
-                           {1.6f * e.x, 1.6f * e.y, 0.02f * e.z, 0}, {0.55f, 0.5f, 0.45f, 1}};
-  const BoxPush box_push{clip_from_world, {c.x - 0.08f * e.x, c.y - 0.12f * e.y, b.min.z, 0},
-                         {0.16f * e.x, 0.24f * e.y, 1.4f * e.z, 0}, {0.85f, 0.25f, 0.2f, 1}};
+  const sluice::render::View& view() const { return view_; }
 
-  // 5. One frame: the host clears and draws its geometry, sluice records the
-  // fluid into the same images (occluded by the host's depth, writing its own).
-  const auto draw_frame = [&](Slot& slot, bool host_geometry, bool with_fluid) {
+  // One frame: the host clears and draws its geometry (or not), then the
+  // stream records the fluid into the same images (occluded by the host's
+  // depth, writing its own), or not; submitted, not waited for.
+  void draw(bool host_geometry, sluice::render::Stream* fluid) {
+    Slot& slot = slots_[next_++ % slots_.size()];
     wait_for(slot);  // the frames-in-flight contract: this slot's previous frame is done
     vk::CommandBuffer cmd = *slot.cmd;
     cmd.reset();
     cmd.begin(vk::CommandBufferBeginInfo(vk::CommandBufferUsageFlagBits::eOneTimeSubmit));
-    using S = vk::PipelineStageFlagBits2;
-    using A = vk::AccessFlagBits2;
-    const std::array to_draw{
-        vk::ImageMemoryBarrier2(S::eAllCommands, A::eMemoryRead, S::eColorAttachmentOutput, A::eColorAttachmentWrite,
-                                vk::ImageLayout::eUndefined, vk::ImageLayout::eColorAttachmentOptimal, VK_QUEUE_FAMILY_IGNORED,
-                                VK_QUEUE_FAMILY_IGNORED, *color.image,
-                                vk::ImageSubresourceRange(vk::ImageAspectFlagBits::eColor, 0, 1, 0, 1)),
-        vk::ImageMemoryBarrier2(S::eAllCommands, A::eMemoryRead, S::eEarlyFragmentTests | S::eLateFragmentTests,
-                                A::eDepthStencilAttachmentWrite | A::eDepthStencilAttachmentRead, vk::ImageLayout::eUndefined,
-                                vk::ImageLayout::eDepthStencilAttachmentOptimal, VK_QUEUE_FAMILY_IGNORED, VK_QUEUE_FAMILY_IGNORED,
-                                *depth.image, vk::ImageSubresourceRange(vk::ImageAspectFlagBits::eDepth, 0, 1, 0, 1))};
-    cmd.pipelineBarrier2(vk::DependencyInfo({}, {}, {}, to_draw));
-    vk::RenderingAttachmentInfo color_attachment(*color.view, vk::ImageLayout::eColorAttachmentOptimal, {}, {}, {},
-                                                 vk::AttachmentLoadOp::eClear, vk::AttachmentStoreOp::eStore,
-                                                 vk::ClearColorValue(std::array<float, 4>{0.12f, 0.13f, 0.16f, 1}));
-    vk::RenderingAttachmentInfo depth_attachment(*depth.view, vk::ImageLayout::eDepthStencilAttachmentOptimal, {}, {}, {},
-                                                 vk::AttachmentLoadOp::eClear, vk::AttachmentStoreOp::eStore,
-                                                 vk::ClearDepthStencilValue(1.0f, 0));
-    cmd.beginRendering(vk::RenderingInfo({}, area, 1, 0, color_attachment, &depth_attachment));
-    if (host_geometry) {
-      cmd.bindPipeline(vk::PipelineBindPoint::eGraphics, *box_pipeline);
-      for (const BoxPush* push : {&floor_push, &box_push}) {
-        cmd.pushConstants<BoxPush>(*layout, vk::ShaderStageFlagBits::eVertex | vk::ShaderStageFlagBits::eFragment, 0, *push);
-        cmd.draw(36, 1, 0, 0);
-      }
-    }
-    cmd.endRendering();
+    draw_geometry(cmd, host_geometry);
     sluice::render::FrameSync sync;
-    sluice::render::RenderTarget target;
-    target.width = kWidth;
-    target.height = kHeight;
-    target.color_image = *color.image;
-    target.color_view = *color.view;
-    target.color_format = static_cast<VkFormat>(kColor);
-    target.color_layout_before = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
-    target.color_layout_after = VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL;
-    target.depth_image = *depth.image;
-    target.depth_view = *depth.view;
-    target.depth_format = static_cast<VkFormat>(kDepth);
-    target.depth_layout_before = VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL;
-    target.depth_layout_after = VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL;
-    target.background = false;  // the host's clear colour stays where there is no fluid
-    if (with_fluid) {
-      sync = stream->record(static_cast<VkCommandBuffer>(cmd), target, {&view, 1});
-    } else {
-      const std::array to_read{
-          vk::ImageMemoryBarrier2(S::eColorAttachmentOutput, A::eColorAttachmentWrite, S::eAllCommands, A::eMemoryRead,
-                                  vk::ImageLayout::eColorAttachmentOptimal, vk::ImageLayout::eTransferSrcOptimal,
-                                  VK_QUEUE_FAMILY_IGNORED, VK_QUEUE_FAMILY_IGNORED, *color.image,
-                                  vk::ImageSubresourceRange(vk::ImageAspectFlagBits::eColor, 0, 1, 0, 1)),
-          vk::ImageMemoryBarrier2(S::eLateFragmentTests, A::eDepthStencilAttachmentWrite, S::eAllCommands, A::eMemoryRead,
-                                  vk::ImageLayout::eDepthStencilAttachmentOptimal, vk::ImageLayout::eTransferSrcOptimal,
-                                  VK_QUEUE_FAMILY_IGNORED, VK_QUEUE_FAMILY_IGNORED, *depth.image,
-                                  vk::ImageSubresourceRange(vk::ImageAspectFlagBits::eDepth, 0, 1, 0, 1))};
-      cmd.pipelineBarrier2(vk::DependencyInfo({}, {}, {}, to_read));
-    }
+    if (fluid) sync = fluid->record(static_cast<VkCommandBuffer>(cmd), target(), {&view_, 1});
+    else to_transfer_source(cmd);
     cmd.end();
     const vk::CommandBufferSubmitInfo cb(cmd);
     const vk::SemaphoreSubmitInfo wait(vk::Semaphore(sync.upload_semaphore), sync.upload_value,
                                        vk::PipelineStageFlags2(sync.wait_stages));
-    queue.submit2(vk::SubmitInfo2({}, with_fluid ? 1u : 0u, &wait, 1, &cb), *slot.fence);
+    d_.queue.submit2(vk::SubmitInfo2({}, fluid ? 1u : 0u, &wait, 1, &cb), *slot.fence);
     slot.busy = true;
-  };
+  }
 
-  // Reads the colour and depth images of the last frame (after waiting for it).
-  const auto read_back = [&](std::vector<uint32_t>& rgba, std::vector<float>& z) {
-    for (Slot& s : slots) wait_for(s);
+  // The colour and depth of the last frame (after waiting for it).
+  void read_back(std::vector<uint32_t>& rgba, std::vector<float>& z) {
+    for (Slot& s : slots_) wait_for(s);
     const vk::DeviceSize bytes = vk::DeviceSize(kWidth) * kHeight * 4;
-    vk::raii::Buffer buffer(device, vk::BufferCreateInfo({}, 2 * bytes, vk::BufferUsageFlagBits::eTransferDst));
+    vk::raii::Buffer buffer(d_.device, vk::BufferCreateInfo({}, 2 * bytes, vk::BufferUsageFlagBits::eTransferDst));
     const auto req = buffer.getMemoryRequirements();
-    vk::raii::DeviceMemory memory(device, vk::MemoryAllocateInfo(req.size, memory_type(physical, req.memoryTypeBits,
-                                                                                       vk::MemoryPropertyFlagBits::eHostVisible |
-                                                                                           vk::MemoryPropertyFlagBits::eHostCoherent)));
+    using M = vk::MemoryPropertyFlagBits;
+    vk::raii::DeviceMemory memory(
+        d_.device, vk::MemoryAllocateInfo(req.size, memory_type(d_.physical, req.memoryTypeBits, M::eHostVisible | M::eHostCoherent)));
     buffer.bindMemory(*memory, 0);
-    Slot& slot = slots[0];
+    Slot& slot = slots_[0];
     vk::CommandBuffer cmd = *slot.cmd;
     cmd.reset();
     cmd.begin(vk::CommandBufferBeginInfo(vk::CommandBufferUsageFlagBits::eOneTimeSubmit));
-    cmd.copyImageToBuffer(*color.image, vk::ImageLayout::eTransferSrcOptimal, *buffer,
+    cmd.copyImageToBuffer(*color_.image, vk::ImageLayout::eTransferSrcOptimal, *buffer,
                           vk::BufferImageCopy(0, 0, 0, {vk::ImageAspectFlagBits::eColor, 0, 0, 1}, {}, {kWidth, kHeight, 1}));
-    cmd.copyImageToBuffer(*depth.image, vk::ImageLayout::eTransferSrcOptimal, *buffer,
+    cmd.copyImageToBuffer(*depth_.image, vk::ImageLayout::eTransferSrcOptimal, *buffer,
                           vk::BufferImageCopy(bytes, 0, 0, {vk::ImageAspectFlagBits::eDepth, 0, 0, 1}, {}, {kWidth, kHeight, 1}));
     cmd.end();
     const vk::CommandBufferSubmitInfo cb(cmd);
-    queue.submit2(vk::SubmitInfo2({}, {}, cb), *slot.fence);
+    d_.queue.submit2(vk::SubmitInfo2({}, {}, cb), *slot.fence);
     slot.busy = true;
     wait_for(slot);
     const auto* mapped = static_cast<const std::byte*>(memory.mapMemory(0, 2 * bytes));
@@ -360,65 +275,239 @@ int main(int argc, char** argv) try {
     z.resize(rgba.size());
     std::memcpy(rgba.data(), mapped, bytes);
     std::memcpy(z.data(), mapped + bytes, bytes);
+  }
+
+ private:
+  struct Slot {
+    vk::raii::CommandBuffer cmd{nullptr};
+    vk::raii::Fence fence{nullptr};
+    bool busy = false;
   };
 
-  // The frame loop: the views, the frame due, the host's drawing and sluice's.
-  if (!live_mode) stream->player().play();
-  for (int f = 0; f < frames; ++f) {
-    if (live_mode) stream->push({simulate(f), {}, {}, f / 30.0});  // a new frame from the host's memory
-    stream->set_views({&view, 1});
-    stream->update();
-    draw_frame(slots[size_t(f) % slots.size()], true, true);
+  void wait_for(Slot& s) {
+    if (!s.busy) return;
+    while (d_.device.waitForFences(*s.fence, true, UINT64_MAX) == vk::Result::eTimeout) {
+    }
+    d_.device.resetFences(*s.fence);
+    s.busy = false;
   }
-  if (live_mode) {
+
+  void make_pipeline() {
+    const vk::PushConstantRange push_range(vk::ShaderStageFlagBits::eVertex | vk::ShaderStageFlagBits::eFragment, 0, sizeof(BoxPush));
+    layout_ = vk::raii::PipelineLayout(d_.device, vk::PipelineLayoutCreateInfo({}, {}, push_range));
+    const vk::raii::ShaderModule vs(d_.device, vk::ShaderModuleCreateInfo({}, sizeof kBoxVert, kBoxVert));
+    const vk::raii::ShaderModule fs(d_.device, vk::ShaderModuleCreateInfo({}, sizeof kBoxFrag, kBoxFrag));
+    const std::array stages{vk::PipelineShaderStageCreateInfo({}, vk::ShaderStageFlagBits::eVertex, *vs, "main"),
+                            vk::PipelineShaderStageCreateInfo({}, vk::ShaderStageFlagBits::eFragment, *fs, "main")};
+    const vk::PipelineVertexInputStateCreateInfo vertex_input;
+    const vk::PipelineInputAssemblyStateCreateInfo assembly({}, vk::PrimitiveTopology::eTriangleList);
+    const vk::Viewport viewport(0, 0, float(kWidth), float(kHeight), 0, 1);
+    const vk::Rect2D area({0, 0}, {kWidth, kHeight});
+    const vk::PipelineViewportStateCreateInfo viewport_state({}, viewport, area);
+    const vk::PipelineRasterizationStateCreateInfo raster({}, false, false, vk::PolygonMode::eFill, vk::CullModeFlagBits::eNone,
+                                                          vk::FrontFace::eCounterClockwise, false, 0, 0, 0, 1);
+    const vk::PipelineMultisampleStateCreateInfo multisample;
+    const vk::PipelineDepthStencilStateCreateInfo depth_state({}, true, true, vk::CompareOp::eLess);
+    vk::PipelineColorBlendAttachmentState blend;
+    blend.colorWriteMask = vk::ColorComponentFlagBits::eR | vk::ColorComponentFlagBits::eG | vk::ColorComponentFlagBits::eB |
+                           vk::ColorComponentFlagBits::eA;
+    const vk::PipelineColorBlendStateCreateInfo blend_state({}, false, vk::LogicOp::eCopy, blend);
+    vk::PipelineRenderingCreateInfo rendering(0, kColor, kDepth);
+    vk::GraphicsPipelineCreateInfo info({}, stages, &vertex_input, &assembly, nullptr, &viewport_state, &raster, &multisample,
+                                        &depth_state, &blend_state, nullptr, *layout_);
+    info.pNext = &rendering;
+    pipeline_ = vk::raii::Pipeline(d_.device, nullptr, info);
+  }
+
+  // The host's camera looking at the data, a floor under it and a box standing in its middle.
+  void place_camera_and_boxes(const sluice::render::Bounds& b) {
+    const sluice::render::Vec3 c = b.center(), e = b.max - b.min;
+    const sluice::render::Vec3 eye{c.x - 0.35f * e.x, b.min.y - 1.3f * std::max(e.x, e.y), b.max.z + 0.9f * e.z};
+    view_.view = sluice::render::look_at(eye, {c.x, c.y, b.min.z + 0.3f * e.z}, {0, 0, 1});
+    view_.projection = projection(45, float(kWidth) / kHeight, 0.05f * e.x, 20 * (e.x + e.y + e.z));
+    view_.viewport = {0, 0, kWidth, kHeight};
+    const sluice::render::Mat4 clip_from_world = view_.projection * view_.view;
+    floor_ = {clip_from_world, {b.min.x - 0.3f * e.x, b.min.y - 0.3f * e.y, b.min.z - 0.02f * e.z, 0},
+              {1.6f * e.x, 1.6f * e.y, 0.02f * e.z, 0}, {0.55f, 0.5f, 0.45f, 1}};
+    box_ = {clip_from_world, {c.x - 0.08f * e.x, c.y - 0.12f * e.y, b.min.z, 0}, {0.16f * e.x, 0.24f * e.y, 1.4f * e.z, 0},
+            {0.85f, 0.25f, 0.2f, 1}};
+  }
+
+  // Clears the images and draws the floor and the box (or only clears),
+  // leaving both in ATTACHMENT_OPTIMAL.
+  void draw_geometry(vk::CommandBuffer cmd, bool host_geometry) {
+    using S = vk::PipelineStageFlagBits2;
+    using A = vk::AccessFlagBits2;
+    const std::array to_draw{
+        vk::ImageMemoryBarrier2(S::eAllCommands, A::eMemoryRead, S::eColorAttachmentOutput, A::eColorAttachmentWrite,
+                                vk::ImageLayout::eUndefined, vk::ImageLayout::eColorAttachmentOptimal, VK_QUEUE_FAMILY_IGNORED,
+                                VK_QUEUE_FAMILY_IGNORED, *color_.image,
+                                vk::ImageSubresourceRange(vk::ImageAspectFlagBits::eColor, 0, 1, 0, 1)),
+        vk::ImageMemoryBarrier2(S::eAllCommands, A::eMemoryRead, S::eEarlyFragmentTests | S::eLateFragmentTests,
+                                A::eDepthStencilAttachmentWrite | A::eDepthStencilAttachmentRead, vk::ImageLayout::eUndefined,
+                                vk::ImageLayout::eDepthStencilAttachmentOptimal, VK_QUEUE_FAMILY_IGNORED, VK_QUEUE_FAMILY_IGNORED,
+                                *depth_.image, vk::ImageSubresourceRange(vk::ImageAspectFlagBits::eDepth, 0, 1, 0, 1))};
+    cmd.pipelineBarrier2(vk::DependencyInfo({}, {}, {}, to_draw));
+    vk::RenderingAttachmentInfo color_attachment(*color_.view, vk::ImageLayout::eColorAttachmentOptimal, {}, {}, {},
+                                                 vk::AttachmentLoadOp::eClear, vk::AttachmentStoreOp::eStore,
+                                                 vk::ClearColorValue(std::array<float, 4>{0.12f, 0.13f, 0.16f, 1}));
+    vk::RenderingAttachmentInfo depth_attachment(*depth_.view, vk::ImageLayout::eDepthStencilAttachmentOptimal, {}, {}, {},
+                                                 vk::AttachmentLoadOp::eClear, vk::AttachmentStoreOp::eStore,
+                                                 vk::ClearDepthStencilValue(1.0f, 0));
+    cmd.beginRendering(vk::RenderingInfo({}, vk::Rect2D({0, 0}, {kWidth, kHeight}), 1, 0, color_attachment, &depth_attachment));
+    if (host_geometry) {
+      cmd.bindPipeline(vk::PipelineBindPoint::eGraphics, *pipeline_);
+      for (const BoxPush* push : {&floor_, &box_}) {
+        cmd.pushConstants<BoxPush>(*layout_, vk::ShaderStageFlagBits::eVertex | vk::ShaderStageFlagBits::eFragment, 0, *push);
+        cmd.draw(36, 1, 0, 0);
+      }
+    }
+    cmd.endRendering();
+  }
+
+  // The host's images as sluice's target: drawn over (its clear colour
+  // stays where there is no fluid), left ready for the read-back.
+  sluice::render::RenderTarget target() const {
+    sluice::render::RenderTarget t;
+    t.width = kWidth;
+    t.height = kHeight;
+    t.color_image = *color_.image;
+    t.color_view = *color_.view;
+    t.color_format = static_cast<VkFormat>(kColor);
+    t.color_layout_before = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
+    t.color_layout_after = VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL;
+    t.depth_image = *depth_.image;
+    t.depth_view = *depth_.view;
+    t.depth_format = static_cast<VkFormat>(kDepth);
+    t.depth_layout_before = VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL;
+    t.depth_layout_after = VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL;
+    t.background = false;
+    return t;
+  }
+
+  // Without the fluid, the host moves its images to the read-back layout itself.
+  void to_transfer_source(vk::CommandBuffer cmd) const {
+    using S = vk::PipelineStageFlagBits2;
+    using A = vk::AccessFlagBits2;
+    const std::array to_read{
+        vk::ImageMemoryBarrier2(S::eColorAttachmentOutput, A::eColorAttachmentWrite, S::eAllCommands, A::eMemoryRead,
+                                vk::ImageLayout::eColorAttachmentOptimal, vk::ImageLayout::eTransferSrcOptimal, VK_QUEUE_FAMILY_IGNORED,
+                                VK_QUEUE_FAMILY_IGNORED, *color_.image,
+                                vk::ImageSubresourceRange(vk::ImageAspectFlagBits::eColor, 0, 1, 0, 1)),
+        vk::ImageMemoryBarrier2(S::eLateFragmentTests, A::eDepthStencilAttachmentWrite, S::eAllCommands, A::eMemoryRead,
+                                vk::ImageLayout::eDepthStencilAttachmentOptimal, vk::ImageLayout::eTransferSrcOptimal,
+                                VK_QUEUE_FAMILY_IGNORED, VK_QUEUE_FAMILY_IGNORED, *depth_.image,
+                                vk::ImageSubresourceRange(vk::ImageAspectFlagBits::eDepth, 0, 1, 0, 1))};
+    cmd.pipelineBarrier2(vk::DependencyInfo({}, {}, {}, to_read));
+  }
+
+  const Device& d_;
+  Image color_, depth_;
+  vk::raii::PipelineLayout layout_{nullptr};
+  vk::raii::Pipeline pipeline_{nullptr};
+  vk::raii::CommandPool pool_{nullptr};
+  std::vector<Slot> slots_;
+  size_t next_ = 0;
+  sluice::render::View view_;
+  BoxPush floor_{}, box_{};
+};
+
+// 6. --check: the host's geometry alone and the fluid alone, against both
+// drawn together. Where both drew, the nearer one must show: the box in
+// front hides the fluid, the fluid in front of the box hides it.
+bool check_occlusion(HostScene& scene, sluice::render::Stream& stream, const std::vector<uint32_t>& both,
+                     const std::vector<float>& both_z) {
+  std::vector<uint32_t> host_only, fluid_only;
+  std::vector<float> host_z, fluid_z;
+  scene.draw(true, nullptr);
+  scene.read_back(host_only, host_z);
+  scene.draw(false, &stream);
+  scene.read_back(fluid_only, fluid_z);
+  size_t host_in_front = 0, fluid_in_front = 0, wrong = 0, fluid_pixels = 0;
+  for (size_t i = 0; i < both.size(); ++i) {
+    const bool has_host = host_z[i] < 1.0f, has_fluid = fluid_z[i] < 1.0f;
+    fluid_pixels += has_fluid;
+    if (!has_host || !has_fluid || host_z[i] == fluid_z[i]) continue;
+    if (fluid_z[i] < host_z[i]) {
+      ++fluid_in_front;
+      wrong += both[i] != fluid_only[i] || both_z[i] != fluid_z[i];
+    } else {
+      ++host_in_front;
+      wrong += both[i] != host_only[i] || both_z[i] != host_z[i];
+    }
+  }
+  std::printf("occlusion: %zu fluid pixels; where both drew, the host's geometry is in front at %zu pixels and the fluid at "
+              "%zu; %zu pixels show the wrong one\n",
+              fluid_pixels, host_in_front, fluid_in_front, wrong);
+  const bool ok = host_in_front > 200 && fluid_in_front > 200 && wrong == 0;
+  std::printf("check %s\n", ok ? "passed" : "FAILED");
+  return ok;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) try {
+  int status = 0;
+  const std::optional<Args> args = parse_args(argc, argv, status);
+  if (!args) return status;
+  vk::raii::Context loader;
+  const Instance instance = make_instance(loader);       // 1.
+  const Device device = make_device(instance.instance);  // 2.
+
+  // 3. sluice on the host's handles: a stream of the file's frames, or of
+  // frames the host computes (pushed from its memory, recorded when asked).
+  sluice::render::HostVulkan host;
+  host.handles = {*instance.instance, *device.physical, *device.device, device.family, *device.queue};
+  host.memory_budget_enabled = device.memory_budget;
+  sluice::render::Context context(host);
+  sluice::render::StreamOptions options;
+  options.renderer.frames_in_flight = kFramesInFlight;
+  options.motion = sluice::render::ViewMotion::Fixed;  // the host's camera stays put
+  sluice::render::LiveOptions live;
+  live.particle_spacing = 0.02f;
+  live.frame_rate = 30;
+  live.record = args->record;
+  live.ids = false;  // the host keeps its particle order: LOD values follow the index
+  std::unique_ptr<sluice::render::Stream> stream =
+      args->live ? std::make_unique<sluice::render::Stream>(context, sluice::render::Bounds{{0, 0, 0}, {2, 1, 1}}, live, options)
+                 : std::make_unique<sluice::render::Stream>(context, args->file, options);
+  sluice::render::FluidOptions look = stream->fluid();
+  look.ground = false;  // the host draws its own floor
+  stream->set_look(look, {});
+
+  // 4. The host's images, pipeline, camera and frames in flight.
+  HostScene scene(device, stream->scene().bounds);
+
+  // 5. The frame loop: the views, the frame due, the host's drawing and sluice's.
+  if (!args->live) stream->player().play();
+  for (int f = 0; f < args->frames; ++f) {
+    if (args->live) stream->push({simulate(f, live.particle_spacing), {}, {}, f / 30.0});  // a frame from the host's memory
+    stream->set_views({&scene.view(), 1});
+    stream->update();
+    scene.draw(true, stream.get());
+  }
+  if (args->live) {
     stream->finish();
-    std::printf("pushed %d live frames%s%s\n", frames, record.empty() ? "" : ", recorded to ", record.c_str());
+    std::printf("pushed %d live frames%s%s\n", args->frames, args->record.empty() ? "" : ", recorded to ", args->record.c_str());
   } else {
     stream->player().pause();  // on the frame due
     stream->player().wait_for_due();
   }
   // The checks below compare three draws of one frame: drawn once its copy is done.
   stream->renderer().wait_upload(stream->update().ticket);
-  draw_frame(slots[0], true, true);
-  std::vector<uint32_t> both, host_only, fluid_only;
-  std::vector<float> both_z, host_z, fluid_z;
-  read_back(both, both_z);
+  scene.draw(true, stream.get());
 
   // 6. Output, and with --check the occlusion test.
+  std::vector<uint32_t> both;
+  std::vector<float> both_z;
+  scene.read_back(both, both_z);
   sluice::render::Image png{kWidth, kHeight, std::vector<uint8_t>(both.size() * 4)};
   std::memcpy(png.rgba.data(), both.data(), png.rgba.size());
-  sluice::render::write_png(out, png);
-  std::printf("wrote %s (%ux%u, %d frames, %d validation errors)\n", out.c_str(), kWidth, kHeight, frames, validation_errors);
-  int status = validation_errors == 0 ? 0 : 1;
-  if (check) {
-    draw_frame(slots[0], true, false);
-    read_back(host_only, host_z);
-    draw_frame(slots[0], false, true);
-    read_back(fluid_only, fluid_z);
-    // Where the host drew (depth < 1) and the fluid drew (depth < 1), the
-    // nearer one must show: the box in front hides the fluid, the fluid in
-    // front of the box hides it.
-    size_t host_in_front = 0, fluid_in_front = 0, wrong = 0, fluid_pixels = 0;
-    for (size_t i = 0; i < both.size(); ++i) {
-      const bool has_host = host_z[i] < 1.0f, has_fluid = fluid_z[i] < 1.0f;
-      fluid_pixels += has_fluid;
-      if (!has_host || !has_fluid || host_z[i] == fluid_z[i]) continue;
-      if (fluid_z[i] < host_z[i]) {
-        ++fluid_in_front;
-        wrong += both[i] != fluid_only[i] || both_z[i] != fluid_z[i];
-      } else {
-        ++host_in_front;
-        wrong += both[i] != host_only[i] || both_z[i] != host_z[i];
-      }
-    }
-    std::printf("occlusion: %zu fluid pixels; where both drew, the host's geometry is in front at %zu pixels and the fluid at "
-                "%zu; %zu pixels show the wrong one\n",
-                fluid_pixels, host_in_front, fluid_in_front, wrong);
-    const bool ok = host_in_front > 200 && fluid_in_front > 200 && wrong == 0;
-    std::printf("check %s\n", ok ? "passed" : "FAILED");
-    if (!ok || validation_errors > 0) status = 1;
-  }
-  return status;
+  sluice::render::write_png(args->out, png);
+  std::printf("wrote %s (%ux%u, %d frames, %d validation errors)\n", args->out.c_str(), kWidth, kHeight, args->frames,
+              validation_errors);
+  const bool checked = !args->check || check_occlusion(scene, *stream, both, both_z);
+  return checked && validation_errors == 0 ? 0 : 1;
 } catch (const std::exception& e) {
   std::fprintf(stderr, "host_vulkan: %s\n", e.what());
   return 1;
