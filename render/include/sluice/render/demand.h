@@ -21,9 +21,8 @@ runtime::ViewDemand view_demand(std::span<const View> views, const SceneInfo& sc
 
 // A margin for a camera that moves at most `speed` (world units per
 // second) over `seconds` of prefetch, at least a twentieth of `diagonal`
-// (the scene's): on the H200's 100M pool a quarter orbit in 12 frames kept
-// every streamed picture within 45 dB of the full read's with a tenth
-// (docs/measurements.md), and a twentieth reads 10% less.
+// (the scene's; docs/measurements.md compares a tenth and a twentieth on
+// the picture and the bytes read).
 float view_margin(float diagonal, float speed, float seconds);
 
 }  // namespace sluice::render

@@ -46,9 +46,8 @@ class FrameFeed {
                         const io::FileHeader& file, DecodeSite decode = DecodeSite::Auto);
   // The staging for such a player, made before configure(): frames the GPU
   // decodes are relayed into a window in device memory as they are read
-  // (StagingOptions::resident; on the H200, 10M-particle frames arrived at
-  // 98% of the read bound relayed against 85% through host staging,
-  // docs/gpu_decode.md), unless the relay would share a queue the host
+  // (StagingOptions::resident; docs/gpu_decode.md measures both ways),
+  // unless the relay would share a queue the host
   // submits to without Context::queue_lock() (`host_takes_queue_lock`
   // false and Context::relay_queue_shared()).
   static StagingOptions staging_options(const Context& context, const io::FileHeader& file, DecodeSite decode,

@@ -3,7 +3,7 @@
 // freely (nothing is rebuilt except where noted).
 //
 // Names follow vtkOpenGLFluidMapper's where they mean the same thing (table
-// 2.1 of the Tsinghua thesis, ../shared/papers/003_*), in snake_case:
+// 2.1 of the Tsinghua thesis on the mapper; docs/render.md cites it), in snake_case:
 // ParticleRadius -> particle_radius, DisplayMode -> display_mode, ...
 // Units: world units for lengths, pixels where the name says so.
 #pragma once

@@ -144,7 +144,7 @@ struct RenderTarget {
   // The colour image was created with VK_IMAGE_USAGE_STORAGE_BIT and its
   // (non-sRGB) format allows storage. Then, without a depth image, the
   // shading pass writes it directly and the present pass (a full-viewport
-  // raster pass, slow on compute-first GPUs such as the H100/H200) is skipped.
+  // raster pass, slow on compute-first GPUs) is skipped.
   bool color_storage = false;
   // Optional: the host's depth (its opaque geometry). The fluid is hidden
   // behind it and writes its own depth into it.

@@ -41,9 +41,8 @@ struct StagingOptions {
   // Frames kept encoded live in device memory, relayed through a ring.
   bool resident = false;
   // The ring: `ring_slots` slots of `ring_piece_bytes` (0: the read threads
-  // a pipeline has by default on this machine, plus 4). The H200 moved the
-  // 10M synthetic file at 98-99% of its copy bound through 4-8 pieces of
-  // 16.8 MB (docs/gpu_decode.md).
+  // a pipeline has by default on the machine it runs on, plus 4;
+  // docs/gpu_decode.md measures slot counts and sizes).
   uint32_t ring_slots = 0;
   uint64_t ring_piece_bytes = 8 << 20;
 };

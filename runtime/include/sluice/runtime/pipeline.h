@@ -113,18 +113,14 @@ struct PipelineOptions {
 
 // How the pipeline shares `cores` by default: one read thread per 4 cores
 // (1 to 4) and, from 8 cores on, the others decode, so that readers and
-// workers do not fight over cores; below 8 cores every core decodes. On the
-// 16-core GPU machine, 10M-particle frames stream from the page cache at 227
-// frames/s with 12 workers + 4 readers, 200 with 13 + 3, 120 with 14 + 2:
-// copying out of the page cache slows to under 4 GB/s per thread while the
-// workers load memory (docs/measurements.md).
+// workers do not fight over cores; below 8 cores every core decodes
+// (copying out of the page cache slows while the workers load memory).
 //
 // Frames kept encoded for the GPU (`keep_encoded`) are checked as they are
 // read, which leaves the workers only zstd planes to inflate, so reading
 // takes thirteen sixteenths of the cores, 1 to 13, and the rest are
-// workers: on the same machine 10M-particle frames reach device memory at
-// 525.6-545.7 frames/s with 3 workers + 13 readers against 437.1-453.3 with
-// 6 + 10 (docs/measurements.md, "Checked as read").
+// workers. docs/measurements.md ("Checked as read" and the thread split)
+// has the measurements behind both splits.
 struct ThreadSplit {
   int decode = 1;
   int read = 1;

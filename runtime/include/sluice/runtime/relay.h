@@ -2,9 +2,9 @@
 // by piece as they are read.
 //
 // Without a relay, a frame kept encoded waits in host staging (the window)
-// until the consumer commits it, and the GPU copies it from there: on the
-// H200 the staging has long left the CPU's cache by then, and its bytes
-// cross host memory three times. With one, a read thread copies a piece of
+// until the consumer commits it, and the GPU copies it from there: the
+// staging has usually left the CPU's cache by then, and its bytes cross
+// host memory three times. With one, a read thread copies a piece of
 // the record out of the page cache into a small ring slot (plain stores),
 // checks and plans its chunks while they are in the cache, and send()s it
 // to the frame's place in device memory, where the window lives; the GPU
