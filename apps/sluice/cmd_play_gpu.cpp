@@ -86,11 +86,11 @@ void run_play_gpu(const PlayOptions& o, const WindowPlayOptions& w) {
       last_new = now;
     }
     // Figures come back frames_in_flight frames later: take each frame's once.
-    if (stats.frame != last_stats_frame && stats.particles > 0 && new_frames > reader.frame_count()) {
+    if (stats.record_index != last_stats_frame && stats.particles > 0 && new_frames > reader.frame_count()) {
       render_ms.push_back(stats.gpu_ms);
       upload_ms.push_back(stats.upload_ms);
       decode_ms.push_back(stats.decode_ms);
-      last_stats_frame = stats.frame;
+      last_stats_frame = stats.record_index;
     }
     const double elapsed = std::chrono::duration<double>(now - start).count();
     if (o.stats && elapsed >= next_stats) {

@@ -69,9 +69,9 @@ void add_synth(CLI::App& app) {
       ->check(CLI::Range(1e-12, 0.5));
   cmd->add_flag("--no-tiers", [o](int64_t) { o->lod_tiers = false; },
                 "One record per chunk, not one per LOD tier (format 1.3's layout): smaller, always read whole");
-  cmd->add_flag("--smallest", [o](int64_t) { o->pack_planes = false; },
+  cmd->add_flag("--smallest", [o](int64_t) { o->planes = io::PlaneCoding::Zstd; },
                 "zstd on every plane it shrinks most (smaller, slower to decode)");
-  cmd->add_flag("--gpu-decodable", [o](int64_t) { o->zstd_planes = false; },
+  cmd->add_flag("--gpu-decodable", [o](int64_t) { o->planes = io::PlaneCoding::GpuDecodable; },
                 "No zstd planes (each stored or bit-packed): every chunk decodes on the GPU with no CPU work\n"
                 "but its checksum; files some percent larger (docs/format.md)");
   cmd->add_option("-j,--jobs", o->jobs, "Frames encoded at once (default: one per core)");

@@ -146,9 +146,9 @@ void run_xr(const XrOptions& o) {
     if (frame.render) ++drawn;
     ++ended;
     const render::FrameStats stats = stream.renderer().last_stats();
-    if (stats.frame != last_stats && stats.particles > 0) {
+    if (stats.record_index != last_stats && stats.particles > 0) {
       gpu_ms.push_back(stats.gpu_ms);
-      last_stats = stats.frame;
+      last_stats = stats.record_index;
     }
     if (o.frames > 0 && ended >= o.frames && !exit_asked) {
       session.request_exit();

@@ -301,8 +301,9 @@ ConversionSummary convert_input(const ConversionOptions& o, const std::string& o
   settings.drop_far = o.drop_outliers * header.particle_spacing;
   settings.encode.chunk_particles = o.chunk;
   settings.encode.zstd_level = o.level;
-  settings.encode.pack_planes = !o.smallest;
-  settings.encode.zstd_planes = !o.gpu_decodable;
+  settings.encode.planes = o.gpu_decodable ? io::PlaneCoding::GpuDecodable
+                          : o.smallest      ? io::PlaneCoding::Zstd
+                                            : io::PlaneCoding::Packed;
   settings.encode.lod_tiers = o.lod_tiers;
   settings.encode.layers = o.layers;
   settings.encode.band_voxel = o.band_voxel;

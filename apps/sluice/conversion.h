@@ -34,7 +34,7 @@ struct ConversionOptions {
   int level = 3;
   bool smallest = false;
   bool lod_tiers = true;       // chunks as LOD tiers (EncodeOptions::lod_tiers)
-  bool gpu_decodable = false;  // no zstd planes (EncodeOptions::zstd_planes)
+  bool gpu_decodable = false;  // no zstd planes (io::PlaneCoding::GpuDecodable)
   // Classify the narrow band: surface, interior and blob layers (format
   // 1.3). Quantized positions only: --lossless files stay one layer.
   bool layers = true;

@@ -39,7 +39,7 @@ struct Dataset {
 };
 
 std::string write_container(const std::string& path, const io::FrameSource& source, io::PositionCoding coding,
-                            bool pack_planes = true) {
+                            io::PlaneCoding planes = io::PlaneCoding::Packed) {
   io::FileHeader header;
   header.position_coding = coding;
   header.lod_id_array = source.info().id_array;
@@ -47,7 +47,7 @@ std::string write_container(const std::string& path, const io::FrameSource& sour
   header.source = source.info().description;
   io::ContainerWriter writer(path, header);
   io::EncodeOptions encode;
-  encode.pack_planes = pack_planes;
+  encode.planes = planes;
   io::convert_frames(source, std::nullopt, writer, io::ConvertSettings{.encode = encode, .max_in_flight = size_t(core_count()) + 1});
   writer.finish();
   return path;
@@ -268,7 +268,7 @@ void run_io_bench(const IoBenchOptions& o) {
   const std::string quantized = write_container((dir / "q.sluice").string(), *source, io::PositionCoding::Quantized16);
   const std::string lossless = write_container((dir / "f.sluice").string(), *source, io::PositionCoding::Float32);
   const std::string smallest =
-      write_container((dir / "z.sluice").string(), *source, io::PositionCoding::Quantized16, false);
+      write_container((dir / "z.sluice").string(), *source, io::PositionCoding::Quantized16, io::PlaneCoding::Zstd);
   uint64_t vtu_zlib = 0, vtu_raw = 0;
   if (io::has_vtk_support()) {
     for (uint64_t f = 0; f < frame_count; ++f) {

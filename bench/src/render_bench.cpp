@@ -223,7 +223,7 @@ LayeredFrame layered_frame(const render::SyntheticFluid& f) {
   in.positions = xyz;
   in.lod = lod;
   io::EncodeOptions options;
-  options.compress = false;
+  options.planes = io::PlaneCoding::Stored;
   options.layers = true;
   out.frame = io::encode_frame(in, out.file, options);
   return out;

@@ -142,8 +142,7 @@ SynthResult write_synthetic(const SynthOptions& o, const std::function<void(uint
   io::EncodeOptions encode;
   encode.chunk_particles = o.chunk_particles;
   encode.zstd_level = o.zstd_level;
-  encode.pack_planes = o.pack_planes;
-  encode.zstd_planes = o.zstd_planes;
+  encode.planes = o.planes;
   encode.lod_tiers = o.lod_tiers;
   encode.layers = o.layers;
   const size_t jobs = o.jobs > 0 ? size_t(o.jobs) : size_t(tbb::info::default_concurrency());

@@ -95,7 +95,7 @@ void entry_stored(std::vector<std::byte>& payload, const std::byte* plane, size_
 
 void compress_planes(std::vector<std::byte>& raw, size_t n, const EncodeOptions& options,
                      std::vector<std::byte>& payload, ChunkCodec& codec) {
-  if (!options.compress) {
+  if (options.planes == PlaneCoding::Stored) {
     payload = std::move(raw);
     codec = ChunkCodec::Stored;
     return;
@@ -109,12 +109,13 @@ void compress_planes(std::vector<std::byte>& raw, size_t n, const EncodeOptions&
     const std::byte* plane = raw.data() + p * n;
     const std::span<const uint8_t> values(reinterpret_cast<const uint8_t*>(plane), n);
     size_t zstd_size = 0;
-    if (options.zstd_planes) {
+    const bool may_zstd = options.planes != PlaneCoding::GpuDecodable;
+    if (may_zstd) {
       zstd_size = ZSTD_compressCCtx(cctx, frame.data(), frame.size(), plane, n, options.zstd_level);
       if (ZSTD_isError(zstd_size)) throw Error({}, std::string("zstd: ") + ZSTD_getErrorName(zstd_size));
     }
-    const PackedPlan packed = options.pack_planes ? plan_packed_plane(values) : PackedPlan{};
-    const bool use_zstd = options.zstd_planes &&
+    const PackedPlan packed = options.planes != PlaneCoding::Zstd ? plan_packed_plane(values) : PackedPlan{};
+    const bool use_zstd = may_zstd &&
                           (packed.width == 0 || double(zstd_size) < double(packed.bytes) * (1.0 - kZstdGainOverPacked));
     if (!use_zstd && packed.width == 0) {  // neither zstd nor packing: stored
       entry_stored(payload, plane, n, p);
@@ -374,14 +375,14 @@ constexpr double kMostTierCost = 0.08;
 // tiered unless that doubles them.
 constexpr double kMostBlobTierCost = 1.0;
 
-bool default_coding(const EncodeOptions& o) { return o.pack_planes && o.zstd_planes && o.compress; }
+bool default_coding(const EncodeOptions& o) { return o.planes == PlaneCoding::Packed; }
 
 std::vector<EncodedChunk> keep_tiers_that_pay(std::vector<EncodedChunk> records, const std::vector<Job>& jobs,
                                               const std::vector<Cell>& cells, const FileHeader& header,
                                               const EncodeOptions& options) {
   const size_t desc = chunk_desc_bytes(header.attributes.size());
   EncodeOptions reference = options;
-  reference.pack_planes = reference.zstd_planes = reference.compress = true;
+  reference.planes = PlaneCoding::Packed;
   const bool same = default_coding(options);
   std::vector<uint32_t> count(cells.size(), 0);
   for (const Job& j : jobs) ++count[j.cell];
@@ -487,7 +488,7 @@ EncodedFrame encode_frame(const FrameInput& in, const FileHeader& header, const 
     const std::span<uint32_t> members = std::span(cell.group->order).subspan(cell.range.begin, cell.range.end - cell.range.begin);
     cell.box = box_of(source, members);
     // Stored frames (not kept: decoded at once) gain nothing from tiers.
-    if (!options.lod_tiers || !options.compress) {
+    if (!options.lod_tiers || options.planes == PlaneCoding::Stored) {
       cell.first.fill(uint32_t(members.size()));
       cell.first[0] = 0;
       return;

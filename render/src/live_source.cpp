@@ -53,7 +53,7 @@ LiveSource::LiveSource(Renderer& renderer, const LiveOptions& options) : rendere
   header_.source = "live frames pushed through sluice::render::LiveSource";
   if (!options.record.empty()) writer_ = std::make_unique<io::ContainerWriter>(options.record, header_);
   // Frames that are only decoded, not kept, need no compression.
-  if (!writer_) options_.encode.compress = false;
+  if (!writer_) options_.encode.planes = io::PlaneCoding::Stored;
 }
 
 LiveSource::~LiveSource() = default;

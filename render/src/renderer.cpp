@@ -349,7 +349,7 @@ void Renderer::Impl::collect_slot(FrameSlot& slot, bool finished) {
     for (uint32_t i = 0; i < count; ++i) stamps[i] = pairs[2 * i];
   }
   FrameStats s;
-  s.frame = slot.frame;
+  s.record_index = slot.frame;
   s.particles = slot.particles;
   GpuArgs counters;
   std::memcpy(&counters, slot.readback.mapped, sizeof counters);
@@ -386,7 +386,7 @@ void Renderer::Impl::collect_slot(FrameSlot& slot, bool finished) {
     for (int a = 0; a < 3; ++a) c.cells[a] = p.dims[a];
   }
   slot.collected = true;
-  if (stats.passes.empty() || s.frame >= stats.frame) stats = std::move(s);
+  if (stats.passes.empty() || s.record_index >= stats.record_index) stats = std::move(s);
 }
 
 std::string describe(const FrameStats::Classification& c) {

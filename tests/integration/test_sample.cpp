@@ -21,7 +21,8 @@ namespace {
 
 const std::string kPvd = std::string(SLUICE_SAMPLE_DIR) + "/dam_break_3d.pvd";
 
-std::filesystem::path convert_sample(const std::filesystem::path& out, PositionCoding coding, bool pack_planes = true) {
+std::filesystem::path convert_sample(const std::filesystem::path& out, PositionCoding coding,
+                                     PlaneCoding planes = PlaneCoding::Packed) {
   const auto source = open_source(kPvd, {});
   FileHeader h;
   h.position_coding = coding;
@@ -29,7 +30,7 @@ std::filesystem::path convert_sample(const std::filesystem::path& out, PositionC
   h.lod_id_array = source->info().id_array;
   ContainerWriter w(out, h);
   EncodeOptions encode;
-  encode.pack_planes = pack_planes;
+  encode.planes = planes;
   convert_frames(*source, std::nullopt, w, ConvertSettings{.encode = encode, .max_in_flight = 3});
   w.finish();
   return out;
@@ -127,7 +128,7 @@ TEST_F(Sample, PackedAndSmallestFilesDecodeToTheSameParticles) {
   // keeps zstd (codec 0 only, readable by format 1.0); the decoded bytes
   // must not depend on which.
   const ContainerReader packed(convert_sample(dir / "p.sluice", PositionCoding::Quantized16));
-  const ContainerReader smallest(convert_sample(dir / "z.sluice", PositionCoding::Quantized16, false));
+  const ContainerReader smallest(convert_sample(dir / "z.sluice", PositionCoding::Quantized16, PlaneCoding::Zstd));
   size_t packed_chunks = 0;
   for (uint64_t f = 0; f < packed.frame_count(); ++f) {
     const DecodedFrame a = decode_frame(packed, f), b = decode_frame(smallest, f);

@@ -147,7 +147,7 @@ TEST(PackedPlane, FramesDecodeTheSameWithAndWithoutPacking) {
   in.positions = positions;
   in.lod = lod;
   EncodeOptions packed_options, zstd_options;
-  zstd_options.pack_planes = false;
+  zstd_options.planes = PlaneCoding::Zstd;
   const EncodedFrame packed = encode_frame(in, header, packed_options);
   const EncodedFrame zstd = encode_frame(in, header, zstd_options);
   size_t packed_chunks = 0;

@@ -191,7 +191,7 @@ TEST(RoundTrip, NonFiniteInputIsRefusedByTheEncoder) {
 namespace sluice::io {
 namespace {
 
-// EncodeOptions::compress = false: every chunk stored, the same particles
+// PlaneCoding::Stored: every chunk stored, the same particles
 // decoded as from the compressed encoding, 8 bytes per particle in payloads.
 TEST(RoundTrip, UncompressedChunksDecodeToTheSameParticles) {
   const FileHeader h = test::test_header(PositionCoding::Quantized16);
@@ -202,7 +202,7 @@ TEST(RoundTrip, UncompressedChunksDecodeToTheSameParticles) {
   packed.chunk_particles = 4096;
   packed.lod_tiers = false;  // stored frames are written untiered: compare the codings alone
   EncodeOptions stored = packed;
-  stored.compress = false;
+  stored.planes = PlaneCoding::Stored;
   const EncodedFrame a = encode_frame(in, h, packed), b = encode_frame(in, h, stored);
   ASSERT_EQ(a.header.chunks.size(), b.header.chunks.size());
   const auto decode = [&](const EncodedFrame& e) {

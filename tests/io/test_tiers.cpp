@@ -40,7 +40,7 @@ io::ParticleFrame scattered_frame(uint64_t n, uint32_t seed) {
 struct Variant {
   const char* name;
   io::PositionCoding coding;
-  bool pack, zstd, compress;
+  io::PlaneCoding planes;
 };
 
 io::EncodedFrame encode(const io::ParticleFrame& f, const io::FileHeader& h, const Variant& v, bool tiers) {
@@ -51,9 +51,7 @@ io::EncodedFrame encode(const io::ParticleFrame& f, const io::FileHeader& h, con
   in.attributes.push_back(f.attributes[0]);
   io::EncodeOptions o;
   o.chunk_particles = 8192;
-  o.pack_planes = v.pack;
-  o.zstd_planes = v.zstd;
-  o.compress = v.compress;
+  o.planes = v.planes;
   o.lod_tiers = tiers;
   return io::encode_frame(in, h, o);
 }
@@ -98,11 +96,11 @@ std::vector<Particle> decoded(const io::EncodedFrame& e, const io::FileHeader& h
 }
 
 const Variant kVariants[] = {
-    {"packed", io::PositionCoding::Quantized16, true, true, true},
-    {"zstd only", io::PositionCoding::Quantized16, false, true, true},
-    {"gpu-decodable", io::PositionCoding::Quantized16, true, false, true},
-    {"stored", io::PositionCoding::Quantized16, true, true, false},
-    {"float32", io::PositionCoding::Float32, true, true, true},
+    {"packed", io::PositionCoding::Quantized16, io::PlaneCoding::Packed},
+    {"zstd only", io::PositionCoding::Quantized16, io::PlaneCoding::Zstd},
+    {"gpu-decodable", io::PositionCoding::Quantized16, io::PlaneCoding::GpuDecodable},
+    {"stored", io::PositionCoding::Quantized16, io::PlaneCoding::Stored},
+    {"float32", io::PositionCoding::Float32, io::PlaneCoding::Packed},
 };
 
 }  // namespace
@@ -114,7 +112,7 @@ TEST(Tiers, EveryCodecDecodesTheSameParticlesAsUntiered) {
     const io::FileHeader h = test::test_header(v.coding);
     const io::EncodedFrame tiered = encode(f, h, v, true), flat = encode(f, h, v, false);
     // Stored frames (decoded at once, never read from a file) stay untiered.
-    if (v.compress) EXPECT_GT(tiered.header.chunks.size(), flat.header.chunks.size());
+    if (v.planes != io::PlaneCoding::Stored) EXPECT_GT(tiered.header.chunks.size(), flat.header.chunks.size());
     else EXPECT_EQ(tiered.header.chunks.size(), flat.header.chunks.size());
     // Positions: each tier is quantized in its cell's box, so they agree bit for bit.
     const std::vector<Particle> a = decoded(tiered, h), b = decoded(flat, h);

@@ -38,7 +38,7 @@ fs::path pool_file() {
     o.particles = 200'000;
     o.frames = 2;
     o.output = p.string();
-    o.zstd_planes = false;
+    o.planes = io::PlaneCoding::GpuDecodable;
     o.chunk_particles = 16384;
     bench::write_synthetic(o);
     return p;

@@ -302,7 +302,7 @@ TEST(Embedding, FramesInFlightWithoutWaitingShowTheNewestCompleteFrame) {
     }
     EXPECT_TRUE(renderer.upload_complete(last_ticket));
     const FrameStats stats = renderer.last_stats();
-    EXPECT_EQ(stats.frame, uint64_t(frames - 1));
+    EXPECT_EQ(stats.record_index, uint64_t(frames - 1));
     EXPECT_EQ(stats.particles, 2u);
     // The last frame shows the spheres at their last positions.
     const std::vector<uint32_t> rgba = host.read(color, kW, kH);
@@ -465,7 +465,7 @@ TEST(Embedding, RecordRefusesTargetsAndViewsThatDoNotFit) {
       EXPECT_THROW(renderer.record(cmd, layers, {&whole, 1}, o, {}), std::invalid_argument);
       EXPECT_THROW(renderer.record(VK_NULL_HANDLE, target, {&whole, 1}, o, {}), std::invalid_argument);
     });
-    EXPECT_EQ(renderer.last_stats().frame, 0u);  // nothing was recorded
+    EXPECT_EQ(renderer.last_stats().record_index, 0u);  // nothing was recorded
   }
   expect_clean(host);
 }

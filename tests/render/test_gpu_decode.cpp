@@ -122,10 +122,10 @@ TEST(GpuDecode, EveryCodecMatchesTheCpuBitForBit) {
     io::EncodeOptions options;
   };
   std::vector<Mode> modes;
-  modes.push_back({"stored", {.chunk_particles = 4096, .compress = false}});
-  modes.push_back({"zstd planes (format 1.0)", {.chunk_particles = 4096, .pack_planes = false}});
+  modes.push_back({"stored", {.chunk_particles = 4096, .planes = io::PlaneCoding::Stored}});
+  modes.push_back({"zstd planes (format 1.0)", {.chunk_particles = 4096, .planes = io::PlaneCoding::Zstd}});
   modes.push_back({"default (packed + zstd)", {.chunk_particles = 4096}});
-  modes.push_back({"GPU-decodable (no zstd)", {.chunk_particles = 4096, .zstd_planes = false}});
+  modes.push_back({"GPU-decodable (no zstd)", {.chunk_particles = 4096, .planes = io::PlaneCoding::GpuDecodable}});
   for (const Mode& m : modes) {
     const io::EncodedFrame f = encode(frame, h, m.options);
     const io::GpuDecodePlan plan = expect_same_decode(f, h, 0, m.name);
@@ -133,14 +133,14 @@ TEST(GpuDecode, EveryCodecMatchesTheCpuBitForBit) {
     std::printf("%-26s %zu chunks: planes stored %llu, packed %llu, zstd %llu (inflated %llu bytes)\n", m.name,
                 plan.chunks.size(), (unsigned long long)plan.stored_planes, (unsigned long long)plan.packed_planes,
                 (unsigned long long)plan.zstd_planes, (unsigned long long)plan.inflated_bytes);
-    if (!m.options.compress) {
+    if (m.options.planes == io::PlaneCoding::Stored) {
       EXPECT_EQ(plan.packed_planes + plan.zstd_planes, 0u);
     }
-    if (!m.options.zstd_planes) {
+    if (m.options.planes == io::PlaneCoding::GpuDecodable) {
       EXPECT_EQ(plan.zstd_planes, 0u);
       EXPECT_GT(plan.packed_planes, 0u);
     }
-    if (!m.options.pack_planes) {
+    if (m.options.planes == io::PlaneCoding::Zstd) {
       EXPECT_EQ(plan.packed_planes, 0u);
       EXPECT_GT(plan.zstd_planes, 0u);
     }
@@ -159,7 +159,7 @@ TEST(GpuDecode, OddLengthsAndTheEncodersWidths) {
       const uint64_t n = std::min<uint64_t>(uint64_t(chunk) * 3 + 5, 150000);
       const io::ParticleFrame frame = uniform_frame(n, seed++);
       io::EncodeOptions o{.chunk_particles = chunk};
-      o.zstd_planes = !gpu_mode;
+      o.planes = gpu_mode ? io::PlaneCoding::GpuDecodable : io::PlaneCoding::Packed;
       const io::EncodedFrame f = encode(frame, h, o);
       const std::string what = "chunk " + std::to_string(chunk) + (gpu_mode ? " GPU-decodable" : "");
       const io::GpuDecodePlan plan = expect_same_decode(f, h, 0, what.c_str());
@@ -189,7 +189,7 @@ TEST(GpuDecode, TheSyntheticPoolMatches) {
   const io::ParticleFrame frame = source->read(1);
   ASSERT_EQ(frame.attributes.size(), 1u);
   for (const bool zstd : {true, false}) {
-    const io::EncodedFrame f = encode(frame, h, {.zstd_planes = zstd});
+    const io::EncodedFrame f = encode(frame, h, {.planes = zstd ? io::PlaneCoding::Packed : io::PlaneCoding::GpuDecodable});
     expect_same_decode(f, h, 0, zstd ? "synthetic pool, default" : "synthetic pool, GPU-decodable");
   }
 }
@@ -205,7 +205,8 @@ TEST(GpuDecode, TheBundledSampleMatches) {
     io::FileHeader h = test::test_header(io::PositionCoding::Quantized16, false);
     for (size_t a = 0; a < frame.attributes.size(); ++a) h.attributes.push_back({"attribute " + std::to_string(a)});
     for (const bool zstd : {true, false}) {
-      const io::EncodedFrame f = encode(frame, h, {.chunk_particles = 2048, .zstd_planes = zstd});
+      const io::EncodedFrame f =
+          encode(frame, h, {.chunk_particles = 2048, .planes = zstd ? io::PlaneCoding::Packed : io::PlaneCoding::GpuDecodable});
       for (int a = -1; a < int(h.attributes.size()); ++a) expect_same_decode(f, h, a, "bundled sample");
     }
   }
@@ -292,7 +293,7 @@ TEST(GpuDecode, CorruptPlanesAreCaughtAndNamed) {
   ValidationGuard guard;
   const io::FileHeader h = test::test_header(io::PositionCoding::Quantized16);
   const io::ParticleFrame frame = uniform_frame(5000, 7);
-  io::EncodedFrame f = encode(frame, h, {.chunk_particles = 5000, .zstd_planes = false});
+  io::EncodedFrame f = encode(frame, h, {.chunk_particles = 5000, .planes = io::PlaneCoding::GpuDecodable});
   uint64_t at = 0;
   ASSERT_TRUE(first_packed_plane(f, 10, at));
 

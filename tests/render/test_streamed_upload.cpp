@@ -57,7 +57,7 @@ fs::path write_block_file(bool zstd_planes = true) {
     in.time = double(f) / 30;
     io::EncodeOptions options;
     options.chunk_particles = 1000;
-    options.zstd_planes = zstd_planes;
+    options.planes = zstd_planes ? io::PlaneCoding::Packed : io::PlaneCoding::GpuDecodable;
     writer.append(io::encode_frame(in, header, options));
   }
   writer.finish();

@@ -50,8 +50,7 @@ struct TinySpec {
   uint32_t particles = 90;  // base count; frames differ by up to 12 more
   uint32_t chunk = 32;      // particles per chunk: several chunks per frame
   bool attribute = true;
-  bool zstd_planes = true;  // false: every plane stored or bit-packed (GPU-decodable, `--gpu-decodable`)
-  bool pack_planes = true;  // false: zstd wherever it is smaller than the plane stored
+  io::PlaneCoding planes = io::PlaneCoding::Packed;
 };
 
 inline uint64_t particles_in(const TinySpec& spec, uint64_t frame) { return spec.particles + (frame * 7) % 13; }
@@ -75,8 +74,7 @@ inline io::EncodedFrame tiny_frame(const TinySpec& spec, const io::FileHeader& h
   in.time = double(frame) / 30.0;
   io::EncodeOptions options;
   options.chunk_particles = spec.chunk;
-  options.zstd_planes = spec.zstd_planes;
-  options.pack_planes = spec.pack_planes;
+  options.planes = spec.planes;
   return io::encode_frame(in, header, options);
 }
 

@@ -341,7 +341,7 @@ TEST_F(PipelineTest, KeptEncodedFramesDecodeToTheSameParticles) {
 // the record alone move to a larger one for the planes inflated there.
 TEST_F(PipelineTest, KeptEncodedFramesWithZstdPlanesMoveToALargerArea) {
   test::TinySpec spec{.frames = 4, .particles = 20000, .chunk = 4096};  // planes larger than the area's rounding
-  spec.pack_planes = false;
+  spec.planes = io::PlaneCoding::Zstd;
   const auto path = test::write_tiny_file(*dir_ / "zstd.sluice", spec);
   const PipelineStats stats = expect_kept_encoded_frames_decode_the_same(path);
   EXPECT_EQ(stats.frames_read, spec.frames);
@@ -352,7 +352,7 @@ TEST_F(PipelineTest, KeptEncodedFramesWithZstdPlanesMoveToALargerArea) {
 // and staged there.
 TEST_F(PipelineTest, GpuDecodableFramesAreReadInPlace) {
   test::TinySpec spec = spec_;
-  spec.zstd_planes = false;
+  spec.planes = io::PlaneCoding::GpuDecodable;
   const auto path = test::write_tiny_file(*dir_ / "gpu.sluice", spec);
   const PipelineStats stats = expect_kept_encoded_frames_decode_the_same(path);
   EXPECT_EQ(stats.frames_in_place, spec.frames);

@@ -145,7 +145,7 @@ class RelayTest : public ::testing::Test {
   static void SetUpTestSuite() {
     dir_ = new test::TempDir;
     test::TinySpec spec{.frames = 12, .particles = 3000, .chunk = 256};
-    spec.zstd_planes = false;
+    spec.planes = io::PlaneCoding::GpuDecodable;
     path_ = new std::filesystem::path(test::write_tiny_file(*dir_ / "gpu.sluice", spec));
   }
   static void TearDownTestSuite() {
@@ -205,7 +205,7 @@ class HostRelayWithHostAreas final : public FrameAllocator {
 // host area, and no later frame is relayed.
 TEST_F(RelayTest, ZstdPlanesFallBackToHostAreas) {
   test::TinySpec spec{.frames = 6, .particles = 3000, .chunk = 256};
-  spec.pack_planes = false;  // zstd wherever it is smaller
+  spec.planes = io::PlaneCoding::Zstd;
   const auto path = test::write_tiny_file(*dir_ / "zstd.sluice", spec);
   const io::ContainerReader reader(path);
   HostRelay relay(8, 64 << 10);

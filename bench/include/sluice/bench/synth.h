@@ -12,6 +12,7 @@
 #include <memory>
 #include <string>
 
+#include "sluice/io/codec.h"
 #include "sluice/io/format.h"
 #include "sluice/io/import.h"
 
@@ -33,8 +34,7 @@ struct SynthOptions {
   bool lossless = false;               // float32 positions instead of 16-bit quantized
   uint32_t chunk_particles = 65536;
   int zstd_level = 1;
-  bool pack_planes = true;             // false: zstd wherever smaller (EncodeOptions)
-  bool zstd_planes = true;             // false: planes only stored or bit-packed (EncodeOptions)
+  io::PlaneCoding planes = io::PlaneCoding::Packed;  // EncodeOptions::planes
   bool lod_tiers = true;               // chunks written as LOD tiers (EncodeOptions::lod_tiers)
   // The file's position bound, spacing x 2^-precision_bits (io::FileHeader).
   uint8_t precision_bits = io::kDefaultPrecisionBits;

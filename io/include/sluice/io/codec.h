@@ -16,21 +16,28 @@
 
 namespace sluice::io {
 
+// How a chunk's byte planes are coded.
+enum class PlaneCoding : uint8_t {
+  // Bit-packed where values are small, unless zstd saves a third over
+  // packing: decoding 1.4-2x faster for 1-2% more bytes (docs/format.md).
+  Packed,
+  // zstd wherever it is smaller (`convert --smallest`; files readable by
+  // format 1.0 readers).
+  Zstd,
+  // No plane zstd, each stored or bit-packed: every chunk decodes on the GPU
+  // (gpu_decode_plan.h) with no CPU work but the checksum (`convert
+  // --gpu-decodable`; the size cost is in docs/format.md).
+  GpuDecodable,
+  // Every chunk's planes stored as they are (ChunkCodec::Stored, 8 bytes
+  // per quantized particle): the fastest to encode and to decode, for
+  // frames that are decoded at once and not kept (live frames not recorded).
+  Stored,
+};
+
 struct EncodeOptions {
   uint32_t chunk_particles = 65536;  // upper bound per chunk; chunks follow octree cells
   int zstd_level = 3;                // 1 (fast) .. 19 (small); decode speed barely changes
-  // Bit-pack planes of small values unless zstd saves a third over packing:
-  // decoding 1.4-2x faster for 1-2% more bytes (docs/format.md). false:
-  // zstd wherever it is smaller (files readable by format 1.0 readers).
-  bool pack_planes = true;
-  // false: no plane is zstd, each is stored or bit-packed: every chunk
-  // decodes on the GPU (gpu_decode_plan.h) with no CPU work but the
-  // checksum (`sluice convert --gpu`; the size cost is in docs/format.md).
-  bool zstd_planes = true;
-  // false: every chunk's planes stored as they are (ChunkCodec::Stored, 8
-  // bytes per quantized particle): the fastest to encode and to decode, for
-  // frames that are decoded at once and not kept (live frames not recorded).
-  bool compress = true;
+  PlaneCoding planes = PlaneCoding::Packed;
   // Classify the narrow band (narrow_band.h) and write the frame as surface
   // chunks, voxel-blob chunks and interior chunks, payloads in that order
   // (format 1.3), so a reader of the surface and blobs reads a prefix of the

@@ -50,7 +50,7 @@ struct LiveOptions {
   std::filesystem::path record;         // empty: not recorded
   // Chunk size; zstd level and plane packing of the recording (frames not
   // recorded are not compressed: only decoded at once).
-  io::EncodeOptions encode{65536, 1, true};
+  io::EncodeOptions encode{.chunk_particles = 65536, .zstd_level = 1};
 };
 
 // The SceneInfo to make the Renderer with for live frames inside `bounds`.

@@ -58,7 +58,7 @@ struct PassTime {
 };
 
 struct FrameStats {
-  uint64_t frame = 0;          // which record() call (0-based) these figures are of
+  uint64_t record_index = 0;   // which record() call (0-based) these figures are of (not a frame number)
   uint64_t particles = 0;      // in the frame drawn
   uint64_t drawn = 0;          // after frustum, near and LOD culling (the last view)
   uint64_t visible_chunks = 0; // the last view
