@@ -121,14 +121,8 @@ void run_xr(const XrOptions& o) {
       lod.level = std::clamp(lod.level + c.lod_delta, 0.02f, 1.0f);
       if (lod.mode == render::LodMode::Off && lod.level < 1) lod.mode = render::LodMode::DensityPreserving;
     }
-    stream.set_look(stream.fluid(), lod);
-    stream.update();
-    while (const auto error = player.pop_error()) {
-      if (errors_printed++ < 20) std::fprintf(stderr, "sluice: frame error: %s\n", error->text().c_str());
-    }
-    render::FrameSync sync;
+    std::array<render::View, 2> views;
     if (frame.render) {
-      std::array<render::View, 2> views;
       for (size_t e = 0; e < 2; ++e) {
         const xr::Eye& eye = frame.eyes[e];
         views[e] = xr::eye_view(eye.pose, eye.fov, controls.placement(), so.near, so.far, eye.viewport);
@@ -136,6 +130,14 @@ void run_xr(const XrOptions& o) {
       // Both eyes' demand, with a margin for head motion until the frames
       // read now are shown.
       stream.set_views(views);
+    }
+    stream.set_look(stream.fluid(), lod);
+    stream.update();
+    while (const auto error = player.pop_error()) {
+      if (errors_printed++ < 20) std::fprintf(stderr, "sluice: frame error: %s\n", error->text().c_str());
+    }
+    render::FrameSync sync;
+    if (frame.render) {
       if (frame.stereo) {
         sync = stream.record(frame.command_buffer, frame.stereo_target, views);  // both eyes, one pass
       } else {

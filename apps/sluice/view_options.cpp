@@ -48,8 +48,8 @@ render::FluidOptions ViewSettings::fluid_options(const render::SceneInfo& scene)
   return f;
 }
 
-render::Vec3 ViewSettings::up_direction(const render::SceneInfo& scene) const {
-  if (up.empty()) return scene.up;
+std::optional<render::Vec3> ViewSettings::up_override() const {
+  if (up.empty()) return std::nullopt;
   try {
     return render::parse_up(up);
   } catch (const std::invalid_argument& e) {
@@ -57,10 +57,7 @@ render::Vec3 ViewSettings::up_direction(const render::SceneInfo& scene) const {
   }
 }
 
-std::optional<render::Vec3> ViewSettings::up_override() const {
-  if (up.empty()) return std::nullopt;
-  return up_direction(render::SceneInfo{});
-}
+render::Vec3 ViewSettings::up_direction(const render::SceneInfo& scene) const { return up_override().value_or(scene.up); }
 
 render::LodOptions ViewSettings::lod_options() const {
   render::LodOptions l = lod;

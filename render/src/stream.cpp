@@ -88,7 +88,7 @@ void Stream::set_look(const FluidOptions& fluid, const LodOptions& lod) {
   }
   fluid_ = fluid;
   lod_ = lod;
-  if (player_) player_->set_demand(demand());
+  demand_stale_ = true;
 }
 
 void Stream::set_views(std::span<const View> views) {
@@ -103,7 +103,7 @@ void Stream::set_views(std::span<const View> views) {
   }
   eye_ = eye;
   eye_seconds_ = now;
-  if (player_) player_->set_demand(demand());
+  demand_stale_ = true;
 }
 
 runtime::ViewDemand Stream::demand() const {
@@ -124,6 +124,7 @@ void Stream::start_player() {
   const int color = decoded_attribute(fluid_);
   FrameFeed::configure(po, *staging_, color, reader_->header(), options_.decode);
   po.pipeline.demand = demand();
+  demand_stale_ = false;
   const runtime::Clock* clock = options_.clock;
   if (!clock) {
     own_clock_ = std::make_unique<runtime::SteadyClock>();
@@ -140,6 +141,9 @@ FeedUpdate Stream::update() {
     return now;
   }
   if (!player_) start_player();
+  // The look and views set since the last update(), as one demand.
+  if (demand_stale_) player_->set_demand(demand());
+  demand_stale_ = false;
   return feed_->update();
 }
 

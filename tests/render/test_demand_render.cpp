@@ -17,6 +17,7 @@
 #include "sluice/render/image_io.h"
 #include "sluice/render/offscreen.h"
 #include "sluice/render/staging_allocator.h"
+#include "sluice/render/stream.h"
 #include "sluice/runtime/clock.h"
 #include "sluice/runtime/player.h"
 
@@ -204,6 +205,52 @@ TEST(DemandRender, APausedFrameConvergesToTheFullReadsPicture) {
   Shot got = draw(r.renderer, target, high);
   got.depth = r.read_raw_depth();
   expect_same(got, reference(reader, scene, 1, high), "refined");
+}
+
+// render::Stream reads for the views and look it is given: the overview at
+// cLOD 0.3 reads a fraction of the records from its first frame on; the
+// look alone raised to level 1 reads the paused frame again; LayerSet
+// particles() reads whole.
+TEST(DemandRender, AStreamReadsWhatItsViewsAndLookDraw) {
+  ValidationGuard guard;
+  const Case low = cases(scene_info(io::ContainerReader(pool_file())))[0];
+  StreamOptions options;
+  options.motion = ViewMotion::Fixed;
+  options.player.pipeline.decode_threads = 2;
+  Stream stream(context(), pool_file(), options);
+  stream.set_look(FluidOptions{}, low.lod);
+  ASSERT_TRUE(stream.reads_by_view()) << "a layered, tiered file with LOD on";
+  stream.set_views(low.views);
+  runtime::Player& player = stream.player();
+  const auto until = [&](runtime::Player& p, Stream& s, auto done) {
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+    while (std::chrono::steady_clock::now() < deadline) {
+      p.wait_for_due();
+      s.update();
+      if (done()) return true;
+    }
+    return false;
+  };
+  ASSERT_TRUE(until(player, stream, [&] { return player.shown() != nullptr; }));
+  const runtime::PipelineStats first = player.stats().pipeline;
+  EXPECT_GT(first.frames_read, 0u);
+  EXPECT_EQ(first.frames_by_demand, first.frames_read) << "every frame read by the view, the first too";
+  EXPECT_LT(first.bytes_read, first.record_bytes / 4) << "the overview reads a fraction";
+  LodOptions high = low.lod;
+  high.level = 1.0f;
+  stream.set_look(FluidOptions{}, high);  // the views stay: the look alone asks for more
+  ASSERT_TRUE(until(player, stream, [&] { return !player.pipeline().short_of(*player.shown(), player.demand()); }));
+  EXPECT_EQ(player.demand().level, 1.0f) << "the player took the new look";
+  EXPECT_EQ(player.stats().refinements, 1u);
+
+  options.layers = io::LayerSet::particles();
+  Stream whole(context(), pool_file(), options);
+  whole.set_look(FluidOptions{}, low.lod);
+  EXPECT_FALSE(whole.reads_by_view());
+  whole.set_views(low.views);
+  runtime::Player& whole_player = whole.player();
+  ASSERT_TRUE(until(whole_player, whole, [&] { return whole_player.shown() != nullptr; }));
+  EXPECT_EQ(whole_player.stats().pipeline.frames_by_demand, 0u);
 }
 
 }  // namespace

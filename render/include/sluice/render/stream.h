@@ -91,11 +91,13 @@ class Stream {
   // How the frames are drawn: the attribute coloured by (decoded only if
   // fluid.scalar_visibility; fixed once the player started: a change
   // throws std::invalid_argument), the splat reach and cLOD the view's
-  // demand assumes. Defaults: FluidOptions{} with the scene's up, LodOptions{}.
+  // demand assumes (taken at the next update()). Defaults: FluidOptions{}
+  // with the scene's up, LodOptions{}.
   void set_look(const FluidOptions& fluid, const LodOptions& lod);
   // The views (1..4) the next frames are drawn with: frames are read for
   // them (with a margin for their motion, ViewMotion::Moving), and a paused
-  // frame is read again when they need more. Once per displayed frame is fine.
+  // frame is read again when they need more. Once per displayed frame is
+  // fine: the player takes the look and views as one demand at update().
   void set_views(std::span<const View> views);
 
   // Once per displayed frame, before record(): commits the frame due when
@@ -146,6 +148,7 @@ class Stream {
   bool gpu_decode_ = false;
   // The views' speed (world units per second) for the margin of a moving view.
   float speed_ = 0;
+  bool demand_stale_ = false;  // the look or views changed since the player last took the demand
   Vec3 eye_{};
   double eye_seconds_ = -1;
   FeedUpdate last_push_;
