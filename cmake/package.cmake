@@ -1,8 +1,8 @@
 # The installed package: `find_package(sluice)` gives sluice::io,
 # sluice::runtime, sluice::render and (where built) sluice::desktop and sluice::xr, with
 # headers under include/sluice and the shaders embedded in the libraries.
-# The importer (sluice_import, which links VTK) is the CLI's and is not
-# installed.
+# sluice::import (simulation output -> .sluice; links VTK where built with
+# it) is a component too, with its worker executable in libexec/sluice.
 include(GNUInstallDirs)
 include(CMakePackageConfigHelpers)
 
@@ -27,13 +27,16 @@ install(EXPORT sluiceTargets NAMESPACE sluice:: DESTINATION ${CMAKE_INSTALL_LIBD
 
 # desktop (GLFW) and xr (OpenXR) are components with export sets of their
 # own: a host that asks only for render needs neither dependency.
-foreach(component desktop xr)
+foreach(component desktop xr import)
   string(TOUPPER ${component} upper)
   set(SLUICE_PACKAGE_${upper} OFF)
   if(TARGET sluice_${component})
     set_target_properties(sluice_${component} PROPERTIES EXPORT_NAME ${component})
     target_include_directories(sluice_${component} INTERFACE $<INSTALL_INTERFACE:${CMAKE_INSTALL_INCLUDEDIR}>)
     install(DIRECTORY ${component}/include/sluice/${component} DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/sluice)
+    if(component STREQUAL "import")  # the worker is installed by import/CMakeLists.txt
+      install(TARGETS sluice_import_worker EXPORT sluice_importTargets RUNTIME DESTINATION ${CMAKE_INSTALL_LIBEXECDIR}/sluice)
+    endif()
     install(TARGETS sluice_${component} EXPORT sluice_${component}Targets
             ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
             LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR})
@@ -41,6 +44,7 @@ foreach(component desktop xr)
     set(SLUICE_PACKAGE_${upper} ON)
   endif()
 endforeach()
+set(SLUICE_PACKAGE_IMPORT_VTK ${SLUICE_WITH_VTK})
 set(SLUICE_PACKAGE_RENDER OFF)
 if(TARGET sluice_render)
   set(SLUICE_PACKAGE_RENDER ON)

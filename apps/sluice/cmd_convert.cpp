@@ -7,15 +7,32 @@
 #include "commands.h"
 #include "conversion.h"
 #include "human.h"
+#include "sluice/io/up_axis.h"
 
 namespace sluice::app {
 namespace {
 
 struct ConvertCommand {
-  ConversionOptions conversion;
+  import::ConvertOptions conversion;
+  ConversionReport report;
   std::string output;
+  std::string up;  // as typed
+  bool smallest = false, gpu_decodable = false, in_process = false;
+  int read_timeout = 120;
   bool force = false;
 };
+
+// The flags that are not fields of import::ConvertOptions as they are typed.
+import::ConvertOptions options_from(const ConvertCommand& c) {
+  import::ConvertOptions o = c.conversion;
+  if (!c.up.empty()) {
+    o.up = io::parse_up_axis(c.up);
+    if (!o.up) throw std::runtime_error("--up: expected x, y, z, -x, -y or -z, got '" + c.up + "'");
+  }
+  o.planes = c.gpu_decodable ? io::PlaneCoding::GpuDecodable : c.smallest ? io::PlaneCoding::Zstd : io::PlaneCoding::Packed;
+  o.isolation = import_isolation(c.in_process, c.read_timeout);
+  return o;
+}
 
 std::string default_output(const std::string& input) {
   std::filesystem::path p(input);
@@ -29,19 +46,19 @@ std::string default_output(const std::string& input) {
 }
 
 void run_convert(const ConvertCommand& c) {
-  const ConversionOptions& o = c.conversion;
+  const import::ConvertOptions o = options_from(c);
   const std::string output = c.output.empty() ? default_output(o.input) : c.output;
   if (std::filesystem::exists(output) && !c.force) {
     throw std::runtime_error(output + " exists; pass --force to overwrite it, or -o to choose another name");
   }
-  const ConversionSummary s = convert_input(o, output);
+  const import::ConvertSummary s = convert_and_report(o, output, c.report);
   const double out = double(std::filesystem::file_size(output));
   const double per = s.particles ? out / double(s.particles) : 0;
   std::printf("wrote %s: %llu frame%s, %s particle%s, %s in -> %s out in %s (%s frames/s)\n", output.c_str(),
               (unsigned long long)s.frames, s.frames == 1 ? "" : "s", human_count(double(s.particles)).c_str(),
               s.particles == 1 ? "" : "s",
-              human_bytes(double(s.input_bytes)).c_str(), human_bytes(out).c_str(), human_duration(s.seconds).c_str(),
-              fixed(double(s.frames) / std::max(s.seconds, 1e-9), 1).c_str());
+              human_bytes(double(s.input_bytes)).c_str(), human_bytes(out).c_str(), human_duration(s.elapsed.count()).c_str(),
+              fixed(double(s.frames) / std::max(s.elapsed.count(), 1e-9), 1).c_str());
   if (s.particles == 0) return;
   // Tiny inputs cost more than 12 bytes a particle (header, index, tables).
   const bool smaller = per <= 12.0;
@@ -54,7 +71,7 @@ void run_convert(const ConvertCommand& c) {
 
 void add_convert(CLI::App& app) {
   auto c = std::make_shared<ConvertCommand>();
-  ConversionOptions* o = &c->conversion;
+  import::ConvertOptions* o = &c->conversion;
   CLI::App* cmd = app.add_subcommand("convert", "Convert simulation output (VTK, CSV, XYZ) into a .sluice file");
   cmd->footer(
       "INPUT is a file, a quoted glob ('out/fluid_*.vtu', naturally sorted: 2 before 10), a .pvd series or a\n"
@@ -96,17 +113,17 @@ void add_convert(CLI::App& app) {
   cmd->add_option("--fps", o->fps,
                   "Playback frames per second (default 30); for an input without times also the time step 1/N");
   cmd->add_option("--dt", o->dt, "Seconds of simulation between frames, for an input without times");
-  cmd->add_option("--up", o->up,
+  cmd->add_option("--up", c->up,
                   "World axis that points up: x, y, z, -x, -y or -z (default: found from the data: how the fluid "
                   "falls, its pressure, its shape)");
   cmd->add_option("--chunk", o->chunk, "Most particles per chunk (octree cells)")->capture_default_str()
       ->check(CLI::Range(1u, 1u << 20));
   cmd->add_option("--level", o->level, "zstd level, 1 (fast) to 19 (small)")->capture_default_str()
       ->check(CLI::Range(1, 19));
-  cmd->add_flag("--smallest", o->smallest,
+  cmd->add_flag("--smallest", c->smallest,
                 "zstd on every plane it shrinks most: files 1-3% smaller, decoding up to 1.4x slower "
                 "(default: small-valued planes are bit-packed)");
-  cmd->add_flag("--gpu-decodable", o->gpu_decodable,
+  cmd->add_flag("--gpu-decodable", c->gpu_decodable,
                 "No zstd planes (each stored or bit-packed): every chunk decodes on the GPU with no CPU work but\n"
                 "its checksum (`sluice play` decodes on the GPU by default); files some percent larger");
   cmd->add_flag("--no-tiers", [o](int64_t) { o->lod_tiers = false; },
@@ -128,15 +145,15 @@ void add_convert(CLI::App& app) {
   cmd->add_flag("--skip-bad", o->skip_bad,
                 "Leave out frames that cannot be read (damaged, cut short) and list them; without it the\n"
                 "conversion stops at the first one, and the output keeps the frames before it");
-  cmd->add_option("--read-timeout", o->read_timeout,
+  cmd->add_option("--read-timeout", c->read_timeout,
                   "Seconds VTK's reader may take for one frame before the frame counts as bad")
       ->capture_default_str()
       ->check(CLI::Range(1, 86400));
-  cmd->add_flag("--in-process", o->in_process,
+  cmd->add_flag("--in-process", c->in_process,
                 "Read VTK XML files in this process rather than in worker processes (a reader crash on a\n"
                 "damaged file then ends sluice; see docs/import.md)");
   cmd->add_flag("-f,--force", c->force, "Overwrite the output if it exists");
-  cmd->add_flag("-q,--quiet", o->quiet, "No progress bar or notes");
+  cmd->add_flag("-q,--quiet", c->report.quiet, "No progress bar or notes");
   cmd->callback([c] { run_convert(*c); });
 }
 

@@ -6,13 +6,13 @@
 #include <string>
 
 #include "commands.h"
-#include "isolated_source.h"
+#include "sluice/import/isolation.h"
 #include "sluice/io/error.h"
 #include "sluice/io/format.h"
 
 int main(int argc, char** argv) {
-  // A worker process of `convert` (isolated_source.h), before anything else.
-  if (int status = 0; sluice::app::run_import_worker(argc, argv, status)) return status;
+  // A worker process of `convert` (sluice/import/isolation.h), before anything else.
+  if (int status = 0; sluice::import::run_worker(argc, argv, status)) return status;
   CLI::App app{
       "sluice: stream huge particle-fluid simulation sequences (SPH, MPM, FLIP) from disk and look at them.\n\n"
       "Typical use:\n"

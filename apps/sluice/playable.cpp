@@ -13,7 +13,7 @@
 
 #include "conversion.h"
 #include "sluice/io/format.h"
-#include "sluice/io/import.h"
+#include "sluice/import/source.h"
 #include "sluice/io/output_lock.h"
 
 namespace sluice::app {
@@ -55,8 +55,7 @@ fs::path user_cache_folder() {
 // Input files, sizes and modification times, and the settings: equal keys
 // mean the cached conversion is still what a new one would write.
 std::string cache_key(const std::string& input) {
-  io::ImportOptions import;
-  const auto source = io::open_source(input, import);
+  const auto source = import::open_source(input, {});
   std::ostringstream key;
   key << "sluice cache 1, format 1." << io::kFormatMinor << "\nspec " << fs::absolute(input).lexically_normal().string() << "\nsettings attributes=all\n";
   const auto stat_line = [&](const std::string& path) {
@@ -87,12 +86,16 @@ std::string read_text(const fs::path& path) {
   return s.str();
 }
 
-ConversionOptions conversion_for(const std::string& input, const PlayableOptions& o) {
-  ConversionOptions c;
+// Every point array carried (the player may colour by any), defaults
+// otherwise; notes and progress as `sluice convert` shows them.
+void convert_for_playing(const std::string& input, const std::string& output, const PlayableOptions& o) {
+  import::ConvertOptions c;
   c.input = input;
   c.all_attributes = true;
-  c.quiet = o.quiet;
-  return c;
+  c.isolation = import_isolation(false, 120);
+  ConversionReport report;
+  report.quiet = o.quiet;
+  convert_and_report(c, output, report);
 }
 
 // Reuses dir/name.sluice when its key matches, else converts into it.
@@ -121,7 +124,7 @@ PlayableFile open_playable_in(const fs::path& dir, const std::string& name, cons
   }
   // The key goes last: a conversion cut short leaves no key, so it is redone.
   fs::remove(key_file, ec);
-  convert_input(conversion_for(input, o), file.string());
+  convert_for_playing(input, file.string(), o);
   const fs::path partial = key_file.string() + ".partial";
   {
     std::ofstream out(partial, std::ios::binary | std::ios::trunc);
@@ -154,7 +157,7 @@ PlayableFile open_playable(const std::string& input, const PlayableOptions& o) {
   if (o.no_cache) {
     const fs::path tmp = fs::temp_directory_path() / ("sluice-" + std::to_string(::getpid()) + "-" + cache_name(input) + ".sluice");
     if (!o.quiet) std::fprintf(stderr, "converting %s into a temporary file (--no-cache)\n", input.c_str());
-    convert_input(conversion_for(input, o), tmp.string());
+    convert_for_playing(input, tmp.string(), o);
     return PlayableFile(tmp.string(), true);
   }
   const std::string key = cache_key(input);

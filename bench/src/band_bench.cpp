@@ -12,8 +12,8 @@
 #include <utility>
 
 #include "machine.h"
-#include "sluice/io/freed_memory.h"
-#include "sluice/io/import.h"
+#include "sluice/import/freed_memory.h"
+#include "sluice/import/source.h"
 #include "sluice/io/narrow_band.h"
 #include "sluice/bench/synth.h"
 #include "sluice/io/spacing.h"
@@ -82,16 +82,16 @@ GpuTiming timed_gpu_classify(render::BandClassifier& gpu, const io::ParticleFram
 }  // namespace
 
 void run_band_bench(const BandBenchOptions& o) {
-  const io::KeepFreedMemory keep;  // as `sluice convert` classifies: frame buffers reused, not faulted in again
+  const import::KeepFreedMemory keep;  // as `sluice convert` classifies: frame buffers reused, not faulted in again
   const int cores = o.max_threads > 0 ? o.max_threads : core_count();
-  std::unique_ptr<io::FrameSource> source;
+  std::unique_ptr<import::FrameSource> source;
   if (o.synth > 0) {
     SynthOptions so;
     so.particles = o.synth;
     so.frames = 1;
     source = synthetic_source(so);
   } else {
-    source = io::open_source(o.input, {});
+    source = import::open_source(o.input, {});
   }
   std::printf("sluice bench band: %s\nmachine: %s, %d threads\n", source->info().description.c_str(),
               cpu_model().c_str(), cores);

@@ -13,8 +13,9 @@
 #include <random>
 
 #include "machine.h"
-#include "sluice/io/convert.h"
-#include "sluice/io/freed_memory.h"
+#include "sluice/import/frames.h"
+#include "sluice/import/freed_memory.h"
+#include "sluice/import/vtk.h"
 #include "sluice/io/lod.h"
 #include "sluice/io/reader.h"
 #include "sluice/io/spacing.h"
@@ -38,7 +39,7 @@ struct Dataset {
   uint64_t input_bytes = 0;
 };
 
-std::string write_container(const std::string& path, const io::FrameSource& source, io::PositionCoding coding,
+std::string write_container(const std::string& path, const import::FrameSource& source, io::PositionCoding coding,
                             io::PlaneCoding planes = io::PlaneCoding::Packed) {
   io::FileHeader header;
   header.position_coding = coding;
@@ -48,7 +49,7 @@ std::string write_container(const std::string& path, const io::FrameSource& sour
   io::ContainerWriter writer(path, header);
   io::EncodeOptions encode;
   encode.planes = planes;
-  io::convert_frames(source, std::nullopt, writer, io::ConvertSettings{.encode = encode, .max_in_flight = size_t(core_count()) + 1});
+  import::convert_frames(source, std::nullopt, writer, import::FramesSettings{.encode = encode, .max_in_flight = size_t(core_count()) + 1});
   writer.finish();
   return path;
 }
@@ -142,7 +143,7 @@ io::ParticleFrame tiled(const io::ParticleFrame& frame, int tile) {
 }
 
 // The files of each frame, when every frame is one file (not pieces).
-std::vector<std::string> single_files(const io::FrameSource& source) {
+std::vector<std::string> single_files(const import::FrameSource& source) {
   std::vector<std::string> files;
   for (uint64_t f = 0; f < source.frame_count(); ++f) {
     std::error_code ec;
@@ -156,24 +157,24 @@ std::vector<std::string> single_files(const io::FrameSource& source) {
 // arrays, one thread, page cache: the input as given, and copies of its
 // frames written by VTK's writers (legacy binary polydata as solvers write
 // it, .vtu appended raw and zlib), with every array the input has.
-void compare_with_vtk(const IoBenchOptions& o, const io::FrameSource& source, const std::filesystem::path& dir) {
-  if (!io::has_vtk_support()) return;
+void compare_with_vtk(const IoBenchOptions& o, const import::FrameSource& source, const std::filesystem::path& dir) {
+  if (!import::has_vtk_support()) return;
   namespace fs = std::filesystem;
-  const io::SourceInfo& info = source.info();
+  const import::SourceInfo& info = source.info();
   std::vector<std::string> rest;  // every other point array, as attributes
   for (const auto& a : info.arrays) {
     if (a != info.id_array && rest.size() < io::kMaxAttributes) rest.push_back(a);
   }
-  io::ImportOptions every;
+  import::SourceOptions every;
   every.attributes = rest;
-  const auto all = io::open_source(o.input, every);
-  const io::PeerArrays arrays{info.id_array, rest};
+  const auto all = import::open_source(o.input, every);
+  const import::PeerArrays arrays{info.id_array, rest};
   for (uint64_t f = 0; f < all->frame_count(); ++f) {
     const io::ParticleFrame frame = tiled(all->read(f), o.tile);
     const std::string n = std::to_string(f);
-    io::write_legacy_vtk((dir / ("legacy_" + n + ".vtk")).string(), frame, arrays);
-    io::write_vtu((dir / ("raw_" + n + ".vtu")).string(), frame, false, arrays);
-    io::write_vtu((dir / ("zlib_" + n + ".vtu")).string(), frame, true, arrays);
+    import::write_legacy_vtk((dir / ("legacy_" + n + ".vtk")).string(), frame, arrays);
+    import::write_vtu((dir / ("raw_" + n + ".vtu")).string(), frame, false, arrays);
+    import::write_vtu((dir / ("zlib_" + n + ".vtu")).string(), frame, true, arrays);
   }
   struct Flavour {
     std::string name;
@@ -191,21 +192,21 @@ void compare_with_vtk(const IoBenchOptions& o, const io::FrameSource& source, co
   const std::vector<std::string> ids_only = info.id_array.empty() ? std::vector<std::string>{}
                                                                   : std::vector<std::string>{info.id_array};
   for (const Flavour& fl : flavours) {
-    const auto points_ids = io::open_source(fl.spec, {});
-    const auto everything = io::open_source(fl.spec, every);
+    const auto points_ids = import::open_source(fl.spec, {});
+    const auto everything = import::open_source(fl.spec, every);
     const std::vector<std::string> files = single_files(*points_ids);
     double n = 0;
     for (uint64_t f = 0; f < points_ids->frame_count(); ++f) n += double(points_ids->read(f).count());
     const double checks = seconds_per_pass(o.min_seconds, [&] {
-      for (const auto& file : files) io::check_vtk_file(file);
+      for (const auto& file : files) import::check_vtk_file(file);
     });
     for (const bool keep_freed : {false, true})
     for (const bool every_array : {false, true}) {
-      std::optional<io::KeepFreedMemory> keep;
+      std::optional<import::KeepFreedMemory> keep;
       if (keep_freed) keep.emplace();
-      const io::FrameSource& s = every_array ? *everything : *points_ids;
+      const import::FrameSource& s = every_array ? *everything : *points_ids;
       const double vtk = seconds_per_pass(o.min_seconds, [&] {
-        for (const auto& file : files) (void)io::read_with_vtk(file, every_array ? nullptr : &ids_only);
+        for (const auto& file : files) (void)import::read_with_vtk(file, every_array ? nullptr : &ids_only);
       });
       const double import = seconds_per_pass(o.min_seconds, [&] {
         for (uint64_t f = 0; f < s.frame_count(); ++f) (void)s.read(f);
@@ -220,7 +221,7 @@ void compare_with_vtk(const IoBenchOptions& o, const io::FrameSource& source, co
   }
   t.print("The importer against VTK's own reader: same files, same arrays, 1 thread, page cache");
   std::printf("  malloc 'default': glibc as it comes; 'kept': freed memory kept for the next frame\n"
-              "  (io::KeepFreedMemory, as `sluice convert` runs), for both readers alike.\n"
+              "  (import::KeepFreedMemory, as `sluice convert` runs), for both readers alike.\n"
               "  VTK's legacy reader cannot choose arrays: it reads every array whatever is asked.\n"
               "  'checks': the size checks alone (legacy: the structure walk with the data skipped), which\n"
               "  the import includes; XML copies hold float32 points, a UInt32 id array and float32 arrays.\n");
@@ -230,7 +231,7 @@ void compare_with_vtk(const IoBenchOptions& o, const io::FrameSource& source, co
 
 void run_io_bench(const IoBenchOptions& o) {
   const int cores = o.max_threads > 0 ? o.max_threads : core_count();
-  const auto source = io::open_source(o.input, {});
+  const auto source = import::open_source(o.input, {});
   const uint64_t frame_count = source->frame_count();
   std::printf("sluice bench io: %s\n", source->info().description.c_str());
   std::printf("machine: %s, %d threads; each timing repeats for at least %.1f s\n", cpu_model().c_str(), cores,
@@ -249,9 +250,9 @@ void run_io_bench(const IoBenchOptions& o) {
   for (const auto& f : data.frames) data.particles += f.count();
   // VTK reading every array of each file, as ParaView opens it.
   double vtk_full = 0;
-  if (io::has_vtk_support()) {
+  if (import::has_vtk_support()) {
     vtk_full = seconds_per_pass(o.min_seconds, [&] {
-      for (uint64_t f = 0; f < frame_count; ++f) (void)io::read_with_vtk(source->frame_name(f));
+      for (uint64_t f = 0; f < frame_count; ++f) (void)import::read_with_vtk(source->frame_name(f));
     });
   }
   const double vtk_n = seconds_per_pass(o.min_seconds, [&] {
@@ -270,11 +271,11 @@ void run_io_bench(const IoBenchOptions& o) {
   const std::string smallest =
       write_container((dir / "z.sluice").string(), *source, io::PositionCoding::Quantized16, io::PlaneCoding::Zstd);
   uint64_t vtu_zlib = 0, vtu_raw = 0;
-  if (io::has_vtk_support()) {
+  if (import::has_vtk_support()) {
     for (uint64_t f = 0; f < frame_count; ++f) {
-      io::write_vtu((dir / "z.vtu").string(), data.frames[f], true);
+      import::write_vtu((dir / "z.vtu").string(), data.frames[f], true);
       vtu_zlib += fs::file_size(dir / "z.vtu");
-      io::write_vtu((dir / "r.vtu").string(), data.frames[f], false);
+      import::write_vtu((dir / "r.vtu").string(), data.frames[f], false);
       vtu_raw += fs::file_size(dir / "r.vtu");
     }
   }

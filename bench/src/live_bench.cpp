@@ -24,7 +24,7 @@ void run_live_bench(const LiveBenchOptions& o) {
     SynthOptions so;
     so.particles = n;
     so.frames = uint64_t(std::max(o.frames, 1));
-    const std::unique_ptr<io::FrameSource> source = synthetic_source(so);
+    const std::unique_ptr<import::FrameSource> source = synthetic_source(so);
     std::vector<io::ParticleFrame> frames;
     for (uint64_t f = 0; f < so.frames; ++f) frames.push_back(source->read(f));
     render::Bounds bounds{{1e30f, 1e30f, 1e30f}, {-1e30f, -1e30f, -1e30f}};

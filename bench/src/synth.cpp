@@ -8,7 +8,7 @@
 #include <filesystem>
 #include <numbers>
 
-#include "sluice/io/convert.h"
+#include "sluice/import/frames.h"
 #include "sluice/io/writer.h"
 
 namespace sluice::bench {
@@ -37,7 +37,7 @@ Block block_for(uint64_t n) {
   return {nx, std::max<uint64_t>(1, (n + nx * nz - 1) / (nx * nz)), nz};
 }
 
-class SyntheticSource final : public io::FrameSource {
+class SyntheticSource final : public import::FrameSource {
  public:
   explicit SyntheticSource(SynthOptions o) : o_(std::move(o)), block_(block_for(o_.particles)) {
     info_.description = std::string("synthetic ") + (o_.motion == SynthMotion::Slosh ? "sloshing wave block" : "drifting lattice") +
@@ -48,7 +48,7 @@ class SyntheticSource final : public io::FrameSource {
   }
 
   uint64_t frame_count() const override { return o_.frames; }
-  const io::SourceInfo& info() const override { return info_; }
+  const import::SourceInfo& info() const override { return info_; }
   std::string frame_name(uint64_t i) const override { return "synthetic frame " + std::to_string(i); }
 
   io::ParticleFrame read(uint64_t frame) const override {
@@ -110,12 +110,12 @@ class SyntheticSource final : public io::FrameSource {
  private:
   SynthOptions o_;
   Block block_;
-  io::SourceInfo info_;
+  import::SourceInfo info_;
 };
 
 }  // namespace
 
-std::unique_ptr<io::FrameSource> synthetic_source(const SynthOptions& options) {
+std::unique_ptr<import::FrameSource> synthetic_source(const SynthOptions& options) {
   return std::make_unique<SyntheticSource>(options);
 }
 
@@ -146,8 +146,8 @@ SynthResult write_synthetic(const SynthOptions& o, const std::function<void(uint
   encode.lod_tiers = o.lod_tiers;
   encode.layers = o.layers;
   const size_t jobs = o.jobs > 0 ? size_t(o.jobs) : size_t(tbb::info::default_concurrency());
-  const io::ConvertResult r = io::convert_frames(*source, std::nullopt, writer, io::ConvertSettings{.encode = encode, .max_in_flight = jobs + 1},
-                                                 [&](const io::ConvertProgress& p) {
+  const import::FramesResult r = import::convert_frames(*source, std::nullopt, writer, import::FramesSettings{.encode = encode, .max_in_flight = jobs + 1},
+                                                 [&](const import::FrameConverted& p) {
                                                    if (on_frame) on_frame(p.frame + 1, writer.bytes_written());
                                                  });
   writer.finish();

@@ -368,19 +368,10 @@ class HostScene {
   // The host's images as sluice's target: drawn over (its clear colour
   // stays where there is no fluid), left ready for the read-back.
   sluice::render::RenderTarget target() const {
-    sluice::render::RenderTarget t;
-    t.width = kWidth;
-    t.height = kHeight;
-    t.color_image = *color_.image;
-    t.color_view = *color_.view;
-    t.color_format = static_cast<VkFormat>(kColor);
-    t.color_layout_before = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
-    t.color_layout_after = VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL;
-    t.depth_image = *depth_.image;
-    t.depth_view = *depth_.view;
-    t.depth_format = static_cast<VkFormat>(kDepth);
-    t.depth_layout_before = VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL;
-    t.depth_layout_after = VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL;
+    const VkImageLayout read_back = VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL;
+    sluice::render::RenderTarget t = sluice::render::render_target(
+        kWidth, kHeight, {*color_.image, *color_.view, VkFormat(kColor), VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, read_back},
+        {*depth_.image, *depth_.view, VkFormat(kDepth), VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL, read_back});
     t.background = false;
     return t;
   }
@@ -456,10 +447,8 @@ int main(int argc, char** argv) try {
 
   // 3. sluice on the host's handles: a stream of the file's frames, or of
   // frames the host computes (pushed from its memory, recorded when asked).
-  sluice::render::HostVulkan host;
-  host.handles = {*instance.instance, *device.physical, *device.device, device.family, *device.queue};
-  host.memory_budget_enabled = device.memory_budget;
-  sluice::render::Context context(host);
+  sluice::render::Context context(sluice::render::HostVulkan{
+      {*instance.instance, *device.physical, *device.device, device.family, *device.queue}, device.memory_budget});
   sluice::render::StreamOptions options;
   options.renderer.frames_in_flight = kFramesInFlight;
   options.motion = sluice::render::ViewMotion::Fixed;  // the host's camera stays put

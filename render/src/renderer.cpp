@@ -606,4 +606,22 @@ void Renderer::set_environment(const Image& equirect) {
   r.has_environment = has_image;
 }
 
+RenderTarget render_target(uint32_t width, uint32_t height, const TargetImage& color, const TargetImage& depth) {
+  RenderTarget t;
+  t.width = width;
+  t.height = height;
+  t.color_image = color.image;
+  t.color_view = color.view;
+  t.color_format = color.format;
+  t.color_layout_before = color.before;
+  t.color_layout_after = color.after;
+  if (depth.image == VK_NULL_HANDLE) return t;
+  t.depth_image = depth.image;
+  t.depth_view = depth.view;
+  t.depth_format = depth.format;
+  t.depth_layout_before = depth.before;
+  t.depth_layout_after = depth.after;
+  return t;
+}
+
 }  // namespace sluice::render

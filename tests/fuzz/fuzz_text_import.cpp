@@ -8,7 +8,7 @@
 #include <string>
 
 #include "sluice/io/error.h"
-#include "sluice/io/import.h"
+#include "sluice/import/source.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   if (size == 0) return 0;
@@ -17,14 +17,14 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   std::ofstream(path, std::ios::binary | std::ios::trunc).write(reinterpret_cast<const char*>(data + 1),
                                                                  std::streamsize(size - 1));
   try {
-    sluice::io::ImportOptions options;
+    sluice::import::SourceOptions options;
     options.attributes = {"rho"};
-    const auto source = sluice::io::open_source(path, options);
+    const auto source = sluice::import::open_source(path, options);
     for (uint64_t f = 0; f < source->frame_count() && f < 4; ++f) (void)source->read(f);
   } catch (const sluice::io::Error&) {
   }
   try {
-    const auto source = sluice::io::open_source(path, {});
+    const auto source = sluice::import::open_source(path, {});
     if (source->frame_count() > 0) (void)source->read(0);
   } catch (const sluice::io::Error&) {
   }

@@ -19,7 +19,7 @@
 
 #include "sluice/io/codec.h"
 #include "sluice/io/error.h"
-#include "sluice/io/import.h"
+#include "sluice/import/source.h"
 #include "sluice/io/lod.h"
 #include "sluice/io/spacing.h"
 
@@ -65,14 +65,14 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   std::ofstream(path, std::ios::binary | std::ios::trunc).write(reinterpret_cast<const char*>(data + 1),
                                                                  std::streamsize(size - 1));
   try {
-    sluice::io::ImportOptions options;
+    sluice::import::SourceOptions options;
     options.attributes = {"rho", "velocity"};
-    const auto source = sluice::io::open_source(path, options);
+    const auto source = sluice::import::open_source(path, options);
     if (source->frame_count() > 0) (void)source->read(0);
   } catch (const sluice::io::Error&) {
   }
   try {
-    const auto source = sluice::io::open_source(path, {});  // ids detected, no attributes
+    const auto source = sluice::import::open_source(path, {});  // ids detected, no attributes
     if (source->frame_count() > 0) check_bound_with_outlier(source->read(0), data, size);
   } catch (const sluice::io::Error&) {
   }

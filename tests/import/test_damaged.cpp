@@ -30,11 +30,11 @@
 #include <vector>
 
 #include "sluice/io/error.h"
-#include "sluice/io/import.h"
+#include "sluice/import/source.h"
 
 namespace fs = std::filesystem;
 using sluice::io::Error;
-using sluice::io::ImportOptions;
+using sluice::import::SourceOptions;
 using sluice::io::ParticleFrame;
 
 namespace {
@@ -126,14 +126,14 @@ class Corpus {
   }
 };
 
-ImportOptions options() {
-  ImportOptions o;
+SourceOptions options() {
+  SourceOptions o;
   o.attributes = {"rho", "velocity"};
   o.id_array = "gid";
   return o;
 }
 
-ParticleFrame read(const fs::path& p) { return sluice::io::open_source(p.string(), options())->read(0); }
+ParticleFrame read(const fs::path& p) { return sluice::import::open_source(p.string(), options())->read(0); }
 
 // Reads `p`, which must fail with an io::Error naming it and containing
 // every one of `words`.
@@ -332,7 +332,7 @@ TEST(XmlCells, MeshCellsAreNamedInEveryEncoding) {
     else w->SetCompressorTypeToNone();
     w->SetEncodeAppendedData(m.encode);
     ASSERT_EQ(w->Write(), 1);
-    const ParticleFrame f = sluice::io::open_source((dir / m.name).string(), {})->read(0);
+    const ParticleFrame f = sluice::import::open_source((dir / m.name).string(), {})->read(0);
     EXPECT_EQ(f.count(), 5u) << m.name;
     ASSERT_EQ(f.repairs.size(), 1u) << m.name;
     EXPECT_EQ(f.repairs[0], "cells of type TETRA ignored: using the 5 points as particles") << m.name;
@@ -348,7 +348,7 @@ TEST(XmlCells, MeshCellsAreNamedInEveryEncoding) {
   w->SetInputData(poly);
   w->SetFileName((dir / "lines.vtp").c_str());
   ASSERT_EQ(w->Write(), 1);
-  const ParticleFrame f = sluice::io::open_source((dir / "lines.vtp").string(), {})->read(0);
+  const ParticleFrame f = sluice::import::open_source((dir / "lines.vtp").string(), {})->read(0);
   ASSERT_EQ(f.repairs.size(), 1u);
   EXPECT_EQ(f.repairs[0], "cells of type LINES ignored: using the 5 points as particles");
 }

@@ -19,13 +19,13 @@
 #include <vector>
 
 #include "sluice/io/error.h"
-#include "sluice/io/import.h"
+#include "sluice/import/source.h"
 
 namespace fs = std::filesystem;
 using sluice::io::Error;
-using sluice::io::ImportOptions;
+using sluice::import::SourceOptions;
 using sluice::io::ParticleFrame;
-using sluice::io::open_source;
+using sluice::import::open_source;
 
 namespace {
 
@@ -40,8 +40,8 @@ uint64_t ref_gid(size_t i) { return 100 + 3 * (6 - i); }
 float ref_rho(size_t i) { return 1000.0f + static_cast<float>(i) / 2.0f; }
 float ref_speed(size_t i) { return 3.0f * static_cast<float>(i); }
 
-ImportOptions with_attributes(std::vector<std::string> attributes) {
-  ImportOptions o;
+SourceOptions with_attributes(std::vector<std::string> attributes) {
+  SourceOptions o;
   o.attributes = std::move(attributes);
   return o;
 }
@@ -93,7 +93,7 @@ void expect_error(const std::function<void()>& f, const std::vector<std::string>
   ADD_FAILURE() << "expected an io::Error";
 }
 
-ParticleFrame read_one(const std::string& spec, const ImportOptions& options = {}) {
+ParticleFrame read_one(const std::string& spec, const SourceOptions& options = {}) {
   auto src = open_source(spec, options);
   EXPECT_EQ(src->frame_count(), 1u);
   return src->read(0);
@@ -160,7 +160,7 @@ std::string paraview_csv() {
 // ------------------------------------------------------------ natural sort
 
 TEST(NaturalSort, DigitRunsCompareAsNumbers) {
-  using sluice::io::natural_less;
+  using sluice::import::natural_less;
   EXPECT_TRUE(natural_less("frame_2.vtu", "frame_10.vtu"));
   EXPECT_FALSE(natural_less("frame_10.vtu", "frame_2.vtu"));
   EXPECT_TRUE(natural_less("a_fluid_00100.vtu", "a_fluid_00564.vtu"));
@@ -173,7 +173,7 @@ TEST(NaturalSort, DigitRunsCompareAsNumbers) {
   EXPECT_FALSE(natural_less("frame_1", "frame_1"));
 
   std::vector<std::string> names = {"f_10", "f_2", "f_1", "f_100", "f_20", "f_02"};
-  std::sort(names.begin(), names.end(), sluice::io::natural_less);
+  std::sort(names.begin(), names.end(), sluice::import::natural_less);
   EXPECT_EQ(names, (std::vector<std::string>{"f_1", "f_02", "f_2", "f_10", "f_20", "f_100"}));
 }
 
@@ -183,13 +183,13 @@ TEST(NaturalSort, GlobExpandsInNaturalOrder) {
     dir.write(name, "x,y,z\n");
   }
   fs::create_directories(dir.path() / "frame_5.csv");  // a directory is not a frame
-  const auto files = sluice::io::expand_glob_natural(dir.file("frame_*.csv"));
+  const auto files = sluice::import::expand_glob_natural(dir.file("frame_*.csv"));
   ASSERT_EQ(files.size(), 4u);
   EXPECT_EQ(fs::path(files[0]).filename(), "frame_1.csv");
   EXPECT_EQ(fs::path(files[1]).filename(), "frame_2.csv");
   EXPECT_EQ(fs::path(files[2]).filename(), "frame_9.csv");
   EXPECT_EQ(fs::path(files[3]).filename(), "frame_10.csv");
-  EXPECT_TRUE(sluice::io::expand_glob_natural(dir.file("nothing_*.vtu")).empty());
+  EXPECT_TRUE(sluice::import::expand_glob_natural(dir.file("nothing_*.vtu")).empty());
 }
 
 TEST(NaturalSort, GlobSourceReadsFramesInOrder) {
@@ -211,7 +211,7 @@ TEST(NaturalSort, GlobSourceReadsFramesInOrder) {
 // ------------------------------------------------------------ id detection
 
 TEST(IdArray, DetectionOrder) {
-  using sluice::io::detect_id_array;
+  using sluice::import::detect_id_array;
   EXPECT_EQ(detect_id_array({"rho", "gid", "velocity"}), "gid");
   EXPECT_EQ(detect_id_array({"Idp", "Vel", "Rhop"}), "Idp");
   EXPECT_EQ(detect_id_array({"x", "id"}), "id");
@@ -251,7 +251,7 @@ TEST(TextImport, CsvWithXyzColumnsAnyCaseAndOtherLayouts) {
   EXPECT_EQ(both.ids, (std::vector<uint64_t>{5, 6}));
   EXPECT_EQ(both.attributes[0], (std::vector<float>{5, 6}));
 
-  ImportOptions no_ids;
+  SourceOptions no_ids;
   no_ids.no_ids = true;
   EXPECT_TRUE(open_source(path, no_ids)->read(0).ids.empty());
 }
@@ -306,7 +306,7 @@ TEST(TextImport, MissingArraysListWhatExists) {
   const std::string path = dir.write("a.csv", "x,y,z,rho,velocity:0,velocity:1\n0,0,0,1,1,1\n");
   expect_error([&] { open_source(path, with_attributes({"pressure"})); },
                {"a.csv", "'pressure'", "rho, velocity"});
-  ImportOptions o;
+  SourceOptions o;
   o.id_array = "gid";
   expect_error([&] { open_source(path, o); }, {"a.csv", "'gid'", "rho, velocity"});
 }
@@ -418,7 +418,7 @@ INSTANTIATE_TEST_SUITE_P(AllEncodings, VtkFormats,
                          });
 
 TEST(VtkImport, WithoutAttributesOrIds) {
-  ImportOptions o;
+  SourceOptions o;
   o.no_ids = true;
   const ParticleFrame f = read_one((kData / "ug_appended_zlib.vtu").string(), o);
   expect_reference(f, all_reference(), false, false);
@@ -427,7 +427,7 @@ TEST(VtkImport, WithoutAttributesOrIds) {
 
 TEST(VtkImport, ExplicitIdArrayOfFloatType) {
   // rho holds integral values >= 1000 at even indices only: not valid ids.
-  ImportOptions o;
+  SourceOptions o;
   o.id_array = "rho";
   expect_error([&] { read_one((kData / "ug_binary.vtu").string(), o); },
                {"ug_binary.vtu", "'rho'", "1000.5", "index 1", "non-negative integers"});
@@ -693,9 +693,9 @@ TEST(RealSample, PySphDamBreak) {
   std::error_code ec;
   // The sample is part of the repository: without it the test fails.
   ASSERT_TRUE(fs::is_directory(dir, ec)) << dir << " does not exist";
-  ASSERT_FALSE(sluice::io::expand_glob_natural((dir / "*.vtu").string()).empty()) << "no .vtu files in " << dir;
+  ASSERT_FALSE(sluice::import::expand_glob_natural((dir / "*.vtu").string()).empty()) << "no .vtu files in " << dir;
 
-  const bool fluid = !sluice::io::expand_glob_natural((dir / "*_fluid_*.vtu").string()).empty();
+  const bool fluid = !sluice::import::expand_glob_natural((dir / "*_fluid_*.vtu").string()).empty();
   const std::string spec = fluid ? (dir / "*_fluid_*.vtu").string() : dir.string();
   auto src = open_source(spec, with_attributes({"rho", "velocity"}));
   ASSERT_GT(src->frame_count(), 0u);

@@ -11,14 +11,15 @@
 #include <tuple>
 
 #include "../io/test_util.h"
-#include "sluice/io/convert.h"
-#include "sluice/io/import.h"
+#include "sluice/import/frames.h"
+#include "sluice/import/source.h"
 #include "sluice/io/maintenance.h"
 #include "sluice/io/outliers.h"
 #include "sluice/io/reader.h"
 
 using namespace sluice;
 using namespace sluice::io;
+using namespace sluice::import;
 
 namespace {
 

@@ -10,12 +10,13 @@
 #include <map>
 
 #include "../io/test_util.h"
-#include "sluice/io/convert.h"
+#include "sluice/import/frames.h"
 #include "sluice/io/maintenance.h"
 #include "sluice/io/reader.h"
 
 using namespace sluice;
 using namespace sluice::io;
+using namespace sluice::import;
 
 namespace {
 
@@ -31,7 +32,7 @@ std::filesystem::path convert_sample(const std::filesystem::path& out, PositionC
   ContainerWriter w(out, h);
   EncodeOptions encode;
   encode.planes = planes;
-  convert_frames(*source, std::nullopt, w, ConvertSettings{.encode = encode, .max_in_flight = 3});
+  convert_frames(*source, std::nullopt, w, FramesSettings{.encode = encode, .max_in_flight = 3});
   w.finish();
   return out;
 }

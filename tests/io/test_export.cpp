@@ -5,7 +5,7 @@
 // fraction asked for, uniformly and the same particles every frame; the
 // --frames parser.
 //
-// Re-importing goes through io::open_source (CSV is read by sluice itself,
+// Re-importing goes through import::open_source (CSV is read by sluice itself,
 // .vtp/.pvd through VTK: only with SLUICE_WITH_VTK). The LOD value is a hash
 // of the solver's particle id, which a container does not store, so a
 // re-conversion cannot recompute it: LOD values are compared through the
@@ -27,10 +27,11 @@
 #include <vector>
 
 #include "frame_range.h"
-#include "sluice/io/convert.h"
+#include "sluice/import/frames.h"
 #include "sluice/io/error.h"
 #include "sluice/io/export.h"
-#include "sluice/io/import.h"
+#include "sluice/import/source.h"
+#include "sluice/import/vtk.h"
 #include "sluice/io/lod.h"
 #include "sluice/io/reader.h"
 #include "test_util.h"
@@ -40,6 +41,7 @@
 
 using namespace sluice;
 using namespace sluice::io;
+using namespace sluice::import;
 
 namespace {
 
@@ -47,8 +49,8 @@ constexpr uint64_t kParticles = 20000;
 const std::vector<double> kTimes = {0.0, 0.125, 1.0 / 3.0};  // 1/3: no short decimal, must still round-trip
 const std::vector<std::string> kReimported = {"lod", "rho", "speed"};  // the exported arrays, as attributes
 
-ImportOptions reimport_options() {
-  ImportOptions o;
+SourceOptions reimport_options() {
+  SourceOptions o;
   o.attributes = kReimported;
   return o;
 }
@@ -160,7 +162,7 @@ std::unique_ptr<ContainerReader> reconvert(const std::string& spec, const std::f
   h.lod_source = LodSource::ParticleOrder;
   {
     ContainerWriter w(out, h);
-    ConvertSettings settings;
+    FramesSettings settings;
     settings.encode.chunk_particles = 3000;  // other chunks than the original's
     convert_frames(*source, std::nullopt, w, settings);
     w.finish();

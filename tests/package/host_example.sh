@@ -36,9 +36,41 @@ if cmake -S "$scratch/components" -B "$scratch/components/hidden" -DCMAKE_PREFIX
   echo "find_package(sluice COMPONENTS desktop) succeeded without GLFW"; exit 1
 fi
 cmake --build "$scratch/build" -j 2 >/dev/null
+# Conversion as a library call: a host program linking sluice::import alone,
+# VTK's readers in the installed worker processes.
+mkdir -p "$scratch/convert"
+cat > "$scratch/convert/CMakeLists.txt" <<'CMAKE'
+cmake_minimum_required(VERSION 3.25)
+project(convert LANGUAGES CXX)
+set(CMAKE_CXX_STANDARD 20)
+find_package(sluice REQUIRED COMPONENTS import)
+add_executable(convert convert.cpp)
+target_link_libraries(convert PRIVATE sluice::import)
+target_compile_definitions(convert PRIVATE WORKER="${SLUICE_IMPORT_WORKER}")
+CMAKE
+cat > "$scratch/convert/convert.cpp" <<'CPP'
+#include <cstdio>
+#include "sluice/import/convert.h"
+int main(int argc, char** argv) {
+  if (argc != 3) return 2;
+  sluice::import::ConvertOptions options;
+  options.input = argv[1];
+  options.isolation.worker = WORKER;
+  uint64_t progressed = 0;
+  sluice::import::ConvertObserver observer;
+  observer.progressed = [&](const sluice::import::ConvertProgress& p) { progressed = p.frames_done; };
+  const sluice::import::ConvertSummary s = sluice::import::convert(options, argv[2], observer);
+  std::printf("%llu frames, %llu particles, progress to %llu\n", (unsigned long long)s.frames,
+              (unsigned long long)s.particles, (unsigned long long)progressed);
+  return s.frames == progressed && s.frames > 0 ? 0 : 1;
+}
+CPP
+cmake -S "$scratch/convert" -B "$scratch/convert/build" -DCMAKE_PREFIX_PATH="$scratch/prefix" -DCMAKE_BUILD_TYPE=Release \
+  "${flags[@]}" >/dev/null
+cmake --build "$scratch/convert/build" -j 2 >/dev/null
 cd "$scratch"
-# The bundled sample, streamed from its file.
-"$build/apps/sluice/sluice" convert "$src/data/dam_break_3d/dam_break_3d.pvd" -o "$scratch/dam.sluice" -q
+# The bundled sample, converted by that program and streamed from its file.
+"$scratch/convert/build/convert" "$src/data/dam_break_3d/dam_break_3d.pvd" "$scratch/dam.sluice"
 "$scratch/build/host_vulkan" --check --frames 8 --out "$scratch/host_vulkan.png" "$scratch/dam.sluice"
 # The same host pushing frames of its own simulation (render::LiveSource), recorded as it goes.
 "$scratch/build/host_vulkan" --live --check --frames 6 --record "$scratch/live.sluice" --out "$scratch/host_live.png"

@@ -14,7 +14,7 @@
 
 #include "render_test_util.h"
 #include "sluice/bench/synth.h"
-#include "sluice/io/import.h"
+#include "sluice/import/source.h"
 #include "sluice/io/narrow_band.h"
 #include "sluice/io/spacing.h"
 #include "sluice/render/band_classifier.h"
@@ -169,7 +169,7 @@ TEST(BandClassifierGpu, SameLayersAsTheCpuOnTheBundledSample) {
   GTEST_SKIP() << "needs the VTK importer to read the sample";
 #endif
   ValidationGuard guard;
-  const auto source = io::open_source(std::string(SLUICE_SAMPLE_DIR) + "/*.vtu", {});
+  const auto source = import::open_source(std::string(SLUICE_SAMPLE_DIR) + "/*.vtu", {});
   for (const uint64_t f : {0u, 6u, 12u}) {
     const io::ParticleFrame frame = source->read(f);
     const float h = io::estimate_spacing(frame.positions);

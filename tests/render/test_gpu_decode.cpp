@@ -26,7 +26,7 @@
 #include "sluice/bench/synth.h"
 #include "sluice/io/codec.h"
 #include "sluice/io/gpu_decode_plan.h"
-#include "sluice/io/import.h"
+#include "sluice/import/source.h"
 #include "sluice/io/lod.h"
 #include "sluice/render/gpu_decoder.h"
 #include "sluice/render/transfer_bound.h"
@@ -199,7 +199,7 @@ TEST(GpuDecode, TheBundledSampleMatches) {
   GTEST_SKIP() << "needs the VTK importer to read the sample";
 #endif
   ValidationGuard guard;
-  const auto source = io::open_source(std::string(SLUICE_SAMPLE_DIR) + "/*.vtu", {});
+  const auto source = import::open_source(std::string(SLUICE_SAMPLE_DIR) + "/*.vtu", {});
   for (const uint64_t index : {0u, 12u}) {
     const io::ParticleFrame frame = source->read(index);
     io::FileHeader h = test::test_header(io::PositionCoding::Quantized16, false);

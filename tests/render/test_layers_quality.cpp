@@ -15,8 +15,8 @@
 #include <filesystem>
 
 #include "sluice/bench/layers_bench.h"
-#include "sluice/io/convert.h"
-#include "sluice/io/import.h"
+#include "sluice/import/frames.h"
+#include "sluice/import/source.h"
 #include "sluice/io/spacing.h"
 #include "sluice/io/writer.h"
 
@@ -26,7 +26,7 @@ namespace {
 namespace fs = std::filesystem;
 
 fs::path convert_sample_with_layers(const fs::path& out, io::F2Test f2) {
-  const auto source = io::open_source(std::string(SLUICE_SAMPLE_DIR) + "/*.vtu", {});
+  const auto source = import::open_source(std::string(SLUICE_SAMPLE_DIR) + "/*.vtu", {});
   std::optional<io::ParticleFrame> first = source->read(0);
   io::FileHeader header;
   header.particle_spacing = io::estimate_spacing(first->positions);
@@ -34,10 +34,10 @@ fs::path convert_sample_with_layers(const fs::path& out, io::F2Test f2) {
   header.lod_id_array = source->info().id_array;
   header.lod_source = header.lod_id_array.empty() ? io::LodSource::ParticleOrder : io::LodSource::IdHash;
   io::ContainerWriter writer(out, header);
-  io::ConvertSettings settings;
+  import::FramesSettings settings;
   settings.encode.layers = true;
   settings.encode.band_f2 = f2;
-  io::convert_frames(*source, std::move(first), writer, settings);
+  import::convert_frames(*source, std::move(first), writer, settings);
   writer.finish();
   return out;
 }

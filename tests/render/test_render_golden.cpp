@@ -12,7 +12,7 @@
 #include <filesystem>
 
 #include "render_test_util.h"
-#include "sluice/io/convert.h"
+#include "sluice/import/frames.h"
 #include "sluice/io/reader.h"
 #include "sluice/io/spacing.h"
 #include "sluice/render/image_io.h"
@@ -34,9 +34,9 @@ bool g_converted = false;
 const fs::path& sample() {
   static const fs::path path = [] {
     const fs::path out = fs::temp_directory_path() / ("sluice_render_golden_" + std::to_string(::getpid()) + ".sluice");
-    io::ImportOptions import;
+    import::SourceOptions import;
     import.attributes = {"rho"};
-    const auto source = io::open_source(std::string(SLUICE_SAMPLE_DIR) + "/*.vtu", import);
+    const auto source = import::open_source(std::string(SLUICE_SAMPLE_DIR) + "/*.vtu", import);
     std::optional<io::ParticleFrame> first = source->read(0);
     io::FileHeader header;
     header.particle_spacing = io::estimate_spacing(first->positions);
@@ -46,7 +46,7 @@ const fs::path& sample() {
     header.lod_id_array = source->info().id_array;
     header.lod_source = header.lod_id_array.empty() ? io::LodSource::ParticleOrder : io::LodSource::IdHash;
     io::ContainerWriter writer(out, header);
-    io::convert_frames(*source, std::move(first), writer, io::ConvertSettings{.encode = io::EncodeOptions{}, .max_in_flight = 2});
+    import::convert_frames(*source, std::move(first), writer, import::FramesSettings{.encode = io::EncodeOptions{}, .max_in_flight = 2});
     writer.finish();
     g_converted = true;
     return out;

@@ -14,7 +14,7 @@
 
 #include "sluice/io/codec.h"
 #include "sluice/io/format.h"
-#include "sluice/io/import.h"
+#include "sluice/import/source.h"
 
 namespace sluice::bench {
 
@@ -44,7 +44,7 @@ struct SynthOptions {
 };
 
 // The sequence as a FrameSource (read(i) may be called from several threads).
-std::unique_ptr<io::FrameSource> synthetic_source(const SynthOptions& options);
+std::unique_ptr<import::FrameSource> synthetic_source(const SynthOptions& options);
 
 struct SynthResult {
   uint64_t frames = 0;

@@ -179,6 +179,19 @@ struct RenderTarget {
   VkImageLayout scene_color_layout = VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL;
 };
 
+// One attachment of a host's target: the image, a view of it, its format
+// and its layouts before and after sluice's commands (see RenderTarget).
+struct TargetImage {
+  VkImage image = VK_NULL_HANDLE;
+  VkImageView view = VK_NULL_HANDLE;
+  VkFormat format = VK_FORMAT_UNDEFINED;
+  VkImageLayout before = VK_IMAGE_LAYOUT_UNDEFINED, after = VK_IMAGE_LAYOUT_UNDEFINED;
+};
+
+// A mono target (layer 0) over a host's colour image and, when `depth.image`
+// is set, its depth image; every other field as RenderTarget's defaults.
+RenderTarget render_target(uint32_t width, uint32_t height, const TargetImage& color, const TargetImage& depth = {});
+
 // What the caller's submission of the recorded command buffer must wait on:
 // the timeline semaphore of the uploads, at the value of the copy of the
 // frame drawn. It is already signalled when record() returns (only finished

@@ -1,4 +1,4 @@
-// sluice/io/freed_memory.h: keeping freed memory in the process while
+// sluice/import/freed_memory.h: keeping freed memory in the process while
 // simulation output is imported.
 //
 // Importing a VTK file allocates and frees tens of bytes per particle per
@@ -15,7 +15,7 @@
 
 #include <cstddef>
 
-namespace sluice::io {
+namespace sluice::import {
 
 class KeepFreedMemory {
  public:
@@ -25,4 +25,4 @@ class KeepFreedMemory {
   KeepFreedMemory& operator=(const KeepFreedMemory&) = delete;
 };
 
-}  // namespace sluice::io
+}  // namespace sluice::import

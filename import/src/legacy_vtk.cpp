@@ -2,7 +2,7 @@
 // data section's size is checked against what remains of the file before it
 // is read, skipped or allocated. Wanted arrays are kept as host-endian typed
 // values and converted into the frame at the end.
-#include "import/legacy_vtk.h"
+#include "legacy_vtk.h"
 
 #include <algorithm>
 #include <array>
@@ -16,11 +16,13 @@
 #include <string_view>
 #include <type_traits>
 
-#include "import/byte_stream.h"
-#include "import/cell_types.h"
-#include "import/values.h"
+#include "byte_stream.h"
+#include "cell_types.h"
+#include "values.h"
 
-namespace sluice::io::detail {
+namespace sluice::import::detail {
+
+using namespace sluice::io;  // the container's types: frames, errors, shapes
 namespace {
 
 // ------------------------------------------------------------------ types
@@ -757,4 +759,4 @@ LegacyRead read_legacy_vtk(const std::string& path, const std::vector<std::strin
   return out;
 }
 
-}  // namespace sluice::io::detail
+}  // namespace sluice::import::detail

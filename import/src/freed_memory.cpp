@@ -1,11 +1,12 @@
 // glibc's malloc thresholds, raised for the life of a KeepFreedMemory.
-#include "sluice/io/freed_memory.h"
+#include "sluice/import/freed_memory.h"
 
 #if defined(__GLIBC__)
 #include <malloc.h>
 #endif
 
-namespace sluice::io {
+namespace sluice::import {
+
 
 KeepFreedMemory::KeepFreedMemory(size_t bytes) {
 #if defined(__GLIBC__)
@@ -27,4 +28,4 @@ KeepFreedMemory::~KeepFreedMemory() {
 #endif
 }
 
-}  // namespace sluice::io
+}  // namespace sluice::import

@@ -1,6 +1,6 @@
 // CSV and XYZ particle files. Files are read whole and parsed in place with
 // std::from_chars: millions of rows take well under a second per million.
-#include "import/text_reader.h"
+#include "text_reader.h"
 
 #include <algorithm>
 #include <cerrno>
@@ -14,7 +14,9 @@
 
 #include "sluice/io/error.h"
 
-namespace sluice::io::detail {
+namespace sluice::import::detail {
+
+using namespace sluice::io;  // the container's types: frames, errors, shapes
 namespace {
 
 // ---------------------------------------------------------------- text basics
@@ -461,4 +463,4 @@ ParticleFrame read_xyz(const std::string& path, const std::vector<std::string>& 
   return sink ? sink->take() : ParticleFrame{};
 }
 
-}  // namespace sluice::io::detail
+}  // namespace sluice::import::detail

@@ -1,6 +1,6 @@
 // VTK XML size checks: markup up to <AppendedData>, then a few header bytes
 // per appended block, read with pread wherever the block lies.
-#include "import/xml_check.h"
+#include "xml_check.h"
 
 #include <fcntl.h>
 #include <sys/stat.h>
@@ -19,11 +19,13 @@
 
 #include <zlib.h>
 
-#include "import/cell_types.h"
-#include "import/xml_tags.h"
+#include "cell_types.h"
+#include "xml_tags.h"
 #include "sluice/io/error.h"
 
-namespace sluice::io::detail {
+namespace sluice::import::detail {
+
+using namespace sluice::io;  // the container's types: frames, errors, shapes
 namespace {
 
 namespace fs = std::filesystem;
@@ -695,4 +697,4 @@ std::vector<std::string> check_parallel_xml(const std::string& path, XmlFacts& f
   return pieces;
 }
 
-}  // namespace sluice::io::detail
+}  // namespace sluice::import::detail

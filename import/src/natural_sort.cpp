@@ -7,9 +7,11 @@
 #include <string_view>
 
 #include "sluice/io/error.h"
-#include "sluice/io/import.h"
+#include "sluice/import/source.h"
 
-namespace sluice::io {
+namespace sluice::import {
+
+using namespace sluice::io;  // the container's types: frames, errors, shapes
 namespace {
 
 bool is_digit(char c) { return c >= '0' && c <= '9'; }
@@ -93,4 +95,4 @@ std::vector<std::string> expand_glob_natural(const std::string& pattern) {
   return files;
 }
 
-}  // namespace sluice::io
+}  // namespace sluice::import

@@ -1,4 +1,4 @@
-#include "sluice/io/convert.h"
+#include "sluice/import/frames.h"
 
 #include <tbb/parallel_pipeline.h>
 
@@ -10,7 +10,9 @@
 #include "sluice/io/lod.h"
 #include "sluice/io/outliers.h"
 
-namespace sluice::io {
+namespace sluice::import {
+
+using namespace sluice::io;  // the container's types: frames, errors, shapes
 namespace {
 
 struct Work {
@@ -50,7 +52,7 @@ void remove_particles(ParticleFrame& frame, std::span<const uint32_t> gone) {
 }
 
 Work encode_one(const FrameSource& source, ParticleFrame frame, uint64_t index, const FileHeader& header,
-                const ConvertSettings& settings) {
+                const FramesSettings& settings) {
   Work w;
   w.frame = index;
   w.time_given = frame.time_given;
@@ -83,11 +85,11 @@ Work encode_one(const FrameSource& source, ParticleFrame frame, uint64_t index, 
 
 }  // namespace
 
-ConvertResult convert_frames(const FrameSource& source, std::optional<ParticleFrame> first, ContainerWriter& writer,
-                             const ConvertSettings& settings,
-                             const std::function<void(const ConvertProgress&)>& on_frame, uint64_t from) {
+FramesResult convert_frames(const FrameSource& source, std::optional<ParticleFrame> first, ContainerWriter& writer,
+                             const FramesSettings& settings,
+                             const std::function<void(const FrameConverted&)>& on_frame, uint64_t from) {
   const uint64_t frames = source.frame_count();
-  ConvertResult result;
+  FramesResult result;
   uint64_t next = from;
   // Errors travel as values to the in-order stage, so every frame before a
   // bad one is written before the conversion stops.
@@ -148,4 +150,4 @@ ConvertResult convert_frames(const FrameSource& source, std::optional<ParticleFr
   return result;
 }
 
-}  // namespace sluice::io
+}  // namespace sluice::import

@@ -1,9 +1,10 @@
 // VTK's cell type names (vtkCellType.h) for messages.
-#include "import/cell_types.h"
+#include "cell_types.h"
 
 #include <utility>
 
-namespace sluice::io::detail {
+namespace sluice::import::detail {
+
 
 std::string cell_type_name(int64_t type) {
   static const std::pair<int, const char*> kNames[] = {
@@ -38,4 +39,4 @@ std::string ignored_cells_note(const std::vector<std::string>& names, uint64_t p
   return "cells of type " + list + " ignored: using the " + std::to_string(points) + " points as particles";
 }
 
-}  // namespace sluice::io::detail
+}  // namespace sluice::import::detail

@@ -10,7 +10,7 @@
 #include <memory>
 #include <vector>
 
-namespace sluice::io::detail {
+namespace sluice::import::detail {
 
 class ByteStream {
  public:
@@ -56,4 +56,4 @@ class ByteStream {
   uint64_t line_ = 1;
 };
 
-}  // namespace sluice::io::detail
+}  // namespace sluice::import::detail

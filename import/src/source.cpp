@@ -16,17 +16,20 @@
 #include <sstream>
 #include <string_view>
 
-#include "import/legacy_vtk.h"
-#include "import/text_reader.h"
-#include "import/xml_check.h"
-#include "import/xml_tags.h"
+#include "legacy_vtk.h"
+#include "text_reader.h"
+#include "xml_check.h"
+#include "xml_tags.h"
 #include "sluice/io/error.h"
-#include "sluice/io/import.h"
+#include "sluice/import/source.h"
+#include "sluice/import/vtk.h"
 #ifdef SLUICE_WITH_VTK
-#include "import/vtk_reader.h"
+#include "vtk_reader.h"
 #endif
 
-namespace sluice::io {
+namespace sluice::import {
+
+using namespace sluice::io;  // the container's types: frames, errors, shapes
 namespace {
 
 namespace fs = std::filesystem;
@@ -295,7 +298,7 @@ struct FrameFiles {
 
 class SeriesSource final : public FrameSource {
  public:
-  SeriesSource(std::vector<FrameFiles> frames, SourceInfo info, ImportOptions options)
+  SeriesSource(std::vector<FrameFiles> frames, SourceInfo info, SourceOptions options)
       : frames_(std::move(frames)), info_(std::move(info)), options_(std::move(options)) {}
 
   uint64_t frame_count() const override { return frames_.size(); }
@@ -346,7 +349,7 @@ class SeriesSource final : public FrameSource {
 
   std::vector<FrameFiles> frames_;
   SourceInfo info_;
-  ImportOptions options_;
+  SourceOptions options_;
 };
 
 // -------------------------------------------------------------- planning
@@ -575,7 +578,7 @@ std::string formats_of(const std::vector<FrameFiles>& frames) {
   return "(" + join(names, " + ") + ")";
 }
 
-std::string resolve_id_array(const ImportOptions& options, const std::vector<std::string>& arrays,
+std::string resolve_id_array(const SourceOptions& options, const std::vector<std::string>& arrays,
                              const std::string& file) {
   if (options.no_ids) return "";
   if (options.id_array.empty()) return detect_id_array(arrays);
@@ -585,7 +588,7 @@ std::string resolve_id_array(const ImportOptions& options, const std::vector<std
   return options.id_array;
 }
 
-void require_attributes(const ImportOptions& options, const std::vector<std::string>& arrays,
+void require_attributes(const SourceOptions& options, const std::vector<std::string>& arrays,
                         const std::string& file) {
   for (const auto& name : options.attributes) {
     if (std::find(arrays.begin(), arrays.end(), name) == arrays.end()) {
@@ -596,7 +599,7 @@ void require_attributes(const ImportOptions& options, const std::vector<std::str
 
 }  // namespace
 
-std::unique_ptr<FrameSource> open_source(const std::string& spec, const ImportOptions& options) {
+std::unique_ptr<FrameSource> open_source(const std::string& spec, const SourceOptions& options) {
   Plan plan = plan_frames(spec);
   SourceInfo info;
   info.description = plan.description + " " + formats_of(plan.frames);  // also checks every format
@@ -630,4 +633,4 @@ std::string detect_id_array(const std::vector<std::string>& arrays) {
   return "";
 }
 
-}  // namespace sluice::io
+}  // namespace sluice::import

@@ -1,5 +1,5 @@
 // One VTK file into a ParticleFrame, through VTK's own readers.
-#include "import/vtk_reader.h"
+#include "vtk_reader.h"
 
 #include <vtkCellType.h>
 #include <vtkCellTypes.h>
@@ -33,11 +33,13 @@
 #include <mutex>
 #include <type_traits>
 
-#include "import/cell_types.h"
-#include "import/values.h"
+#include "cell_types.h"
+#include "values.h"
 #include "sluice/io/error.h"
 
-namespace sluice::io::detail {
+namespace sluice::import::detail {
+
+using namespace sluice::io;  // the container's types: frames, errors, shapes
 namespace {
 
 // ------------------------------------------------ VTK's messages, per thread
@@ -436,4 +438,4 @@ VtkRead read_vtk(const std::string& path, const std::vector<std::string>& attrib
   return out;
 }
 
-}  // namespace sluice::io::detail
+}  // namespace sluice::import::detail

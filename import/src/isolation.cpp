@@ -1,6 +1,6 @@
 // Worker processes for reads by third-party readers: spawn, ask, answer,
 // and what a worker's death or silence becomes.
-#include "isolated_source.h"
+#include "sluice/import/isolation.h"
 
 #include <poll.h>
 #include <signal.h>
@@ -10,6 +10,8 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <cstdlib>
+#include <filesystem>
 #include <cstring>
 #include <mutex>
 #include <string_view>
@@ -17,11 +19,13 @@
 #include <vector>
 
 #include "sluice/io/error.h"
-#include "sluice/io/freed_memory.h"
+#include "sluice/import/freed_memory.h"
 
 extern char** environ;
 
-namespace sluice::app {
+namespace sluice::import {
+
+using namespace sluice::io;  // the container's types: frames, errors, shapes
 namespace {
 
 constexpr const char* kWorkerFlag = "--import-worker";
@@ -84,7 +88,7 @@ void injected_fault(const std::string& frame_name) {
   }
 }
 
-bool send_frame(int fd, const io::ParticleFrame& f) {
+bool send_frame(int fd, const ParticleFrame& f) {
   const uint64_t positions = f.positions.size(), ids = f.ids.size(), attributes = f.attributes.size(),
                  repairs = f.repairs.size();
   const uint8_t time_given = f.time_given ? 1 : 0;
@@ -108,12 +112,12 @@ bool send_error(int fd, const io::Error& e) {
          send_value(fd, has_chunk) && send_value(fd, chunk) && send_string(fd, e.message());
 }
 
-int serve(int fd, const std::string& spec, const io::ImportOptions& options) {
-  const io::KeepFreedMemory keep;  // VTK allocates per frame (freed_memory.h)
-  std::unique_ptr<io::FrameSource> source;
+int serve(int fd, const std::string& spec, const SourceOptions& options) {
+  const KeepFreedMemory keep;  // VTK allocates per frame (freed_memory.h)
+  std::unique_ptr<FrameSource> source;
   std::optional<io::Error> open_error;
   try {
-    source = io::open_source(spec, options);
+    source = open_source(spec, options);
   } catch (const io::Error& e) {
     open_error = e;
   }
@@ -127,7 +131,7 @@ int serve(int fd, const std::string& spec, const io::ImportOptions& options) {
     injected_fault(name);
     bool sent = false;
     try {
-      const io::ParticleFrame f = source->read(index);
+      const ParticleFrame f = source->read(index);
       sent = send_frame(fd, f);
     } catch (const io::Error& e) {
       sent = send_error(fd, e);
@@ -158,7 +162,7 @@ std::string describe_exit(int status) {
 
 class Worker {
  public:
-  Worker(const std::vector<std::string>& args) {
+  Worker(const std::string& executable, const std::vector<std::string>& args) {
     int fds[2];
     if (::socketpair(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0, fds) != 0) {
       throw io::Error({}, std::string("cannot start a reader process: ") + std::strerror(errno));
@@ -168,17 +172,17 @@ class Worker {
     posix_spawn_file_actions_t actions;
     posix_spawn_file_actions_init(&actions);
     posix_spawn_file_actions_adddup2(&actions, fds[1], kChildFd);  // dup2 clears close-on-exec
-    std::vector<std::string> all = {"sluice", kWorkerFlag, std::to_string(kChildFd)};
+    std::vector<std::string> all = {executable, kWorkerFlag, std::to_string(kChildFd)};
     all.insert(all.end(), args.begin(), args.end());
     std::vector<char*> argv;
     for (auto& a : all) argv.push_back(a.data());
     argv.push_back(nullptr);
-    const int rc = ::posix_spawn(&pid_, "/proc/self/exe", &actions, nullptr, argv.data(), environ);
+    const int rc = ::posix_spawn(&pid_, executable.c_str(), &actions, nullptr, argv.data(), environ);
     posix_spawn_file_actions_destroy(&actions);
     ::close(fds[1]);
     if (rc != 0) {
       ::close(fd_);
-      throw io::Error({}, std::string("cannot start a reader process: ") + std::strerror(rc));
+      throw io::Error({executable}, std::string("cannot start a reader process: ") + std::strerror(rc));
     }
   }
   ~Worker() {
@@ -194,7 +198,7 @@ class Worker {
 
   // Frame `index`, or its io::Error; throws Lost when the worker died or
   // did not answer in time (it is then gone).
-  io::ParticleFrame ask(uint64_t index, std::chrono::seconds limit) {
+  ParticleFrame ask(uint64_t index, std::chrono::seconds limit) {
     deadline_ = std::chrono::steady_clock::now() + limit;
     limit_ = limit;
     if (!send_value(fd_, index)) lost();
@@ -203,7 +207,7 @@ class Worker {
     if (kind == kFailed) throw_error();
     if (kind != kOk) throw Lost{"the reader process answered garbage"};
     uint64_t positions = 0, ids = 0, attributes = 0, repairs = 0;
-    io::ParticleFrame f;
+    ParticleFrame f;
     uint8_t time_given = 0;
     take(&positions, 8);
     take(&ids, 8);
@@ -255,7 +259,7 @@ class Worker {
         }
         reaped_ = true;
         throw Lost{"reading it took more than " + std::to_string(limit_.count()) +
-                   " s (the reader hangs on it, or it needs more time: pass --read-timeout SECONDS)"};
+                   " s (the reader hangs on it, or it needs more time: raise the read limit, IsolationPolicy::read_limit)"};
       }
       const ssize_t got = ::recv(fd_, p, n, 0);
       if (got < 0 && errno == EINTR) continue;
@@ -295,19 +299,20 @@ class Worker {
   std::chrono::seconds limit_{0};
 };
 
-class IsolatedSource final : public io::FrameSource {
+class IsolatedSource final : public FrameSource {
  public:
-  IsolatedSource(std::unique_ptr<io::FrameSource> source, std::vector<std::string> args, std::chrono::seconds limit)
-      : source_(std::move(source)), args_(std::move(args)), limit_(limit) {}
+  IsolatedSource(std::unique_ptr<FrameSource> source, std::string executable, std::vector<std::string> args,
+                 std::chrono::seconds limit)
+      : source_(std::move(source)), executable_(std::move(executable)), args_(std::move(args)), limit_(limit) {}
 
   uint64_t frame_count() const override { return source_->frame_count(); }
-  const io::SourceInfo& info() const override { return source_->info(); }
+  const SourceInfo& info() const override { return source_->info(); }
   std::string frame_name(uint64_t i) const override { return source_->frame_name(i); }
 
-  io::ParticleFrame read(uint64_t i) const override {
+  ParticleFrame read(uint64_t i) const override {
     std::unique_ptr<Worker> worker = take_worker();
     try {
-      io::ParticleFrame f = worker->ask(i, limit_);
+      ParticleFrame f = worker->ask(i, limit_);
       give_back(std::move(worker));
       return f;
     } catch (const io::Error&) {
@@ -328,35 +333,58 @@ class IsolatedSource final : public io::FrameSource {
         return w;
       }
     }
-    return std::make_unique<Worker>(args_);
+    return std::make_unique<Worker>(executable_, args_);
   }
   void give_back(std::unique_ptr<Worker> w) const {
     std::lock_guard lock(mutex_);
     idle_.push_back(std::move(w));
   }
 
-  std::unique_ptr<io::FrameSource> source_;
+  std::unique_ptr<FrameSource> source_;
+  std::string executable_;
   std::vector<std::string> args_;
   std::chrono::seconds limit_;
   mutable std::mutex mutex_;
   mutable std::vector<std::unique_ptr<Worker>> idle_;
 };
 
+bool executable(const std::string& path) { return !path.empty() && ::access(path.c_str(), X_OK) == 0; }
+
 }  // namespace
 
-std::unique_ptr<io::FrameSource> isolate(std::unique_ptr<io::FrameSource> source, const std::string& spec,
-                                         const io::ImportOptions& options, std::chrono::seconds limit) {
-  // The worker reads with the id array the parent resolved ("=" + name;
+std::string worker_executable(const IsolationPolicy& policy) {
+  if (!policy.worker.empty()) {
+    if (!executable(policy.worker)) throw io::Error({policy.worker}, "the import worker is not an executable file");
+    return policy.worker;
+  }
+  if (const char* env = std::getenv("SLUICE_IMPORT_WORKER"); env && *env) {
+    if (!executable(env)) throw io::Error({env}, "SLUICE_IMPORT_WORKER names no executable file");
+    return env;
+  }
+  for (const char* candidate : {SLUICE_IMPORT_WORKER_BUILT, SLUICE_IMPORT_WORKER_INSTALLED}) {
+    if (executable(candidate)) return candidate;
+  }
+  throw io::Error({SLUICE_IMPORT_WORKER_INSTALLED},
+                  "no import worker found (built at " SLUICE_IMPORT_WORKER_BUILT
+                  "): install sluice, set SLUICE_IMPORT_WORKER, or read in process (Isolation::InProcess)");
+}
+
+std::unique_ptr<FrameSource> open_isolated(const std::string& spec, const SourceOptions& options,
+                                           const IsolationPolicy& policy) {
+  std::unique_ptr<FrameSource> source = open_source(spec, options);
+  if (policy.mode == Isolation::InProcess || !source->info().third_party_reader) return source;
+  // The worker reads with the id array this process resolved ("=" + name;
   // "=" alone: no ids), then the attributes.
   std::vector<std::string> args = {spec, "=" + source->info().id_array};
   args.insert(args.end(), options.attributes.begin(), options.attributes.end());
-  return std::make_unique<IsolatedSource>(std::move(source), std::move(args), limit);
+  return std::make_unique<IsolatedSource>(std::move(source), worker_executable(policy), std::move(args),
+                                          policy.read_limit);
 }
 
-bool run_import_worker(int argc, char** argv, int& status) {
+bool run_worker(int argc, char** argv, int& status) {
   if (argc < 5 || std::string_view(argv[1]) != kWorkerFlag) return false;
   const int fd = std::atoi(argv[2]);
-  io::ImportOptions options;
+  SourceOptions options;
   const std::string_view ids = argv[4];
   options.id_array = std::string(ids.substr(ids.empty() ? 0 : 1));
   options.no_ids = options.id_array.empty();
@@ -365,4 +393,4 @@ bool run_import_worker(int argc, char** argv, int& status) {
   return true;
 }
 
-}  // namespace sluice::app
+}  // namespace sluice::import

@@ -22,10 +22,10 @@
 #include "sluice/io/error.h"
 #include "sluice/io/types.h"
 
-namespace sluice::io::detail {
+namespace sluice::import::detail {
 
 struct LegacyRead {
-  ParticleFrame frame;         // raw values: non-finite numbers are kept for the caller
+  io::ParticleFrame frame;         // raw values: non-finite numbers are kept for the caller
   std::optional<double> time;  // from a TimeValue/TIME field-data array, if any
 };
 
@@ -39,4 +39,4 @@ std::vector<std::string> legacy_vtk_arrays(const std::string& path);
 LegacyRead read_legacy_vtk(const std::string& path, const std::vector<std::string>& attributes,
                            const std::string& id_array);
 
-}  // namespace sluice::io::detail
+}  // namespace sluice::import::detail

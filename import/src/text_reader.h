@@ -19,7 +19,7 @@
 
 #include "sluice/io/types.h"
 
-namespace sluice::io::detail {
+namespace sluice::import::detail {
 
 // The arrays a file offers (position columns excluded), from its first lines.
 std::vector<std::string> csv_arrays(const std::string& path);
@@ -27,9 +27,9 @@ std::vector<std::string> xyz_arrays(const std::string& path);
 
 // Reads every row. `attributes` are array names as listed by *_arrays;
 // `id_array` is empty when no ids are wanted.
-ParticleFrame read_csv(const std::string& path, const std::vector<std::string>& attributes,
+io::ParticleFrame read_csv(const std::string& path, const std::vector<std::string>& attributes,
                        const std::string& id_array);
-ParticleFrame read_xyz(const std::string& path, const std::vector<std::string>& attributes,
+io::ParticleFrame read_xyz(const std::string& path, const std::vector<std::string>& attributes,
                        const std::string& id_array);
 
-}  // namespace sluice::io::detail
+}  // namespace sluice::import::detail

@@ -12,13 +12,13 @@
 
 #include "sluice/io/types.h"
 
-namespace sluice::io::detail {
+namespace sluice::import::detail {
 
 // The point-data arrays a file offers (only the header is parsed).
 std::vector<std::string> vtk_arrays(const std::string& path);
 
 struct VtkRead {
-  ParticleFrame frame;               // raw values: non-finite numbers are kept for the caller
+  io::ParticleFrame frame;               // raw values: non-finite numbers are kept for the caller
   std::optional<double> time;        // from a TimeValue/TIME field-data array, if any
 };
 
@@ -29,4 +29,4 @@ struct VtkRead {
 VtkRead read_vtk(const std::string& path, const std::vector<std::string>& attributes, const std::string& id_array,
                  const std::vector<std::string>& non_vertex_cells);
 
-}  // namespace sluice::io::detail
+}  // namespace sluice::import::detail

@@ -22,7 +22,7 @@
 #include <string>
 #include <vector>
 
-namespace sluice::io::detail {
+namespace sluice::import::detail {
 
 // What the checks learn on the way: the kinds of cells, so that VTK's
 // reader need not read the cells at all (vtk_reader.h).
@@ -43,4 +43,4 @@ XmlFacts check_vtk_xml(const std::string& path);
 // `facts` gathers theirs.
 std::vector<std::string> check_parallel_xml(const std::string& path, XmlFacts& facts);
 
-}  // namespace sluice::io::detail
+}  // namespace sluice::import::detail

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-namespace sluice::io::detail {
+namespace sluice::import::detail {
 
 // "TETRA" for 10, "type 77" for a number without a name here.
 std::string cell_type_name(int64_t type);
@@ -24,4 +24,4 @@ std::vector<std::string> non_vertex_names(const std::set<int64_t>& types);
 // empty when `names` is.
 std::string ignored_cells_note(const std::vector<std::string>& names, uint64_t points);
 
-}  // namespace sluice::io::detail
+}  // namespace sluice::import::detail

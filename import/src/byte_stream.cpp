@@ -1,5 +1,5 @@
 // A bounded read buffer over a file: words, lines and raw byte runs.
-#include "import/byte_stream.h"
+#include "byte_stream.h"
 
 #include <fcntl.h>
 #include <sys/stat.h>
@@ -11,7 +11,9 @@
 
 #include "sluice/io/error.h"
 
-namespace sluice::io::detail {
+namespace sluice::import::detail {
+
+using namespace sluice::io;  // the container's types: frames, errors, shapes
 namespace {
 
 constexpr size_t kBufferBytes = size_t(1) << 16;
@@ -139,4 +141,4 @@ void ByteStream::skip(uint64_t n) {
   pos_ = end_ = 0;
 }
 
-}  // namespace sluice::io::detail
+}  // namespace sluice::import::detail

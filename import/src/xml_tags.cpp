@@ -1,5 +1,5 @@
 // A small XML tag scanner: no DOM, no validation beyond well-formed tags.
-#include "import/xml_tags.h"
+#include "xml_tags.h"
 
 #include <algorithm>
 #include <cctype>
@@ -7,7 +7,9 @@
 
 #include "sluice/io/error.h"
 
-namespace sluice::io::detail {
+namespace sluice::import::detail {
+
+using namespace sluice::io;  // the container's types: frames, errors, shapes
 
 std::string decode_entities(std::string_view s) {
   std::string out;
@@ -153,4 +155,4 @@ void TagScanner::parse_tag(XmlTag& tag) {
   }
 }
 
-}  // namespace sluice::io::detail
+}  // namespace sluice::import::detail

@@ -1,7 +1,8 @@
 // VTK used as the peer in comparisons: its writer (sizes) and its readers as
 // a user runs them (speed).
 #include "sluice/io/error.h"
-#include "sluice/io/import.h"
+#include "sluice/import/source.h"
+#include "sluice/import/vtk.h"
 
 #ifdef SLUICE_WITH_VTK
 #include <vtkCellType.h>
@@ -28,7 +29,9 @@
 #include <type_traits>
 #endif
 
-namespace sluice::io {
+namespace sluice::import {
+
+using namespace sluice::io;  // the container's types: frames, errors, shapes
 
 #ifdef SLUICE_WITH_VTK
 
@@ -148,4 +151,4 @@ void write_legacy_vtk(const std::string& path, const ParticleFrame&, const PeerA
 
 #endif
 
-}  // namespace sluice::io
+}  // namespace sluice::import

@@ -1,4 +1,4 @@
-// sluice/io/import.h: reading simulation output into ParticleFrames.
+// sluice/import/source.h: reading simulation output into ParticleFrames.
 //
 // A FrameSource is an ordered sequence of frames opened from what the user
 // typed: a single file, a `.pvd` series, a numbered series given as a glob
@@ -17,9 +17,9 @@
 
 #include "sluice/io/types.h"
 
-namespace sluice::io {
+namespace sluice::import {
 
-struct ImportOptions {
+struct SourceOptions {
   // Point-data arrays to carry as attribute streams, in this order ("rho",
   // "velocity", ...). A vector array is stored as its magnitude.
   std::vector<std::string> attributes;
@@ -51,12 +51,12 @@ class FrameSource {
   virtual std::string frame_name(uint64_t i) const = 0;
   // Reads frame `i`. Throws io::Error naming the file and frame on bad input.
   // Repairs (dropped non-finite particles, ...) are listed in `repairs`.
-  virtual ParticleFrame read(uint64_t i) const = 0;
+  virtual io::ParticleFrame read(uint64_t i) const = 0;
 };
 
 // Opens `spec` (file, glob, .pvd, directory). Throws io::Error with advice if
 // nothing matches or the format is not supported in this build.
-std::unique_ptr<FrameSource> open_source(const std::string& spec, const ImportOptions& options);
+std::unique_ptr<FrameSource> open_source(const std::string& spec, const SourceOptions& options);
 
 // Picks the id array among `arrays`: the first of id, ids, Id, ID, Idp, idp,
 // gid, particle_id, ParticleId, ParticleID, particleId that is present.
@@ -69,42 +69,4 @@ std::vector<std::string> expand_glob_natural(const std::string& pattern);
 // Natural ordering of strings: digit runs compare as numbers.
 bool natural_less(const std::string& a, const std::string& b);
 
-}  // namespace sluice::io
-
-namespace sluice::io {
-
-// True when this build reads (and writes) VTK files.
-bool has_vtk_support();
-
-// The peer's files of a frame, for comparisons: every file holds float32
-// points, `id_name` (if not empty) as a UInt32/unsigned_int id array from
-// frame.ids, and the attributes under `attribute_names` (float32 scalars).
-struct PeerArrays {
-  std::string id_name;
-  std::vector<std::string> attribute_names;  // one per frame.attributes
-};
-
-// A VTK XML unstructured grid with one VTK_VERTEX cell per particle (as
-// solvers write particle files), appended binary data, zlib-compressed when
-// `compress`. Throws io::Error when built without VTK.
-void write_vtu(const std::string& path, const ParticleFrame& frame, bool compress, const PeerArrays& arrays = {});
-
-// A legacy binary POLYDATA file written by VTK's own writer in the 4.2
-// layout solvers write (one vertex per particle). Throws io::Error when
-// built without VTK.
-void write_legacy_vtk(const std::string& path, const ParticleFrame& frame, const PeerArrays& arrays);
-
-// Reads a VTK file with VTK's own reader and returns its point count: the
-// peer in `sluice bench io`. `only` null: every array, as ParaView opens
-// it; otherwise only those point arrays (XML readers; VTK's legacy reader
-// cannot choose and reads every array). Throws io::Error when built without
-// VTK.
-uint64_t read_with_vtk(const std::string& path, const std::vector<std::string>* only = nullptr);
-
-// The checks read() makes of a VTK file before it is read (declared sizes
-// against the bytes present; for legacy files the whole structure, with the
-// data skipped). Throws the io::Error read() would. For measuring what the
-// checks cost, and for hosts that vet files before accepting them.
-void check_vtk_file(const std::string& path);
-
-}  // namespace sluice::io
+}  // namespace sluice::import

@@ -9,7 +9,7 @@
 #include <string>
 #include <string_view>
 
-namespace sluice::io::detail {
+namespace sluice::import::detail {
 
 // A start (or empty-element) tag.
 struct XmlTag {
@@ -55,4 +55,4 @@ class TagScanner {
 // The five predefined entities and numeric character references.
 std::string decode_entities(std::string_view s);
 
-}  // namespace sluice::io::detail
+}  // namespace sluice::import::detail

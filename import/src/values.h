@@ -1,4 +1,4 @@
-// Private: numeric arrays of any stored type into what a ParticleFrame holds
+// Private: numeric arrays of any stored type into what a io::ParticleFrame holds
 // (float values, float magnitudes of vectors, uint64 ids). Shared by the
 // readers, so every format converts the same way.
 #pragma once
@@ -9,7 +9,7 @@
 #include <type_traits>
 #include <vector>
 
-namespace sluice::io::detail {
+namespace sluice::import::detail {
 
 template <class T>
 void convert_values(const T* in, size_t count, float* out) {
@@ -71,4 +71,4 @@ size_t assign_ids(const T* in, size_t count, std::vector<uint64_t>& out) {
   }
 }
 
-}  // namespace sluice::io::detail
+}  // namespace sluice::import::detail
