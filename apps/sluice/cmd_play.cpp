@@ -140,17 +140,17 @@ runtime::PlayerOptions player_options(const PlayOptions& o, bool window) {
   po.end = end_mode(o, window);
   po.policy = o.policy == "skip" ? runtime::RealTimePolicy::SkipToNewest : runtime::RealTimePolicy::HoldLastFrame;
   po.on_error = o.on_error == "stop" ? runtime::ErrorPolicy::Stop : runtime::ErrorPolicy::SkipFrame;
-  po.pipeline.decode_threads = o.threads;
-  po.pipeline.read_threads = o.read_threads;
-  po.pipeline.direct_io = o.direct;
+  po.pipeline.decode.threads = o.threads;
+  po.pipeline.read.threads = o.read_threads;
+  po.pipeline.read.direct_io = o.direct;
   po.pipeline.layers = layer_set(o.layers);
-  po.pipeline.budget.max_frames = o.window;
+  po.pipeline.window.budget.max_frames = o.window;
   if (!o.memory.empty()) {
     const auto bytes = runtime::parse_byte_size(o.memory);
     if (!bytes) throw std::runtime_error("--memory: cannot read '" + o.memory + "' as a size (try 8G or 512M)");
-    po.pipeline.budget.memory_cap = *bytes;
+    po.pipeline.window.budget.memory_cap = *bytes;
   }
-  if (!o.quiet) po.pipeline.on_window_change = print_window_change;
+  if (!o.quiet) po.pipeline.window.on_change = print_window_change;
   return po;
 }
 

@@ -40,9 +40,11 @@ bool is_warning(import::Notice about) {
   }
 }
 
-class Printer {
+}  // namespace
+
+class ConversionPrinter::Lines {
  public:
-  explicit Printer(const ConversionReport& r) : report_(r) {}
+  explicit Lines(const ConversionReport& r) : report_(r) {}
 
   void planned(const import::ConvertPlan& p) {
     if (!report_.quiet) {
@@ -95,14 +97,36 @@ class Printer {
     else std::fprintf(stderr, "%s\n", line.c_str());
   }
 
-  const ConversionReport& report_;
+  ConversionReport report_;
   std::unique_ptr<ProgressBar> bar_;
   bool bar_finished_ = false;
   size_t shown_ = 0, suppressed_ = 0;
   std::vector<std::string> skipped_;
 };
 
-}  // namespace
+ConversionPrinter::ConversionPrinter(const ConversionReport& report) : lines_(std::make_unique<Lines>(report)) {}
+ConversionPrinter::~ConversionPrinter() = default;
+
+import::ConvertObserver ConversionPrinter::observer() {
+  import::ConvertObserver observer;
+  Lines* lines = lines_.get();
+  observer.planned = [lines](const import::ConvertPlan& p) { lines->planned(p); };
+  observer.progressed = [lines](const import::ConvertProgress& p) { lines->progressed(p); };
+  observer.noted = [lines](const import::Note& n) { lines->noted(n); };
+  return observer;
+}
+
+void ConversionPrinter::finish() { lines_->finish(); }
+
+void rethrow_with_advice(const import::ConvertStopped& e) {
+  const uint64_t kept = e.frames_kept();
+  if (!e.output_complete()) {  // writing failed (disk full?): nothing was renamed into place
+    throw std::runtime_error(std::string(e.what()) + "\n  " + e.output() + " holds the " + std::to_string(kept) +
+                             " frames written before; `sluice recover` rebuilds a file of them once there is room");
+  }
+  throw std::runtime_error(std::string(e.what()) + "\n  " + e.output() + " holds the " + std::to_string(kept) + " frame" +
+                           (kept == 1 ? "" : "s") + " before it; pass --skip-bad to leave bad frames out and convert the rest");
+}
 
 import::IsolationPolicy import_isolation(bool in_process, int read_timeout) {
   import::IsolationPolicy policy;
@@ -114,25 +138,14 @@ import::IsolationPolicy import_isolation(bool in_process, int read_timeout) {
 
 import::ConvertSummary convert_and_report(const import::ConvertOptions& options, const std::string& output,
                                           const ConversionReport& report) {
-  Printer printer(report);
-  import::ConvertObserver observer;
-  observer.planned = [&](const import::ConvertPlan& p) { printer.planned(p); };
-  observer.progressed = [&](const import::ConvertProgress& p) { printer.progressed(p); };
-  observer.noted = [&](const import::Note& n) { printer.noted(n); };
+  ConversionPrinter printer(report);
   try {
-    import::ConvertSummary s = import::convert(options, output, observer);
+    import::ConvertSummary s = import::convert(options, output, printer.observer());
     printer.finish();
     return s;
   } catch (const import::ConvertStopped& e) {
     printer.finish();
-    const uint64_t kept = e.frames_kept();
-    if (!e.output_complete()) {  // writing failed (disk full?): nothing was renamed into place
-      throw std::runtime_error(std::string(e.what()) + "\n  " + e.output() + " holds the " + std::to_string(kept) +
-                               " frames written before; `sluice recover` rebuilds a file of them once there is room");
-    }
-    throw std::runtime_error(std::string(e.what()) + "\n  " + e.output() + " holds the " + std::to_string(kept) +
-                             " frame" + (kept == 1 ? "" : "s") +
-                             " before it; pass --skip-bad to leave bad frames out and convert the rest");
+    rethrow_with_advice(e);
   } catch (...) {
     printer.finish();
     throw;

@@ -3,7 +3,9 @@
 #pragma once
 
 #include <cstddef>
+#include <memory>
 #include <string>
+#include <vector>
 
 #include "sluice/import/convert.h"
 
@@ -13,6 +15,25 @@ struct ConversionReport {
   bool quiet = false;        // no plan, bar or notes (warnings past the bar still counted)
   size_t max_warnings = 20;  // per-frame warnings shown; the rest counted
 };
+
+// Prints a conversion as it goes: its observer() shows the plan, a progress
+// bar and the notes, each with the flag that changes it; finish() the bar's
+// last line and what was counted rather than shown.
+class ConversionPrinter {
+ public:
+  explicit ConversionPrinter(const ConversionReport& report);
+  ~ConversionPrinter();
+  import::ConvertObserver observer();
+  void finish();
+
+ private:
+  class Lines;
+  std::unique_ptr<Lines> lines_;
+};
+
+// The error `sluice` shows for a stopped conversion: what the output holds
+// and what to pass next.
+[[noreturn]] void rethrow_with_advice(const import::ConvertStopped& stopped);
 
 // How the sluice command reads third-party formats: in worker processes
 // that are this executable (main() calls import::run_worker first), or in

@@ -71,14 +71,14 @@ Pass stream(const io::ContainerReader& reader, const Slice& slice, const PassSet
             double min_seconds, io::LayerSet layers) {
   runtime::HostFrameAllocator allocator;
   runtime::PipelineOptions o;
-  o.decode_threads = setup.decode_threads;
-  o.read_threads = setup.read_threads;
-  o.direct_io = direct;
-  o.budget.memory_cap = setup.memory;
+  o.decode.threads = setup.decode_threads;
+  o.read.threads = setup.read_threads;
+  o.read.direct_io = direct;
+  o.window.budget.memory_cap = setup.memory;
   o.layers = layers;
   // A loop round a slice that fits in the window would be served from the
   // frames kept decoded; at half the slice every frame comes through again.
-  if (loop) o.budget.max_frames = static_cast<uint32_t>(std::max<uint64_t>(2, slice.frames / 2));
+  if (loop) o.window.budget.max_frames = static_cast<uint32_t>(std::max<uint64_t>(2, slice.frames / 2));
   runtime::Pipeline pipeline(reader, allocator, o);
   // frame_count = the slice: a loop goes round the prefix only.
   pipeline.restart({slice.frames, 0, 1, 1, loop ? EndMode::Loop : EndMode::Stop});

@@ -82,18 +82,18 @@ DevicePass stream_to_device(const io::ContainerReader& reader, const Slice& slic
   }
   render::Renderer renderer(context, render::scene_info(reader));
   runtime::PipelineOptions o;
-  o.decode_threads = setup.decode_threads;
-  o.read_threads = setup.read_threads;
-  o.budget.memory_cap = setup.memory;
+  o.decode.threads = setup.decode_threads;
+  o.read.threads = setup.read_threads;
+  o.window.budget.memory_cap = setup.memory;
   // Every frame comes through again; at least one more than the frames in
   // flight, or the pipeline has no slot left for the frame awaited.
-  o.budget.max_frames = static_cast<uint32_t>(std::max<uint64_t>(kInFlight + 1, slice.frames / 2));
-  o.device_budget = staging.device_budget();
+  o.window.budget.max_frames = static_cast<uint32_t>(std::max<uint64_t>(kInFlight + 1, slice.frames / 2));
+  o.window.device_budget = staging.device_budget();
   o.layers = slice.layers;
-  o.attributes = setup.color >= 0 ? std::vector<uint32_t>{uint32_t(setup.color)} : std::vector<uint32_t>{};
-  o.keep_encoded = gpu_decode;
-  o.mapped_reads = mapped;
-  o.encoded_color_attribute = setup.color;
+  o.decode.attributes = setup.color >= 0 ? std::vector<uint32_t>{uint32_t(setup.color)} : std::vector<uint32_t>{};
+  o.decode.mode = (gpu_decode) ? sluice::runtime::DecodeMode::KeepEncoded : sluice::runtime::DecodeMode::Cpu;
+  o.read.mapped = mapped;
+  o.decode.color_attribute = setup.color;
   runtime::Pipeline pipeline(reader, staging, o);
   pipeline.restart({slice.frames, 0, 1, 1, runtime::EndMode::Loop});
 
@@ -268,7 +268,7 @@ void run_stream_gpu_bench(const StreamBenchOptions& o) {
   render::Context context(co);
   // The GPU rows run with the pipeline's split for frames kept encoded;
   // the CPU row with its split for decoding (unless either is given).
-  const runtime::ThreadSplit split = runtime::default_thread_split(core_count(), true);
+  const runtime::ThreadSplit split = runtime::default_thread_split(core_count(), runtime::DecodeMode::KeepEncoded);
   const runtime::ThreadSplit cpu_split = runtime::default_thread_split(core_count());
   DeviceSetup setup;
   setup.decode_threads = o.max_threads > 0 ? o.max_threads : split.decode;

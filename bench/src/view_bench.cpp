@@ -266,11 +266,11 @@ class Bench {
     po.policy = runtime::RealTimePolicy::HoldLastFrame;
     po.on_error = runtime::ErrorPolicy::Stop;
     po.pipeline.layers = io::LayerSet::surface();
-    po.pipeline.budget.memory_cap = o_.memory > 0 ? o_.memory : (uint64_t(4) << 30);
+    po.pipeline.window.budget.memory_cap = o_.memory > 0 ? o_.memory : (uint64_t(4) << 30);
     render::FrameFeed::configure(po, staging, -1, reader_.header(), decode_site(o_.decode));
     po.pipeline.demand = demand;
-    if (o_.read_threads > 0) po.pipeline.read_threads = o_.read_threads;
-    po.pipeline.mapped_reads = o_.mapped_reads;
+    if (o_.read_threads > 0) po.pipeline.read.threads = o_.read_threads;
+    po.pipeline.read.mapped = o_.mapped_reads;
     return po;
   }
 

@@ -19,6 +19,7 @@
 #include <stdexcept>
 
 #include "sluice/desktop/window.h"
+#include "sluice/desktop/error.h"
 
 namespace sluice::desktop {
 namespace {
@@ -27,7 +28,7 @@ using Stage = vk::PipelineStageFlagBits2;
 using Access = vk::AccessFlagBits2;
 
 void check_vk(VkResult r) {
-  if (r != VK_SUCCESS) throw std::runtime_error("Dear ImGui Vulkan backend: error " + std::to_string(int(r)));
+  if (r != VK_SUCCESS) throw Error("Dear ImGui Vulkan backend: error " + std::to_string(int(r)));
 }
 
 void ensure_glfw() {
@@ -35,10 +36,10 @@ void ensure_glfw() {
     if (!glfwInit()) {
       const char* why = nullptr;
       glfwGetError(&why);
-      throw std::runtime_error(std::string("cannot open a window: ") + (why ? why : "GLFW failed to start") +
+      throw Error(std::string("cannot open a window: ") + (why ? why : "GLFW failed to start") +
                                " (no display? run it on a desktop, under xvfb-run, or use `sluice play --headless` or `sluice render`)");
     }
-    if (!glfwVulkanSupported()) throw std::runtime_error("cannot open a window: GLFW finds no Vulkan loader");
+    if (!glfwVulkanSupported()) throw Error("cannot open a window: GLFW finds no Vulkan loader");
     std::atexit(glfwTerminate);
     return true;
   }();
@@ -51,7 +52,7 @@ std::vector<std::string> window_instance_extensions() {
   ensure_glfw();
   uint32_t count = 0;
   const char** names = glfwGetRequiredInstanceExtensions(&count);
-  if (!names) throw std::runtime_error("cannot open a window: Vulkan cannot present to this display");
+  if (!names) throw Error("cannot open a window: Vulkan cannot present to this display");
   return std::vector<std::string>(names, names + count);
 }
 
@@ -101,7 +102,7 @@ Readback make_readback(const Borrowed& vk_, vk::DeviceSize size) {
   for (uint32_t i = 0; i < props.memoryTypeCount && type == UINT32_MAX; ++i) {
     if ((req.memoryTypeBits & (1u << i)) && (props.memoryTypes[i].propertyFlags & want) == want) type = i;
   }
-  if (type == UINT32_MAX) throw std::runtime_error("window: no host-visible memory for the capture");
+  if (type == UINT32_MAX) throw Error("window: no host-visible memory for the capture");
   r.memory = vk::raii::DeviceMemory(vk_.device, vk::MemoryAllocateInfo(req.size, type));
   r.buffer.bindMemory(*r.memory, 0);
   r.mapped = r.memory.mapMemory(0, VK_WHOLE_SIZE);
@@ -119,7 +120,7 @@ struct Slot {
 
 }  // namespace
 
-struct Window::Impl {
+struct detail::WindowImpl {
   Borrowed ctx;
   WindowOptions options;
   GLFWwindow* window = nullptr;
@@ -147,7 +148,7 @@ struct Window::Impl {
   // queue (render/context.h, "Queues").
   std::mutex& queue_lock;
 
-  Impl(const render::Context& context, const WindowOptions& o)
+  WindowImpl(const render::Context& context, const WindowOptions& o)
       : ctx(context.vulkan()), options(o), queue_lock(context.queue_lock()) {}
   void create_swapchain();
   void wait(Slot& s) {
@@ -164,7 +165,7 @@ struct Window::Impl {
   void run_once(const std::function<void(vk::CommandBuffer)>& record);
 };
 
-void Window::Impl::ensure_slots(uint32_t count) {
+void detail::WindowImpl::ensure_slots(uint32_t count) {
   if (slots.size() == count) return;
   wait_all();
   slots.clear();
@@ -177,7 +178,7 @@ void Window::Impl::ensure_slots(uint32_t count) {
   }
 }
 
-void Window::Impl::run_once(const std::function<void(vk::CommandBuffer)>& record) {
+void detail::WindowImpl::run_once(const std::function<void(vk::CommandBuffer)>& record) {
   vk::raii::CommandBuffer cmd =
       std::move(vk::raii::CommandBuffers(ctx.device, vk::CommandBufferAllocateInfo(*pool, vk::CommandBufferLevel::ePrimary, 1))[0]);
   cmd.begin(vk::CommandBufferBeginInfo(vk::CommandBufferUsageFlagBits::eOneTimeSubmit));
@@ -193,7 +194,7 @@ void Window::Impl::run_once(const std::function<void(vk::CommandBuffer)>& record
   }
 }
 
-void Window::Impl::create_swapchain() {
+void detail::WindowImpl::create_swapchain() {
   wait_all();  // the old images may still be drawn into by this window's frames
   framebuffers.clear();
   views.clear();
@@ -235,7 +236,7 @@ Window::Window(render::Context& context, const WindowOptions& options, const Win
   ensure_glfw();
   glfwWindowHint(GLFW_CLIENT_API, GLFW_NO_API);
   w.window = glfwCreateWindow(int(options.width), int(options.height), options.title.c_str(), nullptr, nullptr);
-  if (!w.window) throw std::runtime_error("cannot open a window (GLFW)");
+  if (!w.window) throw Error("cannot open a window (GLFW)");
   glfwSetWindowUserPointer(w.window, callbacks.user);
   if (callbacks.key) glfwSetKeyCallback(w.window, callbacks.key);
   if (callbacks.mouse_button) glfwSetMouseButtonCallback(w.window, callbacks.mouse_button);
@@ -244,11 +245,11 @@ Window::Window(render::Context& context, const WindowOptions& options, const Win
 
   VkSurfaceKHR raw = VK_NULL_HANDLE;
   if (glfwCreateWindowSurface(static_cast<VkInstance>(*w.ctx.instance), w.window, nullptr, &raw) != VK_SUCCESS) {
-    throw std::runtime_error("cannot create a Vulkan surface for the window");
+    throw Error("cannot create a Vulkan surface for the window");
   }
   w.surface = vk::raii::SurfaceKHR(w.ctx.instance, raw);
   if (!w.ctx.physical.getSurfaceSupportKHR(w.ctx.family, *w.surface)) {
-    throw std::runtime_error("the Vulkan device cannot present to this window");
+    throw Error("the Vulkan device cannot present to this window");
   }
   // The renderer's output is already sRGB-encoded: a UNORM swapchain passes it through.
   const auto formats = w.ctx.physical.getSurfaceFormatsKHR(*w.surface);

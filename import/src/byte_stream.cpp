@@ -14,6 +14,7 @@
 namespace sluice::import::detail {
 
 using namespace sluice::io;  // the container's types: frames, errors, shapes
+using io::Error;  // (not sluice::Error, its base)
 namespace {
 
 constexpr size_t kBufferBytes = size_t(1) << 16;

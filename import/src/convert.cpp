@@ -23,6 +23,7 @@
 namespace sluice::import {
 
 using namespace sluice::io;  // the container's types: frames, headers, shapes
+using io::Error;  // (not sluice::Error, its base)
 namespace {
 
 void tell(const ConvertObserver& observer, Notice about, std::optional<uint64_t> frame, std::string text) {

@@ -26,6 +26,7 @@ extern char** environ;
 namespace sluice::import {
 
 using namespace sluice::io;  // the container's types: frames, errors, shapes
+using io::Error;  // (not sluice::Error, its base)
 namespace {
 
 constexpr const char* kWorkerFlag = "--import-worker";

@@ -12,6 +12,7 @@
 namespace sluice::import {
 
 using namespace sluice::io;  // the container's types: frames, errors, shapes
+using io::Error;  // (not sluice::Error, its base)
 namespace {
 
 bool is_digit(char c) { return c >= '0' && c <= '9'; }

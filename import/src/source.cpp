@@ -30,6 +30,7 @@
 namespace sluice::import {
 
 using namespace sluice::io;  // the container's types: frames, errors, shapes
+using io::Error;  // (not sluice::Error, its base)
 namespace {
 
 namespace fs = std::filesystem;

@@ -17,6 +17,7 @@
 namespace sluice::import::detail {
 
 using namespace sluice::io;  // the container's types: frames, errors, shapes
+using io::Error;  // (not sluice::Error, its base)
 namespace {
 
 // ---------------------------------------------------------------- text basics

@@ -10,6 +10,7 @@
 namespace sluice::import::detail {
 
 using namespace sluice::io;  // the container's types: frames, errors, shapes
+using io::Error;  // (not sluice::Error, its base)
 
 std::string decode_entities(std::string_view s) {
   std::string out;

@@ -10,7 +10,7 @@ std::string format_location(const ErrorLocation& where) {
 }
 
 Error::Error(ErrorLocation where, const std::string& message)
-    : std::runtime_error(format_location(where) + ": " + message),
+    : sluice::Error(format_location(where) + ": " + message),
       where_(std::move(where)),
       message_(message) {}
 

@@ -261,7 +261,7 @@ void stage_frame(std::span<const std::byte> record, const FrameHeader& header, c
 }
 
 void write_tables(const GpuDecodePlan& plan, std::span<std::byte> staged) {
-  if (staged.size() < plan.staged_bytes()) throw std::invalid_argument("write_tables: the staged area is too small");
+  if (staged.size() < plan.staged_bytes()) throw Error({}, "write_tables: the staged area is too small");
   // A frame may have no chunk at all (every cell out of view): no copy.
   if (!plan.chunks.empty()) {
     std::memcpy(staged.data() + plan.plans_offset(), plan.chunks.data(), plan.chunks.size() * sizeof(GpuChunkPlan));
@@ -271,7 +271,7 @@ void write_tables(const GpuDecodePlan& plan, std::span<std::byte> staged) {
 
 void write_table_block(const GpuDecodePlan& plan, std::span<std::byte> out) {
   const uint64_t plans = plan.chunks.size() * sizeof(GpuChunkPlan);
-  if (out.size() < plans + plan.tile_chunk.size() * 4) throw std::invalid_argument("write_table_block: too small");
+  if (out.size() < plans + plan.tile_chunk.size() * 4) throw Error({}, "write_table_block: too small");
   if (plans > 0) std::memcpy(out.data(), plan.chunks.data(), plans);
   if (!plan.tile_chunk.empty()) std::memcpy(out.data() + plans, plan.tile_chunk.data(), plan.tile_chunk.size() * 4);
 }

@@ -4,6 +4,8 @@
 // table) every voxel from its neighbours' lookups, in parallel.
 #include "sluice/io/narrow_band.h"
 
+#include "sluice/io/error.h"
+
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
@@ -742,7 +744,7 @@ void gather_blobs(const VoxelGrid& grid, std::span<const float> xyz, NarrowBand&
 }  // namespace
 
 NarrowBand classify_narrow_band(std::span<const float> xyz, const NarrowBandOptions& o) {
-  if (!(o.diameter > 0)) throw std::invalid_argument("classify_narrow_band: the particle diameter must be positive");
+  if (!(o.diameter > 0)) throw Error({}, "classify_narrow_band: the particle diameter must be positive");
   const float h = o.diameter;
   NarrowBand out;
   out.voxel = o.voxel > 0 ? o.voxel : 2 * h;

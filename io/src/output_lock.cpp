@@ -31,7 +31,7 @@ bool still_linked(int fd, const std::filesystem::path& path) {
 }  // namespace
 
 OutputLock::OutputLock(const std::filesystem::path& output, Wait wait,
-                       void (*on_wait)(const std::filesystem::path&, long)) {
+                       const std::function<void(const std::filesystem::path&, long)>& on_wait) {
   path_ = output;
   path_ += ".lock";
   bool told = false;

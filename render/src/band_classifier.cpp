@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "band_passes.h"
+#include "sluice/render/error.h"
 
 namespace sluice::render {
 namespace {
@@ -19,7 +20,7 @@ constexpr uint32_t kStamps = uint32_t(std::size(BandPasses::kSteps)) + 1;  // be
 }  // namespace
 
 struct BandClassifier::Impl {
-  Context::Impl& ctx;
+  detail::ContextImpl& ctx;
   BandPasses passes;
   vk::raii::QueryPool stamps{nullptr};
   bool timestamps = false;
@@ -28,7 +29,7 @@ struct BandClassifier::Impl {
   bool hashed = false;
   Buffer upload, xyz, readback;  // grown to the largest frame seen
 
-  explicit Impl(Context::Impl& c) : ctx(c), passes(c) {
+  explicit Impl(detail::ContextImpl& c) : ctx(c), passes(c) {
     const auto families = ctx.physical.getQueueFamilyProperties();
     timestamps = ctx.graphics_family < families.size() && families[ctx.graphics_family].timestampValidBits > 0;
     stamps = vk::raii::QueryPool(ctx.device, vk::QueryPoolCreateInfo({}, vk::QueryType::eTimestamp, kStamps));
@@ -56,13 +57,13 @@ std::vector<BandClassifier::PassTime> BandClassifier::last_pass_ms() const { ret
 bool BandClassifier::last_hashed() const { return impl_->hashed; }
 
 io::NarrowBand BandClassifier::classify(std::span<const float> xyz, const io::NarrowBandOptions& o) {
-  if (!(o.diameter > 0)) throw std::invalid_argument("BandClassifier: the particle diameter must be positive");
-  if (o.f2 != io::F2Test::All) throw std::invalid_argument("BandClassifier: only F2Test::All runs on the GPU");
+  if (!(o.diameter > 0)) throw Error("BandClassifier: the particle diameter must be positive");
+  if (o.f2 != io::F2Test::All) throw Error("BandClassifier: only F2Test::All runs on the GPU");
   Impl& r = *impl_;
   io::NarrowBand out;
   out.voxel = o.voxel > 0 ? o.voxel : 2 * o.diameter;
   const uint64_t n = xyz.size() / 3;
-  if (n > BandPasses::kMaxParticles) throw std::invalid_argument("BandClassifier: more than 2^28 particles");
+  if (n > BandPasses::kMaxParticles) throw Error("BandClassifier: more than 2^28 particles");
   out.layer.assign(n, io::BandLayer::Interior);
   if (n == 0) return out;
 
@@ -104,7 +105,7 @@ io::NarrowBand BandClassifier::classify(std::span<const float> xyz, const io::Na
   std::memcpy(&params, r.readback.mapped, sizeof params);
   r.hashed = params.dense == 0;
   if (!params.fits) {
-    throw std::runtime_error("BandClassifier: the particles' box holds " + std::to_string(params.dims[0]) + " x " +
+    throw Error("BandClassifier: the particles' box holds " + std::to_string(params.dims[0]) + " x " +
                              std::to_string(params.dims[1]) + " x " + std::to_string(params.dims[2]) +
                              " voxels, more than 32-bit keys address; classify on the CPU");
   }

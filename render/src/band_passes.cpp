@@ -43,7 +43,7 @@ void BandPasses::barrier(vk::CommandBuffer cmd) {
                  Stage::eComputeShader | Stage::eTransfer, Access::eShaderRead | Access::eShaderWrite | Access::eTransferRead);
 }
 
-BandPasses::BandPasses(Context::Impl& ctx) : ctx_(ctx) {
+BandPasses::BandPasses(detail::ContextImpl& ctx) : ctx_(ctx) {
   const vk::PushConstantRange range(vk::ShaderStageFlagBits::eCompute, 0, sizeof(BandPush));
   layout_ = vk::raii::PipelineLayout(ctx.device, vk::PipelineLayoutCreateInfo({}, {}, range));
   for (const Shader s : kPasses) pipelines_.push_back(compute_pipeline(ctx.device, layout_, s));

@@ -44,7 +44,7 @@ class BandPasses {
   // 5 x capacity (2n rounded up to a power of two) slot indices fit 32 bits.
   static constexpr uint64_t kMaxParticles = uint64_t(1) << 28;
 
-  explicit BandPasses(Context::Impl& ctx);
+  explicit BandPasses(detail::ContextImpl& ctx);
 
   // Grows the scratch and result buffers to `n` particles (contents lost).
   // The old buffers go to `retire` when given (a recorded run may still use
@@ -71,7 +71,7 @@ class BandPasses {
   static constexpr uint64_t kLayerWord = 3, kBlobOfWord = 4;  // multiples of n, in words
 
  private:
-  Context::Impl& ctx_;
+  detail::ContextImpl& ctx_;
   vk::raii::PipelineLayout layout_{nullptr};
   std::vector<vk::raii::Pipeline> pipelines_;
   Buffer table_;

@@ -1,6 +1,7 @@
 // Camera interactions and its text form (see camera.h).
 #include "sluice/render/camera.h"
 #include "sluice/render/options.h"
+#include "sluice/render/error.h"
 
 #include <algorithm>
 #include <cmath>
@@ -30,12 +31,12 @@ std::vector<float> parse_floats(const std::string& key, const std::string& value
     try {
       size_t used = 0;
       parts.push_back(std::stof(item, &used));
-      if (used != item.size()) throw std::invalid_argument(item);
+      if (used != item.size()) throw Error(item);
     } catch (const std::exception&) {
-      throw std::invalid_argument("camera: '" + key + "' needs " + want + ", got '" + value + "'");
+      throw Error("camera: '" + key + "' needs " + want + ", got '" + value + "'");
     }
   }
-  if (parts.size() != count) throw std::invalid_argument("camera: '" + key + "' needs " + want + ", got '" + value + "'");
+  if (parts.size() != count) throw Error("camera: '" + key + "' needs " + want + ", got '" + value + "'");
   return parts;
 }
 
@@ -51,7 +52,7 @@ float parse_float(const std::string& key, const std::string& value) {
     if (used == value.size()) return f;
   } catch (const std::exception&) {
   }
-  throw std::invalid_argument("camera: '" + key + "' needs a number, got '" + value + "'");
+  throw Error("camera: '" + key + "' needs a number, got '" + value + "'");
 }
 
 std::string fmt(Vec3 v) {
@@ -182,7 +183,7 @@ void Camera::apply(const std::string& text) {
   while (std::getline(ss, item, ';')) {
     if (item.empty()) continue;
     const size_t eq = item.find('=');
-    if (eq == std::string::npos) throw std::invalid_argument("camera: expected key=value, got '" + item + "'");
+    if (eq == std::string::npos) throw Error("camera: expected key=value, got '" + item + "'");
     const std::string key = item.substr(0, eq), value = item.substr(eq + 1);
     if (key == "eye") next.eye = parse_vec3(key, value);
     else if (key == "target") next.target = parse_vec3(key, value);
@@ -193,11 +194,11 @@ void Camera::apply(const std::string& text) {
       const std::vector<float> xy = parse_floats(key, value, 2);
       next.shift_x = xy[0];
       next.shift_y = xy[1];
-    } else throw std::invalid_argument("camera: unknown key '" + key + "' (eye, target, up, fov, near, shift)");
+    } else throw Error("camera: unknown key '" + key + "' (eye, target, up, fov, near, shift)");
   }
-  if (!(next.fov_deg > 0 && next.fov_deg < 179)) throw std::invalid_argument("camera: fov must be in (0, 179) degrees");
-  if (length(next.eye - next.target) <= 0) throw std::invalid_argument("camera: eye and target coincide");
-  if (length(next.up) <= 0) throw std::invalid_argument("camera: up is zero");
+  if (!(next.fov_deg > 0 && next.fov_deg < 179)) throw Error("camera: fov must be in (0, 179) degrees");
+  if (length(next.eye - next.target) <= 0) throw Error("camera: eye and target coincide");
+  if (length(next.up) <= 0) throw Error("camera: up is zero");
   *this = next;
 }
 

@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "vk_common.h"
+#include "sluice/render/error.h"
 
 namespace sluice::render {
 namespace {
@@ -110,7 +111,7 @@ DeviceInfo describe(const vk::raii::PhysicalDevice& pd, uint32_t index, bool pre
 VKAPI_ATTR VkBool32 VKAPI_CALL debug_callback(VkDebugUtilsMessageSeverityFlagBitsEXT severity,
                                               VkDebugUtilsMessageTypeFlagsEXT /*types*/,
                                               const VkDebugUtilsMessengerCallbackDataEXT* data, void* user) {
-  auto* impl = static_cast<Context::Impl*>(user);
+  auto* impl = static_cast<detail::ContextImpl*>(user);
   const bool error = severity & VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT;
   (error ? impl->errors : impl->warnings).fetch_add(1, std::memory_order_relaxed);
   const std::string text = std::string(error ? "validation error: " : "validation warning: ") +
@@ -159,7 +160,7 @@ Context::Context(const ContextOptions& options) : impl_(std::make_unique<Impl>()
   Impl& c = *impl_;
   c.options = options;
   if (c.context.enumerateInstanceVersion() < VK_API_VERSION_1_3) {
-    throw std::runtime_error("the Vulkan loader is older than 1.3 (" +
+    throw Error("the Vulkan loader is older than 1.3 (" +
                              format_api_version(c.context.enumerateInstanceVersion()) + ")");
   }
   const auto instance_extensions = c.context.enumerateInstanceExtensionProperties();
@@ -186,7 +187,7 @@ Context::Context(const ContextOptions& options) : impl_(std::make_unique<Impl>()
   vk::raii::PhysicalDevices devices(c.instance);
   std::vector<DeviceInfo> infos;
   for (uint32_t i = 0; i < devices.size(); ++i) infos.push_back(describe(devices[i], i, options.presentation));
-  if (infos.empty()) throw std::runtime_error("no Vulkan device found (is mesa-vulkan-drivers or a GPU driver installed?)");
+  if (infos.empty()) throw Error("no Vulkan device found (is mesa-vulkan-drivers or a GPU driver installed?)");
   int chosen = -1;
   const std::string& want = options.device;
   if (!want.empty()) {
@@ -200,10 +201,10 @@ Context::Context(const ContextOptions& options) : impl_(std::make_unique<Impl>()
     if (chosen < 0) {
       std::string list;
       for (const DeviceInfo& d : infos) list += "\n  " + std::to_string(d.index) + ": " + d.name;
-      throw std::runtime_error("no Vulkan device matches '" + want + "'; devices:" + list);
+      throw Error("no Vulkan device matches '" + want + "'; devices:" + list);
     }
     if (!infos[size_t(chosen)].usable) {
-      throw std::runtime_error("device " + infos[size_t(chosen)].name + " cannot run sluice: " + infos[size_t(chosen)].why_not);
+      throw Error("device " + infos[size_t(chosen)].name + " cannot run sluice: " + infos[size_t(chosen)].why_not);
     }
   } else {
     for (const DeviceInfo& d : infos) {
@@ -216,7 +217,7 @@ Context::Context(const ContextOptions& options) : impl_(std::make_unique<Impl>()
     if (chosen < 0) {
       std::string list;
       for (const DeviceInfo& d : infos) list += "\n  " + d.name + ": " + d.why_not;
-      throw std::runtime_error("no Vulkan device can run sluice:" + list);
+      throw Error("no Vulkan device can run sluice:" + list);
     }
   }
   c.physical = std::move(devices[size_t(chosen)]);
@@ -279,10 +280,10 @@ Context::Context(const HostVulkan& host) : impl_(std::make_unique<Impl>()) {
   Impl& c = *impl_;
   const VulkanHandles& h = host.handles;
   if (!h.instance || !h.physical_device || !h.device || !h.graphics_queue) {
-    throw std::invalid_argument("sluice context: the host's instance, physical device, device and graphics queue are required");
+    throw Error("sluice context: the host's instance, physical device, device and graphics queue are required");
   }
   if (h.transfer_family != UINT32_MAX && !h.transfer_queue) {
-    throw std::invalid_argument("sluice context: a transfer family was given without its queue");
+    throw Error("sluice context: a transfer family was given without its queue");
   }
   c.owning = false;
   c.handles = h;
@@ -290,7 +291,7 @@ Context::Context(const HostVulkan& host) : impl_(std::make_unique<Impl>()) {
   c.physical = vk::raii::PhysicalDevice(c.instance, h.physical_device);
   const std::string why = missing_features(c.physical, false);
   if (!why.empty()) {
-    throw std::runtime_error("the host's Vulkan device cannot run sluice: " + why);
+    throw Error("the host's Vulkan device cannot run sluice: " + why);
   }
   c.info = describe(c.physical, 0, false);
   c.properties = c.physical.getProperties();
@@ -305,7 +306,7 @@ Context::Context(const HostVulkan& host) : impl_(std::make_unique<Impl>()) {
   c.relay_queue = vk::raii::Queue(c.device, transfer ? h.transfer_queue : h.graphics_queue);  // shared: queue_lock()
 }
 
-Context::Impl::~Impl() {
+detail::ContextImpl::~ContextImpl() {
   if (*device && owning) device.waitIdle();
   if (!owning) {
     // The host's handles: let go of them without destroying anything.
@@ -429,14 +430,14 @@ uint64_t Context::heap_available_bytes(uint32_t heap) const {
   return budget.heapBudget[heap] > budget.heapUsage[heap] ? budget.heapBudget[heap] - budget.heapUsage[heap] : 0;
 }
 
-uint32_t Context::Impl::memory_type(uint32_t type_bits, vk::MemoryPropertyFlags wanted) const {
+uint32_t detail::ContextImpl::memory_type(uint32_t type_bits, vk::MemoryPropertyFlags wanted) const {
   for (uint32_t i = 0; i < memory.memoryTypeCount; ++i) {
     if ((type_bits & (1u << i)) && (memory.memoryTypes[i].propertyFlags & wanted) == wanted) return i;
   }
-  throw std::runtime_error("no Vulkan memory type with the wanted properties");
+  throw Error("no Vulkan memory type with the wanted properties");
 }
 
-void Context::Impl::run_once(const std::function<void(vk::CommandBuffer)>& record) const {
+void detail::ContextImpl::run_once(const std::function<void(vk::CommandBuffer)>& record) const {
   vk::raii::CommandPool pool(device, vk::CommandPoolCreateInfo(vk::CommandPoolCreateFlagBits::eTransient, graphics_family));
   vk::raii::CommandBuffers cmds(device, vk::CommandBufferAllocateInfo(*pool, vk::CommandBufferLevel::ePrimary, 1));
   vk::CommandBuffer cmd = *cmds[0];
@@ -450,7 +451,7 @@ void Context::Impl::run_once(const std::function<void(vk::CommandBuffer)>& recor
   }
 }
 
-void Context::Impl::submit(const vk::raii::Queue& queue, const vk::SubmitInfo2& submission, vk::Fence fence) const {
+void detail::ContextImpl::submit(const vk::raii::Queue& queue, const vk::SubmitInfo2& submission, vk::Fence fence) const {
   if (!relay_shared) {
     queue.submit2(submission, fence);
     return;
@@ -459,12 +460,12 @@ void Context::Impl::submit(const vk::raii::Queue& queue, const vk::SubmitInfo2& 
   queue.submit2(submission, fence);
 }
 
-void Context::Impl::wait_idle(const vk::raii::Queue& queue) const {
+void detail::ContextImpl::wait_idle(const vk::raii::Queue& queue) const {
   const std::lock_guard lock(queue_mutex);  // rare: teardown
   queue.waitIdle();
 }
 
-Buffer create_buffer(const Context::Impl& ctx, vk::DeviceSize size, vk::BufferUsageFlags usage, MemoryKind kind) {
+Buffer create_buffer(const detail::ContextImpl& ctx, vk::DeviceSize size, vk::BufferUsageFlags usage, MemoryKind kind) {
   Buffer b;
   b.size = size;
   const bool address = bool(usage & vk::BufferUsageFlagBits::eShaderDeviceAddress);
@@ -509,7 +510,7 @@ Buffer create_buffer(const Context::Impl& ctx, vk::DeviceSize size, vk::BufferUs
   return b;
 }
 
-void grow_buffer(const Context::Impl& ctx, Buffer& b, vk::DeviceSize size, vk::BufferUsageFlags usage, MemoryKind kind,
+void grow_buffer(const detail::ContextImpl& ctx, Buffer& b, vk::DeviceSize size, vk::BufferUsageFlags usage, MemoryKind kind,
                  const std::function<void(Buffer&&)>& retire) {
   if (*b.buffer && b.size >= size) return;
   if (retire && *b.buffer) retire(std::move(b));
@@ -517,7 +518,7 @@ void grow_buffer(const Context::Impl& ctx, Buffer& b, vk::DeviceSize size, vk::B
   b = create_buffer(ctx, size, usage, kind);
 }
 
-Texture create_texture(const Context::Impl& ctx, vk::Extent2D extent, vk::Format format, vk::ImageUsageFlags usage,
+Texture create_texture(const detail::ContextImpl& ctx, vk::Extent2D extent, vk::Format format, vk::ImageUsageFlags usage,
                        uint32_t layers, bool array_view) {
   Texture t;
   t.format = format;

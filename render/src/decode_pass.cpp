@@ -24,7 +24,7 @@ constexpr uint32_t kMaxGroups = 65535;  // the guaranteed maxComputeWorkGroupCou
 
 }  // namespace
 
-DecodePass::DecodePass(Context::Impl& ctx) {
+DecodePass::DecodePass(detail::ContextImpl& ctx) {
   const vk::PushConstantRange range(vk::ShaderStageFlagBits::eCompute, 0, sizeof(DecodePush));
   layout_ = vk::raii::PipelineLayout(ctx.device, vk::PipelineLayoutCreateInfo({}, {}, range));
   pipeline_ = compute_pipeline(ctx.device, layout_, Shader::Decode);

@@ -26,7 +26,7 @@ class DecodePass {
   static constexpr uint64_t kTileSumBytes = 2 * 10 * 4;  // per tile: codes and byte sums of 10 planes
   static constexpr uint32_t kPasses = 2;                 // sum the tiles, decode them
 
-  explicit DecodePass(Context::Impl& ctx);
+  explicit DecodePass(detail::ContextImpl& ctx);
   // Records the dispatches; the caller orders the inputs' writes before and
   // the outputs' reads after (barrier()).
   // `after(pass)` runs after each pass's dispatches (0 .. kPasses - 1), for timestamps.

@@ -52,7 +52,7 @@ GpuChunk blob_chunk_row(std::span<const GpuChunk> table, uint64_t particles, flo
   return row;
 }
 
-FrameBand::FrameBand(Context::Impl& ctx, float diameter) : ctx_(ctx), diameter_(diameter), passes_(ctx) {
+FrameBand::FrameBand(detail::ContextImpl& ctx, float diameter) : ctx_(ctx), diameter_(diameter), passes_(ctx) {
   const vk::PushConstantRange range(vk::ShaderStageFlagBits::eCompute, 0, sizeof(FramePush));
   layout_ = vk::raii::PipelineLayout(ctx.device, vk::PipelineLayoutCreateInfo({}, {}, range));
   gather_ = compute_pipeline(ctx.device, layout_, Shader::BandGather);

@@ -30,7 +30,7 @@ GpuChunk blob_chunk_row(std::span<const GpuChunk> table, uint64_t particles, flo
 
 class FrameBand {
  public:
-  FrameBand(Context::Impl& ctx, float diameter);
+  FrameBand(detail::ContextImpl& ctx, float diameter);
   // h (the particle diameter) the frames are classified with; 0: unknown,
   // frames stay whole.
   float diameter() const { return diameter_; }
@@ -44,7 +44,7 @@ class FrameBand {
   const Buffer& params() const { return passes_.params; }
 
  private:
-  Context::Impl& ctx_;
+  detail::ContextImpl& ctx_;
   float diameter_;
   BandPasses passes_;
   vk::raii::PipelineLayout layout_{nullptr};

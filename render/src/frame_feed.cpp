@@ -1,4 +1,5 @@
 #include "sluice/render/frame_feed.h"
+#include "sluice/render/error.h"
 
 #include <chrono>
 #include <stdexcept>
@@ -10,13 +11,14 @@ FrameFeed::FrameFeed(Renderer& renderer, runtime::Player& player, const StagingA
 
 void FrameFeed::configure(runtime::PlayerOptions& options, const StagingAllocator& staging, int color_attribute,
                           const io::FileHeader& file, DecodeSite decode) {
-  options.pipeline.attributes = color_attribute >= 0 ? std::vector<uint32_t>{uint32_t(color_attribute)} : std::vector<uint32_t>{};
-  options.pipeline.device_budget = staging.device_budget();
+  options.pipeline.decode.attributes = color_attribute >= 0 ? std::vector<uint32_t>{uint32_t(color_attribute)} : std::vector<uint32_t>{};
+  options.pipeline.window.device_budget = staging.device_budget();
   if (decode == DecodeSite::Gpu && !io::gpu_decodable(file)) {
-    throw std::invalid_argument("frames with float32 positions are decoded on the CPU only");
+    throw Error("frames with float32 positions are decoded on the CPU only");
   }
-  options.pipeline.keep_encoded = decode != DecodeSite::Cpu && io::gpu_decodable(file);
-  options.pipeline.encoded_color_attribute = color_attribute;
+  options.pipeline.decode.mode = decode != DecodeSite::Cpu && io::gpu_decodable(file) ? runtime::DecodeMode::KeepEncoded
+                                                                                     : runtime::DecodeMode::Cpu;
+  options.pipeline.decode.color_attribute = color_attribute;
 }
 
 StagingOptions FrameFeed::staging_options(const Context& context, const io::FileHeader& file, DecodeSite decode,

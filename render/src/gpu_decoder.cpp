@@ -18,7 +18,7 @@ constexpr auto kDeviceUsage = vk::BufferUsageFlagBits::eStorageBuffer | vk::Buff
 }  // namespace
 
 struct GpuDecoder::Impl {
-  Context::Impl& ctx;
+  detail::ContextImpl& ctx;
   DecodePass pass;
   vk::raii::QueryPool stamps{nullptr};
   bool timestamps = false;
@@ -28,7 +28,7 @@ struct GpuDecoder::Impl {
   std::vector<double> pass_ms;  // the last run's passes, mean over its repeats
   Buffer upload, encoded, tile_sums, decoded, values, errors, readback;  // grown to the largest frame seen
 
-  explicit Impl(Context::Impl& c) : ctx(c), pass(c) {
+  explicit Impl(detail::ContextImpl& c) : ctx(c), pass(c) {
     const auto families = ctx.physical.getQueueFamilyProperties();
     timestamps = ctx.graphics_family < families.size() && families[ctx.graphics_family].timestampValidBits > 0;
   }

@@ -1,5 +1,6 @@
 // PNG files, an ffmpeg pipe, and PSNR (see image_io.h).
 #include "sluice/render/image_io.h"
+#include "sluice/render/error.h"
 
 #include <png.h>
 #include <sys/wait.h>
@@ -35,11 +36,11 @@ void write_png_to(FILE* file, const std::string& path, const Image& image) {
   png_infop info = png ? png_create_info_struct(png) : nullptr;
   if (!info) {
     png_destroy_write_struct(&png, nullptr);
-    throw std::runtime_error(path + ": libpng failed to start");
+    throw Error(path + ": libpng failed to start");
   }
   if (setjmp(png_jmpbuf(png))) {
     png_destroy_write_struct(&png, &info);
-    throw std::runtime_error(path + ": writing the PNG failed (disk full?)");
+    throw Error(path + ": writing the PNG failed (disk full?)");
   }
   png_init_io(png, file);
   // Level 6 is within a few percent of 9 on renders and much faster.
@@ -57,12 +58,12 @@ void write_png_to(FILE* file, const std::string& path, const Image& image) {
 }  // namespace
 
 void write_png(const std::string& path, const Image& image) {
-  if (image.rgba.size() != size_t(image.width) * image.height * 4) throw std::runtime_error(path + ": image has the wrong size");
+  if (image.rgba.size() != size_t(image.width) * image.height * 4) throw Error(path + ": image has the wrong size");
   // Written beside it and renamed when whole: a failed write (disk full)
   // never leaves an empty or cut image under the real name.
   const std::string partial = path + ".partial";
   FILE* f = std::fopen(partial.c_str(), "wb");
-  if (!f) throw std::runtime_error(path + ": cannot create the file (" + std::strerror(errno) + ")");
+  if (!f) throw Error(path + ": cannot create the file (" + std::strerror(errno) + ")");
   try {
     write_png_to(f, path, image);
   } catch (...) {
@@ -78,12 +79,12 @@ void write_png(const std::string& path, const Image& image) {
   }
   if (!written) {
     std::remove(partial.c_str());
-    throw std::runtime_error(path + ": writing the PNG failed (" + std::strerror(error) + ")");
+    throw Error(path + ": writing the PNG failed (" + std::strerror(error) + ")");
   }
   if (std::rename(partial.c_str(), path.c_str()) != 0) {
     const std::string reason = std::strerror(errno);
     std::remove(partial.c_str());
-    throw std::runtime_error(path + ": cannot move the finished PNG into place (" + reason + ")");
+    throw Error(path + ": cannot move the finished PNG into place (" + reason + ")");
   }
 }
 
@@ -91,14 +92,14 @@ Image read_png(const std::string& path) {
   png_image img{};
   img.version = PNG_IMAGE_VERSION;
   if (!png_image_begin_read_from_file(&img, path.c_str())) {
-    throw std::runtime_error(path + ": not a readable PNG (" + img.message + ")");
+    throw Error(path + ": not a readable PNG (" + img.message + ")");
   }
   // The header's size is checked before any allocation: a few bytes may claim gigapixels.
   constexpr uint32_t kMaxSide = 32768;
   if (img.width > kMaxSide || img.height > kMaxSide) {
     const std::string claim = std::to_string(img.width) + "x" + std::to_string(img.height);
     png_image_free(&img);
-    throw std::runtime_error(path + ": the PNG claims " + claim + " pixels, more than sluice reads (" +
+    throw Error(path + ": the PNG claims " + claim + " pixels, more than sluice reads (" +
                              std::to_string(kMaxSide) + " per side)");
   }
   img.format = PNG_FORMAT_RGBA;
@@ -108,13 +109,13 @@ Image read_png(const std::string& path) {
   out.rgba.resize(PNG_IMAGE_SIZE(img));
   if (!png_image_finish_read(&img, nullptr, out.rgba.data(), 0, nullptr)) {
     png_image_free(&img);
-    throw std::runtime_error(path + ": PNG decode failed (" + img.message + ")");
+    throw Error(path + ": PNG decode failed (" + img.message + ")");
   }
   return out;
 }
 
 double psnr(const Image& a, const Image& b) {
-  if (a.width != b.width || a.height != b.height) throw std::runtime_error("psnr: images differ in size");
+  if (a.width != b.width || a.height != b.height) throw Error("psnr: images differ in size");
   double sum = 0;
   const size_t n = size_t(a.width) * a.height;
   for (size_t i = 0; i < n; ++i) {
@@ -132,7 +133,7 @@ bool ffmpeg_available() { return std::system("command -v ffmpeg > /dev/null 2>&1
 
 VideoWriter::VideoWriter(const std::string& path, uint32_t width, uint32_t height, double fps)
     : path_(path), width_(width), height_(height) {
-  if (!ffmpeg_available()) throw std::runtime_error("writing " + path + " needs ffmpeg on PATH (apt-get install ffmpeg)");
+  if (!ffmpeg_available()) throw Error("writing " + path + " needs ffmpeg on PATH (apt-get install ffmpeg)");
   // yuv420p needs even sizes: pad by a pixel rather than fail.
   const std::string cmd = "ffmpeg -loglevel error -y -f rawvideo -pix_fmt rgba -s " + std::to_string(width) + "x" +
                           std::to_string(height) + " -r " + std::to_string(fps) +
@@ -141,7 +142,7 @@ VideoWriter::VideoWriter(const std::string& path, uint32_t width, uint32_t heigh
   // A dying ffmpeg must surface as a write error, not kill us with SIGPIPE.
   std::signal(SIGPIPE, SIG_IGN);
   pipe_ = popen(cmd.c_str(), "w");
-  if (!pipe_) throw std::runtime_error(path + ": cannot start ffmpeg");
+  if (!pipe_) throw Error(path + ": cannot start ffmpeg");
 }
 
 std::string VideoWriter::partial_path() const { return path_ + ".partial"; }
@@ -152,9 +153,9 @@ VideoWriter::~VideoWriter() {
 }
 
 void VideoWriter::add(const Image& frame) {
-  if (frame.width != width_ || frame.height != height_) throw std::runtime_error(path_ + ": frame size changed");
+  if (frame.width != width_ || frame.height != height_) throw Error(path_ + ": frame size changed");
   if (std::fwrite(frame.rgba.data(), 1, frame.rgba.size(), pipe_) != frame.rgba.size()) {
-    throw std::runtime_error(path_ + ": ffmpeg stopped taking frames (its message is above)");
+    throw Error(path_ + ": ffmpeg stopped taking frames (its message is above)");
   }
   ++frames_;
 }
@@ -164,7 +165,7 @@ void VideoWriter::finish() {
   const int status = pclose(pipe_);
   pipe_ = nullptr;
   if (status == -1 || !WIFEXITED(status) || WEXITSTATUS(status) != 0) {
-    throw std::runtime_error(path_ + ": ffmpeg failed (its message is above)");
+    throw Error(path_ + ": ffmpeg failed (its message is above)");
   }
   // ffmpeg has exited 0 on a full disk with a file nothing can open: the
   // result counts only when ffprobe reads back every frame.
@@ -180,11 +181,11 @@ void VideoWriter::finish() {
   const long frames = std::strtol(said.c_str(), nullptr, 10);
   if (probed != 0 || frames != long(frames_)) {
     while (!said.empty() && (said.back() == '\n' || said.back() == ' ')) said.pop_back();
-    throw std::runtime_error(path_ + ": the video ffmpeg wrote is not readable back (ffprobe: " +
+    throw Error(path_ + ": the video ffmpeg wrote is not readable back (ffprobe: " +
                              (said.empty() ? "no answer" : said) + "; " + std::to_string(frames_) + " frames sent)");
   }
   if (std::rename(partial_path().c_str(), path_.c_str()) != 0) {
-    throw std::runtime_error(path_ + ": cannot move the finished video into place (" + std::strerror(errno) + ")");
+    throw Error(path_ + ": cannot move the finished video into place (" + std::strerror(errno) + ")");
   }
   finished_ = true;
 }

@@ -7,6 +7,7 @@
 
 #include "sluice/io/lod.h"
 #include "sluice/io/writer.h"
+#include "sluice/render/error.h"
 
 namespace sluice::render {
 namespace {
@@ -35,10 +36,10 @@ SceneInfo live_scene(const Bounds& bounds, const LiveOptions& options, std::vect
 
 LiveSource::LiveSource(Renderer& renderer, const LiveOptions& options) : renderer_(renderer), options_(options) {
   if (renderer.scene().coding != io::PositionCoding::Quantized16) {
-    throw std::invalid_argument("live frames are quantized: make the renderer with live_scene()");
+    throw Error("live frames are quantized: make the renderer with live_scene()");
   }
   if (renderer.scene().attribute_names != options.attributes) {
-    throw std::invalid_argument("live source: the renderer's scene has other attributes than the options");
+    throw Error("live source: the renderer's scene has other attributes than the options");
   }
   header_.particle_spacing = options.particle_spacing;
   header_.particle_radius = options.particle_radius;
@@ -60,28 +61,28 @@ LiveSource::~LiveSource() = default;
 
 uint64_t LiveSource::push(const LiveFrame& frame) {
   const std::string what = "live frame " + std::to_string(pushed_) + ": ";
-  if (frame.positions.size() % 3 != 0) throw std::invalid_argument(what + "positions are not x,y,z triples");
+  if (frame.positions.size() % 3 != 0) throw Error(what + "positions are not x,y,z triples");
   const uint64_t n = frame.positions.size() / 3;
   if (options_.ids && frame.ids.size() != n) {
-    throw std::invalid_argument(what + std::to_string(frame.ids.size()) + " ids for " + std::to_string(n) +
+    throw Error(what + std::to_string(frame.ids.size()) + " ids for " + std::to_string(n) +
                                 " particles (the source was declared with ids: LiveOptions::ids)");
   }
   if (!options_.ids && !frame.ids.empty()) {
-    throw std::invalid_argument(what + "ids given to a source declared without them (LiveOptions::ids = false)");
+    throw Error(what + "ids given to a source declared without them (LiveOptions::ids = false)");
   }
   if (!frame.attributes.empty() && frame.attributes.size() != header_.attributes.size()) {
-    throw std::invalid_argument(what + std::to_string(frame.attributes.size()) + " attributes for the " +
+    throw Error(what + std::to_string(frame.attributes.size()) + " attributes for the " +
                                 std::to_string(header_.attributes.size()) + " declared");
   }
   for (size_t a = 0; a < frame.attributes.size(); ++a) {
     if (frame.attributes[a].size() != n) {
-      throw std::invalid_argument(what + "attribute " + header_.attributes[a].name + " has " +
+      throw Error(what + "attribute " + header_.attributes[a].name + " has " +
                                   std::to_string(frame.attributes[a].size()) + " values for " + std::to_string(n) + " particles");
     }
   }
   for (uint64_t i = 0; i < frame.positions.size(); ++i) {
     if (!std::isfinite(frame.positions[i])) {
-      throw std::invalid_argument(what + "particle " + std::to_string(i / 3) + " has a non-finite position");
+      throw Error(what + "particle " + std::to_string(i / 3) + " has a non-finite position");
     }
   }
   const auto t0 = std::chrono::steady_clock::now();

@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "vk_common.h"
+#include "sluice/render/error.h"
 
 namespace sluice::render {
 
@@ -20,8 +21,8 @@ struct Slot {
 
 }  // namespace
 
-struct OffscreenTarget::Impl {
-  Context::Impl& ctx;
+struct detail::OffscreenTargetImpl {
+  detail::ContextImpl& ctx;
   OffscreenOptions options;
   Texture color, depth;
   vk::raii::CommandPool pool{nullptr};
@@ -29,7 +30,7 @@ struct OffscreenTarget::Impl {
   uint64_t frames = 0;
   int last = -1;  // slot of the last frame submitted
 
-  Impl(Context::Impl& c, const OffscreenOptions& o) : ctx(c), options(o) {}
+  OffscreenTargetImpl(detail::ContextImpl& c, const OffscreenOptions& o) : ctx(c), options(o) {}
   void wait(Slot& s) {
     if (!s.submitted) return;
     while (ctx.device.waitForFences(*s.fence, VK_TRUE, UINT64_MAX) == vk::Result::eTimeout) {
@@ -40,9 +41,9 @@ struct OffscreenTarget::Impl {
     for (Slot& s : slots) wait(s);
   }
   void create(uint32_t width, uint32_t height) {
-    if (width == 0 || height == 0) throw std::invalid_argument("offscreen target: size must be at least 1x1");
+    if (width == 0 || height == 0) throw Error("offscreen target: size must be at least 1x1");
     using U = vk::ImageUsageFlagBits;
-    if (options.layers < 1 || options.layers > 2) throw std::invalid_argument("offscreen target: 1 or 2 layers");
+    if (options.layers < 1 || options.layers > 2) throw Error("offscreen target: 1 or 2 layers");
     color = create_texture(ctx, {width, height}, vk::Format::eR8G8B8A8Unorm, U::eColorAttachment | U::eStorage | U::eTransferSrc,
                            options.layers);
     if (options.depth) {
@@ -61,7 +62,7 @@ OffscreenTarget::OffscreenTarget(Context& context, uint32_t width, uint32_t heig
     : impl_(std::make_unique<Impl>(context_impl(context), options)) {
   Impl& o = *impl_;
   if (options.frames_in_flight < 1 || options.frames_in_flight > 8) {
-    throw std::invalid_argument("offscreen target: frames_in_flight must be 1..8");
+    throw Error("offscreen target: frames_in_flight must be 1..8");
   }
   o.pool = vk::raii::CommandPool(o.ctx.device, vk::CommandPoolCreateInfo(vk::CommandPoolCreateFlagBits::eResetCommandBuffer,
                                                                          o.ctx.graphics_family));
@@ -98,7 +99,7 @@ FrameStats OffscreenTarget::render(Renderer& renderer, std::span<const View> vie
                                    const LodOptions& lod, bool background) {
   Impl& o = *impl_;
   if (o.slots.size() > renderer.options().frames_in_flight) {
-    throw std::invalid_argument("offscreen target: more frames in flight than the renderer keeps");
+    throw Error("offscreen target: more frames in flight than the renderer keeps");
   }
   const int index = int(o.frames % o.slots.size());
   Slot& slot = o.slots[size_t(index)];

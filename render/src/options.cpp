@@ -2,6 +2,7 @@
 #include "sluice/render/options.h"
 
 #include "sluice/io/up_axis.h"
+#include "sluice/render/error.h"
 
 #include <array>
 #include <cctype>
@@ -61,14 +62,14 @@ DisplayMode parse_display_mode(const std::string& s) {
   }
   std::string choices;
   for (const Name& n : kDisplay) choices += std::string(choices.empty() ? "" : ", ") + n.short_name;
-  throw std::invalid_argument("unknown display mode '" + s + "' (" + choices + ", or the VTK names)");
+  throw Error("unknown display mode '" + s + "' (" + choices + ", or the VTK names)");
 }
 
 SurfaceFilterMethod parse_filter_method(const std::string& s) {
   const std::string l = lower(s);
   if (l == "narrow-range" || l == "narrowrange" || l == "nrf") return SurfaceFilterMethod::NarrowRange;
   if (l == "bilateral" || l == "bilateralgaussian" || l == "bilateral-gaussian") return SurfaceFilterMethod::BilateralGaussian;
-  throw std::invalid_argument("unknown filter '" + s + "' (narrow-range, bilateral)");
+  throw Error("unknown filter '" + s + "' (narrow-range, bilateral)");
 }
 
 LodMode parse_lod_mode(const std::string& s) {
@@ -76,7 +77,7 @@ LodMode parse_lod_mode(const std::string& s) {
   if (l == "off" || l == "none") return LodMode::Off;
   if (l == "clod" || l == "on") return LodMode::Clod;
   if (l == "density" || l == "density-preserving") return LodMode::DensityPreserving;
-  throw std::invalid_argument("unknown LOD mode '" + s + "' (off, clod, density)");
+  throw Error("unknown LOD mode '" + s + "' (off, clod, density)");
 }
 
 Colormap parse_colormap(const std::string& s) {
@@ -84,7 +85,7 @@ Colormap parse_colormap(const std::string& s) {
   for (Colormap c : {Colormap::Viridis, Colormap::Coolwarm, Colormap::Turbo, Colormap::Blues}) {
     if (l == to_string(c)) return c;
   }
-  throw std::invalid_argument("unknown colormap '" + s + "' (viridis, coolwarm, turbo, blues)");
+  throw Error("unknown colormap '" + s + "' (viridis, coolwarm, turbo, blues)");
 }
 
 const char* to_string(Splatting m) {
@@ -96,12 +97,12 @@ Splatting parse_splatting(const std::string& s) {
   if (l == "auto") return Splatting::Auto;
   if (l == "compute") return Splatting::Compute;
   if (l == "raster" || l == "points") return Splatting::Raster;
-  throw std::invalid_argument("unknown splatting '" + s + "' (auto, compute, raster)");
+  throw Error("unknown splatting '" + s + "' (auto, compute, raster)");
 }
 
 Vec3 parse_up(const std::string& s) {
   const std::optional<io::UpAxis> up = io::parse_up_axis(s);
-  if (!up) throw std::invalid_argument("unknown axis '" + s + "' (x, y, z, -x, -y, -z)");
+  if (!up) throw Error("unknown axis '" + s + "' (x, y, z, -x, -y, -z)");
   const std::array<float, 3> v = io::up_vector(*up);
   return {v[0], v[1], v[2]};
 }

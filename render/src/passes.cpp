@@ -49,7 +49,7 @@ bool is_srgb(vk::Format f) {
   }
 }
 
-PassRecorder::PassRecorder(Renderer::Impl& r, vk::CommandBuffer cmd, FrameSlot& slot, uint32_t slot_index)
+PassRecorder::PassRecorder(detail::RendererImpl& r, vk::CommandBuffer cmd, FrameSlot& slot, uint32_t slot_index)
     : r_(r), cmd_(cmd), slot_(slot), first_stamp_(slot_index * kStampsPerSlot) {}
 
 void PassRecorder::stamp(const char* name) {

@@ -11,7 +11,7 @@ namespace sluice::render {
 
 class PassRecorder {
  public:
-  PassRecorder(Renderer::Impl& r, vk::CommandBuffer cmd, FrameSlot& slot, uint32_t slot_index);
+  PassRecorder(detail::RendererImpl& r, vk::CommandBuffer cmd, FrameSlot& slot, uint32_t slot_index);
 
   // Orders the frame after everything before it on the queue, initializes
   // new targets, moves the caller's images to attachment layouts.
@@ -44,7 +44,7 @@ class PassRecorder {
   void compute_to_compute();
   void separable(const vk::raii::Pipeline& pipeline, vk::Extent2D size, int iterations);
 
-  Renderer::Impl& r_;
+  detail::RendererImpl& r_;
   vk::CommandBuffer cmd_;
   FrameSlot& slot_;
   uint32_t first_stamp_;

@@ -3,10 +3,11 @@
 #include <stdexcept>
 
 #include "staging_block.h"
+#include "sluice/render/error.h"
 
 namespace sluice::render {
 
-RelayRing::RelayRing(const Context::Impl& ctx, uint32_t slots, uint64_t piece_bytes)
+RelayRing::RelayRing(const detail::ContextImpl& ctx, uint32_t slots, uint64_t piece_bytes)
     : ctx_(ctx), piece_bytes_(piece_bytes), slots_(slots) {
   memory_ = create_buffer(ctx, uint64_t(slots) * piece_bytes, vk::BufferUsageFlagBits::eTransferSrc, MemoryKind::UploadRead);
   const uint32_t family = ctx.transfer_family;  // the relay queue's
@@ -42,7 +43,7 @@ void RelayRing::wait_all() const {
 }
 
 std::span<std::byte> RelayRing::claim(uint64_t bytes) {
-  if (bytes > piece_bytes_) throw std::invalid_argument("RelayRing::claim: a piece larger than a slot");
+  if (bytes > piece_bytes_) throw Error("RelayRing::claim: a piece larger than a slot");
   uint32_t s = 0;
   {
     std::unique_lock lock(mutex_);
@@ -78,7 +79,7 @@ void RelayRing::send(std::span<std::byte> piece, const runtime::FrameBuffers& fr
     const uint64_t base = uint64_t(s) * piece_bytes_;
     for (const Range& r : ranges) {
       if (r.from + r.bytes > piece.size() || r.to + r.bytes > area.device.size) {
-        throw std::out_of_range("RelayRing::send: a range outside the piece or the frame's area");
+        throw Error("RelayRing::send: a range outside the piece or the frame's area");
       }
       if (r.bytes > 0) regions.emplace_back(base + r.from, r.to, r.bytes);
     }
@@ -104,7 +105,7 @@ void RelayRing::send(std::span<std::byte> piece, const runtime::FrameBuffers& fr
     }
   } catch (const vk::SystemError& e) {
     put_back(s);
-    throw std::runtime_error(std::string("relaying a piece to the GPU failed: ") + e.what());
+    throw Error(std::string("relaying a piece to the GPU failed: ") + e.what());
   } catch (...) {
     put_back(s);
     throw;

@@ -38,7 +38,7 @@ class RelayRing final : public runtime::PieceRelay {
  public:
   // `slots` slots of `piece_bytes` each. Throws vk::SystemError when the
   // memory cannot be had.
-  RelayRing(const Context::Impl& ctx, uint32_t slots, uint64_t piece_bytes);
+  RelayRing(const detail::ContextImpl& ctx, uint32_t slots, uint64_t piece_bytes);
   ~RelayRing() override;  // waits for the copies in flight
   RelayRing(const RelayRing&) = delete;
   RelayRing& operator=(const RelayRing&) = delete;
@@ -63,7 +63,7 @@ class RelayRing final : public runtime::PieceRelay {
   uint32_t slot_of(std::span<std::byte> piece) const;
   void put_back(uint32_t slot);
 
-  const Context::Impl& ctx_;
+  const detail::ContextImpl& ctx_;
   uint64_t piece_bytes_;
   Buffer memory_;  // slots() * piece_bytes_, cached host-visible, mapped
   std::vector<Slot> slots_;

@@ -9,6 +9,7 @@
 #include "renderer_impl.h"
 #include "passes.h"
 #include "shaders.h"
+#include "sluice/render/error.h"
 
 namespace sluice::render {
 namespace {
@@ -55,7 +56,7 @@ constexpr auto kBufferUsage = vk::BufferUsageFlagBits::eStorageBuffer | vk::Buff
 
 }  // namespace
 
-void Renderer::Impl::create_pipelines() {
+void detail::RendererImpl::create_pipelines() {
   const auto& device = ctx.device;
   std::vector<vk::DescriptorSetLayoutBinding> bindings{
       {0, vk::DescriptorType::eUniformBufferDynamic, 1, kAllStages}};
@@ -113,7 +114,7 @@ void Renderer::Impl::create_pipelines() {
 }
 
 
-const vk::raii::Pipeline& Renderer::Impl::present_pipeline(vk::Format color, vk::Format depth) {
+const vk::raii::Pipeline& detail::RendererImpl::present_pipeline(vk::Format color, vk::Format depth) {
   for (const PresentPipeline& p : present_pipelines) {
     if (p.color == color && p.depth == depth) return p.pipeline;
   }
@@ -147,7 +148,7 @@ const vk::raii::Pipeline& Renderer::Impl::present_pipeline(vk::Format color, vk:
   return present_pipelines.back().pipeline;
 }
 
-void Renderer::Impl::ensure(Buffer& b, vk::DeviceSize size, vk::BufferUsageFlags usage, MemoryKind kind) {
+void detail::RendererImpl::ensure(Buffer& b, vk::DeviceSize size, vk::BufferUsageFlags usage, MemoryKind kind) {
   if (*b.buffer && b.size >= size) return;
   retire(std::move(b));
   b = Buffer{};
@@ -156,11 +157,11 @@ void Renderer::Impl::ensure(Buffer& b, vk::DeviceSize size, vk::BufferUsageFlags
   b = create_buffer(ctx, std::max<vk::DeviceSize>(grown, 256), usage, kind);
 }
 
-void Renderer::Impl::collect_retired() {
+void detail::RendererImpl::collect_retired() {
   while (!retired.empty() && retired.front().after_frame <= frames_recorded) retired.pop_front();
 }
 
-void Renderer::Impl::write_descriptors(FrameSlot& slot) {
+void detail::RendererImpl::write_descriptors(FrameSlot& slot) {
   const Targets& t = targets;
   const vk::DescriptorSet set = *slot.set;
   vk::DescriptorBufferInfo ubo(*globals.buffer, 0, 2 * sizeof(Globals));  // both eyes' uniforms
@@ -196,14 +197,14 @@ void Renderer::Impl::write_descriptors(FrameSlot& slot) {
   slot.set_generation = targets.generation + (environment_generation << 32);
 }
 
-void Renderer::Impl::bind_output(FrameSlot& slot, VkImageView view) {
+void detail::RendererImpl::bind_output(FrameSlot& slot, VkImageView view) {
   // Written every frame, not only when the handle changes: a caller's view
   // destroyed and re-created may come back with the same handle value.
   const vk::DescriptorImageInfo image({}, vk::ImageView(view), vk::ImageLayout::eGeneral);
   ctx.device.updateDescriptorSets(vk::WriteDescriptorSet(*slot.set, 9, 0, 1, vk::DescriptorType::eStorageImage, &image), {});
 }
 
-void Renderer::Impl::bind_scene_color(FrameSlot& slot, const RenderTarget& target) {
+void detail::RendererImpl::bind_scene_color(FrameSlot& slot, const RenderTarget& target) {
   // Without the host's scene the binding holds the environment (never read).
   vk::DescriptorImageInfo image(*sampler, *environment_array, vk::ImageLayout::eShaderReadOnlyOptimal);
   if (target.scene_color_image) {
@@ -220,7 +221,7 @@ void Renderer::Impl::bind_scene_color(FrameSlot& slot, const RenderTarget& targe
       vk::WriteDescriptorSet(*slot.set, 16, 0, 1, vk::DescriptorType::eCombinedImageSampler, &image), {});
 }
 
-VkImageView Renderer::Impl::layer_view(VkImage image, VkFormat format, vk::ImageAspectFlags aspect, uint32_t layer) {
+VkImageView detail::RendererImpl::layer_view(VkImage image, VkFormat format, vk::ImageAspectFlags aspect, uint32_t layer) {
   vk::raii::ImageView view(ctx.device, vk::ImageViewCreateInfo({}, vk::Image(image), vk::ImageViewType::e2D, vk::Format(format), {},
                                                                vk::ImageSubresourceRange(aspect, 0, 1, layer, 1)));
   const VkImageView handle = *view;
@@ -228,7 +229,7 @@ VkImageView Renderer::Impl::layer_view(VkImage image, VkFormat format, vk::Image
   return handle;
 }
 
-VkImageView Renderer::Impl::array_view_of(const RenderTarget& target) {
+VkImageView detail::RendererImpl::array_view_of(const RenderTarget& target) {
   // A view of the caller's layers as the shading pass's storage image
   // (an array, one layer per eye); it lives as long as this frame's commands.
   vk::raii::ImageView view(ctx.device,
@@ -241,7 +242,7 @@ VkImageView Renderer::Impl::array_view_of(const RenderTarget& target) {
   return handle;
 }
 
-std::vector<std::byte> Renderer::Impl::read_texture(const Texture& t, size_t texel_bytes) {
+std::vector<std::byte> detail::RendererImpl::read_texture(const Texture& t, size_t texel_bytes) {
   const size_t bytes = size_t(t.extent.width) * t.extent.height * texel_bytes;
   Buffer readback = create_buffer(ctx, bytes, vk::BufferUsageFlagBits::eTransferDst, MemoryKind::Readback);
   ctx.run_once([&](vk::CommandBuffer c) {
@@ -260,21 +261,11 @@ std::vector<std::byte> Renderer::Impl::read_texture(const Texture& t, size_t tex
   return out;
 }
 
-// IEEE half to float (the thickness targets where 32-bit float blending is missing).
-static float half_to_float(uint16_t h) {
-  const uint32_t sign = uint32_t(h >> 15) << 31, exponent = (h >> 10) & 31, mantissa = h & 1023;
-  if (exponent == 0) return (sign ? -1.f : 1.f) * std::ldexp(float(mantissa), -24);
-  uint32_t bits = sign | ((exponent == 31 ? 255u : exponent + 112u) << 23) | (mantissa << 13);
-  float f;
-  std::memcpy(&f, &bits, 4);
-  return f;
-}
-
 Renderer::Renderer(Context& context, const SceneInfo& scene, const RendererOptions& options)
     : impl_(std::make_unique<Impl>(context_impl(context), scene, options)) {
   Impl& r = *impl_;
   if (options.frames_in_flight < 1 || options.frames_in_flight > 8) {
-    throw std::invalid_argument("renderer: frames_in_flight must be 1..8");
+    throw Error("renderer: frames_in_flight must be 1..8");
   }
   const auto& device = r.ctx.device;
   const uint32_t n = options.frames_in_flight;
@@ -333,7 +324,7 @@ Renderer::~Renderer() {
 const SceneInfo& Renderer::scene() const { return impl_->scene; }
 const RendererOptions& Renderer::options() const { return impl_->options; }
 
-void Renderer::Impl::collect_slot(FrameSlot& slot, bool finished) {
+void detail::RendererImpl::collect_slot(FrameSlot& slot, bool finished) {
   if (slot.collected || slot.frame == UINT64_MAX) return;
   // Without timestamps nothing says whether the frame is done: only when
   // the frames-in-flight contract does.
@@ -416,25 +407,25 @@ FrameStats Renderer::last_stats() {
 FrameSync Renderer::record(VkCommandBuffer command_buffer, const RenderTarget& target, std::span<const View> views,
                            const FluidOptions& options, const LodOptions& lod) {
   Impl& r = *impl_;
-  if (!command_buffer) throw std::invalid_argument("record: no command buffer");
-  if (views.empty() || views.size() > kMaxViews) throw std::invalid_argument("record: 1 to 4 views");
+  if (!command_buffer) throw Error("record: no command buffer");
+  if (views.empty() || views.size() > kMaxViews) throw Error("record: 1 to 4 views");
   if (!target.color_view || !target.color_image || target.width == 0 || target.height == 0) {
-    throw std::invalid_argument("record: the target needs a colour image, its view and its size");
+    throw Error("record: the target needs a colour image, its view and its size");
   }
   const uint32_t layers = target.layer_count;
-  if (layers != 1 && layers != 2) throw std::invalid_argument("record: targets of 1 layer, or 2 (both eyes in one pass)");
-  if (layers == 2 && views.size() != 2) throw std::invalid_argument("record: a 2-layer target takes 2 views, one per layer");
-  if (bool(target.depth_view) != bool(target.depth_image)) throw std::invalid_argument("record: a depth image needs its view");
+  if (layers != 1 && layers != 2) throw Error("record: targets of 1 layer, or 2 (both eyes in one pass)");
+  if (layers == 2 && views.size() != 2) throw Error("record: a 2-layer target takes 2 views, one per layer");
+  if (bool(target.depth_view) != bool(target.depth_image)) throw Error("record: a depth image needs its view");
   const Viewport size = views[0].viewport;
   for (const View& v : views) {
     if (v.viewport.width == 0 || v.viewport.height == 0 || v.viewport.width != size.width || v.viewport.height != size.height) {
-      throw std::invalid_argument("record: every view needs the same non-empty viewport size");
+      throw Error("record: every view needs the same non-empty viewport size");
     }
     if (uint64_t(v.viewport.x) + v.viewport.width > target.width || uint64_t(v.viewport.y) + v.viewport.height > target.height) {
-      throw std::invalid_argument("record: a viewport reaches outside the target");
+      throw Error("record: a viewport reaches outside the target");
     }
     if (layers == 2 && (v.viewport.x != size.x || v.viewport.y != size.y)) {
-      throw std::invalid_argument("record: both eyes of a 2-layer target need the same viewport");
+      throw Error("record: both eyes of a 2-layer target need the same viewport");
     }
   }
 
@@ -514,38 +505,6 @@ FrameSync Renderer::record(VkCommandBuffer command_buffer, const RenderTarget& t
   return sync;
 }
 
-std::vector<float> Renderer::read_surface() {
-  if (!impl_->options.debug_surfaces) throw std::logic_error("read_surface: the renderer was made without debug_surfaces");
-  const std::vector<std::byte> bytes = impl_->read_texture(impl_->targets.aux, 16);
-  std::vector<float> out(bytes.size() / 4);
-  std::memcpy(out.data(), bytes.data(), bytes.size());
-  return out;
-}
-
-std::vector<float> Renderer::read_raw_thickness() {
-  const Texture& t = impl_->targets.thick_raw;
-  const bool half = impl_->targets.thick_format == vk::Format::eR16G16Sfloat;
-  const std::vector<std::byte> bytes = impl_->read_texture(t, half ? 4 : 8);
-  std::vector<float> out(size_t(t.extent.width) * t.extent.height);
-  for (size_t i = 0; i < out.size(); ++i) {
-    if (half) {
-      uint16_t h;
-      std::memcpy(&h, bytes.data() + 4 * i, 2);
-      out[i] = half_to_float(h);
-    } else {
-      std::memcpy(&out[i], bytes.data() + 8 * i, 4);
-    }
-  }
-  return out;
-}
-
-std::vector<float> Renderer::read_raw_depth() {
-  const std::vector<std::byte> bytes = impl_->read_texture(impl_->targets.depth_raw, 4);
-  std::vector<float> out(bytes.size() / 4);
-  std::memcpy(out.data(), bytes.data(), bytes.size());
-  return out;
-}
-
 View camera_view(const Camera& camera, const Viewport& viewport) {
   View v;
   v.view = camera.view();
@@ -558,7 +517,7 @@ View camera_view(const Camera& camera, const Viewport& viewport) {
 
 namespace sluice::render {
 
-void Renderer::Impl::upload_environment(const Image& equirect) {
+void detail::RendererImpl::upload_environment(const Image& equirect) {
   // No image: a 1x1 placeholder so the descriptor stays valid (the shader uses the procedural sky).
   static const Image kPlaceholder{1, 1, {0, 0, 0, 255}};
   const Image& image = equirect.width == 0 || equirect.height == 0 ? kPlaceholder : equirect;
@@ -594,11 +553,11 @@ void Renderer::set_environment(const Image& equirect) {
   Impl& r = *impl_;
   const bool has_image = equirect.width > 0 && equirect.height > 0;
   if (has_image && equirect.rgba.size() != size_t(equirect.width) * equirect.height * 4) {
-    throw std::invalid_argument("set_environment: the image's pixels do not match its size");
+    throw Error("set_environment: the image's pixels do not match its size");
   }
   const uint32_t limit = r.ctx.properties.limits.maxImageDimension2D;
   if (equirect.width > limit || equirect.height > limit) {
-    throw std::invalid_argument("environment image of " + std::to_string(equirect.width) + "x" +
+    throw Error("environment image of " + std::to_string(equirect.width) + "x" +
                                 std::to_string(equirect.height) + " exceeds the device's largest image (" +
                                 std::to_string(limit) + ")");
   }

@@ -89,8 +89,8 @@ struct FrameSlot {
   bool collected = true;
 };
 
-struct Renderer::Impl {
-  Context::Impl& ctx;
+struct detail::RendererImpl {
+  detail::ContextImpl& ctx;
   SceneInfo scene;
   RendererOptions options;
 
@@ -150,7 +150,7 @@ struct Renderer::Impl {
   };
   std::deque<Retired> retired;
 
-  Impl(Context::Impl& c, const SceneInfo& s, const RendererOptions& o) : ctx(c), scene(s), options(o) {}
+  RendererImpl(detail::ContextImpl& c, const SceneInfo& s, const RendererOptions& o) : ctx(c), scene(s), options(o) {}
 
   void create_pipelines();
   const vk::raii::Pipeline& present_pipeline(vk::Format color, vk::Format depth);

@@ -9,6 +9,7 @@
 #include "sluice/runtime/pipeline.h"
 
 #include "staging_block.h"
+#include "sluice/render/error.h"
 
 namespace sluice::render {
 namespace {
@@ -47,7 +48,7 @@ class StagingAllocator::HeapBudget final : public runtime::DeviceMemoryBudget {
 
 namespace {
 
-uint32_t heap_with(const Context::Impl& c, vk::MemoryPropertyFlags props) {
+uint32_t heap_with(const detail::ContextImpl& c, vk::MemoryPropertyFlags props) {
   for (uint32_t t = 0; t < c.memory.memoryTypeCount; ++t) {
     if ((c.memory.memoryTypes[t].propertyFlags & props) == props) return c.memory.memoryTypes[t].heapIndex;
   }
@@ -59,14 +60,14 @@ uint32_t heap_with(const Context::Impl& c, vk::MemoryPropertyFlags props) {
 // is not waited for.
 uint32_t default_ring_slots() {
   const int cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  return static_cast<uint32_t>(runtime::default_thread_split(cores, true).read + 4);
+  return static_cast<uint32_t>(runtime::default_thread_split(cores, runtime::DecodeMode::KeepEncoded).read + 4);
 }
 
 }  // namespace
 
 StagingAllocator::StagingAllocator(Context& context, const StagingOptions& options)
     : context_(context), options_(options), pool_(std::make_unique<Pool>()), resident_pool_(std::make_unique<Pool>()) {
-  const Context::Impl& c = context_impl(context);
+  const detail::ContextImpl& c = context_impl(context);
   heap_ = heap_with(c, kStagingProps);
   device_heap_ = bool(c.memory.memoryHeaps[heap_].flags & vk::MemoryHeapFlagBits::eDeviceLocal);
   device_local_heap_ = heap_with(c, vk::MemoryPropertyFlagBits::eDeviceLocal);
@@ -111,8 +112,8 @@ uint64_t StagingAllocator::bytes_for(const runtime::FrameLayout& layout) const {
 
 runtime::FrameBuffers StagingAllocator::allocate(const runtime::FrameLayout& layout) {
   if (layout.resident) {
-    if (!ring_) throw std::logic_error("StagingAllocator: a resident frame asked of an allocator without a resident window");
-    const Context::Impl& c = context_impl(context_);
+    if (!ring_) throw Error("StagingAllocator: a resident frame asked of an allocator without a resident window");
+    const detail::ContextImpl& c = context_impl(context_);
     Pool::Block& block = resident_pool_->acquire(resident_bytes(layout), [&](uint64_t need) {
       Memory m;
       m.area = std::make_unique<ResidentArea>(

@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "sluice/render/demand.h"
+#include "sluice/render/error.h"
 
 namespace sluice::render {
 namespace {
@@ -27,7 +28,7 @@ Vec3 eye_of(const View& view) {
 Stream::Stream(Context& context, const std::filesystem::path& file, StreamOptions options)
     : context_(context), options_(std::move(options)) {
   reader_ = std::make_unique<io::ContainerReader>(file);
-  if (reader_->frame_count() == 0) throw std::invalid_argument(file.string() + ": the file has no frames to play");
+  if (reader_->frame_count() == 0) throw Error(file.string() + ": the file has no frames to play");
   SceneInfo scene = scene_info(*reader_);
   if (options_.up) scene.up = *options_.up;
   RendererOptions ro = options_.renderer;
@@ -40,7 +41,7 @@ Stream::Stream(Context& context, const std::filesystem::path& file, StreamOption
   const bool layered = reader_->frame_count() > 0 && reader_->index().frames[0].layered();
   by_view_ = layered && options_.layers == io::LayerSet::surface();
   if (options_.decode == DecodeSite::Gpu && !io::gpu_decodable(header)) {
-    throw std::invalid_argument(file.string() + ": frames with float32 positions are decoded on the CPU only");
+    throw Error(file.string() + ": frames with float32 positions are decoded on the CPU only");
   }
   gpu_decode_ = options_.decode != DecodeSite::Cpu && io::gpu_decodable(header);
 }
@@ -63,7 +64,7 @@ Stream::~Stream() = default;
 const SceneInfo& Stream::scene() const { return renderer_->scene(); }
 
 void Stream::require_file(const char* what) const {
-  if (!reader_) throw std::logic_error(std::string("Stream::") + what + ": a live stream has no file");
+  if (!reader_) throw Error(std::string("Stream::") + what + ": a live stream has no file");
 }
 
 const io::ContainerReader& Stream::reader() const {
@@ -84,7 +85,7 @@ runtime::Player& Stream::player() {
 
 void Stream::set_look(const FluidOptions& fluid, const LodOptions& lod) {
   if (player_ && decoded_attribute(fluid) != decoded_attribute(fluid_)) {
-    throw std::invalid_argument("Stream::set_look: the colour attribute is fixed once the player started");
+    throw Error("Stream::set_look: the colour attribute is fixed once the player started");
   }
   fluid_ = fluid;
   lod_ = lod;
@@ -152,7 +153,7 @@ FrameSync Stream::record(VkCommandBuffer cmd, const RenderTarget& target, std::s
 }
 
 uint64_t Stream::push(const LiveFrame& frame) {
-  if (!live_) throw std::logic_error("Stream::push: a file stream takes no pushed frames");
+  if (!live_) throw Error("Stream::push: a file stream takes no pushed frames");
   const uint64_t ticket = live_->push(frame);
   last_push_.changed = true;
   last_push_.has_frame = true;

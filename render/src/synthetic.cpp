@@ -1,5 +1,6 @@
 // Particles from code rather than files (see synthetic.h).
 #include "sluice/render/synthetic.h"
+#include "sluice/render/error.h"
 
 #include <tbb/parallel_for.h>
 
@@ -95,11 +96,11 @@ void upload_points(Renderer& renderer, std::span<const float> xyz, std::span<con
                    std::span<const float> attribute, uint32_t chunk_particles) {
   const uint64_t n = xyz.size() / 3;
   if (lod.size() != n || (!attribute.empty() && attribute.size() != n) || chunk_particles == 0) {
-    throw std::invalid_argument("upload_points: array sizes disagree");
+    throw Error("upload_points: array sizes disagree");
   }
   const uint32_t chunks = uint32_t((n + chunk_particles - 1) / chunk_particles);
   FrameStaging st = renderer.stage_frame(n, chunks);
-  if (st.stride != 8) throw std::invalid_argument("upload_points: the scene must use 16-bit quantized positions");
+  if (st.stride != 8) throw Error("upload_points: the scene must use 16-bit quantized positions");
   tbb::parallel_for(uint32_t(0), chunks, [&](uint32_t c) {
     const uint64_t first = uint64_t(c) * chunk_particles;
     const uint64_t last = std::min(n, first + chunk_particles);
@@ -137,7 +138,7 @@ void upload_points(Renderer& renderer, std::span<const float> xyz, std::span<con
 }
 
 SyntheticFluid synthetic_fluid(uint64_t target) {
-  if (target == 0) throw std::invalid_argument("synthetic_fluid: zero particles");
+  if (target == 0) throw Error("synthetic_fluid: zero particles");
   // Liquid volume by midpoint sampling, then the spacing that gives `target`.
   double volume = 0;
   const int samples = 400;
@@ -161,7 +162,7 @@ SyntheticFluid synthetic_fluid(uint64_t target) {
     f.particles = count;
     if (pass == 0) s *= float(std::cbrt(double(count) / double(target)));
   }
-  if (f.particles > UINT32_MAX) throw std::invalid_argument("synthetic_fluid: more than 2^32 particles");
+  if (f.particles > UINT32_MAX) throw Error("synthetic_fluid: more than 2^32 particles");
   const Grid g = make_grid(s);
   f.spacing = s;
   uint64_t chunks = 0;
@@ -254,7 +255,7 @@ void upload_synthetic(Renderer& renderer, const SyntheticFluid& f) {
   const Grid g = make_grid(f.spacing);
   const std::vector<Block> blocks = blocks_of(g);
   const uint64_t total = blocks.empty() ? 0 : blocks.back().first + blocks.back().count;
-  if (total != f.particles) throw std::logic_error("upload_synthetic: particle count changed");
+  if (total != f.particles) throw Error("upload_synthetic: particle count changed");
   FrameStaging st = renderer.stage_frame(total, uint32_t(blocks.size()));
   auto* out = reinterpret_cast<uint16_t*>(st.particles.data());
   tbb::parallel_for(size_t(0), blocks.size(), [&](size_t bi) {

@@ -5,7 +5,7 @@
 
 namespace sluice::render {
 
-void Renderer::Impl::ensure_targets(uint32_t width, uint32_t height, bool half, uint32_t layers) {
+void detail::RendererImpl::ensure_targets(uint32_t width, uint32_t height, bool half, uint32_t layers) {
   Targets& t = targets;
   if (t.generation > 0 && t.size == vk::Extent2D(width, height) && t.half_thickness == half && t.layers == layers) return;
   using U = vk::ImageUsageFlagBits;

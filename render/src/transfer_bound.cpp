@@ -17,7 +17,7 @@ namespace {
 // queue, `in_flight` of them queued at a time (each into its own target),
 // kept queued for at least `seconds` after one warm-up round; GB/s over the
 // timed stretch, from the first submission to the last fence.
-double sustained_copy_gbps(Context::Impl& ctx, vk::Buffer source, uint64_t bytes, int in_flight, double seconds) {
+double sustained_copy_gbps(detail::ContextImpl& ctx, vk::Buffer source, uint64_t bytes, int in_flight, double seconds) {
   in_flight = std::max(in_flight, 1);
   const vk::raii::CommandPool pool(ctx.device, vk::CommandPoolCreateInfo({}, ctx.transfer_family));
   const vk::raii::CommandBuffers cmds(
@@ -62,7 +62,7 @@ double sustained_copy_gbps(Context::Impl& ctx, vk::Buffer source, uint64_t bytes
 }  // namespace
 
 double host_to_device_gbps(Context& context, uint64_t bytes, const CopyShape& shape) {
-  Context::Impl& ctx = context_impl(context);
+  detail::ContextImpl& ctx = context_impl(context);
   const MemoryKind kind = shape.staging == StagingMemory::Cached ? MemoryKind::UploadRead : MemoryKind::Upload;
   const Buffer staging = create_buffer(ctx, bytes, vk::BufferUsageFlagBits::eTransferSrc, kind);
   std::memset(staging.mapped, 1, bytes);  // pages touched before timing
@@ -70,7 +70,7 @@ double host_to_device_gbps(Context& context, uint64_t bytes, const CopyShape& sh
 }
 
 uint64_t import_alignment(Context& context) {
-  Context::Impl& ctx = context_impl(context);
+  detail::ContextImpl& ctx = context_impl(context);
   if (!ctx.external_memory_host) return 0;
   return ctx.physical
       .getProperties2<vk::PhysicalDeviceProperties2, vk::PhysicalDeviceExternalMemoryHostPropertiesEXT>()
@@ -79,7 +79,7 @@ uint64_t import_alignment(Context& context) {
 }
 
 ImportedCopy imported_host_copy_gbps(Context& context, const void* host, uint64_t bytes, const CopyShape& shape) {
-  Context::Impl& ctx = context_impl(context);
+  detail::ContextImpl& ctx = context_impl(context);
   ImportedCopy out;
   const uint64_t alignment = import_alignment(context);
   if (alignment == 0) {

@@ -15,6 +15,7 @@
 #include "sluice/io/codec.h"
 #include "sluice/io/reader.h"
 #include "staging_block.h"
+#include "sluice/render/error.h"
 
 namespace sluice::render {
 namespace {
@@ -73,20 +74,20 @@ void Renderer::wait_upload(uint64_t ticket) const {
   }
 }
 
-bool Renderer::Impl::set_in_use(const FrameSet& s) const {
+bool detail::RendererImpl::set_in_use(const FrameSet& s) const {
   // The host guarantees that record() call n - 1 - frames_in_flight has
   // finished by the time call n - 1 was made (n calls made so far).
   return s.last_drawn != UINT64_MAX && s.last_drawn + options.frames_in_flight >= frames_recorded;
 }
 
-int Renderer::Impl::free_set() {
+int detail::RendererImpl::free_set() {
   int best = -1;
   for (int i = 0; i < int(sets.size()); ++i) {
     if (i == shown || set_in_use(sets[size_t(i)])) continue;
     if (best < 0 || sets[size_t(i)].ticket < sets[size_t(best)].ticket) best = i;
   }
   if (best < 0) {
-    throw std::logic_error("renderer: every frame buffer is in use by frames in flight; commit at most one frame per "
+    throw Error("renderer: every frame buffer is in use by frames in flight; commit at most one frame per "
                            "recorded frame (see the frames-in-flight contract in renderer.h)");
   }
   // A newer frame supersedes one whose copy may still run: wait for that copy
@@ -101,7 +102,7 @@ int Renderer::Impl::free_set() {
   return best;
 }
 
-void Renderer::Impl::pick_shown_set() {
+void detail::RendererImpl::pick_shown_set() {
   const uint64_t done = upload_done.getCounterValue();
   int newest = shown;
   for (int i = 0; i < int(sets.size()); ++i) {
@@ -175,7 +176,7 @@ struct EncodedSource {
 // attribute buffers, creating what it needs first (the pass, a command
 // buffer, the tile sums sized for `plan`); submits nothing, so a failure
 // here leaves no copy in flight.
-void record_decode(Renderer::Impl& r, FrameSet& set, const io::GpuDecodePlan& plan, vk::DeviceAddress encoded) {
+void record_decode(detail::RendererImpl& r, FrameSet& set, const io::GpuDecodePlan& plan, vk::DeviceAddress encoded) {
   using Stage = vk::PipelineStageFlagBits2;
   using Access = vk::AccessFlagBits2;
   if (!r.decode_pass) {
@@ -217,7 +218,7 @@ void record_decode(Renderer::Impl& r, FrameSet& set, const io::GpuDecodePlan& pl
 // the copy that signals `copy_value` on copy_done (and, for a resident
 // frame, the relay's copies into it); returns the upload timeline value the
 // decode signals.
-uint64_t submit_decode(Renderer::Impl& r, FrameSet& set, uint64_t copy_value, const EncodedSource& source) {
+uint64_t submit_decode(detail::RendererImpl& r, FrameSet& set, uint64_t copy_value, const EncodedSource& source) {
   using Stage = vk::PipelineStageFlagBits2;
   const vk::CommandBufferSubmitInfo cb(*set.decode);
   // Every stage waits (the first timestamp too, so decode_ms is the decode's).
@@ -241,7 +242,7 @@ uint64_t submit_decode(Renderer::Impl& r, FrameSet& set, uint64_t copy_value, co
 // The chunk table source must be set.staging at `chunks_offset` (it is
 // validated there). Returns the frame's ticket: the value the copy, or for
 // an encoded frame the decode, signals on the upload timeline.
-uint64_t upload_frame(Renderer::Impl& r, FrameSet& set, UploadSource particles_src, vk::DeviceSize chunks_offset,
+uint64_t upload_frame(detail::RendererImpl& r, FrameSet& set, UploadSource particles_src, vk::DeviceSize chunks_offset,
                       UploadSource attribute_src, const EncodedSource* encoded = nullptr) {
   const uint64_t n = set.particle_count;
   const uint32_t chunks = set.chunk_count;
@@ -252,7 +253,7 @@ uint64_t upload_frame(Renderer::Impl& r, FrameSet& set, UploadSource particles_s
     if (uint64_t(table[c].first) + table[c].count > n) {
       set.chunk_count = 0;
       set.particle_count = 0;
-      throw std::runtime_error("staged chunk " + std::to_string(c) + " reaches past the frame's particles");
+      throw Error("staged chunk " + std::to_string(c) + " reaches past the frame's particles");
     }
     blocks += (table[c].count + 255) / 256;
   }
@@ -390,7 +391,7 @@ void fill_chunk_table(const io::FrameHeader& header, std::span<const uint64_t> f
 
 uint64_t Renderer::commit_frame() {
   Impl& r = *impl_;
-  if (r.staged < 0) throw std::logic_error("commit_frame: no staged frame (call stage_frame first)");
+  if (r.staged < 0) throw Error("commit_frame: no staged frame (call stage_frame first)");
   FrameSet& set = r.sets[size_t(r.staged)];
   r.staged = -1;
   const StagingLayout l = staging_layout(set.particle_count, set.chunk_count, r.stride, set.has_attribute);
@@ -403,10 +404,10 @@ uint64_t Renderer::commit_decoded(const DecodedFrameView& frame, const StagingAl
   const io::FrameHeader& header = *frame.header;
   const uint64_t n = header.particle_count;
   const uint32_t chunks = uint32_t(header.chunks.size());
-  if (frame.chunk_first.size() != chunks) throw std::invalid_argument("commit_decoded: one first index per chunk");
+  if (frame.chunk_first.size() != chunks) throw Error("commit_decoded: one first index per chunk");
   const bool attribute = frame.color_stream >= 0 && size_t(frame.color_stream) < frame.buffers->attributes.size();
   const size_t stride = io::decoded_particle_bytes(r.scene.coding);
-  if (frame.buffers->particles.size() < n * stride) throw std::invalid_argument("commit_decoded: particle buffer too small");
+  if (frame.buffers->particles.size() < n * stride) throw Error("commit_decoded: particle buffer too small");
   const StagingAllocator::Memory* block = from ? &staging_memory(*frame.buffers) : nullptr;
 
   if (!block || block->host) {
@@ -453,16 +454,16 @@ uint64_t Renderer::commit_encoded(const EncodedFrameView& frame, const StagingAl
   const io::GpuDecodePlan& plan = *frame.plan;
   const uint32_t chunks = uint32_t(header.chunks.size());
   if (frame.chunk_first.size() != chunks || plan.chunks.size() != chunks) {
-    throw std::invalid_argument("commit_encoded: one first index and one plan per chunk");
+    throw Error("commit_encoded: one first index and one plan per chunk");
   }
-  if (r.scene.coding != io::PositionCoding::Quantized16) throw std::invalid_argument("commit_encoded: a float32 scene");
+  if (r.scene.coding != io::PositionCoding::Quantized16) throw Error("commit_encoded: a float32 scene");
   const uint64_t staged = plan.staged_bytes();
   const bool attribute = frame.color_attribute >= 0 && chunks > 0 && plan.chunks[0].with_attribute != 0;
   const StagingAllocator::Memory* block = from ? &staging_memory(*frame.buffers) : nullptr;
   const ResidentArea* resident = block && block->resident() ? block->area.get() : nullptr;
-  if (resident && resident->device.size < staged) throw std::invalid_argument("commit_encoded: the resident area is too small");
+  if (resident && resident->device.size < staged) throw Error("commit_encoded: the resident area is too small");
   if (!resident && frame.buffers->particles.size() < staged) {
-    throw std::invalid_argument("commit_encoded: the staged area is too small");
+    throw Error("commit_encoded: the staged area is too small");
   }
   const bool own = !resident && (!block || block->host);  // not in Vulkan memory: through the renderer's staging
   // A resident frame's tables go through the renderer's staging too.

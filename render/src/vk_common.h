@@ -20,7 +20,7 @@
 
 namespace sluice::render {
 
-struct Context::Impl {
+struct detail::ContextImpl {
   ContextOptions options;
   bool owning = true;     // false: the handles are a host's; released, not destroyed
   VulkanHandles handles;  // raw copies of the handles below
@@ -54,8 +54,8 @@ struct Context::Impl {
   mutable std::mutex messages_mutex;
   std::vector<std::string> messages;
 
-  Impl() = default;
-  ~Impl();
+  ContextImpl() = default;
+  ~ContextImpl();
 
   uint32_t memory_type(uint32_t type_bits, vk::MemoryPropertyFlags wanted) const;
   // Submits to `queue` (one of the above), holding queue_mutex while the
@@ -67,8 +67,8 @@ struct Context::Impl {
   void run_once(const std::function<void(vk::CommandBuffer)>& record) const;
 };
 
-inline Context::Impl& context_impl(Context& c) { return *c.impl_; }
-inline const Context::Impl& context_impl(const Context& c) { return *c.impl_; }
+inline detail::ContextImpl& context_impl(Context& c) { return *c.impl_; }
+inline const detail::ContextImpl& context_impl(const Context& c) { return *c.impl_; }
 
 // A buffer with its own memory. Host-visible buffers are persistently mapped.
 struct Buffer {
@@ -83,11 +83,11 @@ struct Buffer {
 // are checked where they were read): cached where the driver offers it, as
 // Readback; plain Upload memory may be write-combined, slow to read.
 enum class MemoryKind { DeviceLocal, Upload, UploadRead, Readback };
-Buffer create_buffer(const Context::Impl& ctx, vk::DeviceSize size, vk::BufferUsageFlags usage, MemoryKind kind);
+Buffer create_buffer(const detail::ContextImpl& ctx, vk::DeviceSize size, vk::BufferUsageFlags usage, MemoryKind kind);
 // Makes `b` at least `size` bytes (contents lost when it grows). The old
 // buffer goes to `retire` when given (recorded work may still use it), else
 // it is freed before the new one is allocated.
-void grow_buffer(const Context::Impl& ctx, Buffer& b, vk::DeviceSize size, vk::BufferUsageFlags usage, MemoryKind kind,
+void grow_buffer(const detail::ContextImpl& ctx, Buffer& b, vk::DeviceSize size, vk::BufferUsageFlags usage, MemoryKind kind,
                  const std::function<void(Buffer&&)>& retire = {});
 
 // A 2D image (array of `layers`: one per eye for multiview stereo) with a
@@ -101,7 +101,7 @@ struct Texture {
   uint32_t layers = 1;
   vk::ImageAspectFlags aspect = vk::ImageAspectFlagBits::eColor;
 };
-Texture create_texture(const Context::Impl& ctx, vk::Extent2D extent, vk::Format format, vk::ImageUsageFlags usage,
+Texture create_texture(const detail::ContextImpl& ctx, vk::Extent2D extent, vk::Format format, vk::ImageUsageFlags usage,
                        uint32_t layers = 1, bool array_view = false);
 
 // An image layout transition with synchronization2 scopes.

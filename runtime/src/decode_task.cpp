@@ -59,7 +59,7 @@ void PipelineCore::decode_chunk(Slot& slot, size_t c) noexcept {
   const size_t stride = slot.layout.particle_stride;
   const auto t0 = std::chrono::steady_clock::now();
   try {
-    if (options_.before_decode_chunk) options_.before_decode_chunk(slot.frame, c);
+    if (options_.faults.before_decode_chunk) options_.faults.before_decode_chunk(slot.frame, c);
     // Each arena slot has its scratch (a thread outside the arena, which TBB
     // does not let decode here, would get one of its own).
     const int worker = tbb::this_task_arena::current_thread_index();

@@ -8,10 +8,12 @@
 #include <utility>
 
 #include "pipeline_core.h"
+#include "sluice/runtime/error.h"
 
 namespace sluice::runtime {
 
-ThreadSplit default_thread_split(int cores, bool kept_encoded) {
+ThreadSplit default_thread_split(int cores, DecodeMode mode) {
+  const bool kept_encoded = mode == DecodeMode::KeepEncoded;
   cores = std::max(cores, 1);
   ThreadSplit split;
   if (kept_encoded) {
@@ -55,27 +57,27 @@ PipelineCore::PipelineCore(const io::ContainerReader& reader, FrameAllocator& al
     : reader_(reader),
       allocator_(allocator),
       options_(std::move(options)),
-      decode_threads_(options_.decode_threads > 0 ? options_.decode_threads
-                                                  : default_thread_split(tbb::info::default_concurrency(), options_.keep_encoded).decode),
-      delivery_(std::max<uint32_t>(2, options_.budget.ring_capacity)),
-      returns_(std::max<uint32_t>(2, options_.budget.ring_capacity)),
+      decode_threads_(options_.decode.threads > 0 ? options_.decode.threads
+                                                  : default_thread_split(tbb::info::default_concurrency(), options_.decode.mode).decode),
+      delivery_(std::max<uint32_t>(2, options_.window.budget.ring_capacity)),
+      returns_(std::max<uint32_t>(2, options_.window.budget.ring_capacity)),
       record_returns_(size_t(decode_threads_) + 1),
       records_(size_t(decode_threads_) + 1),
       demand_(options_.demand) {
-  if (options_.keep_encoded) {
+  if ((options_.decode.mode == DecodeMode::KeepEncoded)) {
     if (!io::gpu_decodable(reader_.header())) {
       throw io::Error({reader_.path()}, "frames cannot stay encoded for the GPU: its positions are float32");
     }
     relay_ = allocator_.relay();
   }
   const std::optional<std::vector<uint32_t>> none = std::vector<uint32_t>{};  // encoded: nothing decoded on the CPU
-  stream_of_attribute_ = stream_map(reader_, options_.keep_encoded ? none : options_.attributes, attribute_streams_);
-  footprint_ = largest_frame(reader_, attribute_streams_, &allocator_, options_.layers, options_.keep_encoded);
+  stream_of_attribute_ = stream_map(reader_, (options_.decode.mode == DecodeMode::KeepEncoded) ? none : options_.decode.attributes, attribute_streams_);
+  footprint_ = largest_frame(reader_, attribute_streams_, &allocator_, options_.layers, (options_.decode.mode == DecodeMode::KeepEncoded));
   record_where_.file = reader_.path();
-  source_ = options_.source ? options_.source
-                            : std::make_shared<FileRecordSource>(reader_.path(), reader_.descriptor(), options_.direct_io,
-                                                                 options_.mapped_reads);
-  slot_count_ = std::max<uint32_t>(2, options_.budget.ring_capacity);
+  source_ = options_.read.source ? options_.read.source
+                            : std::make_shared<FileRecordSource>(reader_.path(), reader_.descriptor(), options_.read.direct_io,
+                                                                 options_.read.mapped);
+  slot_count_ = std::max<uint32_t>(2, options_.window.budget.ring_capacity);
   slots_ = std::make_unique<Slot[]>(slot_count_);
   for (const io::FrameIndexEntry& e : reader_.index().frames) most_chunks_ = std::max(most_chunks_, e.chunk_count);
   workers_ = std::make_unique<WorkerCounters[]>(worker_slots());
@@ -83,9 +85,9 @@ PipelineCore::PipelineCore(const io::ContainerReader& reader, FrameAllocator& al
 
   // Readers come out of the cores by default; with a worker count given they
   // come on top of it: a quarter as many (1 to 4).
-  read_threads_ = options_.read_threads > 0    ? options_.read_threads
-                  : options_.decode_threads > 0 ? std::clamp(decode_threads_ / 4, 1, 4)
-                                                : default_thread_split(tbb::info::default_concurrency(), options_.keep_encoded).read;
+  read_threads_ = options_.read.threads > 0    ? options_.read.threads
+                  : options_.decode.threads > 0 ? std::clamp(decode_threads_ / 4, 1, 4)
+                                                : default_thread_split(tbb::info::default_concurrency(), options_.decode.mode).read;
   // TBB workers wanted: every decode slot (the read helpers are threads of
   // their own, read_crew.h).
   if (decode_threads_ + 1 > tbb::info::default_concurrency()) {
@@ -108,7 +110,7 @@ PipelineCore::PipelineCore(const io::ContainerReader& reader, FrameAllocator& al
   counters_.window_frames.store(initial_plan_.frames, kRelaxed);
   counters_.active_frames.store(initial_active(initial_plan_), kRelaxed);
   counters_.record_buffers.store(initial_plan_.record_buffers, kRelaxed);
-  if (options_.on_window_change) options_.on_window_change({0, initial_plan_});
+  if (options_.window.on_change) options_.window.on_change({0, initial_plan_});
 
   reader_thread_ = std::thread([this] { reader_main(); });
 }
@@ -142,7 +144,7 @@ void PipelineCore::wake_consumer() {
 uint64_t PipelineCore::restart(const PlaybackSchedule& schedule) {
   if (schedule.frame_count > reader_.frame_count() || schedule.stride == 0 ||
       (schedule.direction != 1 && schedule.direction != -1)) {
-    throw std::invalid_argument("Pipeline::restart(): the schedule needs frame_count <= the file's frames (" +
+    throw Error("Pipeline::restart(): the schedule needs frame_count <= the file's frames (" +
                                 std::to_string(reader_.frame_count()) + "), stride >= 1 and direction +1 or -1");
   }
   uint64_t g;
@@ -220,7 +222,7 @@ NextEntry PipelineCore::wait_next() {
       // may keep ahead: waiting would never end.
       const uint32_t window = counters_.window_frames.load(kRelaxed);
       if (handles_held_ >= ahead_most(window)) {
-        throw std::logic_error("Pipeline::wait_next(): the consumer holds " + std::to_string(handles_held_) +
+        throw Error("Pipeline::wait_next(): the consumer holds " + std::to_string(handles_held_) +
                                " frames, all the reader may keep ahead in a window of " + std::to_string(window) +
                                ": release one (FrameHandle::reset) before waiting for the next");
       }
@@ -237,7 +239,7 @@ FrameHandle PipelineCore::take() {
   const Entry* e = front();
   const SlotState state = e ? slots_[e->slot].state.load(std::memory_order_acquire) : SlotState::Free;
   if (state != SlotState::Ready && state != SlotState::Failed) {
-    throw std::logic_error("Pipeline::take(): the next entry is not ready (check peek() or wait_next() first)");
+    throw Error("Pipeline::take(): the next entry is not ready (check peek() or wait_next() first)");
   }
   Entry entry;
   delivery_.try_pop(entry);
@@ -271,7 +273,7 @@ FrameHandle PipelineCore::take() {
 
 void PipelineCore::drop() {
   Entry entry;
-  if (!front() || !delivery_.try_pop(entry)) throw std::logic_error("Pipeline::drop(): no entry to drop");
+  if (!front() || !delivery_.try_pop(entry)) throw Error("Pipeline::drop(): no entry to drop");
   ++next_sequence_;
   slots_[entry.slot].abandoned.store(true, std::memory_order_release);
   give_back(entry.slot);

@@ -1,4 +1,5 @@
 #include "read_crew.h"
+#include "sluice/runtime/error.h"
 
 #include <chrono>
 #include <stdexcept>
@@ -76,8 +77,8 @@ void ReadCrew::helper_main() {
 }
 
 void ReadCrew::begin(uint64_t count, PieceBody body) {
-  if (in_flight() >= kRounds) throw std::logic_error("ReadCrew::begin: every round is in flight");
-  if (count > kLow) throw std::length_error("ReadCrew::begin: 2^32 pieces or more");
+  if (in_flight() >= kRounds) throw Error("ReadCrew::begin: every round is in flight");
+  if (count > kLow) throw Error("ReadCrew::begin: 2^32 pieces or more");
   Round& round = rounds_[begun_ % kRounds];
   round.count = static_cast<uint32_t>(count);
   round.body = body;
@@ -92,7 +93,7 @@ void ReadCrew::begin(uint64_t count, PieceBody body) {
 }
 
 void ReadCrew::join() {
-  if (in_flight() == 0) throw std::logic_error("ReadCrew::join: no round in flight");
+  if (in_flight() == 0) throw Error("ReadCrew::join: no round in flight");
   Round& round = rounds_[joined_ % kRounds];
   while (take(round)) {
   }
@@ -104,7 +105,7 @@ void ReadCrew::join() {
 }
 
 void ReadCrew::run(uint64_t count, PieceBody body) {
-  if (in_flight() > 0) throw std::logic_error("ReadCrew::run: a round is in flight");
+  if (in_flight() > 0) throw Error("ReadCrew::run: a round is in flight");
   begin(count, body);
   join();
 }

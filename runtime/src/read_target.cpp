@@ -41,7 +41,7 @@ PipelineCore::ReadTarget PipelineCore::record_target(ReaderState& rs, Slot& slot
 }
 
 bool PipelineCore::reads_in_place() const {
-  return options_.keep_encoded && source_->alignment() <= 1;
+  return (options_.decode.mode == DecodeMode::KeepEncoded) && source_->alignment() <= 1;
 }
 
 // The kernel is asked for every wanted chunk at once, runs less than
@@ -162,13 +162,13 @@ PipelineCore::ReadTarget PipelineCore::chunks_to_read(Slot& slot, std::span<std:
   }
   hint_chunks(slot);
   if (slot.relayed) {
-    io::plan_gpu_frame(slot.header, reader_.header(), {.color_attribute = options_.encoded_color_attribute}, slot.plan,
+    io::plan_gpu_frame(slot.header, reader_.header(), {.color_attribute = options_.decode.color_attribute}, slot.plan,
                        reader_.location(slot.frame));
   }
   // As many pieces as byte pieces would be (a multiple of the threads
   // reading), at most one per chunk; cut where the running sum crosses each
   // equal share. A relayed piece fits a ring slot.
-  uint64_t most = std::max<uint64_t>(options_.read_piece_bytes, 1);
+  uint64_t most = std::max<uint64_t>(options_.read.piece_bytes, 1);
   if (slot.relayed) most = std::min(most, std::max<uint64_t>(relay_->piece_bytes(), 1));
   const uint64_t threads = uint64_t(read_crew_.helpers()) + 1;
   const uint64_t at_most = (total + most - 1) / most;

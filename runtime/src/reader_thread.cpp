@@ -27,7 +27,7 @@ void PipelineCore::reader_main() {
   ReaderState rs;
   rs.plan = initial_plan_;
   rs.active = initial_active(rs.plan);  // as the constructor reported it
-  rs.next_evaluation = options_.reevaluate_every;
+  rs.next_evaluation = options_.window.reevaluate_every;
   // Every list a slot count long at most: reserved once, so the frame path
   // never allocates.
   rs.free_slots.reserve(slot_count_);
@@ -95,7 +95,7 @@ bool PipelineCore::grow(ReaderState& rs) {
 }
 
 uint32_t PipelineCore::initial_active(const WindowPlan& plan) const {
-  if (!options_.slow_start) return plan.frames;
+  if (!options_.window.slow_start) return plan.frames;
   return std::min<uint32_t>(plan.frames, static_cast<uint32_t>(std::max(4, decode_threads_ + 2)));
 }
 
@@ -207,10 +207,10 @@ void PipelineCore::collect_records(ReaderState& rs) {
 
 WindowPlan PipelineCore::plan_now(uint64_t held) const {
   BudgetReading reading;
-  reading.host = read_host_memory(options_.budget.host_paths);
+  reading.host = read_host_memory(options_.window.budget.host_paths);
   reading.held_bytes = held;
-  if (options_.device_budget) reading.device_available = options_.device_budget->available_bytes();
-  WindowPlan plan = plan_window(footprint_, reading, options_.budget, decode_threads_);
+  if (options_.window.device_budget) reading.device_available = options_.window.device_budget->available_bytes();
+  WindowPlan plan = plan_window(footprint_, reading, options_.window.budget, decode_threads_);
   // More slots than frames would hold copies of the same frames (a short
   // loop); with one slot per frame a loop is read once and then served from
   // memory.
@@ -224,16 +224,16 @@ WindowPlan PipelineCore::plan_now(uint64_t held) const {
 }
 
 void PipelineCore::reevaluate(ReaderState& rs) {
-  rs.next_evaluation = rs.frames_started + std::max<uint32_t>(1, options_.reevaluate_every);
+  rs.next_evaluation = rs.frames_started + std::max<uint32_t>(1, options_.window.reevaluate_every);
   const WindowPlan plan = plan_now(held_now(rs));
   if (!worth_changing(rs.plan.frames, plan.frames)) return;
   const uint32_t previous = rs.plan.frames;
   rs.plan = plan;
-  rs.active = options_.slow_start ? std::min(rs.active, plan.frames) : plan.frames;
+  rs.active = options_.window.slow_start ? std::min(rs.active, plan.frames) : plan.frames;
   counters_.active_frames.store(rs.active, kRelaxed);
   counters_.window_frames.store(plan.frames, kRelaxed);
   counters_.record_buffers.store(plan.record_buffers, kRelaxed);
-  if (options_.on_window_change) options_.on_window_change({previous, plan});
+  if (options_.window.on_change) options_.window.on_change({previous, plan});
 }
 
 PipelineCore::Start PipelineCore::start_entry(ReaderState& rs, uint64_t k, uint64_t frame) {
@@ -451,7 +451,7 @@ void PipelineCore::finish_entry(ReaderState& rs, uint32_t s, uint64_t k) {
   slot.state.store(SlotState::Decoding, std::memory_order_release);
   publish(rs, s, k);
   try {
-    if (options_.before_decode_handoff) options_.before_decode_handoff(frame);
+    if (options_.faults.before_decode_handoff) options_.faults.before_decode_handoff(frame);
     arena_.enqueue(decode_group_.defer([this, &slot, s] { decode_frame(slot, s); }));
   } catch (...) {
     // The frame could not be handed to the workers (no memory for the
@@ -519,8 +519,8 @@ void PipelineCore::prepare_decode(ReaderState& rs, Slot& slot) {
     return;
   }
   if (!slot.has_buffers) set_layout(slot, h.particle_count, 0);
-  if (options_.keep_encoded) {  // the tables are read here; the workers stage the payloads
-    io::plan_gpu_decode(slot.record_bytes, h, reader_.header(), {.color_attribute = options_.encoded_color_attribute},
+  if ((options_.decode.mode == DecodeMode::KeepEncoded)) {  // the tables are read here; the workers stage the payloads
+    io::plan_gpu_decode(slot.record_bytes, h, reader_.header(), {.color_attribute = options_.decode.color_attribute},
                         slot.plan, slot.where);
     if (!slot.has_buffers) {
       slot.layout.encoded_bytes = encoded_block_bytes(slot.plan.staged_bytes());
@@ -536,7 +536,7 @@ void PipelineCore::prepare_decode(ReaderState& rs, Slot& slot) {
               slot.buffers.attributes.size() >= attribute_streams_;
   for (uint32_t a = 0; fits && a < attribute_streams_; ++a) fits = slot.buffers.attributes[a].size() >= h.particle_count;
   if (!fits) throw io::Error(reader_.location(slot.frame), "the frame allocator returned buffers smaller than the frame");
-  if (options_.keep_encoded) io::write_tables(slot.plan, slot.buffers.particles);
+  if ((options_.decode.mode == DecodeMode::KeepEncoded)) io::write_tables(slot.plan, slot.buffers.particles);
   slot.attribute_targets.assign(stream_of_attribute_.size(), nullptr);
   for (size_t a = 0; a < stream_of_attribute_.size(); ++a) {
     if (stream_of_attribute_[a] != ~0u) slot.attribute_targets[a] = slot.buffers.attributes[stream_of_attribute_[a]].data();

@@ -41,12 +41,12 @@ void PipelineCore::read_piece(std::span<std::byte> piece, uint64_t offset, uint6
 void PipelineCore::begin_pieces(PieceRound& round, std::span<std::byte> dst, uint64_t offset, uint64_t need,
                                 uint64_t frame, uint64_t generation) {
   const uint64_t align = std::max<size_t>(1, source_->alignment());
-  // Pieces of at most read_piece_bytes, as many as a multiple of the
+  // Pieces of at most ReadSettings::piece_bytes, as many as a multiple of the
   // threads reading them, of equal size: every thread reads the same share
   // and none waits for a straggler at the end of the record (9 pieces of
   // 8 MiB on 4 threads take 3 rounds where 12 of 6 MiB take the same 3 with
   // less in each).
-  const uint64_t most = round_up(std::max<uint64_t>(options_.read_piece_bytes, 1), align);
+  const uint64_t most = round_up(std::max<uint64_t>(options_.read.piece_bytes, 1), align);
   const uint64_t threads = uint64_t(read_crew_.helpers()) + 1;
   const uint64_t at_most = (dst.size() + most - 1) / most;
   const uint64_t even = (at_most + threads - 1) / threads * threads;
@@ -138,7 +138,7 @@ void PieceRound::operator()(uint64_t p) const {
 void PipelineCore::relay_chunks(const PieceRound& round, uint64_t p) {
   Slot& slot = *round.relayed;
   const uint64_t most = relay_->piece_bytes();
-  const io::GpuPlanOptions plan_options{.color_attribute = options_.encoded_color_attribute};
+  const io::GpuPlanOptions plan_options{.color_attribute = options_.decode.color_attribute};
   thread_local std::vector<PieceRelay::Range> ranges;  // grows once per thread
   uint32_t c = round.cuts[p];
   const uint32_t end = round.cuts[p + 1];
@@ -188,7 +188,7 @@ void PipelineCore::relay_large_chunk(Slot& slot, size_t c, uint64_t offset) {
   thread_local std::vector<std::byte> whole;
   whole.resize(chunk.compressed_size);
   read_chunk(whole, offset + chunk.offset, slot.frame, c, chunk.checksum);
-  if (!io::plan_gpu_chunk(whole, slot.header, reader_.header(), {.color_attribute = options_.encoded_color_attribute}, c,
+  if (!io::plan_gpu_chunk(whole, slot.header, reader_.header(), {.color_attribute = options_.decode.color_attribute}, c,
                           slot.plan, slot.where)) {
     slot.relay_refused.store(true, kRelaxed);
     return;

@@ -69,7 +69,7 @@ struct Slot {
   bool checked_on_read = false;                  // the wanted chunks were checked as they were read (checksums)
   bool relayed = false;                          // ... and sent to a resident area through the relay (relay.h)
   std::vector<uint32_t> piece_cuts;              // checked reads: piece p reads chunks [cuts[p], cuts[p + 1])
-  io::GpuDecodePlan plan;                        // PipelineOptions::keep_encoded: what the workers stage
+  io::GpuDecodePlan plan;                        // DecodeMode::KeepEncoded: what the workers stage
   std::vector<CellRead> cells;                   // every cell of the frame and the tiers read of it (demand.h)
   bool demand_applied = false;                   // `header` holds the demanded tiers only, `cells` is filled
   bool by_demand = false;                        // read chunk by chunk for a demand that leaves tiers out

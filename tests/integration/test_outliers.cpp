@@ -17,7 +17,8 @@
 #include "sluice/io/outliers.h"
 #include "sluice/io/reader.h"
 
-using namespace sluice;
+namespace test = sluice::test;
+namespace io = sluice::io;
 using namespace sluice::io;
 using namespace sluice::import;
 

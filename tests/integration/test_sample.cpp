@@ -14,7 +14,8 @@
 #include "sluice/io/maintenance.h"
 #include "sluice/io/reader.h"
 
-using namespace sluice;
+namespace test = sluice::test;
+namespace io = sluice::io;
 using namespace sluice::io;
 using namespace sluice::import;
 

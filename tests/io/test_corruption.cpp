@@ -26,7 +26,8 @@ void* operator new(size_t n) {
 void operator delete(void* p) noexcept { std::free(p); }
 void operator delete(void* p, size_t) noexcept { std::free(p); }
 
-using namespace sluice;
+namespace test = sluice::test;
+namespace io = sluice::io;
 using namespace sluice::io;
 
 namespace {

@@ -39,9 +39,13 @@
 #include "sluice/render/lod.h"
 #endif
 
-using namespace sluice;
+namespace test = sluice::test;
+namespace io = sluice::io;
+namespace render = sluice::render;
+namespace app = sluice::app;
 using namespace sluice::io;
 using namespace sluice::import;
+using sluice::app::parse_frame_range;
 
 namespace {
 

@@ -8,6 +8,7 @@
 #include <random>
 #include <vector>
 
+#include "sluice/io/error.h"
 #include "sluice/io/narrow_band.h"
 
 namespace {
@@ -174,7 +175,7 @@ TEST(NarrowBand, VoxelLayersCountFromTheOutside) {
 
 TEST(NarrowBand, RejectsANonPositiveDiameter) {
   const std::vector<float> xyz = {0, 0, 0};
-  EXPECT_THROW(sluice::io::classify_narrow_band(xyz, NarrowBandOptions{}), std::invalid_argument);
+  EXPECT_THROW(sluice::io::classify_narrow_band(xyz, NarrowBandOptions{}), sluice::io::Error);
 }
 
 }  // namespace

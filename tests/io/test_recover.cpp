@@ -7,7 +7,8 @@
 #include "sluice/io/reader.h"
 #include "test_util.h"
 
-using namespace sluice;
+namespace test = sluice::test;
+namespace io = sluice::io;
 using namespace sluice::io;
 
 namespace {

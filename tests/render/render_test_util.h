@@ -9,6 +9,7 @@
 #include <memory>
 
 #include "sluice/render/context.h"
+#include "sluice/render/inspection.h"
 #include "sluice/render/offscreen.h"
 #include "sluice/render/renderer.h"
 
@@ -71,8 +72,8 @@ class OffscreenRenderer {
     return target.render(renderer, camera, options, lod);
   }
   std::vector<uint8_t> read_rgba8() { return target.read_rgba8(); }
-  std::vector<float> read_surface() { return renderer.read_surface(); }
-  std::vector<float> read_raw_depth() { return renderer.read_raw_depth(); }
+  std::vector<float> read_surface() { return sluice::render::read_surface(renderer); }
+  std::vector<float> read_raw_depth() { return sluice::render::read_raw_depth(renderer); }
   void load_frame(const io::ContainerReader& reader, uint64_t frame, int color_attribute) {
     renderer.load_frame(reader, frame, color_attribute);
   }

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "render_test_util.h"
+#include "sluice/render/error.h"
 #include "sluice/bench/synth.h"
 #include "sluice/import/source.h"
 #include "sluice/io/narrow_band.h"
@@ -184,8 +185,8 @@ TEST(BandClassifierGpu, RefusesWhatItCannotDoAndSaysSo) {
   const std::vector<float> far = {0, 0, 0, 1000, 1000, 1000};
   EXPECT_EQ(io::classify_narrow_band(far, {.diameter = 0.001f}).surface(), 2u);
   EXPECT_THROW((void)classifier().classify(far, {.diameter = 0.001f}), std::runtime_error);
-  EXPECT_THROW((void)classifier().classify(far, {.diameter = 0}), std::invalid_argument);
-  EXPECT_THROW((void)classifier().classify(far, {.diameter = 1, .f2 = io::F2Test::Asymmetry}), std::invalid_argument);
+  EXPECT_THROW((void)classifier().classify(far, {.diameter = 0}), sluice::render::Error);
+  EXPECT_THROW((void)classifier().classify(far, {.diameter = 1, .f2 = io::F2Test::Asymmetry}), sluice::render::Error);
   // And it still works afterwards.
   expect_same_band(lattice_box(6, 0.1f), {.diameter = 0.1f}, "box after a refusal");
   EXPECT_TRUE(classifier().classify({}, {.diameter = 1}).layer.empty());

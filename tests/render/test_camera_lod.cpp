@@ -3,6 +3,7 @@
 
 #include <cmath>
 
+#include "sluice/render/error.h"
 #include "sluice/render/camera.h"
 #include "sluice/render/lod.h"
 #include "sluice/render/options.h"
@@ -26,9 +27,9 @@ TEST(Camera, PartialAndBadStrings) {
   Camera c;
   c.apply("fov=60");
   EXPECT_FLOAT_EQ(c.fov_deg, 60.0f);
-  EXPECT_THROW(c.apply("eye=1,2"), std::invalid_argument);
-  EXPECT_THROW(c.apply("zoom=3"), std::invalid_argument);
-  EXPECT_THROW(c.apply("fov=0"), std::invalid_argument);
+  EXPECT_THROW(c.apply("eye=1,2"), sluice::render::Error);
+  EXPECT_THROW(c.apply("zoom=3"), sluice::render::Error);
+  EXPECT_THROW(c.apply("fov=0"), sluice::render::Error);
   EXPECT_FLOAT_EQ(c.fov_deg, 60.0f);  // failed applies change nothing
 }
 
@@ -139,5 +140,5 @@ TEST(Options, Names) {
   for (const std::string& n : display_mode_names()) EXPECT_EQ(to_string(parse_display_mode(n)), n);
   EXPECT_EQ(parse_filter_method("bilateral"), SurfaceFilterMethod::BilateralGaussian);
   EXPECT_EQ(parse_lod_mode("density"), LodMode::DensityPreserving);
-  EXPECT_THROW(parse_display_mode("shiny"), std::invalid_argument);
+  EXPECT_THROW(parse_display_mode("shiny"), sluice::render::Error);
 }

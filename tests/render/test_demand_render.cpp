@@ -13,6 +13,7 @@
 #include "sluice/bench/synth.h"
 #include "sluice/io/reader.h"
 #include "sluice/render/demand.h"
+#include "sluice/render/inspection.h"
 #include "sluice/render/frame_feed.h"
 #include "sluice/render/image_io.h"
 #include "sluice/render/offscreen.h"
@@ -100,7 +101,7 @@ Shot reference(const io::ContainerReader& reader, const SceneInfo& scene, uint64
   OffscreenTarget target(context(), kW, kH, {.layers = uint32_t(c.views.size())});
   r.renderer.load_frame(reader, frame, -1, io::LayerSet::surface());
   Shot s = draw(r.renderer, target, c);
-  s.depth = r.read_raw_depth();
+  s.depth = sluice::render::read_raw_depth(r);
   return s;
 }
 
@@ -113,10 +114,10 @@ Shot by_demand(const io::ContainerReader& reader, const SceneInfo& scene, uint64
   OffscreenTarget target(context(), kW, kH, {.layers = uint32_t(c.views.size())});
   StagingAllocator staging(context(), {.resident = path == Path::Relayed});
   runtime::PipelineOptions po;
-  po.decode_threads = 2;
+  po.decode.threads = 2;
   po.layers = io::LayerSet::surface();
-  po.attributes = std::vector<uint32_t>{};
-  po.keep_encoded = path != Path::Cpu;
+  po.decode.attributes = std::vector<uint32_t>{};
+  po.decode.mode = (path != Path::Cpu) ? sluice::runtime::DecodeMode::KeepEncoded : sluice::runtime::DecodeMode::Cpu;
   po.demand = view_demand(c.views, scene, FluidOptions{}, c.lod, 0);
   runtime::Pipeline pipeline(reader, staging, po);
   pipeline.restart({reader.frame_count(), int64_t(frame), 1, 1, runtime::EndMode::Stop});
@@ -133,7 +134,7 @@ Shot by_demand(const io::ContainerReader& reader, const SceneInfo& scene, uint64
     r.commit_decoded({&h.header(), h.chunk_first(), &h.buffers(), -1, -1}, &staging);
   }
   Shot s = draw(r.renderer, target, c);
-  s.depth = r.read_raw_depth();
+  s.depth = sluice::render::read_raw_depth(r);
   stats = pipeline.stats();
   return s;
 }
@@ -180,7 +181,7 @@ TEST(DemandRender, APausedFrameConvergesToTheFullReadsPicture) {
   StagingAllocator staging(context(), FrameFeed::staging_options(context(), reader.header(), DecodeSite::Auto, true));
   runtime::PlayerOptions po;
   po.start_frame = 1;
-  po.pipeline.decode_threads = 2;
+  po.pipeline.decode.threads = 2;
   po.pipeline.layers = io::LayerSet::surface();
   FrameFeed::configure(po, staging, -1, reader.header(), DecodeSite::Auto);
   po.pipeline.demand = view_demand(low.views, scene, FluidOptions{}, low.lod, 0);
@@ -203,7 +204,7 @@ TEST(DemandRender, APausedFrameConvergesToTheFullReadsPicture) {
   r.renderer.wait_upload(feed.last().ticket);
   OffscreenTarget target(context(), kW, kH);
   Shot got = draw(r.renderer, target, high);
-  got.depth = r.read_raw_depth();
+  got.depth = sluice::render::read_raw_depth(r);
   expect_same(got, reference(reader, scene, 1, high), "refined");
 }
 
@@ -216,7 +217,7 @@ TEST(DemandRender, AStreamReadsWhatItsViewsAndLookDraw) {
   const Case low = cases(scene_info(io::ContainerReader(pool_file())))[0];
   StreamOptions options;
   options.motion = ViewMotion::Fixed;
-  options.player.pipeline.decode_threads = 2;
+  options.player.pipeline.decode.threads = 2;
   Stream stream(context(), pool_file(), options);
   stream.set_look(FluidOptions{}, low.lod);
   ASSERT_TRUE(stream.reads_by_view()) << "a layered, tiered file with LOD on";

@@ -9,6 +9,7 @@
 #include <cmath>
 
 #include "render_test_util.h"
+#include "sluice/render/error.h"
 #include "sluice/render/offscreen.h"
 #include "sluice/render/renderer.h"
 #include "sluice/render/staging_allocator.h"
@@ -423,7 +424,7 @@ TEST(Embedding, TheHostsSceneShowsThroughTheWater) {
 }
 
 TEST(Embedding, HostHandlesAreChecked) {
-  EXPECT_THROW(Context(HostVulkan{}), std::invalid_argument);
+  EXPECT_THROW(Context(HostVulkan{}), sluice::render::Error);
   const DeviceFeatures f = required_device_features();
   const DeviceFeatures copy = f;  // the copy's chain points into the copy
   EXPECT_EQ(copy.features2.pNext, &copy.vulkan11);
@@ -451,19 +452,19 @@ TEST(Embedding, RecordRefusesTargetsAndViewsThatDoNotFit) {
     host.submit([&](vk::CommandBuffer c) {
       const auto cmd = static_cast<VkCommandBuffer>(c);
       const FluidOptions o;
-      EXPECT_THROW(renderer.record(cmd, target, {}, o, {}), std::invalid_argument);  // no view
+      EXPECT_THROW(renderer.record(cmd, target, {}, o, {}), sluice::render::Error);  // no view
       View outside = whole;
       outside.viewport.x = 1;  // reaches one pixel past the right edge
-      EXPECT_THROW(renderer.record(cmd, target, {&outside, 1}, o, {}), std::invalid_argument);
+      EXPECT_THROW(renderer.record(cmd, target, {&outside, 1}, o, {}), sluice::render::Error);
       const std::array uneven{whole, camera_view(front_camera(), {0, 0, kW / 2, kH})};
-      EXPECT_THROW(renderer.record(cmd, target, uneven, o, {}), std::invalid_argument);
+      EXPECT_THROW(renderer.record(cmd, target, uneven, o, {}), sluice::render::Error);
       RenderTarget no_view = target;
       no_view.color_view = VK_NULL_HANDLE;
-      EXPECT_THROW(renderer.record(cmd, no_view, {&whole, 1}, o, {}), std::invalid_argument);
+      EXPECT_THROW(renderer.record(cmd, no_view, {&whole, 1}, o, {}), sluice::render::Error);
       RenderTarget layers = target;
       layers.layer_count = 2;
-      EXPECT_THROW(renderer.record(cmd, layers, {&whole, 1}, o, {}), std::invalid_argument);
-      EXPECT_THROW(renderer.record(VK_NULL_HANDLE, target, {&whole, 1}, o, {}), std::invalid_argument);
+      EXPECT_THROW(renderer.record(cmd, layers, {&whole, 1}, o, {}), sluice::render::Error);
+      EXPECT_THROW(renderer.record(VK_NULL_HANDLE, target, {&whole, 1}, o, {}), sluice::render::Error);
     });
     EXPECT_EQ(renderer.last_stats().record_index, 0u);  // nothing was recorded
   }

@@ -11,6 +11,7 @@
 #include <fstream>
 
 #include "render_test_util.h"
+#include "sluice/render/error.h"
 #include "sluice/render/image_io.h"
 #include "sluice/render/renderer.h"
 #include "sluice/render/synthetic.h"
@@ -95,7 +96,7 @@ TEST(Environment, BackgroundIsTheImageInTheViewDirection) {
 TEST(Environment, RejectsAnImageWhosePixelsDoNotMatchItsSize) {
   SceneInfo scene = scene_for_points(std::vector<float>{0, 0, 0, 1, 1, 1}, 0.1f);
   testing::OffscreenRenderer r(context(), scene, 16, 16);
-  EXPECT_THROW(r.set_environment(Image{4, 4, std::vector<uint8_t>(10)}), std::invalid_argument);
+  EXPECT_THROW(r.set_environment(Image{4, 4, std::vector<uint8_t>(10)}), sluice::render::Error);
 }
 
 }  // namespace

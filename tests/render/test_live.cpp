@@ -10,6 +10,8 @@
 #include <random>
 
 #include "render_test_util.h"
+#include "sluice/render/error.h"
+#include "sluice/render/inspection.h"
 #include "sluice/io/lod.h"
 #include "sluice/io/reader.h"
 #include "sluice/render/live_source.h"
@@ -76,7 +78,7 @@ TEST(Live, AMovingBallIsDrawnWhereItIsAndRecorded) {
     const FrameStats stats = target.render(renderer, front(), fo, {});
     EXPECT_EQ(stats.particles, n);
     // The fluid's pixels are centred where the ball's centre projects.
-    const std::vector<float> depth = renderer.read_raw_depth();
+    const std::vector<float> depth = sluice::render::read_raw_depth(renderer);
     double sum = 0;
     size_t count = 0;
     for (uint32_t y = 0; y < kH; ++y) {
@@ -98,7 +100,7 @@ TEST(Live, AMovingBallIsDrawnWhereItIsAndRecorded) {
   // A frame with a NaN is refused before anything is committed or recorded.
   std::vector<float> bad(pushed.back());
   bad[4] = std::nanf("");
-  EXPECT_THROW(live.push({bad, {}, {}, 1.0}), std::invalid_argument);
+  EXPECT_THROW(live.push({bad, {}, {}, 1.0}), sluice::render::Error);
   EXPECT_EQ(live.frames_pushed(), 5u);
   live.finish();
 
@@ -136,16 +138,16 @@ TEST(Live, RefusesInputThatDoesNotFitTheScene) {
   lo.attributes = {"speed"};
   lo.ids = false;
   Renderer plain(context(), live_scene({{0, 0, 0}, {1, 1, 1}}, LiveOptions{}));
-  EXPECT_THROW(LiveSource(plain, lo), std::invalid_argument);  // the scene has no attributes
+  EXPECT_THROW(LiveSource(plain, lo), sluice::render::Error);  // the scene has no attributes
   Renderer renderer(context(), live_scene({{0, 0, 0}, {1, 1, 1}}, lo));
   LiveSource live(renderer, lo);
   const std::vector<float> xyz{0.5f, 0.5f, 0.5f, 0.6f, 0.5f};
-  EXPECT_THROW(live.push({xyz, {}, {}, 0}), std::invalid_argument);  // not triples
+  EXPECT_THROW(live.push({xyz, {}, {}, 0}), sluice::render::Error);  // not triples
   const std::vector<float> one{0.5f, 0.5f, 0.5f};
   const std::vector<uint64_t> two_ids{1, 2};
-  EXPECT_THROW(live.push({one, two_ids, {}, 0}), std::invalid_argument);  // ids on a source without them
+  EXPECT_THROW(live.push({one, two_ids, {}, 0}), sluice::render::Error);  // ids on a source without them
   const std::vector<float> values{1, 2};
-  EXPECT_THROW(live.push({one, {}, {values}, 0}), std::invalid_argument);
+  EXPECT_THROW(live.push({one, {}, {values}, 0}), sluice::render::Error);
   EXPECT_NO_THROW(renderer.wait_upload(live.push({one, {}, {}, 0})));  // attributes left out: zero
   EXPECT_EQ(live.frames_pushed(), 1u);
 }

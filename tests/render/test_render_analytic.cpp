@@ -12,6 +12,7 @@
 #include "sluice/io/codec.h"
 #include "sluice/io/lod.h"
 #include "sluice/render/image_io.h"
+#include "sluice/render/inspection.h"
 #include "sluice/render/lod.h"
 #include "sluice/render/renderer.h"
 #include "sluice/render/synthetic.h"
@@ -102,7 +103,7 @@ TEST_P(LoneSphere, DepthIsExact) {
   o.splatting = GetParam();
   const FrameStats stats = r.render(cam, o, {});
   EXPECT_EQ(stats.drawn, centers.size());
-  const std::vector<float> depth = r.read_raw_depth();
+  const std::vector<float> depth = sluice::render::read_raw_depth(r);
   double worst = 0;
   size_t hits = 0, missed = 0, extra = 0;
   for (uint32_t y = 0; y < kH; ++y) {
@@ -165,7 +166,7 @@ double thickness_integral(const LayeredBlock& b, io::LayerSet layers, const Came
   rr.renderer.wait_upload(rr.renderer.commit_record(b.frame.record, h, b.file, -1, {}));
   const FrameStats stats = rr.render(cam, o, lod);
   if (drawn) *drawn = stats.drawn;
-  const std::vector<float> thickness = rr.renderer.read_raw_thickness();
+  const std::vector<float> thickness = sluice::render::read_raw_thickness(rr.renderer);
   EXPECT_EQ(thickness.size(), size_t(kW) * kH);
   const double pixel = 2 * std::tan(double(cam.fov_deg) * M_PI / 360.0) / kH;  // side of a pixel at unit distance
   double sum = 0;
@@ -355,7 +356,7 @@ void check_slab_normals(SurfaceFilterMethod method, int iterations, double max_d
   o.surface_filter_method = method;
   o.surface_filter_iterations = iterations;
   r.render(cam, o, {});
-  const std::vector<float> surface = r.read_surface();
+  const std::vector<float> surface = sluice::render::read_surface(r);
   // The plane's normal in eye space.
   const Mat4 view = cam.view();
   const Vec4 nz = view * Vec4{0, 0, 1, 0};

@@ -14,6 +14,7 @@
 #include "sluice/io/reader.h"
 #include "sluice/io/writer.h"
 #include "sluice/render/image_io.h"
+#include "sluice/render/inspection.h"
 #include "sluice/render/renderer.h"
 #include "sluice/render/staging_allocator.h"
 #include "sluice/runtime/pipeline.h"
@@ -76,7 +77,7 @@ Rendered draw(testing::OffscreenRenderer& r, const SceneInfo& scene) {
   o.color_attribute = 0;
   const Camera cam = Camera::framing(scene.bounds, Vec3{0, 0, 1}, 160.0f / 120.0f);
   const FrameStats stats = r.render(cam, o, {});
-  return {r.read_rgba8(), r.read_raw_depth(), stats.particles};
+  return {r.read_rgba8(), sluice::render::read_raw_depth(r), stats.particles};
 }
 
 // Renders every frame through a pipeline over `allocator`, handing
@@ -87,10 +88,10 @@ std::vector<Rendered> streamed(const io::ContainerReader& reader, runtime::Frame
   const SceneInfo scene = scene_info(reader);
   testing::OffscreenRenderer r(context(), scene, 160, 120);
   runtime::PipelineOptions po;
-  po.decode_threads = 2;
-  po.attributes = std::vector<uint32_t>{0};
-  po.keep_encoded = encoded;
-  po.encoded_color_attribute = 0;
+  po.decode.threads = 2;
+  po.decode.attributes = std::vector<uint32_t>{0};
+  po.decode.mode = (encoded) ? sluice::runtime::DecodeMode::KeepEncoded : sluice::runtime::DecodeMode::Cpu;
+  po.decode.color_attribute = 0;
   runtime::Pipeline pipeline(reader, allocator, po);
   pipeline.restart({reader.frame_count(), 0, 1, 1, runtime::EndMode::Stop});
   std::vector<Rendered> out;
@@ -260,8 +261,8 @@ TEST_F(StreamedUpload, RelayedCorruptChunkFailsItsFrameOnly) {
   testing::OffscreenRenderer r(context(), scene, 160, 120);
   StagingAllocator staging(context(), {.resident = true});
   runtime::PipelineOptions po;
-  po.keep_encoded = true;
-  po.encoded_color_attribute = 0;
+  po.decode.mode = sluice::runtime::DecodeMode::KeepEncoded;
+  po.decode.color_attribute = 0;
   runtime::Pipeline pipeline(reader, staging, po);
   pipeline.restart({reader.frame_count(), 0, 1, 1, runtime::EndMode::Stop});
   for (uint64_t f = 0; f < kFrames; ++f) {
@@ -293,8 +294,8 @@ TEST_F(StreamedUpload, RelayedFramesSurviveSeeks) {
   testing::OffscreenRenderer r(context(), scene, 160, 120);
   StagingAllocator staging(context(), {.resident = true, .ring_slots = 2, .ring_piece_bytes = 8192});
   runtime::PipelineOptions po;
-  po.keep_encoded = true;
-  po.encoded_color_attribute = 0;
+  po.decode.mode = sluice::runtime::DecodeMode::KeepEncoded;
+  po.decode.color_attribute = 0;
   runtime::Pipeline pipeline(reader, staging, po);
   uint64_t drawn = 0;
   for (int seek = 0; seek < 12; ++seek) {

@@ -204,10 +204,10 @@ struct Streamed {
 Streamed stream(const io::ContainerReader& reader, const ViewDemand& demand, bool encoded) {
   HostFrameAllocator allocator;
   PipelineOptions po;
-  po.decode_threads = 2;
-  po.read_threads = 2;
+  po.decode.threads = 2;
+  po.read.threads = 2;
   po.demand = demand;
-  po.keep_encoded = encoded;
+  po.decode.mode = (encoded) ? sluice::runtime::DecodeMode::KeepEncoded : sluice::runtime::DecodeMode::Cpu;
   Pipeline pipeline(reader, allocator, po);
   pipeline.restart({reader.frame_count(), 0, 1, 1, EndMode::Stop});
   Streamed out;
@@ -262,7 +262,7 @@ TEST_F(DemandTest, APausedPlayerReadsWhatTheLargerDemandLacks) {
   VirtualClock clock;
   PlayerOptions po;
   po.start_frame = 3;
-  po.pipeline.decode_threads = 2;
+  po.pipeline.decode.threads = 2;
   po.pipeline.demand = demand_of(kFarEye, kCentre, 0.1f);
   Player player(reader, allocator, clock, po);
   const auto shown_after = [&](auto done) {
@@ -315,9 +315,9 @@ TEST_F(DemandTest, ABadRecordIsNamedAsTheFileNumbersIt) {
   for (const bool encoded : {false, true}) {
     HostFrameAllocator allocator;
     PipelineOptions po;
-    po.decode_threads = 2;
+    po.decode.threads = 2;
     po.demand = far;
-    po.keep_encoded = encoded;
+    po.decode.mode = (encoded) ? sluice::runtime::DecodeMode::KeepEncoded : sluice::runtime::DecodeMode::Cpu;
     Pipeline pipeline(reader, allocator, po);
     pipeline.restart({reader.frame_count(), 0, 1, 1, EndMode::Stop});
     bool failed = false;
@@ -347,9 +347,9 @@ TEST_F(DemandTest, DemandsRaceWithSeeksAndDelivery) {
   for (const bool encoded : {false, true}) {
     HostFrameAllocator allocator;
     PipelineOptions po;
-    po.decode_threads = 2;
-    po.read_threads = 2;
-    po.keep_encoded = encoded;
+    po.decode.threads = 2;
+    po.read.threads = 2;
+    po.decode.mode = (encoded) ? sluice::runtime::DecodeMode::KeepEncoded : sluice::runtime::DecodeMode::Cpu;
     Pipeline pipeline(reader, allocator, po);
     std::atomic<bool> stop{false};
     std::thread setter([&] {

@@ -46,9 +46,9 @@ class FaultTest : public ::testing::Test {
   static PlayerOptions options(ErrorPolicy policy, std::shared_ptr<RecordSource> source = nullptr) {
     PlayerOptions o;
     o.on_error = policy;
-    o.pipeline.decode_threads = 2;
-    o.pipeline.budget.max_frames = 8;
-    o.pipeline.source = std::move(source);
+    o.pipeline.decode.threads = 2;
+    o.pipeline.window.budget.max_frames = 8;
+    o.pipeline.read.source = std::move(source);
     return o;
   }
 
@@ -177,8 +177,8 @@ TEST_F(FaultTest, FaultsInParallelPiecesNameTheFrame) {
     HostFrameAllocator allocator;
     VirtualClock clock;
     PlayerOptions o = options(ErrorPolicy::SkipFrame, faulty(reader, fault));
-    o.pipeline.read_threads = 3;
-    o.pipeline.read_piece_bytes = 300;
+    o.pipeline.read.threads = 3;
+    o.pipeline.read.piece_bytes = 300;
     Player player(reader, allocator, clock, o);
     const bool fails = fault == test::FaultySource::Fault::Fail;
     EXPECT_EQ(play_through(player, clock), all_but(0, 30, fails ? std::vector<uint64_t>{kBad} : std::vector<uint64_t>{}));
@@ -239,10 +239,10 @@ TEST_F(FaultTest, CorruptChunkNamesFileFrameAndChunk) {
     SCOPED_TRACE(testing::Message() << (way.mapped ? "mapped" : "pread") << ", " << way.read_threads << " read threads");
     HostFrameAllocator memory;
     PipelineOptions o;
-    o.decode_threads = 2;
-    o.keep_encoded = true;
-    o.mapped_reads = way.mapped;
-    o.read_threads = way.read_threads;
+    o.decode.threads = 2;
+    o.decode.mode = sluice::runtime::DecodeMode::KeepEncoded;
+    o.read.mapped = way.mapped;
+    o.read.threads = way.read_threads;
     Pipeline p(reader, memory, o);
     p.restart({reader.frame_count(), 0, 1, 1, EndMode::Stop});
     for (uint64_t f = 0; f < reader.frame_count(); ++f) {
@@ -266,8 +266,8 @@ TEST_F(FaultTest, PipelineHandsFailuresToTheConsumerInOrder) {
   const io::ContainerReader reader(*path_);
   HostFrameAllocator allocator;
   PipelineOptions o;
-  o.decode_threads = 2;
-  o.source = faulty(reader, test::FaultySource::Fault::Fail);
+  o.decode.threads = 2;
+  o.read.source = faulty(reader, test::FaultySource::Fault::Fail);
   Pipeline p(reader, allocator, o);
   p.restart({reader.frame_count(), 0, 1, 1, EndMode::Stop});
   for (uint64_t f = 0; f < reader.frame_count(); ++f) {
@@ -337,8 +337,8 @@ std::map<uint64_t, std::string> play_once(Pipeline& p, uint64_t frames) {
 
 PipelineOptions decode_options() {
   PipelineOptions o;
-  o.decode_threads = 2;
-  o.budget.max_frames = 8;
+  o.decode.threads = 2;
+  o.window.budget.max_frames = 8;
   return o;
 }
 
@@ -351,7 +351,7 @@ TEST_F(FaultTest, NoMemoryToDescribeADecodeErrorIsStillAnErrorFrame) {
   const io::ContainerReader reader(*path_);
   HostFrameAllocator allocator;
   PipelineOptions o = decode_options();
-  o.before_decode_chunk = [](uint64_t frame, size_t chunk) {
+  o.faults.before_decode_chunk = [](uint64_t frame, size_t chunk) {
     if (frame != kBad || chunk != 0) return;
     test::fail_next_allocations(1);  // the copy of the file name in the error
     throw InjectedFailure{};
@@ -376,7 +376,7 @@ TEST_F(FaultTest, DecodeErrorsOfEveryKindAreErrorFrames) {
   const io::ContainerReader reader(*path_);
   HostFrameAllocator allocator;
   PipelineOptions o = decode_options();
-  o.before_decode_chunk = [](uint64_t frame, size_t chunk) {
+  o.faults.before_decode_chunk = [](uint64_t frame, size_t chunk) {
     if (frame == kBad && chunk == 1) throw std::bad_alloc();
     if (frame == kBad + 1 && chunk == 0) throw 42;  // not even an exception
   };
@@ -393,7 +393,7 @@ TEST_F(FaultTest, NoMemoryToHandAFrameToTheDecodersIsAnErrorFrame) {
   const io::ContainerReader reader(*path_);
   HostFrameAllocator allocator;
   PipelineOptions o = decode_options();
-  o.before_decode_handoff = [](uint64_t frame) {
+  o.faults.before_decode_handoff = [](uint64_t frame) {
     if (frame == kBad) throw std::bad_alloc();
   };
   std::map<uint64_t, std::string> outcome;
@@ -446,7 +446,7 @@ TEST_F(FaultTest, SeekWhileAFrameIsDecodingDeliversTheNewScheduleOnly) {
   HostFrameAllocator allocator;
   auto gate = std::make_shared<DecodeGate>();
   PipelineOptions o = decode_options();
-  o.before_decode_chunk = [gate](uint64_t frame, size_t chunk) { gate->wait_here(frame, chunk); };
+  o.faults.before_decode_chunk = [gate](uint64_t frame, size_t chunk) { gate->wait_here(frame, chunk); };
   Pipeline p(reader, allocator, o);
   p.restart({reader.frame_count(), int64_t(kBad), 1, 1, EndMode::Stop});
   ASSERT_TRUE(gate->wait_until_held()) << "frame kBad never reached the decoder";
@@ -470,7 +470,7 @@ TEST_F(FaultTest, DestroyingWhileAFrameIsDecodingWaitsForItAndEnds) {
   HostFrameAllocator allocator;
   auto gate = std::make_shared<DecodeGate>();
   PipelineOptions o = decode_options();
-  o.before_decode_chunk = [gate](uint64_t frame, size_t chunk) { gate->wait_here(frame, chunk); };
+  o.faults.before_decode_chunk = [gate](uint64_t frame, size_t chunk) { gate->wait_here(frame, chunk); };
   auto p = std::make_unique<Pipeline>(reader, allocator, o);
   p->restart({reader.frame_count(), int64_t(kBad), 1, 1, EndMode::Stop});
   ASSERT_TRUE(gate->wait_until_held()) << "frame kBad never reached the decoder";
@@ -495,12 +495,12 @@ TEST_F(FaultTest, SteadyPlaybackAllocatesNothingPerFrame) {
   const io::ContainerReader reader(*path_);
   HostFrameAllocator allocator;
   PipelineOptions o = decode_options();
-  o.reevaluate_every = 1u << 30;  // re-reading /proc for the budget allocates; not per frame
-  o.slow_start = false;           // the window stands: no new buffer blocks while it grows
+  o.window.reevaluate_every = 1u << 30;  // re-reading /proc for the budget allocates; not per frame
+  o.window.slow_start = false;           // the window stands: no new buffer blocks while it grows
   // One decode worker: a worker's scratch grows to the largest chunk it has
   // decoded (once), and with several, which worker meets which chunk first is
   // TBB's choice; with one, the warm-up has shown it every chunk.
-  o.decode_threads = 1;
+  o.decode.threads = 1;
   Pipeline p(reader, allocator, o);
   p.restart({reader.frame_count(), 0, 1, 1, EndMode::Loop});
   const auto take = [&](uint64_t n) {

@@ -12,6 +12,7 @@
 #include <thread>
 
 #include "runtime_test_util.h"
+#include "sluice/runtime/error.h"
 #include "sluice/io/gpu_decode_plan.h"
 #include "sluice/io/lod.h"
 #include "sluice/io/writer.h"
@@ -34,19 +35,19 @@ class PipelineTest : public ::testing::Test {
   }
   static PipelineOptions options() {
     PipelineOptions o;
-    o.decode_threads = 2;
-    o.budget.memory_cap = 64u << 20;
+    o.decode.threads = 2;
+    o.window.budget.memory_cap = 64u << 20;
     return o;
   }
   // Options whose window is planned from `fake`/meminfo alone (no cap, no
   // cgroup), re-read before every frame.
   static PipelineOptions budget_from_fake_meminfo(const test::TempDir& fake) {
     PipelineOptions o = options();
-    o.budget.memory_cap = 0;
-    o.budget.max_frames = 0;
-    o.budget.ring_capacity = 64;
-    o.budget.host_paths = {(fake / "meminfo").string(), (fake / "none").string(), (fake / "none").string()};
-    o.reevaluate_every = 1;
+    o.window.budget.memory_cap = 0;
+    o.window.budget.max_frames = 0;
+    o.window.budget.ring_capacity = 64;
+    o.window.budget.host_paths = {(fake / "meminfo").string(), (fake / "none").string(), (fake / "none").string()};
+    o.window.reevaluate_every = 1;
     return o;
   }
   // Takes `count` entries (or until the schedule ends) checking each one.
@@ -114,7 +115,7 @@ TEST_F(PipelineTest, NoStaleFrameAfterRestart) {
   const io::ContainerReader reader(*path_);
   HostFrameAllocator allocator;
   PipelineOptions o = options();
-  o.budget.max_frames = 12;
+  o.window.budget.max_frames = 12;
   Pipeline p(reader, allocator, o);
   std::mt19937 rng(2024);
   const uint64_t n = reader.frame_count();
@@ -147,9 +148,9 @@ TEST_F(PipelineTest, TwoFrameBudgetStillPlays) {
   HostFrameAllocator allocator;
   PipelineOptions o = options();
   const FrameFootprint f = largest_frame(reader, 1, &allocator);
-  o.budget.memory_cap = 2 * f.decoded_bytes + f.record_bytes;
+  o.window.budget.memory_cap = 2 * f.decoded_bytes + f.record_bytes;
   std::vector<WindowChange> changes;
-  o.on_window_change = [&](const WindowChange& c) { changes.push_back(c); };
+  o.window.on_change = [&](const WindowChange& c) { changes.push_back(c); };
   Pipeline p(reader, allocator, o);
   ASSERT_EQ(changes.size(), 1u);
   EXPECT_EQ(changes[0].plan.frames, 2u);
@@ -160,7 +161,7 @@ TEST_F(PipelineTest, TwoFrameBudgetStillPlays) {
     p.restart(s);
     EXPECT_EQ(take_all(p, 1000), expected(s, 1000));
   }
-  EXPECT_LE(allocator.peak_held_bytes() + p.stats().peak_record_bytes, o.budget.memory_cap);
+  EXPECT_LE(allocator.peak_held_bytes() + p.stats().peak_record_bytes, o.window.budget.memory_cap);
 }
 
 // A consumer holding every frame the reader may keep ahead gets an error
@@ -170,7 +171,7 @@ TEST_F(PipelineTest, WaitingWithTheWindowHeldThrows) {
   for (uint32_t window : {2u, 3u, 8u}) {
     HostFrameAllocator allocator;
     PipelineOptions o = options();
-    o.budget.max_frames = window;
+    o.window.budget.max_frames = window;
     Pipeline p(reader, allocator, o);
     ASSERT_EQ(p.window(), window);
     p.restart({reader.frame_count(), 0, 1, 1, EndMode::Loop});
@@ -182,13 +183,13 @@ TEST_F(PipelineTest, WaitingWithTheWindowHeldThrows) {
       held.push_back(p.take());
       ASSERT_TRUE(test::holds_frame(held.back(), i, spec_));
     }
-    EXPECT_THROW(p.wait_next(), std::logic_error) << "window " << window;
+    EXPECT_THROW(p.wait_next(), sluice::runtime::Error) << "window " << window;
     held.erase(held.begin());
     const NextEntry next = p.wait_next();
     ASSERT_EQ(next.status, EntryStatus::Ready) << "window " << window;
     EXPECT_EQ(next.frame, ahead % reader.frame_count());
     held.push_back(p.take());
-    EXPECT_THROW(p.wait_next(), std::logic_error) << "window " << window;
+    EXPECT_THROW(p.wait_next(), sluice::runtime::Error) << "window " << window;
     held.clear();
   }
 }
@@ -198,7 +199,7 @@ TEST_F(PipelineTest, PeakMemoryStaysWithinTheBudget) {
   HostFrameAllocator allocator;
   PipelineOptions o = options();
   const FrameFootprint f = largest_frame(reader, 1, &allocator);
-  o.budget.memory_cap = 7 * f.decoded_bytes + 3 * f.record_bytes;
+  o.window.budget.memory_cap = 7 * f.decoded_bytes + 3 * f.record_bytes;
   Pipeline p(reader, allocator, o);
   EXPECT_EQ(p.window(), 7u);
   std::mt19937 rng(99);
@@ -208,9 +209,9 @@ TEST_F(PipelineTest, PeakMemoryStaysWithinTheBudget) {
     p.restart(s);
     const auto got = take_all(p, rng() % 20);
     ASSERT_EQ(got, expected(s, got.size()));
-    ASSERT_LE(allocator.held_bytes() + p.stats().peak_record_bytes, o.budget.memory_cap);
+    ASSERT_LE(allocator.held_bytes() + p.stats().peak_record_bytes, o.window.budget.memory_cap);
   }
-  EXPECT_LE(allocator.peak_held_bytes() + p.stats().peak_record_bytes, o.budget.memory_cap)
+  EXPECT_LE(allocator.peak_held_bytes() + p.stats().peak_record_bytes, o.window.budget.memory_cap)
       << "decoded buffers peaked at " << allocator.peak_held_bytes() << ", records at " << p.stats().peak_record_bytes;
   EXPECT_GT(allocator.peak_held_bytes(), 3 * f.decoded_bytes) << "the window was used, not just the minimum";
 }
@@ -219,8 +220,8 @@ TEST_F(PipelineTest, FramesBehindThePlayheadServeAReversal) {
   const io::ContainerReader reader(*path_);
   HostFrameAllocator allocator;
   PipelineOptions o = options();
-  o.budget.max_frames = 16;  // 4 kept behind
-  o.slow_start = false;      // the whole window at once (this consumer never lets decoding idle)
+  o.window.budget.max_frames = 16;  // 4 kept behind
+  o.window.slow_start = false;      // the whole window at once (this consumer never lets decoding idle)
   Pipeline p(reader, allocator, o);
   const uint64_t n = reader.frame_count();
   p.restart({n, 0, 1, 1, EndMode::Stop});
@@ -236,11 +237,11 @@ TEST_F(PipelineTest, SlowStartUsesAFewSlotsFirst) {
   const io::ContainerReader reader(*path_);
   HostFrameAllocator allocator;
   PipelineOptions o = options();
-  o.budget.max_frames = 16;
+  o.window.budget.max_frames = 16;
   Pipeline slow(reader, allocator, o);
   EXPECT_EQ(slow.stats().window_frames, 16u);
   EXPECT_EQ(slow.stats().active_frames, 4u) << "two decode workers + 2";
-  o.slow_start = false;
+  o.window.slow_start = false;
   Pipeline eager(reader, allocator, o);
   EXPECT_EQ(eager.stats().active_frames, 16u);
 }
@@ -249,7 +250,7 @@ TEST_F(PipelineTest, DecodesOnlyTheAttributesAskedFor) {
   const io::ContainerReader reader(*path_);
   HostFrameAllocator allocator;
   PipelineOptions o = options();
-  o.attributes = std::vector<uint32_t>{};
+  o.decode.attributes = std::vector<uint32_t>{};
   Pipeline p(reader, allocator, o);
   p.restart({reader.frame_count(), 5, 1, 1, EndMode::Stop});
   ASSERT_EQ(p.wait_next().status, EntryStatus::Ready);
@@ -258,7 +259,7 @@ TEST_F(PipelineTest, DecodesOnlyTheAttributesAskedFor) {
   EXPECT_TRUE(h.buffers().attributes.empty());
   EXPECT_TRUE(test::holds_frame(h, 5, spec_));
 
-  o.attributes = std::vector<uint32_t>{1};
+  o.decode.attributes = std::vector<uint32_t>{1};
   EXPECT_THROW(Pipeline(reader, allocator, o), io::Error);
 }
 
@@ -273,7 +274,7 @@ TEST_F(PipelineTest, ReadTimeCountsAReadStillInFlight) {
   const test::OpenAtExit open_gate{*gate};
   HostFrameAllocator allocator;
   PipelineOptions o = options();
-  o.source = gate;
+  o.read.source = gate;
   Pipeline p(reader, allocator, o);
   p.restart({reader.frame_count(), 0, 1, 1, EndMode::Stop});
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
@@ -294,11 +295,11 @@ PipelineStats expect_kept_encoded_frames_decode_the_same(const std::filesystem::
   EXPECT_TRUE(io::gpu_decodable(reader.header()));
   HostFrameAllocator decoded_memory, encoded_memory;
   PipelineOptions o;
-  o.decode_threads = 2;
-  o.attributes = std::vector<uint32_t>{0};
+  o.decode.threads = 2;
+  o.decode.attributes = std::vector<uint32_t>{0};
   Pipeline decoded(reader, decoded_memory, o);
-  o.keep_encoded = true;
-  o.encoded_color_attribute = 0;
+  o.decode.mode = sluice::runtime::DecodeMode::KeepEncoded;
+  o.decode.color_attribute = 0;
   Pipeline encoded(reader, encoded_memory, o);
   const PlaybackSchedule s{reader.frame_count(), 0, 1, 1, EndMode::Stop};
   decoded.restart(s);
@@ -362,8 +363,8 @@ TEST_F(PipelineTest, ReadsPiecesOfARecordInParallel) {
   const io::ContainerReader reader(*path_);
   HostFrameAllocator allocator;
   PipelineOptions o = options();
-  o.read_threads = 3;
-  o.read_piece_bytes = 256;  // several pieces per (tiny) record
+  o.read.threads = 3;
+  o.read.piece_bytes = 256;  // several pieces per (tiny) record
   Pipeline p(reader, allocator, o);
   EXPECT_NE(p.io_mode().find("3 read threads"), std::string::npos) << p.io_mode();
   std::mt19937 rng(5);
@@ -379,7 +380,7 @@ TEST_F(PipelineTest, DirectIoReadsTheSameFrames) {
   const io::ContainerReader reader(*path_);
   HostFrameAllocator allocator;
   PipelineOptions o = options();
-  o.direct_io = true;
+  o.read.direct_io = true;
   Pipeline p(reader, allocator, o);
   const PlaybackSchedule s{reader.frame_count(), 0, 1, 1, EndMode::Stop};
   p.restart(s);
@@ -405,7 +406,7 @@ TEST_F(PipelineTest, FallsBackWhenTheFilesystemRefusesDirectIo) {
     }
     HostFrameAllocator allocator;
     PipelineOptions o = options();
-    o.direct_io = true;
+    o.read.direct_io = true;
     Pipeline p(reader, allocator, o);
     const PlaybackSchedule s{reader.frame_count(), 0, 1, 1, EndMode::Stop};
     p.restart(s);
@@ -426,7 +427,7 @@ TEST_F(PipelineTest, WindowFollowsAvailableMemoryWhilePlaying) {
   // The fake MemAvailable does not drop as the pipeline allocates, so the
   // window may first grow a little; what matters is that it follows the drop.
   std::atomic<uint32_t> smallest{~0u};
-  o.on_window_change = [&](const WindowChange& c) { smallest = std::min(smallest.load(), c.plan.frames); };
+  o.window.on_change = [&](const WindowChange& c) { smallest = std::min(smallest.load(), c.plan.frames); };
   Pipeline p(reader, allocator, o);
   const uint32_t first = p.window();
   EXPECT_GE(first, 30u);
@@ -447,7 +448,7 @@ TEST_F(PipelineTest, HeldMemoryFollowsTheWindowDownAndUp) {
   HostFrameAllocator allocator;
   test::TempDir fake;
   PipelineOptions o = budget_from_fake_meminfo(fake);
-  o.slow_start = false;  // the whole window at once: held memory is the window
+  o.window.slow_start = false;  // the whole window at once: held memory is the window
   const FrameFootprint f = largest_frame(reader, 1, &allocator);
   const uint64_t plenty = 2 * (40 * f.decoded_bytes + 4 * f.record_bytes);  // ~40 frames
   const auto set_available = [&](uint64_t bytes) {
@@ -485,9 +486,9 @@ TEST_F(PipelineTest, RejectsSchedulesOutsideTheFile) {
   const io::ContainerReader reader(*path_);
   HostFrameAllocator allocator;
   Pipeline p(reader, allocator, options());
-  EXPECT_THROW(p.restart({reader.frame_count() + 1, 0, 1, 1, EndMode::Loop}), std::invalid_argument);
-  EXPECT_THROW(p.restart({reader.frame_count(), 0, 1, 0, EndMode::Loop}), std::invalid_argument);
-  EXPECT_THROW(p.restart({reader.frame_count(), 0, 2, 1, EndMode::Loop}), std::invalid_argument);
+  EXPECT_THROW(p.restart({reader.frame_count() + 1, 0, 1, 1, EndMode::Loop}), sluice::runtime::Error);
+  EXPECT_THROW(p.restart({reader.frame_count(), 0, 1, 0, EndMode::Loop}), sluice::runtime::Error);
+  EXPECT_THROW(p.restart({reader.frame_count(), 0, 2, 1, EndMode::Loop}), sluice::runtime::Error);
   // A loop over the first frames only is fine.
   const PlaybackSchedule prefix{5, 3, 1, 1, EndMode::Loop};
   p.restart(prefix);
@@ -512,16 +513,16 @@ TEST(ThreadSplit, OneReaderPerFourCoresFromEightCoresOn) {
 TEST(ThreadSplit, FramesKeptEncodedReadOnThirteenSixteenthsOfTheCores) {
   // The reads check the chunks; the workers only inflate zstd planes:
   // thirteen sixteenths of the cores read, 1 to 13.
-  EXPECT_EQ(default_thread_split(1, true).read, 1);
-  EXPECT_EQ(default_thread_split(1, true).decode, 1);
-  EXPECT_EQ(default_thread_split(2, true).read, 1);
-  EXPECT_EQ(default_thread_split(2, true).decode, 1);
-  EXPECT_EQ(default_thread_split(8, true).read, 6);
-  EXPECT_EQ(default_thread_split(8, true).decode, 2);
-  EXPECT_EQ(default_thread_split(16, true).read, 13);
-  EXPECT_EQ(default_thread_split(16, true).decode, 3);
-  EXPECT_EQ(default_thread_split(64, true).read, 13);
-  EXPECT_EQ(default_thread_split(64, true).decode, 51);
+  EXPECT_EQ(default_thread_split(1, DecodeMode::KeepEncoded).read, 1);
+  EXPECT_EQ(default_thread_split(1, DecodeMode::KeepEncoded).decode, 1);
+  EXPECT_EQ(default_thread_split(2, DecodeMode::KeepEncoded).read, 1);
+  EXPECT_EQ(default_thread_split(2, DecodeMode::KeepEncoded).decode, 1);
+  EXPECT_EQ(default_thread_split(8, DecodeMode::KeepEncoded).read, 6);
+  EXPECT_EQ(default_thread_split(8, DecodeMode::KeepEncoded).decode, 2);
+  EXPECT_EQ(default_thread_split(16, DecodeMode::KeepEncoded).read, 13);
+  EXPECT_EQ(default_thread_split(16, DecodeMode::KeepEncoded).decode, 3);
+  EXPECT_EQ(default_thread_split(64, DecodeMode::KeepEncoded).read, 13);
+  EXPECT_EQ(default_thread_split(64, DecodeMode::KeepEncoded).decode, 51);
 }
 
 // A file with the narrow band's layers: with the surface set the pipeline
@@ -565,9 +566,9 @@ TEST(PipelineLayers, SurfaceSetReadsThePrefixAndDeliversSurfaceAndBlobs) {
     SCOPED_TRACE(testing::Message() << (surface ? "surface" : "every particle") << ", " << read_threads << " read threads");
     HostFrameAllocator allocator;
     PipelineOptions o;
-    o.decode_threads = 2;
-    o.read_threads = read_threads;
-    o.budget.max_frames = 3;
+    o.decode.threads = 2;
+    o.read.threads = read_threads;
+    o.window.budget.max_frames = 3;
     o.layers = surface ? io::LayerSet::surface() : io::LayerSet::particles();
     Pipeline p(reader, allocator, o);
     p.restart({reader.frame_count(), 0, 1, 1, EndMode::Stop});

@@ -19,9 +19,9 @@ constexpr double kFps = 30.0;  // the tiny files' frame rate
 PlayerOptions small_options(RealTimePolicy policy = RealTimePolicy::HoldLastFrame) {
   PlayerOptions o;
   o.policy = policy;
-  o.pipeline.decode_threads = 2;
-  o.pipeline.budget.memory_cap = 64u << 20;
-  o.pipeline.budget.max_frames = 12;
+  o.pipeline.decode.threads = 2;
+  o.pipeline.window.budget.memory_cap = 64u << 20;
+  o.pipeline.window.budget.max_frames = 12;
   return o;
 }
 
@@ -159,7 +159,7 @@ TEST_F(PlayerTest, StallsAreCountedWhileTheDueFrameIsNotReady) {
   HostFrameAllocator allocator;
   VirtualClock clock;
   PlayerOptions o = small_options();
-  o.pipeline.source = gate;
+  o.pipeline.read.source = gate;
   Player player(reader, allocator, clock, o);
   const test::OpenAtExit open_gate{*gate};
   advance(clock, player, 0);
@@ -260,7 +260,7 @@ void random_operations(const std::filesystem::path& path, const test::TinySpec& 
   VirtualClock clock;
   std::mt19937 rng(seed);
   PlayerOptions o = small_options(policy);
-  o.pipeline.budget.max_frames = 2 + static_cast<uint32_t>(rng() % 15);
+  o.pipeline.window.budget.max_frames = 2 + static_cast<uint32_t>(rng() % 15);
   o.end = static_cast<EndMode>(rng() % 3);
   o.display_rate = rng() % 2 ? 60 : 0;
   Player player(reader, allocator, clock, o);
@@ -379,7 +379,7 @@ TEST(PlayerSoak, TenThousandFramesLoopingWithRandomOperations) {
   VirtualClock clock;
   PlayerOptions o = small_options();
   o.end = EndMode::Loop;
-  o.pipeline.budget.max_frames = 64;
+  o.pipeline.window.budget.max_frames = 64;
   o.start_frame = 9900;
   Player player(reader, allocator, clock, o);
   std::mt19937 rng(10000);

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "read_crew.h"
+#include "sluice/runtime/error.h"
 
 using sluice::runtime::detail::ReadCrew;
 
@@ -99,13 +100,13 @@ TEST(ReadCrew, EachRoundKeepsItsOwnErrorAndRoundsAreBounded) {
   const auto adding = [&](uint64_t p) { sum.fetch_add(p); };
   crew.begin(50, failing);
   crew.begin(100, adding);
-  EXPECT_THROW(crew.begin(1, adding), std::logic_error) << "a third round in flight";
-  EXPECT_THROW(crew.run(1, adding), std::logic_error) << "run() with rounds in flight";
+  EXPECT_THROW(crew.begin(1, adding), sluice::runtime::Error) << "a third round in flight";
+  EXPECT_THROW(crew.run(1, adding), sluice::runtime::Error) << "run() with rounds in flight";
   EXPECT_THROW(crew.join(), std::runtime_error);
   crew.join();  // the younger round ran whole, its error slot untouched
   EXPECT_EQ(sum.load(), 4950u);
-  EXPECT_THROW(crew.join(), std::logic_error) << "nothing left to join";
-  EXPECT_THROW(crew.begin(uint64_t(1) << 32, adding), std::length_error);
+  EXPECT_THROW(crew.join(), sluice::runtime::Error) << "nothing left to join";
+  EXPECT_THROW(crew.begin(uint64_t(1) << 32, adding), sluice::runtime::Error);
   EXPECT_EQ(crew.in_flight(), 0);
 }
 

@@ -103,12 +103,12 @@ PipelineStats expect_relayed_frames_decode_the_same(const std::filesystem::path&
   const io::ContainerReader reader(path);
   HostFrameAllocator decoded_memory;
   PipelineOptions o;
-  o.decode_threads = 2;
-  o.read_threads = read_threads;
-  o.attributes = std::vector<uint32_t>{0};
+  o.decode.threads = 2;
+  o.read.threads = read_threads;
+  o.decode.attributes = std::vector<uint32_t>{0};
   Pipeline decoded(reader, decoded_memory, o);
-  o.keep_encoded = true;
-  o.encoded_color_attribute = 0;
+  o.decode.mode = sluice::runtime::DecodeMode::KeepEncoded;
+  o.decode.color_attribute = 0;
   Pipeline relayed(reader, relay, o);
   const PlaybackSchedule s{reader.frame_count(), 0, 1, 1, EndMode::Stop};
   decoded.restart(s);
@@ -211,10 +211,10 @@ TEST_F(RelayTest, ZstdPlanesFallBackToHostAreas) {
   HostRelay relay(8, 64 << 10);
   HostRelayWithHostAreas allocator(relay);
   PipelineOptions o;
-  o.decode_threads = 2;
-  o.read_threads = 3;
-  o.keep_encoded = true;
-  o.encoded_color_attribute = 0;
+  o.decode.threads = 2;
+  o.read.threads = 3;
+  o.decode.mode = sluice::runtime::DecodeMode::KeepEncoded;
+  o.decode.color_attribute = 0;
   Pipeline p(reader, allocator, o);
   p.restart({reader.frame_count(), 0, 1, 1, EndMode::Stop});
   for (uint64_t f = 0; f < reader.frame_count(); ++f) {

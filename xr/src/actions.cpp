@@ -37,7 +37,7 @@ struct Binding {
 
 }  // namespace
 
-void Session::Impl::create_actions() {
+void detail::SessionImpl::create_actions() {
   XrActionSetCreateInfo create{XR_TYPE_ACTION_SET_CREATE_INFO};
   std::snprintf(create.actionSetName, XR_MAX_ACTION_SET_NAME_SIZE, "playback");
   std::snprintf(create.localizedActionSetName, XR_MAX_LOCALIZED_ACTION_SET_NAME_SIZE, "Playback");
@@ -80,7 +80,7 @@ void Session::Impl::create_actions() {
            {grip, "/user/hand/left/input/grip/pose"}, {grip, "/user/hand/right/input/grip/pose"}});
 }
 
-void Session::Impl::attach_actions() {
+void detail::SessionImpl::attach_actions() {
   XrSessionActionSetsAttachInfo attach{XR_TYPE_SESSION_ACTION_SETS_ATTACH_INFO};
   attach.countActionSets = 1;
   attach.actionSets = &action_set;
@@ -94,14 +94,14 @@ void Session::Impl::attach_actions() {
   }
 }
 
-void Session::Impl::destroy_action_spaces() {
+void detail::SessionImpl::destroy_action_spaces() {
   for (XrSpace& s : grip_spaces) {
     if (s) xrDestroySpace(s);
     s = XR_NULL_HANDLE;
   }
 }
 
-ActionState Session::Impl::sample_actions(XrTime time) {
+ActionState detail::SessionImpl::sample_actions(XrTime time) {
   ActionState a;
   if (state != State::Focused) return a;  // input goes to whoever has focus
   const XrActiveActionSet active{action_set, XR_NULL_PATH};

@@ -4,6 +4,7 @@
 #include <stdexcept>
 
 #include "session_impl.h"
+#include "sluice/xr/error.h"
 
 namespace sluice::xr {
 namespace {
@@ -19,7 +20,7 @@ XrPosef to_xr(const Pose& p) {
 
 Frame Session::begin_frame() {
   Impl& s = *impl_;
-  if (!s.running) throw std::logic_error("begin_frame: the session is not running (call poll() until running())");
+  if (!s.running) throw Error("begin_frame: the session is not running (call poll() until running())");
   XrFrameWaitInfo wait_info{XR_TYPE_FRAME_WAIT_INFO};
   XrFrameState frame_state{XR_TYPE_FRAME_STATE};
   check(xrWaitFrame(s.session, &wait_info, &frame_state), s.instance, "xrWaitFrame");
@@ -119,7 +120,7 @@ void Session::end_frame(Frame& f, const render::FrameSync& sync) {
       submit.pWaitSemaphoreInfos = &wait;
     }
     const size_t slot = s.frame_index % s.fences.size();
-    if (vkQueueSubmit2(s.graphics_queue, 1, &submit, s.fences[slot]) != VK_SUCCESS) throw std::runtime_error("vkQueueSubmit2 failed");
+    if (vkQueueSubmit2(s.graphics_queue, 1, &submit, s.fences[slot]) != VK_SUCCESS) throw Error("vkQueueSubmit2 failed");
     ++s.frame_index;
     for (SwapchainImages& c : s.color) s.release(c);
     for (SwapchainImages& d : s.depth) s.release(d);

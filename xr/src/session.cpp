@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "session_impl.h"
+#include "sluice/xr/error.h"
 
 namespace sluice::xr {
 namespace {
@@ -64,7 +65,7 @@ Session::~Session() {
   if (s.instance) xrDestroyInstance(s.instance);  // also destroys the action set
 }
 
-void Session::Impl::create_session() {
+void detail::SessionImpl::create_session() {
   XrGraphicsBindingVulkan2KHR binding{XR_TYPE_GRAPHICS_BINDING_VULKAN2_KHR};
   binding.instance = vk_instance;
   binding.physicalDevice = physical_device;
@@ -95,7 +96,7 @@ void Session::Impl::create_session() {
   attach_actions();
 }
 
-void Session::Impl::destroy_session() {
+void detail::SessionImpl::destroy_session() {
   if (device) vkDeviceWaitIdle(device);  // the swapchain images' last use
   destroy_action_spaces();
   destroy_swapchains();
@@ -106,7 +107,7 @@ void Session::Impl::destroy_session() {
   running = false;
 }
 
-void Session::Impl::handle_state(XrSessionState next) {
+void detail::SessionImpl::handle_state(XrSessionState next) {
   state = to_state(next);
   counters.states_seen |= 1u << unsigned(state);
   switch (next) {
@@ -173,7 +174,7 @@ bool Session::poll() {
       VkPhysicalDevice physical = VK_NULL_HANDLE;
       check(device_of(s.instance, &device_get, &physical), s.instance, "xrGetVulkanGraphicsDevice2KHR");
       if (physical != s.physical_device) {
-        throw std::runtime_error("after the session was lost, the OpenXR runtime picked another GPU: start sluice again");
+        throw Error("after the session was lost, the OpenXR runtime picked another GPU: start sluice again");
       }
       s.create_session();
     }

@@ -33,7 +33,7 @@ struct Validation {
   std::vector<std::string> messages;
 };
 
-struct Session::Impl {
+struct detail::SessionImpl {
   SessionOptions options;
   SystemInfo info;
   XrInstance instance = XR_NULL_HANDLE;

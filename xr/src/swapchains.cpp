@@ -4,6 +4,7 @@
 #include <stdexcept>
 
 #include "session_impl.h"
+#include "sluice/xr/error.h"
 
 namespace sluice::xr {
 namespace {
@@ -27,13 +28,13 @@ VkImageView make_view(VkDevice device, VkImage image, VkFormat format, bool dept
   if (format == VK_FORMAT_D24_UNORM_S8_UINT || format == VK_FORMAT_D32_SFLOAT_S8_UINT) aspect |= VK_IMAGE_ASPECT_STENCIL_BIT;
   v.subresourceRange = {aspect, 0, 1, first, count};
   VkImageView view = VK_NULL_HANDLE;
-  if (vkCreateImageView(device, &v, nullptr, &view) != VK_SUCCESS) throw std::runtime_error("vkCreateImageView failed");
+  if (vkCreateImageView(device, &v, nullptr, &view) != VK_SUCCESS) throw Error("vkCreateImageView failed");
   return view;
 }
 
 }  // namespace
 
-void Session::Impl::create_swapchains() {
+void detail::SessionImpl::create_swapchains() {
   uint32_t n = 0;
   check(xrEnumerateSwapchainFormats(session, 0, &n, nullptr), instance, "xrEnumerateSwapchainFormats");
   std::vector<int64_t> formats(n);
@@ -42,7 +43,7 @@ void Session::Impl::create_swapchains() {
   // writes from the renderer's linear ones.
   info.color_format = pick(formats, {VK_FORMAT_R8G8B8A8_SRGB, VK_FORMAT_B8G8R8A8_SRGB, VK_FORMAT_R8G8B8A8_UNORM,
                                      VK_FORMAT_B8G8R8A8_UNORM});
-  if (info.color_format == VK_FORMAT_UNDEFINED) throw std::runtime_error("the OpenXR runtime offers no 8-bit RGBA swapchain format");
+  if (info.color_format == VK_FORMAT_UNDEFINED) throw Error("the OpenXR runtime offers no 8-bit RGBA swapchain format");
   info.depth_format = info.depth_layer ? pick(formats, {VK_FORMAT_D32_SFLOAT, VK_FORMAT_D24_UNORM_S8_UINT, VK_FORMAT_D16_UNORM,
                                                         VK_FORMAT_D32_SFLOAT_S8_UINT})
                                        : VK_FORMAT_UNDEFINED;
@@ -94,7 +95,7 @@ void Session::Impl::create_swapchains() {
   }
 }
 
-void Session::Impl::destroy_swapchains() {
+void detail::SessionImpl::destroy_swapchains() {
   for (auto* list : {&color, &depth}) {
     for (SwapchainImages& s : *list) {
       for (const auto& views : s.views) {
@@ -109,7 +110,7 @@ void Session::Impl::destroy_swapchains() {
   }
 }
 
-void Session::Impl::acquire(SwapchainImages& s) {
+void detail::SessionImpl::acquire(SwapchainImages& s) {
   XrSwapchainImageAcquireInfo acquire_info{XR_TYPE_SWAPCHAIN_IMAGE_ACQUIRE_INFO};
   check(xrAcquireSwapchainImage(s.handle, &acquire_info, &s.acquired), instance, "xrAcquireSwapchainImage");
   XrSwapchainImageWaitInfo wait{XR_TYPE_SWAPCHAIN_IMAGE_WAIT_INFO};
@@ -117,7 +118,7 @@ void Session::Impl::acquire(SwapchainImages& s) {
   check(xrWaitSwapchainImage(s.handle, &wait), instance, "xrWaitSwapchainImage");
 }
 
-void Session::Impl::release(SwapchainImages& s) {
+void detail::SessionImpl::release(SwapchainImages& s) {
   if (s.acquired == UINT32_MAX) return;
   XrSwapchainImageReleaseInfo release_info{XR_TYPE_SWAPCHAIN_IMAGE_RELEASE_INFO};
   check(xrReleaseSwapchainImage(s.handle, &release_info), instance, "xrReleaseSwapchainImage");

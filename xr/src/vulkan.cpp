@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "session_impl.h"
+#include "sluice/xr/error.h"
 
 namespace sluice::xr {
 namespace {
@@ -40,7 +41,7 @@ class Vulkan12Structs {
     f.pNext = nullptr;
     VkPhysicalDeviceVulkan12Features none{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES};
     if (std::memcmp(&f, &none, sizeof f) != 0) {
-      throw std::logic_error("xr: render::required_device_features() asks for a Vulkan 1.2 feature the XR device setup does not pass on");
+      throw Error("xr: render::required_device_features() asks for a Vulkan 1.2 feature the XR device setup does not pass on");
     }
     address_.pNext = &timeline_;
     timeline_.pNext = &reset_;
@@ -67,7 +68,7 @@ bool layer_available(const char* name) {
 
 void check(XrResult result, XrInstance instance, const char* what) {
   if (XR_SUCCEEDED(result)) return;
-  throw std::runtime_error(std::string(what) + " failed: " + result_name(result, instance));
+  throw Error(std::string(what) + " failed: " + result_name(result, instance));
 }
 
 std::string result_name(XrResult result, XrInstance instance) {
@@ -78,18 +79,18 @@ std::string result_name(XrResult result, XrInstance instance) {
   return name;
 }
 
-void Session::Impl::create_instance() {
+void detail::SessionImpl::create_instance() {
   uint32_t n = 0;
   const XrResult listed = xrEnumerateInstanceExtensionProperties(nullptr, 0, &n, nullptr);
   if (XR_FAILED(listed)) {
-    throw std::runtime_error("no OpenXR runtime (" + result_name(listed, XR_NULL_HANDLE) +
+    throw Error("no OpenXR runtime (" + result_name(listed, XR_NULL_HANDLE) +
                              "): install one (Monado, SteamVR) or point XR_RUNTIME_JSON at its manifest");
   }
   std::vector<XrExtensionProperties> extensions(n, {XR_TYPE_EXTENSION_PROPERTIES});
   check(xrEnumerateInstanceExtensionProperties(nullptr, n, &n, extensions.data()), XR_NULL_HANDLE,
         "xrEnumerateInstanceExtensionProperties");
   if (!has_extension(extensions, XR_KHR_VULKAN_ENABLE2_EXTENSION_NAME)) {
-    throw std::runtime_error("the OpenXR runtime does not offer " XR_KHR_VULKAN_ENABLE2_EXTENSION_NAME
+    throw Error("the OpenXR runtime does not offer " XR_KHR_VULKAN_ENABLE2_EXTENSION_NAME
                              ", which sluice needs to share its Vulkan device");
   }
   std::vector<const char*> enabled{XR_KHR_VULKAN_ENABLE2_EXTENSION_NAME};
@@ -117,7 +118,7 @@ void Session::Impl::create_instance() {
   get.formFactor = XR_FORM_FACTOR_HEAD_MOUNTED_DISPLAY;
   const XrResult got = xrGetSystem(instance, &get, &system_id);
   if (got == XR_ERROR_FORM_FACTOR_UNAVAILABLE) {
-    throw std::runtime_error("the OpenXR runtime has no headset right now (connect it, start its service)");
+    throw Error("the OpenXR runtime has no headset right now (connect it, start its service)");
   }
   check(got, instance, "xrGetSystem");
   XrSystemProperties system{XR_TYPE_SYSTEM_PROPERTIES};
@@ -127,7 +128,7 @@ void Session::Impl::create_instance() {
   uint32_t views = 0;
   check(xrEnumerateViewConfigurationViews(instance, system_id, XR_VIEW_CONFIGURATION_TYPE_PRIMARY_STEREO, 0, &views, nullptr),
         instance, "xrEnumerateViewConfigurationViews");
-  if (views != 2) throw std::runtime_error("the headset's stereo configuration has " + std::to_string(views) + " views, not 2");
+  if (views != 2) throw Error("the headset's stereo configuration has " + std::to_string(views) + " views, not 2");
   std::vector<XrViewConfigurationView> config(views, {XR_TYPE_VIEW_CONFIGURATION_VIEW});
   check(xrEnumerateViewConfigurationViews(instance, system_id, XR_VIEW_CONFIGURATION_TYPE_PRIMARY_STEREO, views, &views,
                                           config.data()),
@@ -146,7 +147,7 @@ void Session::Impl::create_instance() {
   }
 }
 
-void Session::Impl::create_vulkan() {
+void detail::SessionImpl::create_vulkan() {
   auto requirements_of = instance_function<PFN_xrGetVulkanGraphicsRequirements2KHR>(instance, "xrGetVulkanGraphicsRequirements2KHR");
   auto create_instance_of = instance_function<PFN_xrCreateVulkanInstanceKHR>(instance, "xrCreateVulkanInstanceKHR");
   auto device_of = instance_function<PFN_xrGetVulkanGraphicsDevice2KHR>(instance, "xrGetVulkanGraphicsDevice2KHR");
@@ -156,7 +157,7 @@ void Session::Impl::create_vulkan() {
   check(requirements_of(instance, system_id, &requirements), instance, "xrGetVulkanGraphicsRequirements2KHR");
   // sluice needs Vulkan 1.3 whatever the runtime has tested up to.
   if (XR_VERSION_MAJOR(requirements.minApiVersionSupported) > 1 || XR_VERSION_MINOR(requirements.minApiVersionSupported) > 3) {
-    throw std::runtime_error("the OpenXR runtime needs a Vulkan newer than 1.3");
+    throw Error("the OpenXR runtime needs a Vulkan newer than 1.3");
   }
 
   std::vector<const char*> instance_extensions = render::required_instance_extensions();
@@ -190,7 +191,7 @@ void Session::Impl::create_vulkan() {
   VkResult vk_result = VK_SUCCESS;
   check(create_instance_of(instance, &xr_create, &vk_instance, &vk_result), instance, "xrCreateVulkanInstanceKHR");
   if (vk_result != VK_SUCCESS) {
-    throw std::runtime_error("vkCreateInstance through the OpenXR runtime failed (VkResult " + std::to_string(int(vk_result)) + ")");
+    throw Error("vkCreateInstance through the OpenXR runtime failed (VkResult " + std::to_string(int(vk_result)) + ")");
   }
   if (validation) {
     auto create_messenger = reinterpret_cast<PFN_vkCreateDebugUtilsMessengerEXT>(
@@ -203,7 +204,7 @@ void Session::Impl::create_vulkan() {
   device_get.vulkanInstance = vk_instance;
   check(device_of(instance, &device_get, &physical_device), instance, "xrGetVulkanGraphicsDevice2KHR");
   const std::string unusable = render::device_unusable_reason(vk_instance, physical_device);
-  if (!unusable.empty()) throw std::runtime_error("the GPU the OpenXR runtime picked cannot run sluice: " + unusable);
+  if (!unusable.empty()) throw Error("the GPU the OpenXR runtime picked cannot run sluice: " + unusable);
 
   // Queues: a graphics+compute family; a transfer-only family for uploads where there is one.
   uint32_t n = 0;
@@ -218,7 +219,7 @@ void Session::Impl::create_vulkan() {
       transfer_family = i;
     }
   }
-  if (graphics_family == UINT32_MAX) throw std::runtime_error("the OpenXR runtime's GPU has no graphics+compute queue");
+  if (graphics_family == UINT32_MAX) throw Error("the OpenXR runtime's GPU has no graphics+compute queue");
   const float priority = 1.0f;
   std::vector<VkDeviceQueueCreateInfo> queues;
   for (uint32_t family : {graphics_family, transfer_family}) {
@@ -254,7 +255,7 @@ void Session::Impl::create_vulkan() {
   xr_device.vulkanCreateInfo = &device_create;
   check(create_device_of(instance, &xr_device, &device, &vk_result), instance, "xrCreateVulkanDeviceKHR");
   if (vk_result != VK_SUCCESS) {
-    throw std::runtime_error("vkCreateDevice through the OpenXR runtime failed (VkResult " + std::to_string(int(vk_result)) + ")");
+    throw Error("vkCreateDevice through the OpenXR runtime failed (VkResult " + std::to_string(int(vk_result)) + ")");
   }
   vkGetDeviceQueue(device, graphics_family, 0, &graphics_queue);
 
@@ -274,22 +275,22 @@ void Session::Impl::create_vulkan() {
   VkCommandPoolCreateInfo pool{VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
   pool.flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;
   pool.queueFamilyIndex = graphics_family;
-  if (vkCreateCommandPool(device, &pool, nullptr, &command_pool) != VK_SUCCESS) throw std::runtime_error("vkCreateCommandPool failed");
+  if (vkCreateCommandPool(device, &pool, nullptr, &command_pool) != VK_SUCCESS) throw Error("vkCreateCommandPool failed");
   VkCommandBufferAllocateInfo alloc{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
   alloc.commandPool = command_pool;
   alloc.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
   alloc.commandBufferCount = uint32_t(command_buffers.size());
   if (vkAllocateCommandBuffers(device, &alloc, command_buffers.data()) != VK_SUCCESS) {
-    throw std::runtime_error("vkAllocateCommandBuffers failed");
+    throw Error("vkAllocateCommandBuffers failed");
   }
   for (VkFence& f : fences) {
     VkFenceCreateInfo fence{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
     fence.flags = VK_FENCE_CREATE_SIGNALED_BIT;
-    if (vkCreateFence(device, &fence, nullptr, &f) != VK_SUCCESS) throw std::runtime_error("vkCreateFence failed");
+    if (vkCreateFence(device, &fence, nullptr, &f) != VK_SUCCESS) throw Error("vkCreateFence failed");
   }
 }
 
-void Session::Impl::destroy_vulkan() {
+void detail::SessionImpl::destroy_vulkan() {
   if (device) {
     vkDeviceWaitIdle(device);
     for (VkFence f : fences) {

@@ -34,8 +34,8 @@ struct ViewBenchOptions {
   bool psnr = true;                      // the quality pass
   std::string decode = "auto";           // auto | cpu | gpu
   std::string device;                    // Vulkan device ("": the first GPU)
-  int read_threads = 0;                  // the pipeline's (PipelineOptions::read_threads); 0: its default
-  bool mapped_reads = true;              // false: pread (PipelineOptions::mapped_reads)
+  int read_threads = 0;                  // the pipeline's (ReadSettings::threads); 0: its default
+  bool mapped_reads = true;              // false: pread (ReadSettings::mapped)
 };
 
 // Throws io::Error on a bad file.

@@ -33,7 +33,7 @@ struct WindowOptions {
 };
 
 // Initializes GLFW (once per process) and returns the instance extensions
-// Vulkan needs for its windows. Throws std::runtime_error when there is no
+// Vulkan needs for its windows. Throws desktop::Error when there is no
 // display (no X server / Wayland compositor) or GLFW lacks Vulkan.
 std::vector<std::string> window_instance_extensions();
 
@@ -48,6 +48,10 @@ struct WindowCallbacks {
   void (*scroll)(GLFWwindow*, double dx, double dy) = nullptr;
   void* user = nullptr;  // glfwGetWindowUserPointer
 };
+
+namespace detail {
+struct WindowImpl;  // defined in desktop/src, seen by no caller
+}  // namespace detail
 
 class Window {
  public:
@@ -79,9 +83,9 @@ class Window {
   // (waits for that frame).
   std::vector<uint8_t> read_presented();
 
-  struct Impl;
 
  private:
+  using Impl = detail::WindowImpl;
   std::unique_ptr<Impl> impl_;
 };
 

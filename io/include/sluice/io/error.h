@@ -1,4 +1,5 @@
-// sluice/io/error.h: the one exception type the io module throws.
+// sluice/io/error.h: the one exception type the io module throws (and the
+// import module, whose errors are bad input too), a sluice::Error.
 //
 // Every error names where it happened: the file, and where it applies the
 // frame and the chunk, so a user can find the bad bytes or the bad input.
@@ -6,8 +7,9 @@
 
 #include <cstdint>
 #include <optional>
-#include <stdexcept>
 #include <string>
+
+#include "sluice/error.h"
 
 namespace sluice::io {
 
@@ -17,7 +19,7 @@ struct ErrorLocation {
   std::optional<uint64_t> chunk{};      // chunk number within the frame
 };
 
-class Error : public std::runtime_error {
+class Error : public sluice::Error {
  public:
   Error(ErrorLocation where, const std::string& message);
 

@@ -5,7 +5,8 @@
 
 #include <array>
 #include <cstddef>
-#include <stdexcept>
+
+#include "sluice/io/error.h"
 
 namespace sluice::io {
 
@@ -17,7 +18,7 @@ class InlineVector {
   static constexpr size_t capacity() { return N; }
   // Throws std::length_error beyond N.
   void resize(size_t n, const T& value = T{}) {
-    if (n > N) throw std::length_error("InlineVector: more than its capacity");
+    if (n > N) throw io::Error({}, "InlineVector: more than its capacity");
     for (size_t i = count_; i < n; ++i) items_[i] = value;
     count_ = n;
   }
@@ -28,7 +29,7 @@ class InlineVector {
   void clear() { count_ = 0; }
   template <class... Args>
   T& emplace_back(Args&&... args) {
-    if (count_ == N) throw std::length_error("InlineVector: more than its capacity");
+    if (count_ == N) throw io::Error({}, "InlineVector: more than its capacity");
     items_[count_] = T(static_cast<Args&&>(args)...);
     return items_[count_++];
   }

@@ -66,7 +66,7 @@ struct NarrowBand {
   uint64_t surface() const { return counts[1] + counts[2] + counts[3]; }
 };
 
-// Classifies `xyz` (x,y,z per particle). Throws std::invalid_argument when
+// Classifies `xyz` (x,y,z per particle). Throws io::Error when
 // options.diameter is not positive.
 NarrowBand classify_narrow_band(std::span<const float> xyz, const NarrowBandOptions& options);
 

@@ -10,6 +10,7 @@
 #pragma once
 
 #include <filesystem>
+#include <functional>
 #include <string>
 
 namespace sluice::io {
@@ -22,7 +23,7 @@ class OutputLock {
   // until the holder releases it, calling `on_wait(pid)` once first (pid 0
   // when unknown). Throws io::Error when the lock file cannot be created.
   explicit OutputLock(const std::filesystem::path& output, Wait wait = Wait::No,
-                      void (*on_wait)(const std::filesystem::path& output, long pid) = nullptr);
+                      const std::function<void(const std::filesystem::path& output, long pid)>& on_wait = {});
   ~OutputLock();  // removes the lock file and releases the lock
   OutputLock(const OutputLock&) = delete;
   OutputLock& operator=(const OutputLock&) = delete;

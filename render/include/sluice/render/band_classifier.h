@@ -35,8 +35,8 @@ class BandClassifier {
   // result is io::classify_narrow_band's: layers, counts, voxel counts and,
   // with options.blobs, one blob per voxel holding interior particles (in
   // an order of the GPU's choosing; centroids summed in float). Throws
-  // std::invalid_argument for bad options or more than 2^28 particles,
-  // std::runtime_error when the grid does not fit 32-bit keys or memory
+  // render::Error for bad options or more than 2^28 particles,
+  // render::Error when the grid does not fit 32-bit keys or memory
   // runs out.
   io::NarrowBand classify(std::span<const float> xyz, const io::NarrowBandOptions& options);
 

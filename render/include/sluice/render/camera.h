@@ -62,7 +62,7 @@ class Camera {
   // ";near=..", ";shift=x,y" when they are not 0).
   std::string to_string() const;
   // Parses the form above; keys may come in any order and be omitted (they
-  // keep this camera's values). Throws std::invalid_argument naming the bad key.
+  // keep this camera's values). Throws render::Error naming the bad key.
   void apply(const std::string& text);
 
   bool operator==(const Camera&) const = default;

@@ -116,13 +116,17 @@ DeviceFeatures required_device_features();
 // Empty when `physical_device` (of `instance`) can run sluice, else why not.
 std::string device_unusable_reason(VkInstance instance, VkPhysicalDevice physical_device);
 
+namespace detail {
+struct ContextImpl;  // defined in render/src, seen by no caller
+}  // namespace detail
+
 class Context {
  public:
-  // Owning: creates an instance and device. Throws std::runtime_error when
+  // Owning: creates an instance and device. Throws render::Error when
   // Vulkan is missing or no device fits.
   explicit Context(const ContextOptions& options = {});
   // Non-owning: works on the host's handles (see HostVulkan). Throws
-  // std::runtime_error naming what is missing when the device cannot run
+  // render::Error naming what is missing when the device cannot run
   // sluice. Validation messages are the host's (its own messenger).
   explicit Context(const HostVulkan& host);
   ~Context();
@@ -154,9 +158,9 @@ class Context {
   uint64_t validation_warnings() const;
   std::vector<std::string> validation_messages() const;  // the first 32 errors and warnings
 
-  struct Impl;  // render/src/vk_common.h; only sluice_render's sources see it
 
  private:
+  using Impl = detail::ContextImpl;  // render/src/vk_common.h; only sluice_render's sources see it
   friend Impl& context_impl(Context&);
   friend const Impl& context_impl(const Context&);
   std::unique_ptr<Impl> impl_;

@@ -2,7 +2,7 @@
 // (libpng), an MP4 through an `ffmpeg` child process, and image comparison
 // for golden tests. Images are RGBA8, rows top first, tightly packed.
 //
-// Errors throw std::runtime_error naming the file. Not thread-safe per object.
+// Errors throw render::Error naming the file. Not thread-safe per object.
 #pragma once
 
 #include <cstdint>

@@ -59,7 +59,7 @@ SceneInfo live_scene(const Bounds& bounds, const LiveOptions& options,
 
 class LiveSource {
  public:
-  // Throws std::invalid_argument when the renderer's scene and the options
+  // Throws render::Error when the renderer's scene and the options
   // disagree (attributes), io::Error when the recording cannot be created.
   LiveSource(Renderer& renderer, const LiveOptions& options);
   ~LiveSource();  // without finish(), a recording is left without its index: `sluice recover` completes it
@@ -67,7 +67,7 @@ class LiveSource {
   LiveSource& operator=(const LiveSource&) = delete;
 
   // Encodes, decodes into staging and commits one frame; returns its upload
-  // ticket (Renderer::upload_complete). Throws std::invalid_argument naming
+  // ticket (Renderer::upload_complete). Throws render::Error naming
   // the first bad value (sizes, a non-finite position) before anything is
   // committed or recorded.
   uint64_t push(const LiveFrame& frame);

@@ -27,6 +27,10 @@ struct OffscreenOptions {
   uint32_t layers = 1;
 };
 
+namespace detail {
+struct OffscreenTargetImpl;  // defined in render/src, seen by no caller
+}  // namespace detail
+
 class OffscreenTarget {
  public:
   OffscreenTarget(Context& context, uint32_t width, uint32_t height, const OffscreenOptions& options = {});
@@ -50,9 +54,9 @@ class OffscreenTarget {
   // The last rendered image (waits for it): width*height RGBA8, top row first.
   std::vector<uint8_t> read_rgba8();
 
-  struct Impl;
 
  private:
+  using Impl = detail::OffscreenTargetImpl;
   std::unique_ptr<Impl> impl_;
 };
 

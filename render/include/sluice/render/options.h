@@ -132,7 +132,7 @@ const char* to_string(Splatting m);
 Splatting parse_splatting(const std::string& s);  // "auto" | "compute" | "raster"
 // Accepts the VTK name ("TransparentFluidVolume") or the short one
 // ("transparent", "opaque", "normals", "depth", "thickness", ...).
-// Throws std::invalid_argument listing the choices.
+// Throws render::Error listing the choices.
 DisplayMode parse_display_mode(const std::string& s);
 SurfaceFilterMethod parse_filter_method(const std::string& s);  // "narrow-range" | "bilateral"
 LodMode parse_lod_mode(const std::string& s);                   // "off" | "clod" | "density"

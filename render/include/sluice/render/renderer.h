@@ -96,7 +96,7 @@ struct DecodedFrameView {
 };
 
 // A frame the runtime kept encoded for the GPU decoder
-// (runtime::PipelineOptions::keep_encoded; runtime::FrameHandle has every
+// (runtime::DecodeMode::KeepEncoded; runtime::FrameHandle has every
 // field). Borrowed for the call.
 struct EncodedFrameView {
   const io::FrameHeader* header = nullptr;        // chunk table: counts, AABBs, attribute ranges
@@ -205,7 +205,7 @@ struct FrameSync {
 
 struct RendererOptions {
   uint32_t frames_in_flight = 2;  // see the contract above; 1..8
-  // Keep each view's eye normals and depth for read_surface() (tests; costs
+  // Keep each view's eye normals and depth for read_surface() (inspection.h; costs
   // 16 bytes per pixel per frame).
   bool debug_surfaces = false;
   // Frames that arrive without layers (files converted with --no-layers,
@@ -219,6 +219,10 @@ struct RendererOptions {
   // whose grid is too large, is drawn whole.
   bool classify_unlayered = false;
 };
+
+namespace detail {
+struct RendererImpl;  // defined in render/src, seen by no caller
+}  // namespace detail
 
 class Renderer {
  public:
@@ -295,20 +299,9 @@ class Renderer {
   // at its end, and this reads them there.
   FrameStats last_stats();
 
-  // For tests, after the caller waited for the frame (with debug_surfaces):
-  // per pixel of the last view (eye-space normal x,y,z, linear depth) after
-  // filtering, depth 0 where there is no fluid; and the unfiltered linear
-  // depth (distance along the view axis). Submit and wait on the graphics queue.
-  std::vector<float> read_surface();
-  std::vector<float> read_raw_depth();
-  // The unfiltered thickness (world units along each pixel's ray) of the
-  // last view, at the thickness buffer's resolution (half size unless
-  // full-resolution thickness was asked for).
-  std::vector<float> read_raw_thickness();
-
-  struct Impl;  // render/src/renderer_impl.h
-
  private:
+  using Impl = detail::RendererImpl;  // render/src/renderer_impl.h
+  friend Impl& renderer_impl(Renderer&);  // for render/src only (inspection.cpp)
   std::unique_ptr<Impl> impl_;
 };
 

@@ -77,7 +77,7 @@ class Stream {
  public:
   // Opens `file` and makes the renderer and staging; the player starts at
   // the first update() or player(), paused at options.player.start_frame.
-  // Throws io::Error for a file that cannot be read, std::invalid_argument
+  // Throws io::Error for a file that cannot be read, render::Error
   // for a file without frames or options it cannot honour (DecodeSite::Gpu
   // for float32 positions).
   Stream(Context& context, const std::filesystem::path& file, StreamOptions options = {});
@@ -90,7 +90,7 @@ class Stream {
 
   // How the frames are drawn: the attribute coloured by (decoded only if
   // fluid.scalar_visibility; fixed once the player started: a change
-  // throws std::invalid_argument), the splat reach and cLOD the view's
+  // throws render::Error), the splat reach and cLOD the view's
   // demand assumes (taken at the next update()). Defaults: FluidOptions{}
   // with the scene's up, LodOptions{}.
   void set_look(const FluidOptions& fluid, const LodOptions& lod);
@@ -106,7 +106,7 @@ class Stream {
   // Records the newest committed frame for `views` with the look
   // (Renderer::record: the caller submits `cmd`, waiting on the result).
   FrameSync record(VkCommandBuffer cmd, const RenderTarget& target, std::span<const View> views);
-  // A frame the host computed (live streams only; std::logic_error otherwise).
+  // A frame the host computed (live streams only; render::Error otherwise).
   uint64_t push(const LiveFrame& frame);
   // Closes a live recording (index and footer written); no-op otherwise.
   void finish();
@@ -116,7 +116,7 @@ class Stream {
   const FluidOptions& fluid() const { return fluid_; }
   const LodOptions& lod() const { return lod_; }
   Renderer& renderer() { return *renderer_; }
-  // A file's reader, player and staging (std::logic_error on a live stream).
+  // A file's reader, player and staging (render::Error on a live stream).
   const io::ContainerReader& reader() const;
   runtime::Player& player();
   const StagingAllocator& staging() const;

@@ -29,8 +29,8 @@ struct FrameLayout {
   uint64_t particles = 0;
   uint32_t particle_stride = 8;    // decoded bytes per particle (io::decoded_particle_bytes)
   uint32_t attribute_streams = 0;  // uint16 streams of `particles` values each
-  // > 0: the frame stays encoded for a GPU decoder (PipelineOptions::
-  // keep_encoded): FrameBuffers::particles then holds these bytes, the
+  // > 0: the frame stays encoded for a GPU decoder (DecodeMode::
+  // KeepEncoded): FrameBuffers::particles then holds these bytes, the
   // staged area of io/gpu_decode_plan.h (payloads, inflated planes, chunk
   // plans, tile table; staged_bytes() of them, the rest unused), and there
   // are no attribute streams.

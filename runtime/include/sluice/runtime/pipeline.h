@@ -51,42 +51,49 @@ struct WindowChange {
   WindowPlan plan;
 };
 
-struct PipelineOptions {
-  int decode_threads = 0;   // TBB workers decoding chunks; 0: default_thread_split()
-  int read_threads = 0;     // threads reading a record's pieces at once; 0: default_thread_split(cores, keep_encoded), or
-                            // a quarter of decode_threads (1 to 4) when that is given
-  bool direct_io = false;   // read with O_DIRECT where the filesystem allows it (else buffered, said in stats)
+// How records come off the disk.
+struct ReadSettings {
+  // Threads reading a record's pieces at once; 0: default_thread_split(cores,
+  // DecodeMode::KeepEncoded), or a quarter of DecodeSettings::threads (1 to 4)
+  // when that is given.
+  int threads = 0;
+  bool direct_io = false;  // O_DIRECT where the filesystem allows it (else buffered, said in stats)
   // Buffered reads copy out of the file's mapping with streaming stores
   // (FileRecordSource); false: pread. Stats say which is in use.
-  bool mapped_reads = true;
-  // Attribute streams to decode (indices into the file header's list); nullopt: all of them.
+  bool mapped = true;
+  uint64_t piece_bytes = 8 << 20;  // reads are split (a seek cancels a big read early; pieces go in parallel)
+  // Where records come from; null: the file, through FileRecordSource.
+  std::shared_ptr<RecordSource> source;
+};
+
+enum class DecodeMode : uint8_t {
+  Cpu,  // TBB workers decode every chunk into the frame's buffers
+  // Frames stay encoded for a GPU decoder (io/gpu_decode_plan.h, the
+  // renderer's commit_encoded): the workers check each chunk's checksum,
+  // copy its payload into the frame's buffer and inflate its zstd planes
+  // there (nothing for files written for the GPU); the buffer ends with the
+  // chunk plans. Needs io::gpu_decodable(file) (the constructor throws
+  // io::Error otherwise). When the allocator offers a relay (relay.h) and
+  // reads are buffered, frames are relayed instead: their areas are
+  // resident (device memory), filled as the read threads read, checked and
+  // planned chunk by chunk, with no worker pass; FrameHandle::layout().resident
+  // says so, and buffers().particles is then empty (the plan's tables travel
+  // with gpu_plan()).
+  KeepEncoded,
+};
+
+struct DecodeSettings {
+  DecodeMode mode = DecodeMode::Cpu;
+  int threads = 0;  // TBB workers; 0: default_thread_split()
+  // Cpu: attribute streams to decode (indices into the file header's list);
+  // nullopt: all of them.
   std::optional<std::vector<uint32_t>> attributes;
-  // Layers to read and decode (format 1.3). A frame's chunks of other layers
-  // are never read: with the surface set, a layered frame's interior is
-  // skipped on disk (its payloads come last in the record). Frames without
-  // layers are read whole whatever the set.
-  io::LayerSet layers = io::LayerSet::particles();
-  // What the views draw (demand.h): of each frame it starts reading, the
-  // reader reads only the LOD tiers of each cell this demand needs (cells
-  // no view sees not at all). set_demand() replaces it while playing. The
-  // default (no views) reads every tier. Reads by O_DIRECT read whole
-  // records and decode only the demanded tiers.
-  ViewDemand demand;
-  // Keep frames encoded for a GPU decoder (io/gpu_decode_plan.h, the
-  // renderer's commit_encoded) instead of decoding them: the workers check
-  // each chunk's checksum, copy its payload into the frame's buffer and
-  // inflate its zstd planes there (nothing for files written for the GPU);
-  // the buffer ends with the chunk plans. Needs io::gpu_decodable(file)
-  // (the constructor throws io::Error otherwise). `attributes` is ignored:
-  // the plan decodes `encoded_color_attribute` (file index; -1: none).
-  // When the allocator offers a relay (relay.h) and reads are buffered,
-  // frames are relayed instead: their areas are resident (device memory),
-  // filled as the read threads read, checked and planned chunk by chunk,
-  // with no worker pass; FrameHandle::layout().resident says so, and
-  // buffers().particles is then empty (the plan's tables travel with
-  // gpu_plan()).
-  bool keep_encoded = false;
-  int encoded_color_attribute = -1;
+  // KeepEncoded: the attribute the plan decodes (file index; -1: none).
+  int color_attribute = -1;
+};
+
+// How much memory the window of frames in flight may take (budget.h).
+struct WindowSettings {
   BudgetOptions budget;
   const DeviceMemoryBudget* device_budget = nullptr;  // borrowed; null: no device limit
   uint32_t reevaluate_every = 32;                     // frames started between budget re-readings
@@ -98,17 +105,35 @@ struct PipelineOptions {
   bool slow_start = true;
   // Called when the window is planned (on the constructing thread) and when
   // it changes (on the reader thread). For logging: must not call the pipeline.
-  std::function<void(const WindowChange&)> on_window_change;
-  // Where records come from; null: the file, through FileRecordSource.
-  std::shared_ptr<RecordSource> source;
-  uint64_t read_piece_bytes = 8 << 20;  // reads are split (a seek cancels a big read early; pieces go in parallel)
-  // Fault injection, for tests; empty otherwise. Called on a decode worker
-  // before each chunk (it may block, holding that decode mid-way, or throw:
-  // the frame then fails) and on the reader thread just before a frame is
-  // handed to the decode workers (it may throw, as that hand-off's own
-  // allocation can: the frame then fails).
+  std::function<void(const WindowChange&)> on_change;
+};
+
+// Fault injection, for tests; empty otherwise. Called on a decode worker
+// before each chunk (it may block, holding that decode mid-way, or throw:
+// the frame then fails) and on the reader thread just before a frame is
+// handed to the decode workers (it may throw, as that hand-off's own
+// allocation can: the frame then fails).
+struct FaultHooks {
   std::function<void(uint64_t frame, size_t chunk)> before_decode_chunk;
   std::function<void(uint64_t frame)> before_decode_handoff;
+};
+
+struct PipelineOptions {
+  // What to read. Layers (format 1.3): a frame's chunks of other layers are
+  // never read: with the surface set, a layered frame's interior is skipped
+  // on disk (its payloads come last in the record). Frames without layers
+  // are read whole whatever the set.
+  io::LayerSet layers = io::LayerSet::particles();
+  // What the views draw (demand.h): of each frame it starts reading, the
+  // reader reads only the LOD tiers of each cell this demand needs (cells
+  // no view sees not at all). set_demand() replaces it while playing. The
+  // default (no views) reads every tier. Reads by O_DIRECT read whole
+  // records and decode only the demanded tiers.
+  ViewDemand demand;
+  ReadSettings read;
+  DecodeSettings decode;
+  WindowSettings window;
+  FaultHooks faults;
 };
 
 // How the pipeline shares `cores` by default: one read thread per 4 cores
@@ -116,7 +141,7 @@ struct PipelineOptions {
 // workers do not fight over cores; below 8 cores every core decodes
 // (copying out of the page cache slows while the workers load memory).
 //
-// Frames kept encoded for the GPU (`keep_encoded`) are checked as they are
+// Frames kept encoded for the GPU (DecodeMode::KeepEncoded) are checked as they are
 // read, which leaves the workers only zstd planes to inflate, so reading
 // takes thirteen sixteenths of the cores, 1 to 13, and the rest are
 // workers. docs/measurements.md ("Checked as read" and the thread split)
@@ -125,7 +150,7 @@ struct ThreadSplit {
   int decode = 1;
   int read = 1;
 };
-ThreadSplit default_thread_split(int cores, bool kept_encoded = false);
+ThreadSplit default_thread_split(int cores, DecodeMode mode = DecodeMode::Cpu);
 
 enum class EntryStatus : uint8_t {
   None,     // not fetched yet (or the schedule has ended: see NextEntry::end)
@@ -169,7 +194,7 @@ class FrameHandle {
   std::span<const uint64_t> chunk_first() const;   // first particle of each chunk
   const FrameLayout& layout() const;
   const FrameBuffers& buffers() const;             // particles (io::decoded_particle_bytes each; kept encoded: the staged area; relayed: empty), attributes
-  // Frames kept encoded (PipelineOptions::keep_encoded): the plan of the
+  // Frames kept encoded (DecodeMode::KeepEncoded): the plan of the
   // staged area in buffers().particles; null otherwise.
   const io::GpuDecodePlan* gpu_plan() const;
 
@@ -199,7 +224,7 @@ class Pipeline {
   // Consumer: plays `schedule` from its entry 0 under a new generation;
   // everything of older generations is dropped. Returns the generation.
   // frame_count may be less than the file's (a loop over its first frames);
-  // throws std::invalid_argument if it is more, or stride is 0, or the
+  // throws runtime::Error if it is more, or stride is 0, or the
   // direction is not +1 or -1.
   uint64_t restart(const PlaybackSchedule& schedule);
   const PlaybackSchedule& schedule() const;  // consumer
@@ -211,12 +236,12 @@ class Pipeline {
   // with `end` set when the schedule has no next entry. Releasing frames is
   // the consumer's job: the reader keeps at most most_ahead() frames ahead,
   // handles held included, so with that many handles held and no entry
-  // queued nothing could arrive, and wait_next() throws std::logic_error
+  // queued nothing could arrive, and wait_next() throws runtime::Error
   // instead of waiting forever.
   NextEntry wait_next();
   // Consumer: takes the next entry, which must be Ready or Failed (a failed
   // handle carries the error; its frame is already given back). Throws
-  // std::logic_error otherwise.
+  // runtime::Error otherwise.
   FrameHandle take();
   // Consumer: skips the next entry, whatever its state; work still pending
   // for it is abandoned.

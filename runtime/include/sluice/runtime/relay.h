@@ -32,7 +32,7 @@ class PieceRelay {
   virtual uint64_t piece_bytes() const = 0;
   // Host memory for a piece of `bytes` (<= piece_bytes()) to be written
   // with plain stores. Blocks while every ring slot is claimed or still
-  // being copied. Throws std::runtime_error on a device error.
+  // being copied. Throws a sluice::Error (the implementer's own) on a device error.
   virtual std::span<std::byte> claim(uint64_t bytes) = 0;
   // One range of a sent piece: `bytes` at `from` in the piece go to `to` in
   // the frame's staged area.
@@ -43,7 +43,7 @@ class PieceRelay {
   // area (buffers the same allocator handed out for a resident layout) and
   // returns at once; the slot goes back to the ring once the GPU has
   // copied it. A consumer of the frame waits for every copy sent into it
-  // (the allocator's own bookkeeping). Throws std::runtime_error on a
+  // (the allocator's own bookkeeping). Throws a sluice::Error (the implementer's own) on a
   // device error (the piece is given back).
   virtual void send(std::span<std::byte> piece, const FrameBuffers& frame, std::span<const Range> ranges) = 0;
   // Gives a claimed piece back unsent (after an error).

@@ -36,7 +36,7 @@ struct PipelineStats {
   uint64_t record_bytes = 0;
   uint64_t frames_by_demand = 0;  // frames read with some tier or cell left out
   // Kept-encoded frames read straight into their staged area and staged
-  // there (no copy on the CPU; PipelineOptions::keep_encoded).
+  // there (no copy on the CPU; DecodeMode::KeepEncoded).
   uint64_t frames_in_place = 0;
   // ... of which relayed to device memory as read (runtime/relay.h).
   uint64_t frames_relayed = 0;

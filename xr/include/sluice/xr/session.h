@@ -107,6 +107,10 @@ struct SessionCounters {
   uint32_t states_seen = 0;      // bit (1 << State) for each state reached
 };
 
+namespace detail {
+struct SessionImpl;  // defined in xr/src, seen by no caller
+}  // namespace detail
+
 class Session {
  public:
   // Record() calls per frame in flight: renderers drawing both eyes with one
@@ -114,7 +118,7 @@ class Session {
   static constexpr uint32_t kFramesInFlight = 2;
   static constexpr uint32_t kRecordsInFlight = 2 * kFramesInFlight;
 
-  // Throws std::runtime_error naming what is missing (no runtime, no HMD,
+  // Throws xr::Error naming what is missing (no runtime, no HMD,
   // no XR_KHR_vulkan_enable2, a GPU sluice cannot use).
   explicit Session(const SessionOptions& options = {});
   ~Session();
@@ -144,9 +148,9 @@ class Session {
   uint64_t validation_errors() const;
   std::vector<std::string> validation_messages() const;  // the first 32
 
-  struct Impl;
 
  private:
+  using Impl = detail::SessionImpl;
   std::unique_ptr<Impl> impl_;
 };
 

@@ -1,0 +1,15 @@
+// sluice/render/error.h: the one exception type the Vulkan context, the renderer and the stream throw: a
+// wrong call or argument, or what the system refused (sluice/error.h).
+// Bad input read through io throws io::Error instead (it names the file).
+#pragma once
+
+#include "sluice/error.h"
+
+namespace sluice::render {
+
+class Error : public sluice::Error {
+ public:
+  using sluice::Error::Error;
+};
+
+}  // namespace sluice::render
