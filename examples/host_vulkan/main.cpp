@@ -236,9 +236,8 @@ class HostScene {
     cmd.reset();
     cmd.begin(vk::CommandBufferBeginInfo(vk::CommandBufferUsageFlagBits::eOneTimeSubmit));
     draw_geometry(cmd, host_geometry);
-    sluice::render::FrameSync sync;
-    if (fluid) sync = fluid->record(static_cast<VkCommandBuffer>(cmd), target(), {&view_, 1});
-    else to_transfer_source(cmd);
+    const auto sync = fluid ? fluid->record(static_cast<VkCommandBuffer>(cmd), target(), {&view_, 1}) : sluice::render::FrameSync{};
+    if (!fluid) to_transfer_source(cmd);
     cmd.end();
     const vk::CommandBufferSubmitInfo cb(cmd);
     const vk::SemaphoreSubmitInfo wait(vk::Semaphore(sync.upload_semaphore), sync.upload_value,
@@ -449,9 +448,8 @@ int main(int argc, char** argv) try {
   // frames the host computes (pushed from its memory, recorded when asked).
   sluice::render::Context context(sluice::render::HostVulkan{
       {*instance.instance, *device.physical, *device.device, device.family, *device.queue}, device.memory_budget});
-  sluice::render::StreamOptions options;
-  options.renderer.frames_in_flight = kFramesInFlight;
-  options.motion = sluice::render::ViewMotion::Fixed;  // the host's camera stays put
+  const sluice::render::StreamOptions options{.renderer = {.frames_in_flight = kFramesInFlight},
+                                               .motion = sluice::render::ViewMotion::Fixed};  // the host's camera stays put
   sluice::render::LiveOptions live;
   live.particle_spacing = 0.02f;
   live.frame_rate = 30;
