@@ -12,6 +12,7 @@
 #include "sluice/render/image_io.h"
 #include "sluice/render/offscreen.h"
 #include "sluice/render/renderer.h"
+#include "sluice/render/load.h"
 #include "table.h"
 
 namespace sluice::bench {
@@ -172,16 +173,16 @@ std::vector<LayersRow> compare_layers(const LayersBenchOptions& o) {
       throw std::runtime_error(o.input + ": frame " + std::to_string(f) +
                                " has no layers (convert it again with a sluice that writes format 1.3)");
     }
-    all.load_frame(reader, f, -1, io::LayerSet::particles());
+    sluice::render::load_frame(all, reader, f, -1, io::LayerSet::particles());
     if (o.gpu) {
       // Every particle, its layers forgotten: a frame the renderer classifies.
       const std::vector<std::byte> record = reader.read_record(f);
       io::FrameHeader header = reader.parse_record(f, record);
       io::keep_layers(header, io::LayerSet::particles());
       for (io::ChunkDesc& c : header.chunks) c.layer = io::Layer::All;
-      surface.wait_upload(surface.commit_record(record, header, reader.header(), -1, reader.location(f)));
+      surface.wait_upload(sluice::render::commit_record(surface, record, header, reader.header(), -1, reader.location(f)));
     } else {
-      surface.load_frame(reader, f, -1, io::LayerSet::surface());
+      sluice::render::load_frame(surface, reader, f, -1, io::LayerSet::surface());
     }
     const io::FrameHeader table = reader.read_table(f);
     const std::vector<float> xyz = io::world_positions(io::decode_frame(reader, f), reader.header().position_coding);

@@ -23,6 +23,7 @@
 #include "sluice/render/offscreen.h"
 #include "sluice/render/renderer.h"
 #include "sluice/render/synthetic.h"
+#include "sluice/render/load.h"
 #include "sluice/io/codec.h"
 #include "sluice/io/lod.h"
 #include "table.h"
@@ -334,7 +335,7 @@ void run_render_bench(const RenderBenchOptions& o) {
     const render::SceneInfo scene = render::scene_info(reader);
     render::Renderer r(context, scene);
     const uint64_t frame = reader.frame_count() - 1;
-    r.load_frame(reader, frame, -1);
+    sluice::render::load_frame(r, reader, frame, -1);
     std::vector<float> xyz;
     if (o.vtk) xyz = io::world_positions(io::decode_frame(reader, frame), reader.header().position_coding);
     run_frame("real " + fs::path(o.real).stem().string(), r, scene, &xyz);
@@ -356,7 +357,7 @@ void run_render_bench(const RenderBenchOptions& o) {
         render::Renderer r(context, f.scene);
         io::FrameHeader header = layered.frame.header;
         io::keep_layers(header, surface ? io::LayerSet::surface() : io::LayerSet::particles());
-        r.wait_upload(r.commit_record(layered.frame.record, header, layered.file, -1, {}));
+        r.wait_upload(sluice::render::commit_record(r, layered.frame.record, header, layered.file, -1, {}));
         run_frame("synthetic " + count_name(n) + (surface ? ", surface + blobs" : ", all (layered)"), r, f.scene, nullptr);
       }
     }

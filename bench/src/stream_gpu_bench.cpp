@@ -113,15 +113,9 @@ DevicePass stream_to_device(const io::ContainerReader& reader, const Slice& slic
       if (end) break;
       runtime::FrameHandle h = pipeline.take();
       if (h.failed()) throw io::Error(h.error()->where, h.error()->message);
-      uint64_t ticket = 0;
-      if (const io::GpuDecodePlan* plan = h.gpu_plan()) {
-        ticket = renderer.commit_encoded({&h.header(), h.chunk_first(), &h.buffers(), plan, setup.color}, &staging);
-        staged += plan->staged_bytes();
-      } else {
-        const int stream = setup.color >= 0 ? 0 : -1;
-        ticket = renderer.commit_decoded({&h.header(), h.chunk_first(), &h.buffers(), stream, setup.color}, &staging);
-        staged += h.header().particle_count * (8 + (setup.color >= 0 ? 2 : 0));
-      }
+      const uint64_t ticket = renderer.commit(h, setup.color, &staging);
+      const io::GpuDecodePlan* plan = h.gpu_plan();
+      staged += plan ? plan->staged_bytes() : h.header().particle_count * (8 + (setup.color >= 0 ? 2 : 0));
       flight.emplace_back(std::move(h), ticket);
       const auto before = Clock::now();
       while (flight.size() > in_flight) {

@@ -21,6 +21,7 @@
 #include "sluice/render/offscreen.h"
 #include "sluice/render/renderer.h"
 #include "sluice/render/staging_allocator.h"
+#include "sluice/render/load.h"
 #include "sluice/runtime/player.h"
 #include "table.h"
 
@@ -140,7 +141,7 @@ struct Reference {
       : renderer(c, scene), target(c, o.width, o.height, {.layers = o.stereo ? 2u : 1u}), reader(r) {}
   render::Image picture(uint64_t frame, const std::vector<render::View>& views, const render::FluidOptions& fluid,
                         const render::LodOptions& lod) {
-    renderer.load_frame(reader, frame, -1, io::LayerSet::surface());
+    sluice::render::load_frame(renderer, reader, frame, -1, io::LayerSet::surface());
     target.render(renderer, views, fluid, lod);
     return {target.width(), target.height(), target.read_rgba8()};
   }

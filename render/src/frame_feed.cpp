@@ -41,12 +41,7 @@ FeedUpdate FrameFeed::update() {
   if (tick.changed && tick.frame) {
     const runtime::FrameHandle& f = *tick.frame;
     const auto t0 = std::chrono::steady_clock::now();
-    if (const io::GpuDecodePlan* plan = f.gpu_plan()) {
-      pending_ = renderer_.commit_encoded({&f.header(), f.chunk_first(), &f.buffers(), plan, color_attribute_}, staging_);
-    } else {
-      const int stream = color_attribute_ >= 0 ? 0 : -1;
-      pending_ = renderer_.commit_decoded({&f.header(), f.chunk_first(), &f.buffers(), stream, color_attribute_}, staging_);
-    }
+    pending_ = renderer_.commit(f, color_attribute_, staging_);
     last_.commit_wall_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     last_.changed = true;
     last_.has_frame = true;

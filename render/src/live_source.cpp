@@ -8,6 +8,7 @@
 #include "sluice/io/lod.h"
 #include "sluice/io/writer.h"
 #include "sluice/render/error.h"
+#include "sluice/render/load.h"
 
 namespace sluice::render {
 namespace {
@@ -101,7 +102,7 @@ uint64_t LiveSource::push(const LiveFrame& frame) {
   io::set_frame_number(encoded, uint32_t(pushed_), header_.attributes.size());
   encode_ms_ = ms_since(t0);
   const auto t1 = std::chrono::steady_clock::now();
-  const uint64_t ticket = renderer_.commit_record(encoded.record, encoded.header, header_, options_.color_attribute,
+  const uint64_t ticket = commit_record(renderer_, encoded.record, encoded.header, header_, options_.color_attribute,
                                                   io::ErrorLocation{"live", pushed_, {}});
   decode_ms_ = ms_since(t1);
   if (writer_) writer_->append(std::move(encoded));

@@ -12,6 +12,8 @@
 #include <stdexcept>
 
 #include "renderer_impl.h"
+#include "sluice/render/load.h"
+#include "sluice/runtime/pipeline.h"
 #include "sluice/io/codec.h"
 #include "sluice/io/reader.h"
 #include "staging_block.h"
@@ -19,6 +21,28 @@
 
 namespace sluice::render {
 namespace {
+
+// A decoded frame as the runtime hands it over (FrameHandle has every
+// field). Borrowed for the call.
+struct DecodedFrameView {
+  const io::FrameHeader* header = nullptr;       // chunk table: counts, AABBs, attribute ranges
+  std::span<const uint64_t> chunk_first;         // first particle of each chunk
+  const runtime::FrameBuffers* buffers = nullptr;
+  int color_stream = -1;     // index into buffers->attributes of the colour attribute; -1: none
+  int color_attribute = -1;  // that attribute's index in the file header (for the chunk ranges)
+};
+
+// A frame the runtime kept encoded for the GPU decoder
+// (runtime::DecodeMode::KeepEncoded; runtime::FrameHandle has every
+// field). Borrowed for the call.
+struct EncodedFrameView {
+  const io::FrameHeader* header = nullptr;        // chunk table: counts, AABBs, attribute ranges
+  std::span<const uint64_t> chunk_first;          // first particle of each chunk
+  const runtime::FrameBuffers* buffers = nullptr; // particles: the staged area (io/gpu_decode_plan.h)
+  const io::GpuDecodePlan* plan = nullptr;
+  int color_attribute = -1;  // the attribute the plan decodes (file header index); -1: none
+};
+
 
 constexpr auto kDeviceUsage = vk::BufferUsageFlagBits::eStorageBuffer | vk::BufferUsageFlagBits::eShaderDeviceAddress |
                               vk::BufferUsageFlagBits::eTransferDst;
@@ -399,8 +423,10 @@ uint64_t Renderer::commit_frame() {
   return upload_frame(r, set, {staging, l.particles}, l.chunks, {staging, set.has_attribute ? l.attribute : 0});
 }
 
-uint64_t Renderer::commit_decoded(const DecodedFrameView& frame, const StagingAllocator* from) {
-  Impl& r = *impl_;
+namespace {
+
+uint64_t commit_decoded(Renderer& renderer, detail::RendererImpl& r, const DecodedFrameView& frame,
+                        const StagingAllocator* from) {
   const io::FrameHeader& header = *frame.header;
   const uint64_t n = header.particle_count;
   const uint32_t chunks = uint32_t(header.chunks.size());
@@ -412,7 +438,7 @@ uint64_t Renderer::commit_decoded(const DecodedFrameView& frame, const StagingAl
 
   if (!block || block->host) {
     // Not in Vulkan memory: through the renderer's own staging.
-    FrameStaging s = stage_frame(n, chunks);
+    FrameStaging s = renderer.stage_frame(n, chunks);
     FrameSet& set = r.sets[size_t(r.staged)];
     fill_chunk_table(header, frame.chunk_first, attribute ? frame.color_attribute : -1, s.chunks,
                      io::ErrorLocation{{}, header.frame_number, {}});
@@ -427,7 +453,7 @@ uint64_t Renderer::commit_decoded(const DecodedFrameView& frame, const StagingAl
       }
     });
     set.has_attribute = copy_attribute;
-    return commit_frame();
+    return renderer.commit_frame();
   }
   // Straight from the allocator's staging: only the chunk table is written here.
   const int index = r.free_set();
@@ -448,8 +474,7 @@ uint64_t Renderer::commit_decoded(const DecodedFrameView& frame, const StagingAl
   return upload_frame(r, set, {src, 0}, 0, {src, attribute ? attribute_offset : 0});
 }
 
-uint64_t Renderer::commit_encoded(const EncodedFrameView& frame, const StagingAllocator* from) {
-  Impl& r = *impl_;
+uint64_t commit_encoded(detail::RendererImpl& r, const EncodedFrameView& frame, const StagingAllocator* from) {
   const io::FrameHeader& header = *frame.header;
   const io::GpuDecodePlan& plan = *frame.plan;
   const uint32_t chunks = uint32_t(header.chunks.size());
@@ -494,28 +519,48 @@ uint64_t Renderer::commit_encoded(const EncodedFrameView& frame, const StagingAl
   return upload_frame(r, set, {}, 0, {}, &source);
 }
 
-uint64_t Renderer::commit_record(std::span<const std::byte> record, const io::FrameHeader& header, const io::FileHeader& file,
-                                 int color_attribute, const io::ErrorLocation& where) {
-  if (file.position_coding != impl_->scene.coding) throw io::Error(where, "frame coding differs from the scene's");
+}  // namespace
+
+uint64_t Renderer::commit(const runtime::FrameHandle& frame, int color_attribute, const StagingAllocator* from) {
+  if (frame.empty() || frame.failed()) throw Error("commit: an empty or failed frame handle");
+  if (const io::GpuDecodePlan* plan = frame.gpu_plan()) {
+    return commit_encoded(*impl_, {&frame.header(), frame.chunk_first(), &frame.buffers(), plan, color_attribute}, from);
+  }
+  // The streams hold every attribute (stream k is attribute k) or only the colour one.
+  const size_t streams = frame.buffers().attributes.size();
+  const int stream = color_attribute < 0 ? -1 : streams == 1 ? 0 : color_attribute;
+  if (stream >= 0 && size_t(stream) >= streams) {
+    throw Error("commit: the frame holds " + std::to_string(streams) + " attribute streams, none of them attribute " +
+                std::to_string(color_attribute));
+  }
+  return commit_decoded(*this, *impl_, {&frame.header(), frame.chunk_first(), &frame.buffers(), stream, color_attribute},
+                        from);
+}
+
+uint64_t commit_record(Renderer& renderer, std::span<const std::byte> record, const io::FrameHeader& header,
+                       const io::FileHeader& file, int color_attribute, const io::ErrorLocation& where) {
+  detail::RendererImpl& r = renderer_impl(renderer);
+  if (file.position_coding != r.scene.coding) throw io::Error(where, "frame coding differs from the scene's");
   const uint32_t chunks = uint32_t(header.chunks.size());
-  FrameStaging s = stage_frame(header.particle_count, chunks);
+  FrameStaging s = renderer.stage_frame(header.particle_count, chunks);
   const bool attr = color_attribute >= 0 && size_t(color_attribute) < file.attributes.size() && !s.color_attribute.empty();
   fill_chunk_table(header, {}, attr ? color_attribute : -1, s.chunks, where);
-  mark_layers(impl_->sets[size_t(impl_->staged)], header);
+  mark_layers(r.sets[size_t(r.staged)], header);
   std::vector<uint64_t> starts(chunks);
   io::chunk_starts(header, starts);
   std::vector<uint16_t*> attributes(file.attributes.size(), nullptr);
   if (attr) attributes[size_t(color_attribute)] = s.color_attribute.data();
   // Every chunk straight into the mapped staging memory.
   io::decode_record(record, header, file, starts, s.particles, attributes, where);
-  return commit_frame();
+  return renderer.commit_frame();
 }
 
-void Renderer::load_frame(const io::ContainerReader& reader, uint64_t frame, int color_attribute, io::LayerSet layers) {
+void load_frame(Renderer& renderer, const io::ContainerReader& reader, uint64_t frame, int color_attribute,
+                io::LayerSet layers) {
   const std::vector<std::byte> record = reader.read_record(frame);
   io::FrameHeader header = reader.parse_record(frame, record);
   io::keep_layers(header, layers);
-  wait_upload(commit_record(record, header, reader.header(), color_attribute, reader.location(frame)));
+  renderer.wait_upload(commit_record(renderer, record, header, reader.header(), color_attribute, reader.location(frame)));
 }
 
 }  // namespace sluice::render

@@ -11,7 +11,9 @@
 #include "sluice/render/context.h"
 #include "sluice/render/inspection.h"
 #include "sluice/render/offscreen.h"
+#include "sluice/render/load.h"
 #include "sluice/render/renderer.h"
+#include "sluice/runtime/pipeline.h"
 
 namespace sluice::render::testing {
 
@@ -75,13 +77,10 @@ class OffscreenRenderer {
   std::vector<float> read_surface() { return sluice::render::read_surface(renderer); }
   std::vector<float> read_raw_depth() { return sluice::render::read_raw_depth(renderer); }
   void load_frame(const io::ContainerReader& reader, uint64_t frame, int color_attribute) {
-    renderer.load_frame(reader, frame, color_attribute);
+    sluice::render::load_frame(renderer, reader, frame, color_attribute);
   }
-  void commit_decoded(const DecodedFrameView& frame, const StagingAllocator* from) {
-    renderer.wait_upload(renderer.commit_decoded(frame, from));
-  }
-  void commit_encoded(const EncodedFrameView& frame, const StagingAllocator* from) {
-    renderer.wait_upload(renderer.commit_encoded(frame, from));
+  void commit(const runtime::FrameHandle& frame, int color_attribute, const StagingAllocator* from) {
+    renderer.wait_upload(renderer.commit(frame, color_attribute, from));
   }
   FrameStaging stage_frame(uint64_t particles, uint32_t chunks) { return renderer.stage_frame(particles, chunks); }
   void commit_frame() { renderer.wait_upload(renderer.commit_frame()); }

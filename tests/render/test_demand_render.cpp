@@ -19,6 +19,7 @@
 #include "sluice/render/offscreen.h"
 #include "sluice/render/staging_allocator.h"
 #include "sluice/render/stream.h"
+#include "sluice/render/load.h"
 #include "sluice/runtime/clock.h"
 #include "sluice/runtime/player.h"
 
@@ -99,7 +100,7 @@ Shot draw(Renderer& renderer, OffscreenTarget& target, const Case& c) {
 Shot reference(const io::ContainerReader& reader, const SceneInfo& scene, uint64_t frame, const Case& c) {
   testing::OffscreenRenderer r(context(), scene, kW, kH);
   OffscreenTarget target(context(), kW, kH, {.layers = uint32_t(c.views.size())});
-  r.renderer.load_frame(reader, frame, -1, io::LayerSet::surface());
+  sluice::render::load_frame(r.renderer, reader, frame, -1, io::LayerSet::surface());
   Shot s = draw(r.renderer, target, c);
   s.depth = sluice::render::read_raw_depth(r);
   return s;
@@ -128,11 +129,7 @@ Shot by_demand(const io::ContainerReader& reader, const SceneInfo& scene, uint64
   if (path == Path::Relayed) {
     EXPECT_TRUE(h.layout().resident);
   }
-  if (h.gpu_plan()) {
-    r.commit_encoded({&h.header(), h.chunk_first(), &h.buffers(), h.gpu_plan(), -1}, &staging);
-  } else {
-    r.commit_decoded({&h.header(), h.chunk_first(), &h.buffers(), -1, -1}, &staging);
-  }
+  r.commit(h, -1, &staging);
   Shot s = draw(r.renderer, target, c);
   s.depth = sluice::render::read_raw_depth(r);
   stats = pipeline.stats();

@@ -16,6 +16,7 @@
 #include "sluice/render/lod.h"
 #include "sluice/render/renderer.h"
 #include "sluice/render/synthetic.h"
+#include "sluice/render/load.h"
 
 namespace sluice::render {
 namespace {
@@ -163,7 +164,7 @@ double thickness_integral(const LayeredBlock& b, io::LayerSet layers, const Came
   testing::OffscreenRenderer rr(context(), scene, kW, kH, ro);
   io::FrameHeader h = b.frame.header;
   io::keep_layers(h, layers);
-  rr.renderer.wait_upload(rr.renderer.commit_record(b.frame.record, h, b.file, -1, {}));
+  rr.renderer.wait_upload(sluice::render::commit_record(rr.renderer, b.frame.record, h, b.file, -1, {}));
   const FrameStats stats = rr.render(cam, o, lod);
   if (drawn) *drawn = stats.drawn;
   const std::vector<float> thickness = sluice::render::read_raw_thickness(rr.renderer);
@@ -277,7 +278,7 @@ TEST(RenderAnalytic, GpuClassifiedBlobsCarryTheirParticlesMeanAttribute) {
     testing::OffscreenRenderer rr(context(), scene, kW, kH, ro);
     io::FrameHeader h = b.frame.header;
     io::keep_layers(h, set);
-    rr.renderer.wait_upload(rr.renderer.commit_record(b.frame.record, h, b.file, 0, {}));
+    rr.renderer.wait_upload(sluice::render::commit_record(rr.renderer, b.frame.record, h, b.file, 0, {}));
     const FrameStats stats = rr.render(cam, o, {});
     EXPECT_EQ(stats.classification.ran, classify);
     return Image{kW, kH, rr.read_rgba8()};

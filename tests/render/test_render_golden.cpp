@@ -17,6 +17,7 @@
 #include "sluice/io/spacing.h"
 #include "sluice/render/image_io.h"
 #include "sluice/render/renderer.h"
+#include "sluice/render/load.h"
 
 namespace sluice::render {
 namespace {
@@ -85,7 +86,7 @@ TEST_P(GoldenImage, MatchesReference) {
   o.display_mode = parse_display_mode(g.display);
   o.scalar_visibility = g.color_by_rho;
   o.colormap = Colormap::Turbo;
-  r.load_frame(reader, g.frame, g.color_by_rho ? 0 : -1);
+  sluice::render::load_frame(r, reader, g.frame, g.color_by_rho ? 0 : -1);
   Camera cam = Camera::framing(scene.bounds, Vec3{0, 0, 1}, 320.0f / 240.0f);
   if (*g.camera) cam.apply(g.camera);
   const FrameStats stats = r.render(cam, o, {});

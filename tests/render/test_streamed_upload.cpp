@@ -17,6 +17,7 @@
 #include "sluice/render/inspection.h"
 #include "sluice/render/renderer.h"
 #include "sluice/render/staging_allocator.h"
+#include "sluice/render/load.h"
 #include "sluice/runtime/pipeline.h"
 
 namespace sluice::render {
@@ -82,7 +83,7 @@ Rendered draw(testing::OffscreenRenderer& r, const SceneInfo& scene) {
 
 // Renders every frame through a pipeline over `allocator`, handing
 // `from` (the allocator again when it is a StagingAllocator) to
-// commit_decoded, or with `encoded` to commit_encoded (the GPU decodes).
+// commit (with `encoded` the frames stay encoded and the GPU decodes them).
 std::vector<Rendered> streamed(const io::ContainerReader& reader, runtime::FrameAllocator& allocator,
                                const StagingAllocator* from, bool encoded = false, runtime::PipelineStats* stats = nullptr) {
   const SceneInfo scene = scene_info(reader);
@@ -102,11 +103,7 @@ std::vector<Rendered> streamed(const io::ContainerReader& reader, runtime::Frame
     EXPECT_FALSE(h.failed()) << (h.failed() ? h.error()->text() : "");
     if (h.failed()) break;
     EXPECT_EQ(h.gpu_plan() != nullptr, encoded);
-    if (encoded && h.gpu_plan() != nullptr) {
-      r.commit_encoded({&h.header(), h.chunk_first(), &h.buffers(), h.gpu_plan(), 0}, from);
-    } else {
-      r.commit_decoded({&h.header(), h.chunk_first(), &h.buffers(), 0, 0}, from);
-    }
+    r.commit(h, 0, from);  // decoded, or kept encoded and decoded by the GPU
     out.push_back(draw(r, scene));
   }
   if (stats) *stats = pipeline.stats();
@@ -131,7 +128,7 @@ class StreamedUpload : public ::testing::Test {
     testing::OffscreenRenderer r(context(), scene, 160, 120);
     std::vector<Rendered> out;
     for (uint64_t f = 0; f < reader.frame_count(); ++f) {
-      r.load_frame(reader, f, 0);
+      sluice::render::load_frame(r, reader, f, 0);
       out.push_back(draw(r, scene));
     }
     return out;
@@ -276,7 +273,7 @@ TEST_F(StreamedUpload, RelayedCorruptChunkFailsItsFrameOnly) {
       continue;
     }
     ASSERT_FALSE(h.failed()) << h.error()->text();
-    r.commit_encoded({&h.header(), h.chunk_first(), &h.buffers(), h.gpu_plan(), 0}, &staging);
+    r.commit(h, 0, &staging);
     EXPECT_EQ(draw(r, scene).depth, expected[f].depth) << "frame " << f;
   }
   EXPECT_EQ(pipeline.stats().frames_relayed, kFrames - 1);
@@ -305,7 +302,7 @@ TEST_F(StreamedUpload, RelayedFramesSurviveSeeks) {
       ASSERT_FALSE(pipeline.wait_next().end);
       runtime::FrameHandle h = pipeline.take();
       ASSERT_FALSE(h.failed()) << h.error()->text();
-      r.commit_encoded({&h.header(), h.chunk_first(), &h.buffers(), h.gpu_plan(), 0}, &staging);
+      r.commit(h, 0, &staging);
       EXPECT_EQ(draw(r, scene).depth, expected[h.frame()].depth) << "seek " << seek << ", frame " << h.frame();
       ++drawn;
     }

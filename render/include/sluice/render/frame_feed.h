@@ -40,7 +40,7 @@ class FrameFeed {
   // What a player that feeds a renderer decodes: only the colour attribute
   // (`color_attribute` < 0: none), into `staging` within its device budget.
   // Frames of a file the GPU decodes (io::gpu_decodable: 16-bit positions)
-  // stay encoded and are decoded by the GPU (Renderer::commit_encoded),
+  // stay encoded and are decoded by the GPU (Renderer::commit),
   // unless `decode` says Cpu.
   static void configure(runtime::PlayerOptions& options, const StagingAllocator& staging, int color_attribute,
                         const io::FileHeader& file, DecodeSite decode = DecodeSite::Auto);

@@ -1,7 +1,7 @@
 // sluice/render/gpu_decoder.h: container frames decoded by the GPU, from
 // the host and back, for tests and benchmarks ("decode alone").
 //
-// The renderer decodes frames committed encoded (Renderer::commit_encoded)
+// The renderer decodes frames committed encoded (Renderer::commit)
 // with the same pass; this class runs it on its own: load() plans a record
 // (io/gpu_decode_plan.h: checks, checksums, zstd planes inflated on the CPU)
 // and uploads it, run() decodes it on the GPU as often as asked (timed with

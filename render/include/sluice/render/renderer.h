@@ -9,8 +9,12 @@
 // drawn into the caller's colour image, depth-tested against and written to
 // the caller's depth image. Every pass has a GPU timestamp.
 //
-// The frame loop (docs/embedding.md has the whole host loop):
-//   stage_frame() + commit_frame(), or commit_decoded()  when a new frame is due
+// The frame loop (docs/embedding.md has the whole host loop; render::Stream
+// does all of it for a file or pushed frames):
+//   a frame in, two ways, when a new one is due:
+//     stage_frame() + commit_frame()   particles the caller writes
+//     commit(frame_handle, ...)        a frame the streaming runtime delivered
+//   (render/load.h adds a container record, decoded on the CPU, for tools)
 //   record(cmd, target, views, ...)                       once per displayed frame
 //   the caller submits cmd, waiting on record()'s FrameSync semaphore
 //
@@ -21,7 +25,7 @@
 // per-frame fence before reusing a frame slot gives this for free. Nothing on
 // the per-frame path waits for the GPU: no fence, no queue or device idle.
 //
-// Uploads: commit_*() copy a frame on the transfer queue (the graphics queue
+// Uploads: commit_frame() and commit() copy a frame on the transfer queue (the graphics queue
 // where the device has none) into one of frames_in_flight + 1 device frame
 // buffers and return at once. record() draws the newest committed frame
 // whose copy has finished (checked without waiting), so a frame is shown
@@ -50,6 +54,10 @@
 #include "sluice/render/options.h"
 #include "sluice/render/staging_allocator.h"
 
+namespace sluice::runtime {
+class FrameHandle;
+}  // namespace sluice::runtime
+
 namespace sluice::render {
 
 struct PassTime {
@@ -65,7 +73,7 @@ struct FrameStats {
   std::vector<PassTime> passes;
   double gpu_ms = 0;           // first to last timestamp of the frame
   double upload_ms = 0;        // GPU time of the copy of the frame drawn
-  bool decoded_on_gpu = false; // the frame drawn was committed encoded (commit_encoded)
+  bool decoded_on_gpu = false; // the frame drawn was committed encoded (Renderer::commit of a frame kept encoded)
   double decode_ms = 0;        // GPU time of its decode (0 when not decoded on the GPU, or no timestamps)
   uint32_t decode_errors = 0;  // its chunks whose packed planes the GPU found inconsistent
   // RendererOptions::classify_unlayered: what the classification this frame
@@ -84,27 +92,6 @@ struct FrameStats {
 // For logs and the HUD: "classified on the GPU: 5,012 surface + 1,190 blobs"
 // or why the frame was drawn whole; "" when no classification ran.
 std::string describe(const FrameStats::Classification& c);
-
-// A decoded frame as the runtime hands it over (runtime::FrameHandle has
-// every field). Borrowed for the call.
-struct DecodedFrameView {
-  const io::FrameHeader* header = nullptr;       // chunk table: counts, AABBs, attribute ranges
-  std::span<const uint64_t> chunk_first;         // first particle of each chunk
-  const runtime::FrameBuffers* buffers = nullptr;
-  int color_stream = -1;     // index into buffers->attributes of the colour attribute; -1: none
-  int color_attribute = -1;  // that attribute's index in the file header (for the chunk ranges)
-};
-
-// A frame the runtime kept encoded for the GPU decoder
-// (runtime::DecodeMode::KeepEncoded; runtime::FrameHandle has every
-// field). Borrowed for the call.
-struct EncodedFrameView {
-  const io::FrameHeader* header = nullptr;        // chunk table: counts, AABBs, attribute ranges
-  std::span<const uint64_t> chunk_first;          // first particle of each chunk
-  const runtime::FrameBuffers* buffers = nullptr; // particles: the staged area (io/gpu_decode_plan.h)
-  const io::GpuDecodePlan* plan = nullptr;
-  int color_attribute = -1;  // the attribute the plan decodes (file header index); -1: none
-};
 
 // A rectangle of the target in pixels (origin top left).
 struct Viewport {
@@ -251,39 +238,28 @@ class Renderer {
   // Submits the copy of the staged frame to device memory; returns its
   // upload ticket (see upload_complete()).
   uint64_t commit_frame();
-  // Submits the copy of a frame the streaming runtime decoded. With `from`
-  // (the StagingAllocator that handed out frame.buffers, of this renderer's
-  // Context) the GPU copies straight from those buffers, which must then stay
-  // untouched until upload_complete(ticket); otherwise they are copied through
-  // the renderer's staging and may be reused when this returns.
-  uint64_t commit_decoded(const DecodedFrameView& frame, const StagingAllocator* from);
-  // Submits the copy of a frame kept encoded (with `from`, the
-  // StagingAllocator that handed out frame.buffers, straight from them,
-  // which then stay untouched until upload_complete(ticket); otherwise
-  // through the renderer's staging) and its decode on the GPU
-  // (shaders/decode.comp): a compute submission to the graphics queue that
-  // waits for the copy. A frame relayed into a resident area (a
-  // StagingAllocator with StagingOptions::resident) is already in device
-  // memory: only its tables are copied into the area, and the decode reads
-  // it there, waiting for the relay's copies into it too. The ticket is
-  // the decode's. The one queue
-  // submission the renderer makes per frame on its own: the host must not
-  // use the graphics queue from another thread meanwhile.
-  uint64_t commit_encoded(const EncodedFrameView& frame, const StagingAllocator* from);
+  // Submits a frame the streaming runtime delivered (FrameHandle, neither
+  // empty nor failed; borrowed for the call). A decoded frame: its copy, and
+  // the colour from its attribute streams, which hold every attribute or only
+  // `color_attribute` (PipelineOptions::decode.attributes; -1: no colour).
+  // A frame kept encoded (FrameHandle::gpu_plan()): its copy and its decode
+  // on the GPU (shaders/decode.comp), a compute submission to the graphics
+  // queue that waits for the copy, with the attribute the plan decodes; a
+  // frame relayed into a resident area (StagingOptions::resident) is already
+  // in device memory: only its tables are copied, and the decode waits for
+  // the relay's copies too. That is the one queue submission the renderer
+  // makes per frame on its own: the host must not use the graphics queue from
+  // another thread meanwhile. With `from` (the StagingAllocator that handed
+  // out the frame's buffers, of this renderer's Context) the GPU copies
+  // straight from those buffers, which must then stay untouched until
+  // upload_complete(ticket); otherwise they are copied through the
+  // renderer's staging and may be reused when this returns. Returns the
+  // ticket (the decode's, for an encoded frame).
+  uint64_t commit(const runtime::FrameHandle& frame, int color_attribute, const StagingAllocator* from);
   // Whether the copy with this ticket has finished (no wait).
   bool upload_complete(uint64_t ticket) const;
   // Waits for the copy with this ticket (the transfer queue only).
   void wait_upload(uint64_t ticket) const;
-  // Decodes a container frame record (`header` parsed from it, `file` the
-  // file header it belongs to) straight into staging, chunks in parallel (TBB),
-  // and commits it; returns the upload ticket. `color_attribute` < 0 skips
-  // attributes. Throws io::Error at `where` (chunk filled in) on a bad chunk.
-  uint64_t commit_record(std::span<const std::byte> record, const io::FrameHeader& header, const io::FileHeader& file,
-                         int color_attribute, const io::ErrorLocation& where);
-  // Reads `frame`'s chunks of `layers` (all of a file without layers),
-  // commit_record()s them and waits for the copy.
-  void load_frame(const io::ContainerReader& reader, uint64_t frame, int color_attribute,
-                  io::LayerSet layers = io::LayerSet::particles());
 
   // Records the fluid for `views` (1..4, all the same size; 2 for a 2-layer
   // target, see RenderTarget::layer_count) into `cmd`, a

@@ -3,7 +3,7 @@
 //
 // A runtime::FrameAllocator whose buffers are persistently mapped,
 // host-visible Vulkan buffers: the pipeline's decode workers write a frame
-// straight into memory the GPU copies from (Renderer::commit_decoded), so a
+// straight into memory the GPU copies from (Renderer::commit), so a
 // decoded particle is written once and never copied on the CPU. Where the
 // driver refuses more host-visible memory, a frame falls back to ordinary
 // host memory and the renderer copies it through its own staging (counted in

@@ -69,7 +69,7 @@ struct ReadSettings {
 enum class DecodeMode : uint8_t {
   Cpu,  // TBB workers decode every chunk into the frame's buffers
   // Frames stay encoded for a GPU decoder (io/gpu_decode_plan.h, the
-  // renderer's commit_encoded): the workers check each chunk's checksum,
+  // renderer's commit): the workers check each chunk's checksum,
   // copy its payload into the frame's buffer and inflate its zstd planes
   // there (nothing for files written for the GPU); the buffer ends with the
   // chunk plans. Needs io::gpu_decodable(file) (the constructor throws
