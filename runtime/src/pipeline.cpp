@@ -351,6 +351,10 @@ const io::FrameHeader& FrameHandle::header() const { return owner_->slot(slot_).
 std::span<const uint64_t> FrameHandle::chunk_first() const { return owner_->slot(slot_).chunk_first; }
 const FrameLayout& FrameHandle::layout() const { return owner_->slot(slot_).layout; }
 const FrameBuffers& FrameHandle::buffers() const { return owner_->slot(slot_).buffers; }
+FrameContent FrameHandle::content() const {
+  if (!gpu_plan()) return FrameContent::Decoded;
+  return layout().resident ? FrameContent::Relayed : FrameContent::Encoded;
+}
 const io::GpuDecodePlan* FrameHandle::gpu_plan() const {
   const Slot& s = owner_->slot(slot_);
   return s.layout.encoded_bytes > 0 ? &s.plan : nullptr;

@@ -128,6 +128,7 @@ Shot by_demand(const io::ContainerReader& reader, const SceneInfo& scene, uint64
   if (h.failed()) return {};
   if (path == Path::Relayed) {
     EXPECT_TRUE(h.layout().resident);
+    EXPECT_EQ(h.content(), runtime::FrameContent::Relayed);
   }
   r.commit(h, -1, &staging);
   Shot s = draw(r.renderer, target, c);

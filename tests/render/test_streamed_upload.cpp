@@ -103,6 +103,8 @@ std::vector<Rendered> streamed(const io::ContainerReader& reader, runtime::Frame
     EXPECT_FALSE(h.failed()) << (h.failed() ? h.error()->text() : "");
     if (h.failed()) break;
     EXPECT_EQ(h.gpu_plan() != nullptr, encoded);
+    EXPECT_EQ(h.content(), encoded ? (h.layout().resident ? runtime::FrameContent::Relayed : runtime::FrameContent::Encoded)
+                                   : runtime::FrameContent::Decoded);
     r.commit(h, 0, from);  // decoded, or kept encoded and decoded by the GPU
     out.push_back(draw(r, scene));
   }

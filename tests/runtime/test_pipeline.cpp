@@ -309,6 +309,8 @@ PipelineStats expect_kept_encoded_frames_decode_the_same(const std::filesystem::
     EXPECT_EQ(encoded.wait_next().status, EntryStatus::Ready);
     const FrameHandle d = decoded.take(), e = encoded.take();
     EXPECT_EQ(d.gpu_plan(), nullptr);
+    EXPECT_EQ(d.content(), FrameContent::Decoded);
+    EXPECT_EQ(e.content(), FrameContent::Encoded);
     const io::GpuDecodePlan* plan = e.gpu_plan();
     if (!plan) {
       ADD_FAILURE() << "frame " << f << " has no plan";

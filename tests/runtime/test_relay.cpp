@@ -123,6 +123,7 @@ PipelineStats expect_relayed_frames_decode_the_same(const std::filesystem::path&
     }
     const io::GpuDecodePlan* plan = e.gpu_plan();
     EXPECT_TRUE(e.layout().resident);
+    EXPECT_EQ(e.content(), FrameContent::Relayed);
     EXPECT_TRUE(e.buffers().particles.empty());
     const std::vector<std::byte> area = relay.area(e.buffers().tag);
     if (!plan || area.size() < plan->encoded_bytes()) {
@@ -223,6 +224,7 @@ TEST_F(RelayTest, ZstdPlanesFallBackToHostAreas) {
     ASSERT_FALSE(h.failed()) << h.error()->text();
     EXPECT_FALSE(h.layout().resident) << "frame " << f;
     ASSERT_NE(h.gpu_plan(), nullptr);
+    EXPECT_EQ(h.content(), FrameContent::Encoded) << "zstd planes: a host area, not relayed";
     EXPECT_GE(h.buffers().particles.size(), h.gpu_plan()->staged_bytes());
   }
   EXPECT_EQ(p.stats().frames_relayed, 0u);

@@ -174,6 +174,13 @@ class PipelineCore;  // runtime/src/pipeline_core.h
 // A frame handed to the consumer. Move-only; destroying or reset()ing it
 // gives the frame back. Consumer thread only; must not outlive its Pipeline.
 // Buffers are read-only for the consumer and stay valid until the release.
+// What a delivered frame's buffers hold (FrameHandle::content()).
+enum class FrameContent : uint8_t {
+  Decoded,  // buffers().particles: decoded particles (io::decoded_particle_bytes each); attributes: decoded streams
+  Encoded,  // buffers().particles: the staged area that gpu_plan() plans (io/gpu_decode_plan.h), to decode on the GPU
+  Relayed,  // already in device memory (layout().resident); buffers().particles is empty, gpu_plan() has the tables
+};
+
 class FrameHandle {
  public:
   FrameHandle() = default;
@@ -193,7 +200,8 @@ class FrameHandle {
   const io::FrameHeader& header() const;           // chunk table: counts, AABBs (to dequantize), layers
   std::span<const uint64_t> chunk_first() const;   // first particle of each chunk
   const FrameLayout& layout() const;
-  const FrameBuffers& buffers() const;             // particles (io::decoded_particle_bytes each; kept encoded: the staged area; relayed: empty), attributes
+  FrameContent content() const;                    // what buffers() holds
+  const FrameBuffers& buffers() const;             // as content() says
   // Frames kept encoded (DecodeMode::KeepEncoded): the plan of the
   // staged area in buffers().particles; null otherwise.
   const io::GpuDecodePlan* gpu_plan() const;
