@@ -139,17 +139,7 @@ import::IsolationPolicy import_isolation(bool in_process, int read_timeout) {
 import::ConvertSummary convert_and_report(const import::ConvertOptions& options, const std::string& output,
                                           const ConversionReport& report) {
   ConversionPrinter printer(report);
-  try {
-    import::ConvertSummary s = import::convert(options, output, printer.observer());
-    printer.finish();
-    return s;
-  } catch (const import::ConvertStopped& e) {
-    printer.finish();
-    rethrow_with_advice(e);
-  } catch (...) {
-    printer.finish();
-    throw;
-  }
+  return printer.run([&](const import::ConvertObserver& observer) { return import::convert(options, output, observer); });
 }
 
 }  // namespace sluice::app

@@ -16,6 +16,10 @@ struct ConversionReport {
   size_t max_warnings = 20;  // per-frame warnings shown; the rest counted
 };
 
+// The error `sluice` shows for a stopped conversion: what the output holds
+// and what to pass next.
+[[noreturn]] void rethrow_with_advice(const import::ConvertStopped& stopped);
+
 // Prints a conversion as it goes: its observer() shows the plan, a progress
 // bar and the notes, each with the flag that changes it; finish() the bar's
 // last line and what was counted rather than shown.
@@ -26,14 +30,27 @@ class ConversionPrinter {
   import::ConvertObserver observer();
   void finish();
 
+  // Runs `conversion` (given observer(), it converts), then finish(); a
+  // stopped conversion comes out as rethrow_with_advice() says it.
+  template <class Conversion>
+  auto run(Conversion&& conversion) {
+    try {
+      auto result = conversion(observer());
+      finish();
+      return result;
+    } catch (const import::ConvertStopped& e) {
+      finish();
+      rethrow_with_advice(e);
+    } catch (...) {
+      finish();
+      throw;
+    }
+  }
+
  private:
   class Lines;
   std::unique_ptr<Lines> lines_;
 };
-
-// The error `sluice` shows for a stopped conversion: what the output holds
-// and what to pass next.
-[[noreturn]] void rethrow_with_advice(const import::ConvertStopped& stopped);
 
 // How the sluice command reads third-party formats: in worker processes
 // that are this executable (main() calls import::run_worker first), or in

@@ -36,21 +36,16 @@ import::PlayableFile open_playable(const std::string& input, const PlayableOptio
   import::PlayableOptions options;
   options.use = o.no_cache ? import::CacheUse::Temporary : import::CacheUse::Cache;
   options.isolation = import_isolation(false, 120);
-  options.observer = printer.observer();
   if (!o.quiet) options.events = cache_messages(input, o.no_cache);
   // Waiting is said even when quiet: a player that seems stuck says why.
   options.events.waiting = [](const std::string& folder, long pid) {
     std::fprintf(stderr, "waiting for another sluice%s converting into %s\n",
                  pid > 0 ? (" (process " + std::to_string(pid) + ")").c_str() : "", folder.c_str());
   };
-  try {
-    import::PlayableFile file = import::open_playable(input, options);
-    printer.finish();
-    return file;
-  } catch (const import::ConvertStopped& e) {
-    printer.finish();
-    rethrow_with_advice(e);
-  }
+  return printer.run([&](const import::ConvertObserver& observer) {
+    options.observer = observer;
+    return import::open_playable(input, options);
+  });
 }
 
 }  // namespace sluice::app

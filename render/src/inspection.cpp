@@ -23,8 +23,6 @@ float half_to_float(uint16_t h) {
 
 }  // namespace
 
-detail::RendererImpl& renderer_impl(Renderer& renderer) { return *renderer.impl_; }
-
 std::vector<float> read_surface(Renderer& renderer) {
   detail::RendererImpl& r = renderer_impl(renderer);
   if (!r.options.debug_surfaces) throw Error("read_surface: the renderer was made without debug_surfaces");

@@ -505,6 +505,9 @@ FrameSync Renderer::record(VkCommandBuffer command_buffer, const RenderTarget& t
   return sync;
 }
 
+// For render/src only: the free functions of load.h and inspection.h.
+detail::RendererImpl& renderer_impl(Renderer& renderer) { return *renderer.impl_; }
+
 View camera_view(const Camera& camera, const Viewport& viewport) {
   View v;
   v.view = camera.view();
