@@ -386,7 +386,9 @@ class VoxelGrid {
       // >= 0 for a particle in the box, so truncation is floor; a
       // multiplication, not a division: this runs for every particle.
       const float cell = std::isfinite(v) ? (v - origin_[a]) * inverse_side_ : 0.0f;
-      c[a] = 1 + int64_t(std::clamp(cell, 0.0f, last_cell_[a]));
+      // NaN (a degenerate box: an infinite extent) goes to the first voxel, as
+      // below-the-box does; converting NaN to an integer is undefined.
+      c[a] = 1 + int64_t(cell > 0.0f ? std::min(cell, last_cell_[a]) : 0.0f);
     }
     return pack(c[0], c[1], c[2]);
   }
