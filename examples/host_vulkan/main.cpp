@@ -84,21 +84,54 @@ Image make_image(const vk::raii::Device& device, const vk::raii::PhysicalDevice&
   return i;
 }
 
-// The host's camera: its own convention, standard depth (0 near, 1 far) with
-// a finite far plane; sluice takes the matrices as they are.
-sluice::render::Mat4 projection(float fov_deg, float aspect, float near, float far) {
+// The host's own math (a real host brings its library): column-major 4x4
+// matrices, a right-handed camera looking down -z, standard depth (0 near,
+// 1 far) with a finite far plane. sluice takes the matrices as they are.
+using Matrix = std::array<float, 16>;
+struct Vec {
+  float x, y, z;
+};
+Vec operator-(Vec a, Vec b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
+Vec cross(Vec a, Vec b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }
+float dot(Vec a, Vec b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+Vec normalize(Vec a) {
+  const float n = std::sqrt(dot(a, a));
+  return {a.x / n, a.y / n, a.z / n};
+}
+
+Matrix multiply(const Matrix& a, const Matrix& b) {
+  Matrix r{};
+  for (int col = 0; col < 4; ++col) {
+    for (int row = 0; row < 4; ++row) {
+      for (int k = 0; k < 4; ++k) r[col * 4 + row] += a[k * 4 + row] * b[col * 4 + k];
+    }
+  }
+  return r;
+}
+
+Matrix look_at(Vec eye, Vec target, Vec up) {
+  const Vec f = normalize(target - eye), s = normalize(cross(f, up)), u = cross(s, f);
+  return {s.x, u.x, -f.x, 0, s.y, u.y, -f.y, 0, s.z, u.z, -f.z, 0, -dot(s, eye), -dot(u, eye), dot(f, eye), 1};
+}
+
+Matrix projection(float fov_deg, float aspect, float near, float far) {
   const float f = 1.0f / std::tan(fov_deg * 0.5f * 3.14159265f / 180.0f);
-  sluice::render::Mat4 p;
-  p.at(0, 0) = f / aspect;
-  p.at(1, 1) = -f;  // Vulkan: y down
-  p.at(2, 2) = far / (near - far);
-  p.at(2, 3) = near * far / (near - far);
-  p.at(3, 2) = -1;
+  Matrix p{};
+  p[0] = f / aspect;
+  p[5] = -f;  // Vulkan: y down
+  p[10] = far / (near - far);
+  p[11] = -1;
+  p[14] = near * far / (near - far);
   return p;
 }
 
+// The region the host frames: the data's bounds.
+struct Box {
+  Vec lo, hi;
+};
+
 struct BoxPush {
-  sluice::render::Mat4 clip_from_world;
+  Matrix clip_from_world;
   float lo[4], size[4], color[4];
 };
 
@@ -210,7 +243,7 @@ std::vector<float> simulate(int step, float h) {
 // boxes, a camera, and one command buffer + fence per frame in flight.
 class HostScene {
  public:
-  HostScene(const Device& d, const sluice::render::Bounds& b) : d_(d) {
+  HostScene(const Device& d, const Box& b) : d_(d) {
     using U = vk::ImageUsageFlagBits;
     color_ = make_image(d.device, d.physical, kColor, U::eColorAttachment | U::eTransferSrc, vk::ImageAspectFlagBits::eColor);
     depth_ = make_image(d.device, d.physical, kDepth, U::eDepthStencilAttachment | U::eTransferSrc, vk::ImageAspectFlagBits::eDepth);
@@ -224,7 +257,8 @@ class HostScene {
     place_camera_and_boxes(b);
   }
 
-  const sluice::render::View& view() const { return view_; }
+  // The camera as sluice takes it: the host's matrices over the whole image.
+  sluice::render::View view() const { return {{view_}, {projection_}, {0, 0, kWidth, kHeight}}; }
 
   // One frame: the host clears and draws its geometry (or not), then the
   // stream records the fluid into the same images (occluded by the host's
@@ -236,7 +270,8 @@ class HostScene {
     cmd.reset();
     cmd.begin(vk::CommandBufferBeginInfo(vk::CommandBufferUsageFlagBits::eOneTimeSubmit));
     draw_geometry(cmd, host_geometry);
-    const auto sync = fluid ? fluid->record(static_cast<VkCommandBuffer>(cmd), target(), {&view_, 1}) : sluice::render::FrameSync{};
+    const sluice::render::View camera = view();
+    const auto sync = fluid ? fluid->record(static_cast<VkCommandBuffer>(cmd), target(), {&camera, 1}) : sluice::render::FrameSync{};
     if (!fluid) to_transfer_source(cmd);
     cmd.end();
     const vk::CommandBufferSubmitInfo cb(cmd);
@@ -319,16 +354,15 @@ class HostScene {
   }
 
   // The host's camera looking at the data, a floor under it and a box standing in its middle.
-  void place_camera_and_boxes(const sluice::render::Bounds& b) {
-    const sluice::render::Vec3 c = b.center(), e = b.max - b.min;
-    const sluice::render::Vec3 eye{c.x - 0.35f * e.x, b.min.y - 1.3f * std::max(e.x, e.y), b.max.z + 0.9f * e.z};
-    view_.view = sluice::render::look_at(eye, {c.x, c.y, b.min.z + 0.3f * e.z}, {0, 0, 1});
-    view_.projection = projection(45, float(kWidth) / kHeight, 0.05f * e.x, 20 * (e.x + e.y + e.z));
-    view_.viewport = {0, 0, kWidth, kHeight};
-    const sluice::render::Mat4 clip_from_world = view_.projection * view_.view;
-    floor_ = {clip_from_world, {b.min.x - 0.3f * e.x, b.min.y - 0.3f * e.y, b.min.z - 0.02f * e.z, 0},
+  void place_camera_and_boxes(const Box& b) {
+    const Vec e = b.hi - b.lo, c{b.lo.x + 0.5f * e.x, b.lo.y + 0.5f * e.y, b.lo.z + 0.5f * e.z};
+    const Vec eye{c.x - 0.35f * e.x, b.lo.y - 1.3f * std::max(e.x, e.y), b.hi.z + 0.9f * e.z};
+    view_ = look_at(eye, {c.x, c.y, b.lo.z + 0.3f * e.z}, {0, 0, 1});
+    projection_ = projection(45, float(kWidth) / kHeight, 0.05f * e.x, 20 * (e.x + e.y + e.z));
+    const Matrix clip_from_world = multiply(projection_, view_);
+    floor_ = {clip_from_world, {b.lo.x - 0.3f * e.x, b.lo.y - 0.3f * e.y, b.lo.z - 0.02f * e.z, 0},
               {1.6f * e.x, 1.6f * e.y, 0.02f * e.z, 0}, {0.55f, 0.5f, 0.45f, 1}};
-    box_ = {clip_from_world, {c.x - 0.08f * e.x, c.y - 0.12f * e.y, b.min.z, 0}, {0.16f * e.x, 0.24f * e.y, 1.4f * e.z, 0},
+    box_ = {clip_from_world, {c.x - 0.08f * e.x, c.y - 0.12f * e.y, b.lo.z, 0}, {0.16f * e.x, 0.24f * e.y, 1.4f * e.z, 0},
             {0.85f, 0.25f, 0.2f, 1}};
   }
 
@@ -398,7 +432,7 @@ class HostScene {
   vk::raii::CommandPool pool_{nullptr};
   std::vector<Slot> slots_;
   size_t next_ = 0;
-  sluice::render::View view_;
+  Matrix view_{}, projection_{};
   BoxPush floor_{}, box_{};
 };
 
@@ -462,14 +496,16 @@ int main(int argc, char** argv) try {
   look.ground = false;  // the host draws its own floor
   stream->set_look(look, {});
 
-  // 4. The host's images, pipeline, camera and frames in flight.
-  HostScene scene(device, stream->scene().bounds);
+  // 4. The host's images, pipeline, camera (framing the data) and frames in flight.
+  const sluice::render::Bounds data = stream->scene().bounds;
+  HostScene scene(device, {{data.min.x, data.min.y, data.min.z}, {data.max.x, data.max.y, data.max.z}});
 
   // 5. The frame loop: the views, the frame due, the host's drawing and sluice's.
   if (!args->live) stream->player().play();
   for (int f = 0; f < args->frames; ++f) {
     if (args->live) stream->push({simulate(f, live.particle_spacing), {}, {}, f / 30.0});  // a frame from the host's memory
-    stream->set_views({&scene.view(), 1});
+    const sluice::render::View camera = scene.view();
+    stream->set_views({&camera, 1});
     stream->update();
     scene.draw(true, stream.get());
   }
