@@ -8,6 +8,7 @@
 
 #include "relay_ring.h"
 #include "sluice/render/staging_allocator.h"
+#include "sluice/runtime/block_pool.h"
 #include "vk_common.h"
 
 namespace sluice::render {
@@ -25,6 +26,8 @@ struct StagingAllocator::Memory {
 
   std::byte* data() const { return host ? host.get() : static_cast<std::byte*>(staging.mapped); }
 };
+
+class StagingAllocator::Pool : public runtime::BlockPool<Memory> {};
 
 // The memory behind buffers a StagingAllocator handed out.
 inline const StagingAllocator::Memory& staging_memory(const runtime::FrameBuffers& buffers) {

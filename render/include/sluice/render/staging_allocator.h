@@ -29,7 +29,6 @@
 #include <vector>
 
 #include "sluice/render/context.h"
-#include "sluice/runtime/block_pool.h"
 #include "sluice/runtime/budget.h"
 #include "sluice/runtime/frame_allocator.h"
 
@@ -83,7 +82,7 @@ class StagingAllocator final : public runtime::FrameAllocator {
   uint64_t fresh_allocations() const;  // blocks made anew (not reused): each a Vulkan allocation
 
   struct Memory;  // render/src/staging_block.h: a block's staging buffer (or host fallback)
-  using Pool = runtime::BlockPool<Memory>;  // FrameBuffers::tag points at one of its blocks
+  class Pool;     // render/src/staging_block.h: FrameBuffers::tag points at one of its blocks
 
  private:
   class HeapBudget;
