@@ -1,0 +1,168 @@
+#include "sluice/io/particles.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <memory>
+#include <string>
+
+#include "file.h"
+#include "sluice/io/codec.h"
+#include "sluice/io/error.h"
+#include "sluice/io/export.h"
+#include "sluice/io/lod.h"
+
+namespace sluice::io {
+namespace {
+
+void check_query(const ParticleQuery& query, const FileHeader& file, const ErrorLocation& where) {
+  if (!(query.lod_level > 0 && query.lod_level <= 1)) {
+    throw Error(where, "LOD level " + std::to_string(query.lod_level) + " is out of range: give a fraction in (0, 1]");
+  }
+  for (const size_t a : query.attributes) {
+    if (a >= file.attributes.size()) {
+      throw Error(where, "attribute " + std::to_string(a) + " requested; the file has " + std::to_string(file.attributes.size()));
+    }
+  }
+}
+
+// Whether a blob centred at `p` is kept at `level`: its cell's random term,
+// as the renderer draws blobs at importance 1.
+bool blob_keeps(const float* p, float voxel, float level) {
+  if (!(voxel > 0)) return true;
+  int32_t cell[3];
+  for (int a = 0; a < 3; ++a) cell[a] = int32_t(std::clamp(std::floor(double(p[a]) / voxel), -2147483648.0, 2147483647.0));
+  return 1.0 - blob_lod_uniform(cell[0], cell[1], cell[2]) <= level;
+}
+
+// Removes the particles `level` drops, keeping the order.
+void thin(ParticleArrays& out, float level, float blob_voxel) {
+  std::vector<uint8_t> keeps(65536);
+  for (uint32_t v = 0; v < 65536; ++v) keeps[v] = lod_keeps(uint16_t(v), level) ? 1 : 0;
+  uint64_t kept = 0;
+  for (uint64_t i = 0; i < out.count(); ++i) {
+    const bool keep = out.layer[i] == uint8_t(Layer::Blobs) ? blob_keeps(&out.positions[3 * i], blob_voxel, level)
+                                                           : keeps[out.lod[i]] != 0;
+    if (!keep) continue;
+    if (kept != i) {
+      std::memcpy(&out.positions[3 * kept], &out.positions[3 * i], 3 * sizeof(float));
+      out.lod[kept] = out.lod[i];
+      out.layer[kept] = out.layer[i];
+      for (auto& a : out.attributes) a[kept] = a[i];
+    }
+    ++kept;
+  }
+  out.positions.resize(3 * kept);
+  out.lod.resize(kept);
+  out.layer.resize(kept);
+  for (auto& a : out.attributes) a.resize(kept);
+}
+
+// One chunk's particles into world units, with their layer and attributes.
+void convert_chunk(const ChunkDesc& chunk, uint64_t first, std::span<const std::byte> particles, PositionCoding coding,
+                   std::span<const std::span<const uint16_t>> streams, std::span<const size_t> attributes, ParticleArrays& out) {
+  const size_t stride = decoded_particle_bytes(coding);
+  const size_t lod_offset = coding == PositionCoding::Quantized16 ? 6 : 12;
+  for (uint64_t i = first; i < first + chunk.particle_count; ++i) {
+    const std::byte* p = particles.data() + stride * i;
+    if (coding == PositionCoding::Quantized16) {
+      uint16_t q[3];
+      std::memcpy(q, p, sizeof q);
+      for (int a = 0; a < 3; ++a) out.positions[3 * i + a] = dequantize(q[a], chunk.bounds.min[a], chunk.bounds.max[a]);
+    } else {
+      std::memcpy(&out.positions[3 * i], p, 3 * sizeof(float));
+    }
+    std::memcpy(&out.lod[i], p + lod_offset, sizeof(uint16_t));
+    out.layer[i] = uint8_t(chunk.layer);
+  }
+  for (size_t k = 0; k < attributes.size(); ++k) {
+    const auto [lo, hi] = chunk.attribute_ranges[attributes[k]];
+    for (uint64_t i = first; i < first + chunk.particle_count; ++i) out.attributes[k][i] = dequantize(streams[k][i], lo, hi);
+  }
+}
+
+// The kept chunks' bytes of a frame record into `record` (the whole record's
+// size, only those ranges filled): one read per run of adjacent chunks.
+uint64_t read_chunks(const ContainerReader& reader, uint64_t frame, const FrameHeader& header, uint64_t table_bytes,
+                     std::span<std::byte> record) {
+  const FrameIndexEntry& e = reader.index().frames[frame];
+  const ErrorLocation where = reader.location(frame);
+  uint64_t read = 0;
+  for (size_t c = 0; c < header.chunks.size();) {
+    const uint64_t begin = header.chunks[c].offset;
+    uint64_t end = begin + header.chunks[c].compressed_size;
+    size_t next = c + 1;
+    while (next < header.chunks.size() && header.chunks[next].offset == end) end += header.chunks[next++].compressed_size;
+    if (begin < table_bytes || end > record.size()) throw Error(reader.location(frame, header.chunks[c].index), "chunk lies outside its record");
+    pread_all_or_throw(reader.descriptor(), record.subspan(begin, end - begin), e.offset + begin, where);
+    read += end - begin;
+    c = next;
+  }
+  return read;
+}
+
+}  // namespace
+
+ParticleArrays particles_of(const FrameHeader& header, std::span<const uint64_t> chunk_first,
+                            std::span<const std::byte> particles, std::span<const std::span<const uint16_t>> attribute_streams,
+                            const FileHeader& file, const ParticleQuery& query) {
+  check_query(query, file, {});
+  const uint64_t n = header.particle_count;
+  if (chunk_first.size() != header.chunks.size() || particles.size() < n * decoded_particle_bytes(file.position_coding) ||
+      attribute_streams.size() != query.attributes.size()) {
+    throw Error({}, "particles_of: the decoded buffers do not match the frame");
+  }
+  for (const auto& s : attribute_streams) {
+    if (s.size() < n) throw Error({}, "particles_of: an attribute stream is shorter than the frame");
+  }
+  ParticleArrays out;
+  out.time = header.time;
+  out.positions.resize(3 * n);
+  out.lod.resize(n);
+  out.layer.resize(n);
+  out.attributes.assign(query.attributes.size(), std::vector<float>(n));
+  tbb::parallel_for(size_t(0), header.chunks.size(), [&](size_t c) {
+    convert_chunk(header.chunks[c], chunk_first[c], particles, file.position_coding, attribute_streams, query.attributes, out);
+  });
+  if (query.lod_level < 1) thin(out, query.lod_level, header.blob_voxel);
+  return out;
+}
+
+ParticleArrays read_particles(const ContainerReader& reader, uint64_t frame, const ParticleQuery& query) {
+  const FileHeader& file = reader.header();
+  check_query(query, file, reader.location(frame));
+  FrameHeader header = reader.read_table(frame);
+  const uint64_t table_bytes = frame_table_bytes(header.chunks.size(), file.attributes.size());
+  keep_layers(header, query.layers);
+  if (query.lod_level < 1) {
+    const uint32_t tiers = tiers_for_keep(query.lod_level);
+    keep_tiers(header, [&](const ChunkDesc&) { return std::max<uint32_t>(tiers, 1); });
+  }
+  // The record's whole size, uninitialized: only the pages of the chunks
+  // read are touched.
+  const uint64_t record_bytes = reader.index().frames[frame].bytes;
+  const std::unique_ptr<std::byte[]> record(new std::byte[record_bytes]);
+  const std::span<std::byte> bytes(record.get(), record_bytes);
+  const uint64_t read = read_chunks(reader, frame, header, table_bytes, bytes);
+
+  const uint64_t n = header.particle_count;
+  std::vector<std::byte> particles(n * decoded_particle_bytes(file.position_coding));
+  std::vector<uint64_t> first(header.chunks.size());
+  chunk_starts(header, first);
+  std::vector<std::vector<uint16_t>> streams(file.attributes.size());
+  std::vector<uint16_t*> destinations(file.attributes.size(), nullptr);
+  for (const size_t a : query.attributes) {
+    streams[a].resize(n);
+    destinations[a] = streams[a].data();
+  }
+  decode_record(bytes, header, file, first, particles, destinations, reader.location(frame));
+  std::vector<std::span<const uint16_t>> wanted;
+  for (const size_t a : query.attributes) wanted.emplace_back(streams[a]);
+  ParticleArrays out = particles_of(header, first, particles, wanted, file, query);
+  out.bytes_read = read + std::min<uint64_t>(record_bytes, table_bytes);
+  return out;
+}
+
+}  // namespace sluice::io
