@@ -7,6 +7,7 @@ packages=(
   build-essential cmake pkg-config ccache git
   libzstd-dev libtbb-dev libxxhash-dev libcli11-dev libvtk9-dev zlib1g-dev
   libgtest-dev libbenchmark-dev
+  python3-dev pybind11-dev python3-numpy python3-pytest python3-matplotlib
   clang libclang-rt-14-dev
 )
 # The renderer's packages, when the tree has a renderer.

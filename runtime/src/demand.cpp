@@ -137,6 +137,7 @@ float blob_reach(float voxel, float radius) {
 uint32_t tiers_needed(const ViewDemand& demand, const Prepared& prepared, const io::Aabb& box, io::Layer layer,
                       float blob_voxel) {
   if (demand.everything()) return io::kLodTiers;
+  if (demand.views.size() == 0) return demand.level > 0 ? std::max<uint32_t>(1, io::tiers_for_keep(demand.level)) : 1;
   const bool blob = layer == io::Layer::Blobs;
   const float reach = blob ? blob_reach(blob_voxel, demand.particle_radius) : demand.particle_reach;
   const Box seen = grown(box, reach + demand.margin);

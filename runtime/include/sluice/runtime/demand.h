@@ -32,7 +32,8 @@ struct DemandView {
 
 struct ViewDemand {
   // The views the frames are drawn for (1 to 4; stereo: both eyes). Empty:
-  // no view is known and every tier of every cell is read (the default).
+  // no view is known: every tier of every cell is read (the default), or
+  // with `lod` a uniform level (uniform()).
   io::InlineVector<DemandView, 4> views;
   // Continuous LOD by the stable LOD value. false: every tier of each
   // visible cell (LOD off, or a random term the file's tiers do not order:
@@ -48,7 +49,16 @@ struct ViewDemand {
   // drawn: boxes grow by it for the frustum and the distance tests.
   float margin = 0;
 
-  bool everything() const { return views.size() == 0; }
+  // Without views, a demand with `lod` and a level below 1 keeps that
+  // fraction of every cell at importance 1 (io/particles.h's rule: scripts,
+  // exports); any other demand without views reads everything.
+  bool everything() const { return views.size() == 0 && !(lod && level < 1); }
+  static ViewDemand uniform(float level) {
+    ViewDemand d;
+    d.lod = true;
+    d.level = level;
+    return d;
+  }
 };
 
 // Tiers (0 .. io::kLodTiers) of a cell with box `box` and layer `layer` the

@@ -1,0 +1,58 @@
+# Type stubs for the sluice module (the `_core` extension re-exported).
+from os import PathLike
+from typing import Any, Callable, Iterator, Optional, Sequence as _Seq, Tuple, Union
+
+import numpy as np
+import numpy.typing as npt
+
+LAYERS: Tuple[str, str, str, str]
+
+class Error(RuntimeError): ...
+
+class Frame:
+    index: int
+    time: float
+    bytes_read: int
+    positions: npt.NDArray[np.float32]  # (N, 3)
+    lod: npt.NDArray[np.uint16]
+    layer: npt.NDArray[np.uint8]
+    attributes: dict[str, npt.NDArray[np.float32]]
+    def __len__(self) -> int: ...
+    def __getitem__(self, name: str) -> npt.NDArray[np.float32]: ...
+
+class FrameStream(Iterator[Frame]):
+    window: int
+    def __iter__(self) -> "FrameStream": ...
+    def __next__(self) -> Frame: ...
+    def __len__(self) -> int: ...
+
+class Sequence:
+    path: str
+    times: npt.NDArray[np.float64]
+    counts: npt.NDArray[np.uint64]
+    bounds: Tuple[Tuple[float, float, float], Tuple[float, float, float]]
+    up: str
+    spacing: float
+    radius: float
+    frame_rate: float
+    attributes: list[str]
+    layers: list[str]
+    def __len__(self) -> int: ...
+    def __getitem__(self, i: int) -> Frame: ...
+    def __iter__(self) -> FrameStream: ...
+    def frame(self, i: int, *, layers: str = "all", lod_level: Optional[float] = None,
+              attributes: Optional[_Seq[str]] = None) -> Frame: ...
+    def frames(self, start: int = 0, stop: Optional[int] = None, step: int = 1, *, layers: str = "all",
+               lod_level: Optional[float] = None, attributes: Optional[_Seq[str]] = None,
+               memory: int = 0) -> FrameStream: ...
+    def info(self) -> dict[str, Any]: ...
+
+def open(path: Union[str, PathLike[str]]) -> Sequence: ...
+
+def convert(input: str, output: Union[str, PathLike[str]], *,
+            progress: Optional[Callable[[dict[str, int]], None]] = None,
+            attributes: Optional[_Seq[str]] = None, all_attributes: bool = False,
+            spacing: float = 0.0, radius: float = 0.0, fps: float = 0.0, dt: float = 0.0,
+            up: Optional[str] = None, ids: Optional[str] = None, no_ids: bool = False,
+            lossless: bool = False, layers: bool = True, skip_bad: bool = False,
+            jobs: int = 0, isolate: bool = True) -> dict[str, Any]: ...

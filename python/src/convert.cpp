@@ -1,0 +1,181 @@
+#include "convert.h"
+
+#include <pybind11/stl.h>
+#include <pybind11/stl/filesystem.h>
+
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "sluice/import/convert.h"
+#include "sluice/io/up_axis.h"
+
+namespace py = pybind11;
+
+namespace sluice::python {
+namespace {
+
+// Thrown from the observer (on whichever thread runs it) when the Python
+// side raised (the callback, or Ctrl-C): the conversion unwinds, and the
+// saved Python error is raised again on the calling thread.
+struct PythonRaised {};
+
+class PythonObserver {
+ public:
+  explicit PythonObserver(py::object progress) : progress_(std::move(progress)) {}
+
+  import::ConvertObserver observer() {
+    import::ConvertObserver o;
+    o.progressed = [this](const import::ConvertProgress& p) { progressed(p); };
+    o.noted = [this](const import::Note& n) { notes_.push_back(n.text); };
+    return o;
+  }
+  const std::vector<std::string>& notes() const { return notes_; }
+  // Raises the saved Python error, if one was saved. GIL held.
+  void raise_saved() {
+    if (!type_) return;
+    PyErr_Restore(type_.release().ptr(), value_.release().ptr(), trace_.release().ptr());
+    throw py::error_already_set();
+  }
+  ~PythonObserver() {
+    if (type_ || value_ || trace_) {
+      py::gil_scoped_acquire locked;
+      type_ = value_ = trace_ = py::object();
+    }
+  }
+
+ private:
+  void progressed(const import::ConvertProgress& p) {
+    py::gil_scoped_acquire locked;
+    if (!progress_.is_none()) {
+      py::dict d;
+      d["frames_done"] = p.frames_done;
+      d["frames"] = p.frames;
+      d["input_bytes"] = p.input_bytes;
+      d["output_bytes"] = p.output_bytes;
+      try {
+        progress_(d);
+      } catch (py::error_already_set& e) {
+        e.restore();
+        save();
+      }
+    }
+    if (PyErr_CheckSignals() != 0) save();
+  }
+  void save() {
+    PyObject *type = nullptr, *value = nullptr, *trace = nullptr;
+    PyErr_Fetch(&type, &value, &trace);
+    type_ = py::reinterpret_steal<py::object>(type);
+    value_ = py::reinterpret_steal<py::object>(value);
+    trace_ = py::reinterpret_steal<py::object>(trace);
+    throw PythonRaised{};
+  }
+
+  py::object progress_;
+  py::object type_, value_, trace_;
+  std::vector<std::string> notes_;
+};
+
+std::optional<io::UpAxis> up_axis(const std::optional<std::string>& up) {
+  if (!up) return std::nullopt;
+  const auto axis = io::parse_up_axis(*up);
+  if (!axis) throw py::value_error("up must be an axis such as '+z', 'y' or '-x', not '" + *up + "'");
+  return axis;
+}
+
+py::dict summary_dict(const import::ConvertSummary& s, const std::vector<std::string>& notes) {
+  py::dict d;
+  d["frames"] = s.frames;
+  d["particles"] = s.particles;
+  d["input_bytes"] = s.input_bytes;
+  d["seconds"] = s.elapsed.count();
+  d["up"] = io::up_axis_name(s.header.up);
+  d["up_evidence"] = io::up_evidence_name(s.header.up_evidence);
+  d["spacing"] = s.header.particle_spacing;
+  py::list skipped;
+  for (const import::SkippedFrame& f : s.skipped) skipped.append(py::make_tuple(f.frame, f.name, f.error));
+  d["skipped"] = skipped;
+  d["notes"] = notes;
+  return d;
+}
+
+const char* kConvertDoc = R"(Converts simulation output into a .sluice file.
+
+The same conversion as `sluice convert`: spacing, radius, particle ids,
+times and the up axis are found in the data unless given.
+
+Args:
+    input: a file, a glob ('out/part_*.vtk'), a .pvd collection or a
+        directory (VTK legacy/XML, CSV, XYZ: see docs/import.md).
+    output: the .sluice file to write (written as output + '.partial' and
+        renamed when complete).
+    progress: called once per frame with a dict (frames_done, frames,
+        input_bytes, output_bytes); raising from it stops the conversion.
+    attributes: point arrays to carry for colouring; None carries none
+        unless all_attributes.
+    spacing, radius: world units (0: estimated; radius = spacing / 2).
+    fps: playback frame rate; also the time step for inputs without times.
+    dt: seconds between frames for inputs without times.
+    up: '+z', 'y', '-x', ... (None: found from the data).
+    ids: the particle id array (None: found); no_ids: LOD follows order.
+    lossless: float32 positions instead of 16-bit quantized.
+    layers: classify the narrow band (surface, interior, blobs).
+    skip_bad: leave out frames that cannot be read (listed in the result).
+    jobs: threads (0: every core).
+    isolate: read third-party formats in worker processes (a crashing
+        reader costs one frame, not the interpreter).
+
+Returns:
+    a dict: frames, particles, input_bytes, seconds, up, up_evidence,
+    spacing, skipped [(frame, name, error)], notes [str].
+
+Raises:
+    sluice.Error: bad input or options (naming the file and frame).
+    KeyboardInterrupt (Ctrl-C) or the callback's exception: the
+    conversion stops between frames; output + '.partial' keeps the frames
+    written so far (`sluice recover` makes it a file).
+)";
+
+}  // namespace
+
+void bind_convert(py::module_& m) {
+  m.def("convert",
+        [](const std::string& input, const std::filesystem::path& output, py::object progress,
+           std::optional<std::vector<std::string>> attributes, bool all_attributes, float spacing, float radius, double fps,
+           double dt, std::optional<std::string> up, std::optional<std::string> ids, bool no_ids, bool lossless, bool layers,
+           bool skip_bad, int jobs, bool isolate) {
+          import::ConvertOptions o;
+          o.input = input;
+          if (attributes) o.attributes = *attributes;
+          o.all_attributes = all_attributes;
+          o.spacing = spacing;
+          o.radius = radius;
+          o.fps = fps;
+          o.dt = dt;
+          o.up = up_axis(up);
+          if (ids) o.id_array = *ids;
+          o.no_ids = no_ids;
+          o.lossless = lossless;
+          o.layers = layers;
+          o.skip_bad = skip_bad;
+          o.jobs = jobs;
+          o.isolation.mode = isolate ? import::Isolation::WorkerProcesses : import::Isolation::InProcess;
+          PythonObserver observer(std::move(progress));
+          std::optional<import::ConvertSummary> summary;
+          try {
+            py::gil_scoped_release unlocked;
+            summary = import::convert(o, output.string(), observer.observer());
+          } catch (const PythonRaised&) {
+            observer.raise_saved();
+          }
+          return summary_dict(*summary, observer.notes());
+        },
+        kConvertDoc, py::arg("input"), py::arg("output"), py::kw_only(), py::arg("progress") = py::none(),
+        py::arg("attributes") = py::none(), py::arg("all_attributes") = false, py::arg("spacing") = 0.0f,
+        py::arg("radius") = 0.0f, py::arg("fps") = 0.0, py::arg("dt") = 0.0, py::arg("up") = py::none(),
+        py::arg("ids") = py::none(), py::arg("no_ids") = false, py::arg("lossless") = false, py::arg("layers") = true,
+        py::arg("skip_bad") = false, py::arg("jobs") = 0, py::arg("isolate") = true);
+}
+
+}  // namespace sluice::python

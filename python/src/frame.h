@@ -1,0 +1,32 @@
+// A frame as Python sees it: numpy arrays over memory the frame hands over
+// (positions N x 3 float32, LOD values, layers, one float32 array per
+// attribute), its number and time.
+#pragma once
+
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "sluice/io/particles.h"
+
+namespace sluice::python {
+
+struct Frame {
+  uint64_t index = 0;
+  double time = 0;
+  uint64_t bytes_read = 0;
+  pybind11::array_t<float> positions;
+  pybind11::array_t<uint16_t> lod;
+  pybind11::array_t<uint8_t> layer;
+  pybind11::dict attributes;  // name -> float32 array
+};
+
+// Moves `arrays` into numpy (no copy). `names[i]` names arrays.attributes[i].
+Frame make_frame(uint64_t index, io::ParticleArrays&& arrays, const std::vector<std::string>& names);
+
+void bind_frame(pybind11::module_& m);
+
+}  // namespace sluice::python

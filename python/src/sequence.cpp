@@ -1,0 +1,270 @@
+#include "sequence.h"
+
+#include <pybind11/numpy.h>
+#include <pybind11/stl.h>
+#include <pybind11/stl/filesystem.h>
+
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "frame.h"
+#include "frame_stream.h"
+#include "sluice/io/error.h"
+#include "sluice/io/particles.h"
+#include "sluice/io/reader.h"
+#include "sluice/io/up_axis.h"
+
+namespace py = pybind11;
+
+namespace sluice::python {
+namespace {
+
+// What a Python call asks of a frame, checked against the file.
+struct Request {
+  io::ParticleQuery query;
+  std::vector<std::string> names;  // of query.attributes
+};
+
+io::LayerSet layer_set(const std::string& layers) {
+  if (layers == "all") return io::LayerSet::particles();
+  if (layers == "surface") return io::LayerSet::surface();
+  throw py::value_error("layers must be 'all' (every particle) or 'surface' (the narrow band and the blobs standing "
+                        "in for the interior), not '" + layers + "'");
+}
+
+class Sequence {
+ public:
+  explicit Sequence(const std::filesystem::path& path) {
+    if (!std::filesystem::exists(path)) {
+      PyErr_SetString(PyExc_FileNotFoundError, (path.string() + ": no such file").c_str());
+      throw py::error_already_set();
+    }
+    reader_ = std::make_shared<io::ContainerReader>(path);
+  }
+
+  const io::ContainerReader& reader() const { return *reader_; }
+  std::shared_ptr<const io::ContainerReader> shared() const { return reader_; }
+  uint64_t size() const { return reader_->frame_count(); }
+
+  std::vector<std::string> attribute_names() const {
+    std::vector<std::string> out;
+    for (const io::AttributeInfo& a : reader_->header().attributes) out.push_back(a.name);
+    return out;
+  }
+
+  // The frame number `i` names (negative from the end), or IndexError.
+  uint64_t frame_number(int64_t i) const {
+    const auto n = int64_t(size());
+    if (i < 0) i += n;
+    if (i < 0 || i >= n) throw py::index_error("frame " + std::to_string(i) + " is out of range: the file has " + std::to_string(n));
+    return uint64_t(i);
+  }
+
+  Request request(const std::string& layers, std::optional<float> lod_level,
+                  const std::optional<std::vector<std::string>>& attributes) const {
+    Request r;
+    r.query.layers = layer_set(layers);
+    if (lod_level) {
+      if (!(*lod_level > 0 && *lod_level <= 1)) throw py::value_error("lod_level must lie in (0, 1]: the fraction of particles kept");
+      r.query.lod_level = *lod_level;
+    }
+    const std::vector<std::string> all = attribute_names();
+    for (const std::string& name : attributes ? *attributes : all) {
+      const auto at = std::find(all.begin(), all.end(), name);
+      if (at == all.end()) {
+        std::string have;
+        for (const auto& a : all) have += (have.empty() ? "" : ", ") + a;
+        throw py::key_error("no attribute '" + name + "' in " + reader_->path() + " (it has: " + (have.empty() ? "none" : have) + ")");
+      }
+      r.query.attributes.push_back(size_t(at - all.begin()));
+      r.names.push_back(name);
+    }
+    return r;
+  }
+
+  Frame frame(int64_t i, const Request& r) const {
+    const uint64_t number = frame_number(i);
+    io::ParticleArrays arrays;
+    {
+      py::gil_scoped_release unlocked;
+      arrays = io::read_particles(*reader_, number, r.query);
+    }
+    return make_frame(number, std::move(arrays), r.names);
+  }
+
+  py::dict info() const {
+    const io::FileHeader& h = reader_->header();
+    const io::FrameIndex& index = reader_->index();
+    py::dict d;
+    d["path"] = reader_->path();
+    d["frames"] = size();
+    d["format"] = std::to_string(h.version_major) + "." + std::to_string(h.version_minor);
+    d["positions"] = h.position_coding == io::PositionCoding::Quantized16 ? "quantized16" : "float32";
+    d["spacing"] = h.particle_spacing;
+    d["radius"] = h.particle_radius;
+    d["frame_rate"] = h.frame_rate;
+    d["up"] = io::up_axis_name(h.up);
+    d["up_evidence"] = io::up_evidence_name(h.up_evidence);
+    d["attributes"] = attribute_names();
+    d["lod_id_array"] = h.lod_id_array;
+    d["source"] = h.source;
+    d["file_bytes"] = reader_->file_size();
+    uint64_t particles = 0;
+    for (const io::FrameIndexEntry& e : index.frames) particles += e.particle_count;
+    d["particles"] = particles;
+    d["bounds"] = py::make_tuple(py::make_tuple(index.bounds.min[0], index.bounds.min[1], index.bounds.min[2]),
+                                 py::make_tuple(index.bounds.max[0], index.bounds.max[1], index.bounds.max[2]));
+    return d;
+  }
+
+ private:
+  std::shared_ptr<io::ContainerReader> reader_;
+};
+
+// Iterates frames through the pipeline; outlives its sequence.
+class Stream {
+ public:
+  Stream(std::shared_ptr<const io::ContainerReader> reader, StreamRange range, Request r, uint64_t memory)
+      : names_(std::move(r.names)), frames_(std::move(reader), range, std::move(r.query), memory) {}
+
+  Frame next() {
+    std::optional<StreamedFrame> f;
+    {
+      py::gil_scoped_release unlocked;
+      f = frames_.next();
+    }
+    if (!f) throw py::stop_iteration();
+    return make_frame(f->index, std::move(f->arrays), names_);
+  }
+  uint64_t remaining() const { return frames_.remaining(); }
+  uint32_t window() const { return frames_.window_frames(); }
+
+ private:
+  std::vector<std::string> names_;
+  FrameStream frames_;
+};
+
+const char* kFrameDoc = R"(Reads frame i (negative counts from the end) into numpy arrays.
+
+Args:
+    i: frame number.
+    layers: 'all' (every particle, the default) or 'surface' (the narrow
+        band and the blobs standing in for the interior, what the player
+        draws; a file without layers gives every particle either way).
+    lod_level: the fraction of particles kept, in (0, 1]; None keeps all.
+        The same particles are kept in every frame (the stable LOD value),
+        and only the file's LOD tiers holding them are read from disk.
+    attributes: names of the attributes to load; None loads all of them.
+
+Returns:
+    a sluice.Frame.
+
+Raises:
+    IndexError: no such frame. KeyError: no such attribute.
+    sluice.Error: the frame is damaged (the message names file, frame and chunk).
+)";
+
+const char* kFramesDoc = R"(Streams frames start, start+step, ... below stop through the prefetch pipeline.
+
+Reading and decoding run ahead on worker threads while your loop works on
+the current frame; the window of frames in flight is sized from the
+memory available (or `memory`, in bytes). Arguments as for frame().
+Iterating the sequence itself (`for f in seq`) streams every frame.
+
+Returns:
+    an iterator of sluice.Frame.
+)";
+
+}  // namespace
+
+void bind_sequence(py::module_& m) {
+  py::class_<Stream>(m, "FrameStream", "Frames streamed through the prefetch pipeline (Sequence.frames()).")
+      .def("__iter__", [](Stream& s) -> Stream& { return s; })
+      .def("__next__", &Stream::next)
+      .def("__len__", &Stream::remaining, "Frames left.")
+      .def_property_readonly("window", &Stream::window, "Frames the prefetch window holds at once, as planned.");
+
+  py::class_<Sequence>(m, "Sequence", "A .sluice file: its description, its frames by number, and streaming.")
+      .def("__len__", &Sequence::size, "Number of frames.")
+      .def("__getitem__", [](const Sequence& s, int64_t i) { return s.frame(i, s.request("all", std::nullopt, std::nullopt)); },
+           "seq[i]: frame i with every particle and attribute (see frame()).")
+      .def("frame", [](const Sequence& s, int64_t i, const std::string& layers, std::optional<float> lod_level,
+                       std::optional<std::vector<std::string>> attributes) { return s.frame(i, s.request(layers, lod_level, attributes)); },
+           kFrameDoc, py::arg("i"), py::kw_only(), py::arg("layers") = "all", py::arg("lod_level") = py::none(),
+           py::arg("attributes") = py::none())
+      .def("frames", [](const Sequence& s, int64_t start, std::optional<int64_t> stop, int64_t step, const std::string& layers,
+                        std::optional<float> lod_level, std::optional<std::vector<std::string>> attributes, uint64_t memory) {
+             if (step < 1) throw py::value_error("step must be at least 1");
+             const auto n = int64_t(s.size());
+             const int64_t begin = start < 0 ? std::max<int64_t>(0, start + n) : std::min(start, n);
+             const int64_t end = !stop ? n : *stop < 0 ? std::max<int64_t>(0, *stop + n) : std::min(*stop, n);
+             return std::make_unique<Stream>(s.shared(), StreamRange{uint64_t(begin), uint64_t(std::max(begin, end)), uint32_t(step)},
+                                             s.request(layers, lod_level, attributes), memory);
+           }, kFramesDoc, py::arg("start") = 0, py::arg("stop") = py::none(), py::arg("step") = 1, py::kw_only(),
+           py::arg("layers") = "all", py::arg("lod_level") = py::none(), py::arg("attributes") = py::none(), py::arg("memory") = 0)
+      .def("__iter__", [](const Sequence& s) {
+             return std::make_unique<Stream>(s.shared(), StreamRange{0, s.size(), 1}, s.request("all", std::nullopt, std::nullopt), 0);
+           }, "Streams every frame (see frames()).")
+      .def_property_readonly("path", [](const Sequence& s) { return s.reader().path(); })
+      .def_property_readonly("times", [](const Sequence& s) {
+             std::vector<double> t;
+             for (const io::FrameIndexEntry& e : s.reader().index().frames) t.push_back(e.time);
+             return py::array_t<double>(py::ssize_t(t.size()), t.data());
+           }, "Each frame's time in seconds (float64 array).")
+      .def_property_readonly("counts", [](const Sequence& s) {
+             std::vector<uint64_t> c;
+             for (const io::FrameIndexEntry& e : s.reader().index().frames) c.push_back(e.particle_count);
+             return py::array_t<uint64_t>(py::ssize_t(c.size()), c.data());
+           }, "Each frame's number of particles, every layer (uint64 array).")
+      .def_property_readonly("bounds", [](const Sequence& s) {
+             const io::Aabb& b = s.reader().index().bounds;
+             return py::make_tuple(py::make_tuple(b.min[0], b.min[1], b.min[2]), py::make_tuple(b.max[0], b.max[1], b.max[2]));
+           }, "((xmin, ymin, zmin), (xmax, ymax, zmax)) over every frame, world units.")
+      .def_property_readonly("up", [](const Sequence& s) { return io::up_axis_name(s.reader().header().up); },
+                             "Which world axis points up: '+z', '-y', ...")
+      .def_property_readonly("spacing", [](const Sequence& s) { return s.reader().header().particle_spacing; },
+                             "Rest spacing of the particles, world units (0: not stated).")
+      .def_property_readonly("radius", [](const Sequence& s) { return s.reader().header().particle_radius; },
+                             "Render radius, world units.")
+      .def_property_readonly("frame_rate", [](const Sequence& s) { return s.reader().header().frame_rate; },
+                             "Playback frames per second (0: not stated).")
+      .def_property_readonly("attributes", &Sequence::attribute_names, "Names of the per-particle attributes.")
+      .def_property_readonly("layers", [](const Sequence& s) {
+             std::vector<std::string> out;
+             std::array<uint64_t, io::kLayerCount> total{};
+             for (const io::FrameIndexEntry& e : s.reader().index().frames) {
+               for (int l = 0; l < io::kLayerCount; ++l) total[size_t(l)] += e.layer_particles[size_t(l)];
+             }
+             for (int l = 0; l < io::kLayerCount; ++l) {
+               if (total[size_t(l)] > 0) out.push_back(io::layer_name(io::Layer(l)));
+             }
+             return out;
+           }, "Names of the layers the file holds ('all' for an unlayered file; 'surface', 'interior', 'blobs').")
+      .def("info", &Sequence::info, "The file's header and totals as a dict (what `sluice info` prints).")
+      .def("__repr__", [](const Sequence& s) {
+        return "<sluice.Sequence '" + s.reader().path() + "': " + std::to_string(s.size()) + " frames>";
+      });
+
+  m.def("open", [](const std::filesystem::path& path) { return Sequence(path); },
+        R"(Opens a .sluice file.
+
+Reads the header and the frame index only (one seek per frame later).
+
+    seq = sluice.open("run.sluice")
+    len(seq), seq.times, seq.bounds, seq.up, seq.attributes
+    f = seq[10]                      # every particle, every attribute
+    f.positions                      # float32 (N, 3), world units
+    f = seq.frame(10, lod_level=0.1, attributes=["rho"])  # reads ~1/10
+    for f in seq.frames(0, None, 5): # streamed, read ahead on threads
+        print(f.index, f.time, len(f))
+
+Raises:
+    FileNotFoundError: no file at path.
+    sluice.Error: not a .sluice file, or damaged (run `sluice recover`).
+)", py::arg("path"));
+}
+
+}  // namespace sluice::python
