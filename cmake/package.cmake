@@ -6,6 +6,14 @@
 include(GNUInstallDirs)
 include(CMakePackageConfigHelpers)
 
+# Position-independent code: a host may link the static libraries into a
+# shared object (the Python module, the ParaView plugin, a host's plugin).
+foreach(t sluice_io sluice_runtime sluice_render sluice_desktop sluice_xr sluice_import)
+  if(TARGET ${t})
+    set_target_properties(${t} PROPERTIES POSITION_INDEPENDENT_CODE ON)
+  endif()
+endforeach()
+
 set(sluice_targets sluice_io sluice_runtime)
 set_target_properties(sluice_io PROPERTIES EXPORT_NAME io)
 set_target_properties(sluice_runtime PROPERTIES EXPORT_NAME runtime)
@@ -54,3 +62,7 @@ configure_package_config_file(cmake/sluiceConfig.cmake.in ${CMAKE_CURRENT_BINARY
 write_basic_package_version_file(${CMAKE_CURRENT_BINARY_DIR}/sluiceConfigVersion.cmake COMPATIBILITY SameMinorVersion)
 install(FILES ${CMAKE_CURRENT_BINARY_DIR}/sluiceConfig.cmake ${CMAKE_CURRENT_BINARY_DIR}/sluiceConfigVersion.cmake
         DESTINATION ${CMAKE_INSTALL_LIBDIR}/cmake/sluice)
+
+# The build tree as a package too (sluice_DIR=<build>): the ParaView plugin
+# is built against it.
+export(EXPORT sluiceTargets NAMESPACE sluice:: FILE ${PROJECT_BINARY_DIR}/sluiceTargets.cmake)

@@ -5,12 +5,41 @@
     f = seq[0]                           # numpy arrays: f.positions (N, 3), f.lod, f["rho"]
     for f in seq.frames(step=10, lod_level=0.1):
         ...                              # streamed, read ahead on threads
+    img = sluice.render(seq, 10, size=(960, 540), color="rho")   # RGBA (540, 960, 4)
     sluice.convert("out/*.vtk", "run.sluice", progress=print)
 
-See help(sluice.open), help(sluice.Sequence.frame), help(sluice.convert)
-and docs/python.md.
+See help(sluice.open), help(sluice.Sequence.frame), help(sluice.render),
+help(sluice.convert) and docs/python.md.
 """
 
 from ._core import LAYERS, Error, Frame, FrameStream, Sequence, convert, open  # noqa: F401
 
-__all__ = ["open", "convert", "Sequence", "Frame", "FrameStream", "Error", "LAYERS"]
+try:
+    from ._core import Renderer
+except ImportError:  # built without the Vulkan renderer
+    Renderer = None
+
+__all__ = ["open", "convert", "render", "Sequence", "Frame", "FrameStream", "Renderer", "Error", "LAYERS"]
+
+_last_renderer = None  # (key, Renderer): consecutive renders of one file reuse it
+
+
+def render(seq, frame, size=(960, 540), *, camera=None, layers="surface", color=None, **look):
+    """Draws frame `frame` of `seq` (a Sequence or a path) as liquid.
+
+    Returns a uint8 RGBA array (height, width, 4). `camera` is None (frame
+    the data) or a string in `sluice render --camera` form; `color` names an
+    attribute to colour by; `look` takes Renderer.render's keywords:
+    lod_level, display, ground. Consecutive calls for one file, size, layers
+    and colour reuse one sluice.Renderer; make Renderers yourself to keep
+    several.
+    """
+    global _last_renderer
+    if Renderer is None:
+        raise Error("this sluice module was built without the Vulkan renderer")
+    path = seq.path if isinstance(seq, Sequence) else str(seq)
+    key = (path, tuple(size), layers, color)
+    if _last_renderer is None or _last_renderer[0] != key:
+        _last_renderer = None  # release the old one before making the next
+        _last_renderer = (key, Renderer(path, size=tuple(size), layers=layers, color=color))
+    return _last_renderer[1].render(frame, camera=camera, **look)

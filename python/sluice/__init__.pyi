@@ -56,3 +56,16 @@ def convert(input: str, output: Union[str, PathLike[str]], *,
             up: Optional[str] = None, ids: Optional[str] = None, no_ids: bool = False,
             lossless: bool = False, layers: bool = True, skip_bad: bool = False,
             jobs: int = 0, isolate: bool = True) -> dict[str, Any]: ...
+
+class Renderer:
+    camera: str
+    device: str
+    color: Optional[str]
+    def __init__(self, path: Union[str, PathLike[str]], *, size: Tuple[int, int] = (960, 540),
+                 layers: str = "surface", color: Optional[str] = None) -> None: ...
+    def render(self, i: int, *, camera: Optional[str] = None, lod_level: Optional[float] = None,
+               display: str = "transparent", ground: bool = True) -> npt.NDArray[np.uint8]: ...
+
+def render(seq: Union[Sequence, str, PathLike[str]], frame: int, size: Tuple[int, int] = (960, 540), *,
+           camera: Optional[str] = None, layers: str = "surface", color: Optional[str] = None,
+           **look: Any) -> npt.NDArray[np.uint8]: ...

@@ -6,6 +6,9 @@
 #include <string>
 
 #include "convert.h"
+#ifdef SLUICE_PYTHON_RENDER
+#include "renderer.h"
+#endif
 #include "frame.h"
 #include "sequence.h"
 #include "sluice/error.h"
@@ -34,4 +37,7 @@ PYBIND11_MODULE(_core, m) {
   sluice::python::bind_frame(m);
   sluice::python::bind_sequence(m);
   sluice::python::bind_convert(m);
+#ifdef SLUICE_PYTHON_RENDER
+  sluice::python::bind_renderer(m);
+#endif
 }

@@ -11,11 +11,11 @@
 #include <vector>
 
 #include "frame.h"
-#include "frame_stream.h"
 #include "sluice/io/error.h"
 #include "sluice/io/particles.h"
 #include "sluice/io/reader.h"
 #include "sluice/io/up_axis.h"
+#include "sluice/runtime/particle_stream.h"
 
 namespace py = pybind11;
 
@@ -127,11 +127,11 @@ class Sequence {
 // Iterates frames through the pipeline; outlives its sequence.
 class Stream {
  public:
-  Stream(std::shared_ptr<const io::ContainerReader> reader, StreamRange range, Request r, uint64_t memory)
+  Stream(std::shared_ptr<const io::ContainerReader> reader, runtime::StreamRange range, Request r, uint64_t memory)
       : names_(std::move(r.names)), frames_(std::move(reader), range, std::move(r.query), memory) {}
 
   Frame next() {
-    std::optional<StreamedFrame> f;
+    std::optional<runtime::StreamedFrame> f;
     {
       py::gil_scoped_release unlocked;
       f = frames_.next();
@@ -144,7 +144,7 @@ class Stream {
 
  private:
   std::vector<std::string> names_;
-  FrameStream frames_;
+  runtime::ParticleStream frames_;
 };
 
 const char* kFrameDoc = R"(Reads frame i (negative counts from the end) into numpy arrays.
@@ -201,12 +201,12 @@ void bind_sequence(py::module_& m) {
              const auto n = int64_t(s.size());
              const int64_t begin = start < 0 ? std::max<int64_t>(0, start + n) : std::min(start, n);
              const int64_t end = !stop ? n : *stop < 0 ? std::max<int64_t>(0, *stop + n) : std::min(*stop, n);
-             return std::make_unique<Stream>(s.shared(), StreamRange{uint64_t(begin), uint64_t(std::max(begin, end)), uint32_t(step)},
+             return std::make_unique<Stream>(s.shared(), runtime::StreamRange{uint64_t(begin), uint64_t(std::max(begin, end)), uint32_t(step)},
                                              s.request(layers, lod_level, attributes), memory);
            }, kFramesDoc, py::arg("start") = 0, py::arg("stop") = py::none(), py::arg("step") = 1, py::kw_only(),
            py::arg("layers") = "all", py::arg("lod_level") = py::none(), py::arg("attributes") = py::none(), py::arg("memory") = 0)
       .def("__iter__", [](const Sequence& s) {
-             return std::make_unique<Stream>(s.shared(), StreamRange{0, s.size(), 1}, s.request("all", std::nullopt, std::nullopt), 0);
+             return std::make_unique<Stream>(s.shared(), runtime::StreamRange{0, s.size(), 1}, s.request("all", std::nullopt, std::nullopt), 0);
            }, "Streams every frame (see frames()).")
       .def_property_readonly("path", [](const Sequence& s) { return s.reader().path(); })
       .def_property_readonly("times", [](const Sequence& s) {

@@ -1,9 +1,12 @@
-// The frames of a sequence in order through the runtime's prefetch pipeline
-// (reads and decodes ahead on worker threads, window sized from memory),
-// each converted to world-unit arrays. What `for frame in seq` uses.
+// sluice/runtime/particle_stream.h: the frames of a sequence in order
+// through the prefetch pipeline (read and decoded ahead on worker threads,
+// the window sized from memory), each converted to world-unit arrays
+// (io/particles.h). What the Python module's `for frame in seq` and the
+// ParaView reader's animation use.
 //
-// Threads: one caller at a time (the pipeline's consumer rule); next() may
-// run without the Python GIL.
+// Ownership: shares the reader, so a stream may outlive whoever opened it.
+// Threads: one thread at a time calls the members (the pipeline's consumer
+// rule).
 #pragma once
 
 #include <cstdint>
@@ -15,7 +18,7 @@
 #include "sluice/runtime/frame_allocator.h"
 #include "sluice/runtime/pipeline.h"
 
-namespace sluice::python {
+namespace sluice::runtime {
 
 struct StreamRange {
   uint64_t start = 0, stop = 0;  // frames [start, stop)
@@ -27,29 +30,31 @@ struct StreamedFrame {
   io::ParticleArrays arrays;
 };
 
-class FrameStream {
+class ParticleStream {
  public:
   // Shares the reader (a stream outlives the sequence it came from).
   // `memory_cap`: bytes the window may hold (0: half the available memory).
-  FrameStream(std::shared_ptr<const io::ContainerReader> reader, StreamRange range, io::ParticleQuery query,
+  ParticleStream(std::shared_ptr<const io::ContainerReader> reader, StreamRange range, io::ParticleQuery query,
               uint64_t memory_cap);
-  ~FrameStream();
-  FrameStream(const FrameStream&) = delete;
-  FrameStream& operator=(const FrameStream&) = delete;
+  ~ParticleStream();
+  ParticleStream(const ParticleStream&) = delete;
+  ParticleStream& operator=(const ParticleStream&) = delete;
 
   // The next frame, or nullopt after the last. Throws io::Error (the
   // frame's, naming file, frame and chunk) when a frame cannot be read.
   std::optional<StreamedFrame> next();
   uint64_t remaining() const;
+  // The frame next() returns next (meaningless once remaining() is 0).
+  uint64_t next_frame() const { return range_.start + taken_ * range_.step; }
   uint32_t window_frames() const;  // the prefetch window as planned
 
  private:
   std::shared_ptr<const io::ContainerReader> reader_;
   StreamRange range_;
   io::ParticleQuery query_;
-  runtime::HostFrameAllocator allocator_;
-  std::unique_ptr<runtime::Pipeline> pipeline_;
+  HostFrameAllocator allocator_;
+  std::unique_ptr<Pipeline> pipeline_;
   uint64_t taken_ = 0, count_ = 0;
 };
 
-}  // namespace sluice::python
+}  // namespace sluice::runtime
