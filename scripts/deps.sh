@@ -16,6 +16,12 @@ if [[ -d "$(dirname "$0")/../render/src" ]]; then
              libpng-dev xvfb xauth libopenxr-dev libopenxr-loader1
              ffmpeg)  # render --out x.mp4, and its tests (a full disk, a video read back)
 fi
+# ParaView's libraries for the reader plugin (its headers, CMake files and
+# pvpython are unpacked by scripts/paraview.sh: they cannot be installed
+# beside libvtk9-dev).
+if [[ -d "$(dirname "$0")/../paraview" ]]; then
+  packages+=(paraview)
+fi
 
 missing=()
 for p in "${packages[@]}"; do

@@ -6,7 +6,9 @@
 #      and io suites, once each
 #   4. libFuzzer targets (clang, ASan + UBSan), a short run of each (container, chunk, text)
 # The XR tests run against Monado (a real OpenXR runtime), built headless from
-# Debian 13's source by scripts/monado.sh outside the checkout and reused.
+# Debian 13's source by scripts/monado.sh outside the checkout and reused;
+# the ParaView plugin's against Debian's ParaView 5.11, unpacked outside the
+# checkout by scripts/paraview.sh.
 # Set QUICK=1 to run step 1 only.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
@@ -22,9 +24,14 @@ monado=${SLUICE_MONADO:-${XDG_CACHE_HOME:-$HOME/.cache}/sluice/monado}
 "$root/scripts/monado.sh" "$monado"
 xr_runtime=(-DSLUICE_OPENXR_RUNTIME="$monado/openxr_monado.json")
 
+step "ParaView (for the reader plugin and its pvpython test)"
+paraview=${SLUICE_PARAVIEW:-${XDG_CACHE_HOME:-$HOME/.cache}/sluice/paraview}
+"$root/scripts/paraview.sh" "$paraview"
+paraview_dir=(-DParaView_DIR="$(ls -d "$paraview"/usr/lib/*/cmake/paraview-5.11)")
+
 step "Release build and tests"
 # Warnings are errors here (GCC 12 Release; the sanitizer builds add their own false positives).
-BUILD_DIR="$root/build" "$root/scripts/build.sh" -DSLUICE_WERROR=ON "${xr_runtime[@]}"
+BUILD_DIR="$root/build" "$root/scripts/build.sh" -DSLUICE_WERROR=ON "${xr_runtime[@]}" "${paraview_dir[@]}"
 ctest --test-dir "$root/build" --output-on-failure -j "$jobs"
 [[ "${QUICK:-0}" == 1 ]] && exit 0
 
