@@ -15,11 +15,11 @@ help(sluice.convert) and docs/python.md.
 from ._core import LAYERS, Error, Frame, FrameStream, Sequence, convert, open  # noqa: F401
 
 try:
-    from ._core import Renderer
+    from ._core import LiveView, Renderer
 except ImportError:  # built without the Vulkan renderer
-    Renderer = None
+    LiveView = Renderer = None
 
-__all__ = ["open", "convert", "render", "Sequence", "Frame", "FrameStream", "Renderer", "Error", "LAYERS"]
+__all__ = ["open", "convert", "render", "Sequence", "Frame", "FrameStream", "Renderer", "LiveView", "Error", "LAYERS"]
 
 _last_renderer = None  # (key, Renderer): consecutive renders of one file reuse it
 

@@ -7,6 +7,7 @@
 
 #include "convert.h"
 #ifdef SLUICE_PYTHON_RENDER
+#include "live_view.h"
 #include "renderer.h"
 #endif
 #include "frame.h"
@@ -39,5 +40,6 @@ PYBIND11_MODULE(_core, m) {
   sluice::python::bind_convert(m);
 #ifdef SLUICE_PYTHON_RENDER
   sluice::python::bind_renderer(m);
+  sluice::python::bind_live_view(m);
 #endif
 }
