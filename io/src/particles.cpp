@@ -61,25 +61,41 @@ void thin(ParticleArrays& out, float level, float blob_voxel) {
 }
 
 // One chunk's particles into world units, with their layer and attributes.
+// Plain loops over the chunk's arrays that the compiler vectorizes: the
+// dequantization is dequantize()'s, operation for operation.
 void convert_chunk(const ChunkDesc& chunk, uint64_t first, std::span<const std::byte> particles, PositionCoding coding,
                    std::span<const std::span<const uint16_t>> streams, std::span<const size_t> attributes, ParticleArrays& out) {
-  const size_t stride = decoded_particle_bytes(coding);
-  const size_t lod_offset = coding == PositionCoding::Quantized16 ? 6 : 12;
-  for (uint64_t i = first; i < first + chunk.particle_count; ++i) {
-    const std::byte* p = particles.data() + stride * i;
-    if (coding == PositionCoding::Quantized16) {
-      uint16_t q[3];
-      std::memcpy(q, p, sizeof q);
-      for (int a = 0; a < 3; ++a) out.positions[3 * i + a] = dequantize(q[a], chunk.bounds.min[a], chunk.bounds.max[a]);
-    } else {
-      std::memcpy(&out.positions[3 * i], p, 3 * sizeof(float));
+  const size_t n = chunk.particle_count;
+  float* xyz = out.positions.data() + 3 * first;
+  uint16_t* lod = out.lod.data() + first;
+  if (coding == PositionCoding::Quantized16) {
+    // Decoded particles are 4 uint16 (x, y, z, lod): 8-byte aligned.
+    const auto* q = reinterpret_cast<const uint16_t*>(particles.data() + 8 * first);
+    float lo[3], step[3];
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = chunk.bounds.min[a];
+      step[a] = (chunk.bounds.max[a] - chunk.bounds.min[a]) * (1.0f / 65535.0f);
     }
-    std::memcpy(&out.lod[i], p + lod_offset, sizeof(uint16_t));
-    out.layer[i] = uint8_t(chunk.layer);
+    for (size_t i = 0; i < n; ++i) {
+      xyz[3 * i + 0] = lo[0] + float(q[4 * i + 0]) * step[0];
+      xyz[3 * i + 1] = lo[1] + float(q[4 * i + 1]) * step[1];
+      xyz[3 * i + 2] = lo[2] + float(q[4 * i + 2]) * step[2];
+      lod[i] = q[4 * i + 3];
+    }
+  } else {
+    const std::byte* p = particles.data() + 16 * first;
+    for (size_t i = 0; i < n; ++i) {
+      std::memcpy(&xyz[3 * i], p + 16 * i, 3 * sizeof(float));
+      std::memcpy(&lod[i], p + 16 * i + 12, sizeof(uint16_t));
+    }
   }
+  std::memset(out.layer.data() + first, int(chunk.layer), n);
   for (size_t k = 0; k < attributes.size(); ++k) {
     const auto [lo, hi] = chunk.attribute_ranges[attributes[k]];
-    for (uint64_t i = first; i < first + chunk.particle_count; ++i) out.attributes[k][i] = dequantize(streams[k][i], lo, hi);
+    const float step = (hi - lo) * (1.0f / 65535.0f);
+    const uint16_t* in = streams[k].data() + first;
+    float* values = out.attributes[k].data() + first;
+    for (size_t i = 0; i < n; ++i) values[i] = lo + float(in[i]) * step;
   }
 }
 
@@ -105,9 +121,9 @@ uint64_t read_chunks(const ContainerReader& reader, uint64_t frame, const FrameH
 
 }  // namespace
 
-ParticleArrays particles_of(const FrameHeader& header, std::span<const uint64_t> chunk_first,
-                            std::span<const std::byte> particles, std::span<const std::span<const uint16_t>> attribute_streams,
-                            const FileHeader& file, const ParticleQuery& query) {
+void particles_into(const FrameHeader& header, std::span<const uint64_t> chunk_first, std::span<const std::byte> particles,
+                    std::span<const std::span<const uint16_t>> attribute_streams, const FileHeader& file,
+                    const ParticleQuery& query, ParticleArrays& out) {
   check_query(query, file, {});
   const uint64_t n = header.particle_count;
   if (chunk_first.size() != header.chunks.size() || particles.size() < n * decoded_particle_bytes(file.position_coding) ||
@@ -117,20 +133,43 @@ ParticleArrays particles_of(const FrameHeader& header, std::span<const uint64_t>
   for (const auto& s : attribute_streams) {
     if (s.size() < n) throw Error({}, "particles_of: an attribute stream is shorter than the frame");
   }
-  ParticleArrays out;
   out.time = header.time;
+  out.bytes_read = 0;
   out.positions.resize(3 * n);
   out.lod.resize(n);
   out.layer.resize(n);
-  out.attributes.assign(query.attributes.size(), std::vector<float>(n));
+  out.attributes.resize(query.attributes.size());
+  for (auto& a : out.attributes) a.resize(n);
   tbb::parallel_for(size_t(0), header.chunks.size(), [&](size_t c) {
     convert_chunk(header.chunks[c], chunk_first[c], particles, file.position_coding, attribute_streams, query.attributes, out);
   });
   if (query.lod_level < 1) thin(out, query.lod_level, header.blob_voxel);
+}
+
+ParticleArrays particles_of(const FrameHeader& header, std::span<const uint64_t> chunk_first,
+                            std::span<const std::byte> particles, std::span<const std::span<const uint16_t>> attribute_streams,
+                            const FileHeader& file, const ParticleQuery& query) {
+  ParticleArrays out;
+  particles_into(header, chunk_first, particles, attribute_streams, file, query, out);
   return out;
 }
 
-ParticleArrays read_particles(const ContainerReader& reader, uint64_t frame, const ParticleQuery& query) {
+namespace {
+
+// A buffer of at least `bytes`, uninitialized, kept when large enough.
+std::span<std::byte> at_least(std::unique_ptr<std::byte[]>& buffer, uint64_t& held, uint64_t bytes) {
+  if (held < bytes) {
+    buffer.reset();
+    buffer.reset(new std::byte[bytes]);
+    held = bytes;
+  }
+  return {buffer.get(), bytes};
+}
+
+}  // namespace
+
+void read_particles(const ContainerReader& reader, uint64_t frame, const ParticleQuery& query, ParticleArrays& out,
+                    ParticleScratch& scratch) {
   const FileHeader& file = reader.header();
   check_query(query, file, reader.location(frame));
   FrameHeader header = reader.read_table(frame);
@@ -140,28 +179,33 @@ ParticleArrays read_particles(const ContainerReader& reader, uint64_t frame, con
     const uint32_t tiers = tiers_for_keep(query.lod_level);
     keep_tiers(header, [&](const ChunkDesc&) { return std::max<uint32_t>(tiers, 1); });
   }
-  // The record's whole size, uninitialized: only the pages of the chunks
-  // read are touched.
+  // The record's whole size, uninitialized: only the chunks read are touched.
   const uint64_t record_bytes = reader.index().frames[frame].bytes;
-  const std::unique_ptr<std::byte[]> record(new std::byte[record_bytes]);
-  const std::span<std::byte> bytes(record.get(), record_bytes);
-  const uint64_t read = read_chunks(reader, frame, header, table_bytes, bytes);
+  const std::span<std::byte> record = at_least(scratch.record, scratch.record_bytes, record_bytes);
+  const uint64_t read = read_chunks(reader, frame, header, table_bytes, record);
 
   const uint64_t n = header.particle_count;
-  std::vector<std::byte> particles(n * decoded_particle_bytes(file.position_coding));
+  const std::span<std::byte> decoded =
+      at_least(scratch.decoded, scratch.decoded_bytes, std::max<uint64_t>(1, n * decoded_particle_bytes(file.position_coding)));
   std::vector<uint64_t> first(header.chunks.size());
   chunk_starts(header, first);
-  std::vector<std::vector<uint16_t>> streams(file.attributes.size());
+  scratch.streams.resize(file.attributes.size());
   std::vector<uint16_t*> destinations(file.attributes.size(), nullptr);
   for (const size_t a : query.attributes) {
-    streams[a].resize(n);
-    destinations[a] = streams[a].data();
+    if (scratch.streams[a].size() < n) scratch.streams[a].resize(n);
+    destinations[a] = scratch.streams[a].data();
   }
-  decode_record(bytes, header, file, first, particles, destinations, reader.location(frame));
+  decode_record(record, header, file, first, decoded, destinations, reader.location(frame));
   std::vector<std::span<const uint16_t>> wanted;
-  for (const size_t a : query.attributes) wanted.emplace_back(streams[a]);
-  ParticleArrays out = particles_of(header, first, particles, wanted, file, query);
+  for (const size_t a : query.attributes) wanted.emplace_back(scratch.streams[a].data(), n);
+  particles_into(header, first, decoded, wanted, file, query, out);
   out.bytes_read = read + std::min<uint64_t>(record_bytes, table_bytes);
+}
+
+ParticleArrays read_particles(const ContainerReader& reader, uint64_t frame, const ParticleQuery& query) {
+  ParticleArrays out;
+  ParticleScratch scratch;
+  read_particles(reader, frame, query, out, scratch);
   return out;
 }
 

@@ -6,17 +6,35 @@ namespace py = pybind11;
 
 namespace sluice::python {
 
-Frame make_frame(uint64_t index, io::ParticleArrays&& arrays, const std::vector<std::string>& names) {
+namespace {
+
+template <class T>
+py::array_t<T> give(std::vector<T>&& values, std::vector<py::ssize_t> shape, ArrayPool* pool) {
+  return pool ? pool->hand_over(std::move(values), std::move(shape)) : hand_over(std::move(values), std::move(shape));
+}
+
+}  // namespace
+
+Frame make_frame(uint64_t index, io::ParticleArrays&& arrays, const std::vector<std::string>& names, ArrayPool* pool) {
   Frame f;
   f.index = index;
   f.time = arrays.time;
   f.bytes_read = arrays.bytes_read;
   const auto n = py::ssize_t(arrays.count());
-  f.positions = hand_over(std::move(arrays.positions), {n, 3});
-  f.lod = hand_over(std::move(arrays.lod), {n});
-  f.layer = hand_over(std::move(arrays.layer), {n});
-  for (size_t k = 0; k < names.size(); ++k) f.attributes[py::str(names[k])] = hand_over(std::move(arrays.attributes[k]), {n});
+  f.positions = give(std::move(arrays.positions), {n, 3}, pool);
+  f.lod = give(std::move(arrays.lod), {n}, pool);
+  f.layer = give(std::move(arrays.layer), {n}, pool);
+  for (size_t k = 0; k < names.size(); ++k) f.attributes[py::str(names[k])] = give(std::move(arrays.attributes[k]), {n}, pool);
   return f;
+}
+
+io::ParticleArrays spare_arrays(ArrayPool& pool, size_t attributes) {
+  io::ParticleArrays a;
+  a.positions = pool.take<float>();
+  a.lod = pool.take<uint16_t>();
+  a.layer = pool.take<uint8_t>();
+  for (size_t k = 0; k < attributes; ++k) a.attributes.push_back(pool.take<float>());
+  return a;
 }
 
 void bind_frame(py::module_& m) {

@@ -24,8 +24,14 @@ struct Frame {
   pybind11::dict attributes;  // name -> float32 array
 };
 
+class ArrayPool;
+
 // Moves `arrays` into numpy (no copy). `names[i]` names arrays.attributes[i].
-Frame make_frame(uint64_t index, io::ParticleArrays&& arrays, const std::vector<std::string>& names);
+// With a pool, the arrays' memory goes back to it when they die.
+Frame make_frame(uint64_t index, io::ParticleArrays&& arrays, const std::vector<std::string>& names,
+                 ArrayPool* pool = nullptr);
+// Spare arrays from `pool` for the next frame of a stream.
+io::ParticleArrays spare_arrays(ArrayPool& pool, size_t attributes);
 
 void bind_frame(pybind11::module_& m);
 

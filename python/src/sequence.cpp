@@ -6,10 +6,12 @@
 
 #include <filesystem>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "arrays.h"
 #include "frame.h"
 #include "sluice/io/error.h"
 #include "sluice/io/particles.h"
@@ -87,12 +89,16 @@ class Sequence {
 
   Frame frame(int64_t i, const Request& r) const {
     const uint64_t number = frame_number(i);
-    io::ParticleArrays arrays;
+    io::ParticleArrays arrays = spare_arrays(*pool_, r.names.size());
     {
       py::gil_scoped_release unlocked;
-      arrays = io::read_particles(*reader_, number, r.query);
+      // One scratch, kept between calls; a second thread reading at the
+      // same time uses one of its own.
+      std::unique_lock lock(scratch_mutex_, std::try_to_lock);
+      io::ParticleScratch own;
+      io::read_particles(*reader_, number, r.query, arrays, lock.owns_lock() ? scratch_ : own);
     }
-    return make_frame(number, std::move(arrays), r.names);
+    return make_frame(number, std::move(arrays), r.names, pool_.get());
   }
 
   py::dict info() const {
@@ -122,6 +128,11 @@ class Sequence {
 
  private:
   std::shared_ptr<io::ContainerReader> reader_;
+  // Reused frame after frame: the arrays Python let go of, and what a
+  // frame is read and decoded into.
+  std::shared_ptr<ArrayPool> pool_ = std::make_shared<ArrayPool>();
+  mutable std::mutex scratch_mutex_;
+  mutable io::ParticleScratch scratch_;
 };
 
 // Iterates frames through the pipeline; outlives its sequence.
@@ -134,16 +145,17 @@ class Stream {
     std::optional<runtime::StreamedFrame> f;
     {
       py::gil_scoped_release unlocked;
-      f = frames_.next();
+      f = frames_.next(spare_arrays(*pool_, names_.size()));
     }
     if (!f) throw py::stop_iteration();
-    return make_frame(f->index, std::move(f->arrays), names_);
+    return make_frame(f->index, std::move(f->arrays), names_, pool_.get());
   }
   uint64_t remaining() const { return frames_.remaining(); }
   uint32_t window() const { return frames_.window_frames(); }
 
  private:
   std::vector<std::string> names_;
+  std::shared_ptr<ArrayPool> pool_ = std::make_shared<ArrayPool>();  // the arrays of frames Python let go of
   runtime::ParticleStream frames_;
 };
 
@@ -248,7 +260,7 @@ void bind_sequence(py::module_& m) {
         return "<sluice.Sequence '" + s.reader().path() + "': " + std::to_string(s.size()) + " frames>";
       });
 
-  m.def("open", [](const std::filesystem::path& path) { return Sequence(path); },
+  m.def("open", [](const std::filesystem::path& path) { return std::make_unique<Sequence>(path); },
         R"(Opens a .sluice file.
 
 Reads the header and the frame index only (one seek per frame later).

@@ -43,7 +43,7 @@ uint64_t ParticleStream::remaining() const { return count_ - taken_; }
 
 uint32_t ParticleStream::window_frames() const { return pipeline_ ? pipeline_->window() : 0; }
 
-std::optional<StreamedFrame> ParticleStream::next() {
+std::optional<StreamedFrame> ParticleStream::next(io::ParticleArrays reuse) {
   if (taken_ == count_) return std::nullopt;
   const NextEntry entry = pipeline_->wait_next();
   if (entry.end) return std::nullopt;
@@ -58,9 +58,8 @@ std::optional<StreamedFrame> ParticleStream::next() {
   for (size_t k = 0; k < query_.attributes.size(); ++k) {
     streams.emplace_back(b.attributes[k].data(), handle.header().particle_count);
   }
-  StreamedFrame out{handle.frame(), io::particles_of(handle.header(), handle.chunk_first(), b.particles, streams,
-                                                     reader_->header(), query_)};
-  out.arrays.bytes_read = 0;  // the pipeline's reads are in its stats, not per frame
+  StreamedFrame out{handle.frame(), std::move(reuse)};
+  io::particles_into(handle.header(), handle.chunk_first(), b.particles, streams, reader_->header(), query_, out.arrays);
   return out;
 }
 

@@ -13,6 +13,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <vector>
 
@@ -42,7 +43,7 @@ struct ParticleArrays {
   std::vector<uint8_t> layer;                  // io::Layer of each particle
   std::vector<std::vector<float>> attributes;  // per ParticleQuery::attributes entry, in attribute units
   double time = 0;                             // seconds (FrameHeader::time)
-  uint64_t bytes_read = 0;                     // of the frame's record
+  uint64_t bytes_read = 0;                     // of the frame's record (0: converted from buffers already decoded)
 
   uint64_t count() const { return lod.size(); }
 };
@@ -51,6 +52,21 @@ struct ParticleArrays {
 // payloads) and converts it. Throws io::Error naming the file, frame and
 // chunk on damage, and on an attribute index or level out of range.
 ParticleArrays read_particles(const ContainerReader& reader, uint64_t frame, const ParticleQuery& query);
+
+// What read_particles() reads and decodes into before converting: kept
+// between calls, a reader of frame after frame allocates (and faults in)
+// nothing once it has held the largest frame. One per thread.
+struct ParticleScratch {
+  std::unique_ptr<std::byte[]> record;
+  uint64_t record_bytes = 0;
+  std::unique_ptr<std::byte[]> decoded;
+  uint64_t decoded_bytes = 0;
+  std::vector<std::vector<uint16_t>> streams;
+};
+// The same into `out` (its memory reused, as particles_into()) with
+// `scratch`.
+void read_particles(const ContainerReader& reader, uint64_t frame, const ParticleQuery& query, ParticleArrays& out,
+                    ParticleScratch& scratch);
 
 // A frame already decoded (a pipeline's buffers, a DecodedFrame): `header`
 // holds the chunks that were decoded, `chunk_first` their first particles,
@@ -61,5 +77,11 @@ ParticleArrays read_particles(const ContainerReader& reader, uint64_t frame, con
 ParticleArrays particles_of(const FrameHeader& header, std::span<const uint64_t> chunk_first,
                             std::span<const std::byte> particles, std::span<const std::span<const uint16_t>> attribute_streams,
                             const FileHeader& file, const ParticleQuery& query);
+// The same into `out`, reusing its vectors' memory: a caller converting
+// frame after frame (a stream) hands back the last frame's arrays, so no
+// page is faulted in or cleared again while sizes stay alike.
+void particles_into(const FrameHeader& header, std::span<const uint64_t> chunk_first, std::span<const std::byte> particles,
+                    std::span<const std::span<const uint16_t>> attribute_streams, const FileHeader& file,
+                    const ParticleQuery& query, ParticleArrays& out);
 
 }  // namespace sluice::io

@@ -42,7 +42,9 @@ class ParticleStream {
 
   // The next frame, or nullopt after the last. Throws io::Error (the
   // frame's, naming file, frame and chunk) when a frame cannot be read.
-  std::optional<StreamedFrame> next();
+  // `reuse`: arrays of an earlier frame the caller is done with, whose
+  // memory the new frame's arrays take over (io::particles_into).
+  std::optional<StreamedFrame> next(io::ParticleArrays reuse = {});
   uint64_t remaining() const;
   // The frame next() returns next (meaningless once remaining() is 0).
   uint64_t next_frame() const { return range_.start + taken_ * range_.step; }
