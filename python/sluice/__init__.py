@@ -7,19 +7,20 @@
         ...                              # streamed, read ahead on threads
     img = sluice.render(seq, 10, size=(960, 540), color="rho")   # RGBA (540, 960, 4)
     sluice.convert("out/*.vtk", "run.sluice", progress=print)
+    sluice.export(seq, "out/run.vtp", frames=range(0, 100, 10), lod_level=0.5)   # + out/run.pvd
 
 See help(sluice.open), help(sluice.Sequence.frame), help(sluice.render),
 help(sluice.convert) and docs/python.md.
 """
 
-from ._core import LAYERS, Error, Frame, FrameStream, Sequence, convert, open  # noqa: F401
+from ._core import LAYERS, Error, Frame, FrameStream, Sequence, convert, export, open  # noqa: F401
 
 try:
     from ._core import LiveView, Renderer
 except ImportError:  # built without the Vulkan renderer
     LiveView = Renderer = None
 
-__all__ = ["open", "convert", "render", "Sequence", "Frame", "FrameStream", "Renderer", "LiveView", "Error", "LAYERS"]
+__all__ = ["open", "convert", "export", "render", "Sequence", "Frame", "FrameStream", "Renderer", "LiveView", "Error", "LAYERS"]
 
 _last_renderer = None  # (key, Renderer): consecutive renders of one file reuse it
 

@@ -1,6 +1,6 @@
 # Type stubs for the sluice module (the `_core` extension re-exported).
 from os import PathLike
-from typing import Any, Callable, Iterator, Optional, Sequence as _Seq, Tuple, Union
+from typing import Any, Callable, Iterable, Iterator, Optional, Sequence as _Seq, Tuple, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -69,3 +69,8 @@ class Renderer:
 def render(seq: Union[Sequence, str, PathLike[str]], frame: int, size: Tuple[int, int] = (960, 540), *,
            camera: Optional[str] = None, layers: str = "surface", color: Optional[str] = None,
            **look: Any) -> npt.NDArray[np.uint8]: ...
+
+def export(seq: Union[Sequence, str, PathLike[str]], output: Union[str, PathLike[str]], *,
+           frames: Optional[Iterable[int]] = None, lod_level: Optional[float] = None,
+           attributes: Optional[_Seq[str]] = None, force: bool = False,
+           progress: Optional[Callable[[dict[str, int]], None]] = None) -> dict[str, Any]: ...

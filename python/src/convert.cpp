@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "callback.h"
 #include "sluice/import/convert.h"
 #include "sluice/io/up_axis.h"
 
@@ -16,64 +17,31 @@ namespace py = pybind11;
 namespace sluice::python {
 namespace {
 
-// Thrown from the observer (on whichever thread runs it) when the Python
-// side raised (the callback, or Ctrl-C): the conversion unwinds, and the
-// saved Python error is raised again on the calling thread.
-struct PythonRaised {};
-
+// The conversion's observer: progress to the Python callable, notes kept.
 class PythonObserver {
  public:
   explicit PythonObserver(py::object progress) : progress_(std::move(progress)) {}
 
   import::ConvertObserver observer() {
     import::ConvertObserver o;
-    o.progressed = [this](const import::ConvertProgress& p) { progressed(p); };
+    o.progressed = [this](const import::ConvertProgress& p) {
+      progress_.call_with([&] {
+        py::dict d;
+        d["frames_done"] = p.frames_done;
+        d["frames"] = p.frames;
+        d["input_bytes"] = p.input_bytes;
+        d["output_bytes"] = p.output_bytes;
+        return d;
+      });
+    };
     o.noted = [this](const import::Note& n) { notes_.push_back(n.text); };
     return o;
   }
   const std::vector<std::string>& notes() const { return notes_; }
-  // Raises the saved Python error, if one was saved. GIL held.
-  void raise_saved() {
-    if (!type_) return;
-    PyErr_Restore(type_.release().ptr(), value_.release().ptr(), trace_.release().ptr());
-    throw py::error_already_set();
-  }
-  ~PythonObserver() {
-    if (type_ || value_ || trace_) {
-      py::gil_scoped_acquire locked;
-      type_ = value_ = trace_ = py::object();
-    }
-  }
+  void raise_saved() { progress_.raise_saved(); }
 
  private:
-  void progressed(const import::ConvertProgress& p) {
-    py::gil_scoped_acquire locked;
-    if (!progress_.is_none()) {
-      py::dict d;
-      d["frames_done"] = p.frames_done;
-      d["frames"] = p.frames;
-      d["input_bytes"] = p.input_bytes;
-      d["output_bytes"] = p.output_bytes;
-      try {
-        progress_(d);
-      } catch (py::error_already_set& e) {
-        e.restore();
-        save();
-      }
-    }
-    if (PyErr_CheckSignals() != 0) save();
-  }
-  void save() {
-    PyObject *type = nullptr, *value = nullptr, *trace = nullptr;
-    PyErr_Fetch(&type, &value, &trace);
-    type_ = py::reinterpret_steal<py::object>(type);
-    value_ = py::reinterpret_steal<py::object>(value);
-    trace_ = py::reinterpret_steal<py::object>(trace);
-    throw PythonRaised{};
-  }
-
-  py::object progress_;
-  py::object type_, value_, trace_;
+  PythonCallback progress_;
   std::vector<std::string> notes_;
 };
 

@@ -1,11 +1,13 @@
 // The `sluice._core` extension: what `import sluice` exposes (python/sluice/
 // __init__.py re-exports it). One file per part: frame.cpp (Frame),
-// sequence.cpp (open, Sequence, streaming), convert.cpp (convert).
+// sequence.cpp (open, Sequence, streaming), convert.cpp (convert), export.cpp
+// (export), renderer.cpp (Renderer), live_view.cpp (LiveView).
 #include <pybind11/pybind11.h>
 
 #include <string>
 
 #include "convert.h"
+#include "export.h"
 #ifdef SLUICE_PYTHON_RENDER
 #include "live_view.h"
 #include "renderer.h"
@@ -38,6 +40,7 @@ PYBIND11_MODULE(_core, m) {
   sluice::python::bind_frame(m);
   sluice::python::bind_sequence(m);
   sluice::python::bind_convert(m);
+  sluice::python::bind_export(m);
 #ifdef SLUICE_PYTHON_RENDER
   sluice::python::bind_renderer(m);
   sluice::python::bind_live_view(m);

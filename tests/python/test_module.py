@@ -200,3 +200,24 @@ def test_help_teaches():
     assert "lod_level" in sluice.Sequence.frame.__doc__
     assert "sluice.open(" in sluice.open.__doc__
     assert "progress" in sluice.convert.__doc__
+
+
+def test_export_writes_what_sluice_export_writes(converted, sluice_exe, tmp_path):
+    seq = sluice.open(converted)
+    seen = []
+    out = sluice.export(seq, tmp_path / "py" / "dam.vtp", frames=range(2, 5), progress=seen.append)
+    assert out["frames"] == 3 and sorted(out["files"]) == [2, 3, 4]
+    assert out["pvd"].endswith("dam.pvd") and os.path.exists(out["pvd"])
+    assert [p["frames_done"] for p in seen] == [1, 2, 3]
+    # One frame as CSV: byte for byte the file `sluice export` writes.
+    sluice.export(str(converted), tmp_path / "py.csv", frames=[3], lod_level=0.5, attributes=["rho"])
+    subprocess.run([str(sluice_exe), "export", str(converted), "-o", str(tmp_path / "cli.csv"), "--frames", "3",
+                    "--lod-level", "0.5", "-a", "rho", "-q"], check=True)
+    assert (tmp_path / "py.csv").read_bytes() == (tmp_path / "cli.csv").read_bytes()
+    with pytest.raises(sluice.Error, match="force=True"):
+        sluice.export(seq, tmp_path / "py.csv", frames=[3])
+    assert sluice.export(seq, tmp_path / "py.csv", frames=[4], force=True)["frames"] == 1
+    with pytest.raises(IndexError):
+        sluice.export(seq, tmp_path / "x.csv", frames=[13])
+    with pytest.raises(sluice.Error, match="extension"):
+        sluice.export(seq, tmp_path / "x.txt", frames=[1])
