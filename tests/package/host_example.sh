@@ -75,3 +75,11 @@ cd "$scratch"
 # The same host pushing frames of its own simulation (render::LiveSource), recorded as it goes.
 "$scratch/build/host_vulkan" --live --check --frames 6 --record "$scratch/live.sluice" --out "$scratch/host_live.png"
 test -s "$scratch/live.sluice"
+# The Python module as installed (where built): importable from the prefix's
+# site directory, reading what the host recorded.
+site=$(ls -d "$scratch"/prefix/lib/python3*/dist-packages 2>/dev/null | head -1 || true)
+if [[ -n "$site" ]]; then
+  PYTHONPATH="$site" /usr/bin/python3 -c "import sluice, sys; s = sluice.open(sys.argv[1]); assert len(s) == 6 and len(s[5]) > 0, len(s)" \
+    "$scratch/live.sluice"
+  echo "installed python module: ok"
+fi
