@@ -406,7 +406,8 @@ class VoxelGrid {
       for (size_t m = 0; m < 3; ++m) {
         const Float4 v = load(&xyz[3 * i + 4 * m]);
         Float4 t = finite(v) ? (v - origin[m]) * inverse_side_ : zero;
-        t = t < zero ? zero : last_cell[m] < t ? last_cell[m] : t;  // std::clamp
+        t = zero < t ? t : zero;              // NaN (a degenerate box) to 0, as key_of does
+        t = last_cell[m] < t ? last_cell[m] : t;
         const Int4 cm = __builtin_convertvector(t, Int4) + 1;
         std::memcpy(&c[4 * m], &cm, sizeof cm);
       }

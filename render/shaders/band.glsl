@@ -125,7 +125,8 @@ uvec3 cell_of(vec3 p, Params g) {
   uvec3 c;
   for (int a = 0; a < 3; ++a) {
     precise float cell = isinf(p[a]) || isnan(p[a]) ? 0.0 : (p[a] - g.origin[a]) * pc.inverse;
-    c[a] = 1u + uint(clamp(cell, 0.0, g.last_cell[a]));
+    // NaN (a degenerate box) to the first voxel, as the CPU does (clamp of NaN is undefined).
+    c[a] = 1u + uint(cell > 0.0 ? min(cell, g.last_cell[a]) : 0.0);
   }
   return c;
 }
