@@ -12,7 +12,9 @@
 #include <vector>
 
 #include "arrays.h"
+#include "callback.h"
 #include "frame.h"
+#include "sluice/import/playable.h"
 #include "sluice/io/error.h"
 #include "sluice/io/particles.h"
 #include "sluice/io/reader.h"
@@ -39,12 +41,40 @@ io::LayerSet layer_set(const std::string& layers) {
 
 class Sequence {
  public:
-  explicit Sequence(const std::filesystem::path& path) {
-    if (!std::filesystem::exists(path)) {
-      PyErr_SetString(PyExc_FileNotFoundError, (path.string() + ": no such file").c_str());
+  // A .sluice file as it is; anything `sluice convert` reads (a file, glob,
+  // .pvd or folder) converted once into the players' cache (or a temporary
+  // file, kept while the sequence lives) with `progress` per frame.
+  Sequence(const std::string& input, bool cache, py::object progress) {
+    const bool glob = input.find_first_of("*?[") != std::string::npos;
+    if (!glob && !std::filesystem::exists(input)) {
+      PyErr_SetString(PyExc_FileNotFoundError, (input + ": no such file").c_str());
       throw py::error_already_set();
     }
-    reader_ = std::make_shared<io::ContainerReader>(path);
+    if (std::filesystem::path(input).extension() == ".sluice") {
+      py::gil_scoped_release unlocked;
+      reader_ = std::make_shared<io::ContainerReader>(input);
+      return;
+    }
+    import::PlayableOptions o;
+    o.use = cache ? import::CacheUse::Cache : import::CacheUse::Temporary;
+    PythonCallback callback(std::move(progress));
+    o.observer.progressed = [&](const import::ConvertProgress& p) {
+      callback.call_with([&] {
+        py::dict d;
+        d["frames_done"] = p.frames_done;
+        d["frames"] = p.frames;
+        d["input_bytes"] = p.input_bytes;
+        d["output_bytes"] = p.output_bytes;
+        return d;
+      });
+    };
+    try {
+      py::gil_scoped_release unlocked;
+      converted_ = std::make_shared<import::PlayableFile>(import::open_playable(input, o));
+      reader_ = std::make_shared<io::ContainerReader>(converted_->path());
+    } catch (const PythonRaised&) {
+      callback.raise_saved();
+    }
   }
 
   const io::ContainerReader& reader() const { return *reader_; }
@@ -127,6 +157,7 @@ class Sequence {
   }
 
  private:
+  std::shared_ptr<import::PlayableFile> converted_;  // a conversion of the input (removed with it when temporary)
   std::shared_ptr<io::ContainerReader> reader_;
   // Reused frame after frame: the arrays Python let go of, and what a
   // frame is read and decoded into.
@@ -260,10 +291,20 @@ void bind_sequence(py::module_& m) {
         return "<sluice.Sequence '" + s.reader().path() + "': " + std::to_string(s.size()) + " frames>";
       });
 
-  m.def("open", [](const std::filesystem::path& path) { return std::make_unique<Sequence>(path); },
-        R"(Opens a .sluice file.
+  m.def("open", [](const py::object& path, bool cache, py::object progress) {
+          return std::make_unique<Sequence>(py::str(py::module_::import("os").attr("fspath")(path)).cast<std::string>(),
+                                            cache, std::move(progress));
+        },
+        R"(Opens a .sluice file, or a solver's output.
 
-Reads the header and the frame index only (one seek per frame later).
+A .sluice file is opened as it is: the header and the frame index only
+(one seek per frame later). Anything `sluice convert` reads (a VTK, CSV or
+XYZ file, a quoted glob such as 'out/fluid_*.vtu', a .pvd series, a folder)
+is converted once, as `sluice play` does, into .sluice-cache/ beside it (or
+~/.cache/sluice), and reused while the input files are unchanged;
+cache=False converts into a temporary file kept while the sequence lives.
+progress, if given, is called once per converted frame with a dict
+(frames_done, frames, input_bytes, output_bytes).
 
     seq = sluice.open("run.sluice")
     len(seq), seq.times, seq.bounds, seq.up, seq.attributes
@@ -275,8 +316,9 @@ Reads the header and the frame index only (one seek per frame later).
 
 Raises:
     FileNotFoundError: no file at path.
-    sluice.Error: not a .sluice file, or damaged (run `sluice recover`).
-)", py::arg("path"));
+    sluice.Error: a damaged .sluice file (run `sluice recover`), or input
+        that cannot be converted (the message names the file and frame).
+)", py::arg("path"), py::kw_only(), py::arg("cache") = true, py::arg("progress") = py::none());
 }
 
 }  // namespace sluice::python

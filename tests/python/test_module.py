@@ -221,3 +221,18 @@ def test_export_writes_what_sluice_export_writes(converted, sluice_exe, tmp_path
         sluice.export(seq, tmp_path / "x.csv", frames=[13])
     with pytest.raises(sluice.Error, match="extension"):
         sluice.export(seq, tmp_path / "x.txt", frames=[1])
+
+
+def test_open_converts_what_a_solver_wrote_once(sample_dir, tmp_path):
+    # A copy of the sample's files: the cache goes beside them.
+    for f in sample_dir.glob("*.vtu"):
+        shutil.copy(f, tmp_path / f.name)
+    seen = []
+    seq = sluice.open(str(tmp_path / "*.vtu"), progress=seen.append)
+    assert len(seq) == 13 and seen[-1]["frames_done"] == 13
+    assert (tmp_path / ".sluice-cache").is_dir()
+    again = []
+    assert len(sluice.open(str(tmp_path / "*.vtu"), progress=again.append)) == 13
+    assert again == []  # reused, not converted again
+    temporary = sluice.open(tmp_path / "dam_break_3d_fluid_00000.vtu", cache=False)
+    assert len(temporary) == 1 and len(temporary[0]) == 9360
