@@ -43,6 +43,8 @@ uint64_t ParticleStream::remaining() const { return count_ - taken_; }
 
 uint32_t ParticleStream::window_frames() const { return pipeline_ ? pipeline_->window() : 0; }
 
+PipelineStats ParticleStream::stats() const { return pipeline_ ? pipeline_->stats() : PipelineStats{}; }
+
 std::optional<StreamedFrame> ParticleStream::next(io::ParticleArrays reuse) {
   if (taken_ == count_) return std::nullopt;
   const NextEntry entry = pipeline_->wait_next();

@@ -49,6 +49,9 @@ class ParticleStream {
   // The frame next() returns next (meaningless once remaining() is 0).
   uint64_t next_frame() const { return range_.start + taken_ * range_.step; }
   uint32_t window_frames() const;  // the prefetch window as planned
+  // The pipeline's figures (bytes read against the records' bytes, ...);
+  // empty before the first frame of an empty range. Any thread.
+  PipelineStats stats() const;
 
  private:
   std::shared_ptr<const io::ContainerReader> reader_;
