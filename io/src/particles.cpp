@@ -99,6 +99,18 @@ void convert_chunk(const ChunkDesc& chunk, uint64_t first, std::span<const std::
   }
 }
 
+// `out` sized for the frame's particles, reusing its memory.
+void size_arrays(const FrameHeader& header, const ParticleQuery& query, ParticleArrays& out) {
+  const uint64_t n = header.particle_count;
+  out.time = header.time;
+  out.bytes_read = 0;
+  out.positions.resize(3 * n);
+  out.lod.resize(n);
+  out.layer.resize(n);
+  out.attributes.resize(query.attributes.size());
+  for (auto& a : out.attributes) a.resize(n);
+}
+
 // The kept chunks' bytes of a frame record into `record` (the whole record's
 // size, only those ranges filled): one read per run of adjacent chunks.
 uint64_t read_chunks(const ContainerReader& reader, uint64_t frame, const FrameHeader& header, uint64_t table_bytes,
@@ -133,13 +145,7 @@ void particles_into(const FrameHeader& header, std::span<const uint64_t> chunk_f
   for (const auto& s : attribute_streams) {
     if (s.size() < n) throw Error({}, "particles_of: an attribute stream is shorter than the frame");
   }
-  out.time = header.time;
-  out.bytes_read = 0;
-  out.positions.resize(3 * n);
-  out.lod.resize(n);
-  out.layer.resize(n);
-  out.attributes.resize(query.attributes.size());
-  for (auto& a : out.attributes) a.resize(n);
+  size_arrays(header, query, out);
   tbb::parallel_for(size_t(0), header.chunks.size(), [&](size_t c) {
     convert_chunk(header.chunks[c], chunk_first[c], particles, file.position_coding, attribute_streams, query.attributes, out);
   });
@@ -195,10 +201,28 @@ void read_particles(const ContainerReader& reader, uint64_t frame, const Particl
     if (scratch.streams[a].size() < n) scratch.streams[a].resize(n);
     destinations[a] = scratch.streams[a].data();
   }
-  decode_record(record, header, file, first, decoded, destinations, reader.location(frame));
   std::vector<std::span<const uint16_t>> wanted;
   for (const size_t a : query.attributes) wanted.emplace_back(scratch.streams[a].data(), n);
-  particles_into(header, first, decoded, wanted, file, query, out);
+  size_arrays(header, query, out);
+  // Each chunk decoded and converted at once, while its decoded particles
+  // are still in this core's cache.
+  const size_t stride = decoded_particle_bytes(file.position_coding);
+  const ErrorLocation where = reader.location(frame);
+  tbb::parallel_for(size_t(0), header.chunks.size(), [&](size_t c) {
+    thread_local DecodeScratch decode_scratch;
+    thread_local std::vector<uint16_t*> bases;
+    const ChunkDesc& chunk = header.chunks[c];
+    bases.assign(destinations.size(), nullptr);
+    for (size_t a = 0; a < destinations.size(); ++a) {
+      if (destinations[a]) bases[a] = destinations[a] + first[c];
+    }
+    ErrorLocation at = where;
+    at.chunk = chunk.index;
+    decode_chunk(record, chunk, file, {decoded.subspan(first[c] * stride, size_t(chunk.particle_count) * stride), bases},
+                 decode_scratch, at);
+    convert_chunk(chunk, first[c], decoded, file.position_coding, wanted, query.attributes, out);
+  });
+  if (query.lod_level < 1) thin(out, query.lod_level, header.blob_voxel);
   out.bytes_read = read + std::min<uint64_t>(record_bytes, table_bytes);
 }
 
