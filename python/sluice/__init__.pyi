@@ -56,7 +56,9 @@ def convert(input: str, output: Union[str, PathLike[str]], *,
             spacing: float = 0.0, radius: float = 0.0, fps: float = 0.0, dt: float = 0.0,
             up: Optional[str] = None, ids: Optional[str] = None, no_ids: bool = False,
             lossless: bool = False, layers: bool = True, skip_bad: bool = False,
-            jobs: int = 0, isolate: bool = True) -> dict[str, Any]: ...
+            jobs: int = 0, isolate: bool = True, precision: float = 0.0, drop_outliers: float = 0.0,
+            chunk: int = 65536, level: int = 3, planes: str = "packed", tiers: bool = True,
+            band_voxel: float = 0.0, band_f2: str = "all", read_timeout: float = 120.0) -> dict[str, Any]: ...
 
 class Renderer:
     camera: str

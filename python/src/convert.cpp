@@ -3,6 +3,8 @@
 #include <pybind11/stl.h>
 #include <pybind11/stl/filesystem.h>
 
+#include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <optional>
 #include <string>
@@ -93,6 +95,16 @@ Args:
     jobs: threads (0: every core).
     isolate: read third-party formats in worker processes (a crashing
         reader costs one frame, not the interpreter).
+    read_timeout: seconds a worker may take for one frame before it is
+        killed and the frame is bad.
+    precision: the largest position error relative to the spacing (0:
+        1/1024); drop_outliers: leave out particles this many spacings
+        outside the rest (0: keep and note them).
+    chunk: most particles per chunk; level: zstd level 1-19; planes:
+        'packed' (default), 'smallest' (zstd wherever smaller) or
+        'gpu-decodable'; tiers: write LOD tiers; band_voxel, band_f2: the
+        narrow band's voxel (0: twice the spacing) and F2 test ('all' or
+        'asymmetry'). As `sluice convert --help` explains them.
 
 Returns:
     a dict: frames, particles, input_bytes, seconds, up, up_evidence,
@@ -112,8 +124,25 @@ void bind_convert(py::module_& m) {
         [](const std::string& input, const std::filesystem::path& output, py::object progress,
            std::optional<std::vector<std::string>> attributes, bool all_attributes, float spacing, float radius, double fps,
            double dt, std::optional<std::string> up, std::optional<std::string> ids, bool no_ids, bool lossless, bool layers,
-           bool skip_bad, int jobs, bool isolate) {
+           bool skip_bad, int jobs, bool isolate, double precision, float drop_outliers, uint32_t chunk, int level,
+           const std::string& planes, bool tiers, float band_voxel, const std::string& band_f2, double read_timeout) {
           import::ConvertOptions o;
+          o.precision = precision;
+          o.drop_outliers = drop_outliers;
+          if (chunk < 1) throw py::value_error("chunk must be at least 1 particle");
+          o.chunk = chunk;
+          if (level < 1 || level > 19) throw py::value_error("level must be a zstd level, 1 to 19");
+          o.level = level;
+          if (planes == "packed") o.planes = io::PlaneCoding::Packed;
+          else if (planes == "smallest") o.planes = io::PlaneCoding::Zstd;
+          else if (planes == "gpu-decodable") o.planes = io::PlaneCoding::GpuDecodable;
+          else throw py::value_error("planes must be 'packed', 'smallest' or 'gpu-decodable', not '" + planes + "'");
+          o.lod_tiers = tiers;
+          o.band_voxel = band_voxel;
+          if (band_f2 != "all" && band_f2 != "asymmetry") throw py::value_error("band_f2 must be 'all' or 'asymmetry'");
+          o.band_f2 = band_f2 == "asymmetry" ? io::F2Test::Asymmetry : io::F2Test::All;
+          if (!(read_timeout > 0)) throw py::value_error("read_timeout must be positive (seconds)");
+          o.isolation.read_limit = std::chrono::seconds(int64_t(std::ceil(read_timeout)));
           o.input = input;
           if (attributes) o.attributes = *attributes;
           o.all_attributes = all_attributes;
@@ -143,7 +172,9 @@ void bind_convert(py::module_& m) {
         py::arg("attributes") = py::none(), py::arg("all_attributes") = false, py::arg("spacing") = 0.0f,
         py::arg("radius") = 0.0f, py::arg("fps") = 0.0, py::arg("dt") = 0.0, py::arg("up") = py::none(),
         py::arg("ids") = py::none(), py::arg("no_ids") = false, py::arg("lossless") = false, py::arg("layers") = true,
-        py::arg("skip_bad") = false, py::arg("jobs") = 0, py::arg("isolate") = true);
+        py::arg("skip_bad") = false, py::arg("jobs") = 0, py::arg("isolate") = true, py::arg("precision") = 0.0,
+        py::arg("drop_outliers") = 0.0f, py::arg("chunk") = 65536u, py::arg("level") = 3, py::arg("planes") = "packed",
+        py::arg("tiers") = true, py::arg("band_voxel") = 0.0f, py::arg("band_f2") = "all", py::arg("read_timeout") = 120.0);
 }
 
 }  // namespace sluice::python

@@ -236,3 +236,16 @@ def test_open_converts_what_a_solver_wrote_once(sample_dir, tmp_path):
     assert again == []  # reused, not converted again
     temporary = sluice.open(tmp_path / "dam_break_3d_fluid_00000.vtu", cache=False)
     assert len(temporary) == 1 and len(temporary[0]) == 9360
+
+
+def test_convert_takes_the_command_lines_options(sample_dir, tmp_path):
+    out = tmp_path / "gpu.sluice"
+    sluice.convert(str(sample_dir / "dam_break_3d.pvd"), out, planes="gpu-decodable", chunk=1000, level=1,
+                   tiers=False, layers=False, attributes=["rho"], isolate=False)
+    info = sluice.open(out).info()
+    assert info["frames"] == 13 and info["attributes"] == ["rho"]
+    assert sluice.open(out).layers == ["all"]  # unclassified: layers=False
+    with pytest.raises(ValueError, match="planes"):
+        sluice.convert(str(sample_dir / "dam_break_3d.pvd"), tmp_path / "x.sluice", planes="tiny")
+    with pytest.raises(ValueError, match="level"):
+        sluice.convert(str(sample_dir / "dam_break_3d.pvd"), tmp_path / "x.sluice", level=40)
