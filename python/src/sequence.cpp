@@ -169,8 +169,9 @@ class Sequence {
 // Iterates frames through the pipeline; outlives its sequence.
 class Stream {
  public:
-  Stream(std::shared_ptr<const io::ContainerReader> reader, runtime::StreamRange range, Request r, uint64_t memory)
-      : names_(std::move(r.names)), frames_(std::move(reader), range, std::move(r.query), memory) {}
+  Stream(std::shared_ptr<const io::ContainerReader> reader, runtime::StreamRange range, Request r, uint64_t memory,
+         uint32_t window = 0)
+      : names_(std::move(r.names)), loop_(range.loop), frames_(std::move(reader), range, std::move(r.query), memory, window) {}
 
   Frame next() {
     std::optional<runtime::StreamedFrame> f;
@@ -181,11 +182,15 @@ class Stream {
     if (!f) throw py::stop_iteration();
     return make_frame(f->index, std::move(f->arrays), names_, pool_.get());
   }
-  uint64_t remaining() const { return frames_.remaining(); }
+  uint64_t remaining() const {
+    if (loop_) throw py::type_error("a looping stream has no length");
+    return frames_.remaining();
+  }
   uint32_t window() const { return frames_.window_frames(); }
 
  private:
   std::vector<std::string> names_;
+  bool loop_ = false;
   std::shared_ptr<ArrayPool> pool_ = std::make_shared<ArrayPool>();  // the arrays of frames Python let go of
   runtime::ParticleStream frames_;
 };
@@ -214,8 +219,10 @@ const char* kFramesDoc = R"(Streams frames start, start+step, ... below stop thr
 
 Reading and decoding run ahead on worker threads while your loop works on
 the current frame; the window of frames in flight is sized from the
-memory available (or `memory`, in bytes). Arguments as for frame().
-Iterating the sequence itself (`for f in seq`) streams every frame.
+memory available (or `memory`, in bytes; `window` caps it in frames).
+loop=True goes round again from frame 0 after `stop` (the first `stop`
+frames over and over, never ending: a replay). Other arguments as for
+frame(). Iterating the sequence itself (`for f in seq`) streams every frame.
 
 Returns:
     an iterator of sluice.Frame.
@@ -239,15 +246,17 @@ void bind_sequence(py::module_& m) {
            kFrameDoc, py::arg("i"), py::kw_only(), py::arg("layers") = "all", py::arg("lod_level") = py::none(),
            py::arg("attributes") = py::none())
       .def("frames", [](const Sequence& s, int64_t start, std::optional<int64_t> stop, int64_t step, const std::string& layers,
-                        std::optional<float> lod_level, std::optional<std::vector<std::string>> attributes, uint64_t memory) {
+                        std::optional<float> lod_level, std::optional<std::vector<std::string>> attributes, uint64_t memory,
+                        uint32_t window, bool loop) {
              if (step < 1) throw py::value_error("step must be at least 1");
              const auto n = int64_t(s.size());
              const int64_t begin = start < 0 ? std::max<int64_t>(0, start + n) : std::min(start, n);
              const int64_t end = !stop ? n : *stop < 0 ? std::max<int64_t>(0, *stop + n) : std::min(*stop, n);
-             return std::make_unique<Stream>(s.shared(), runtime::StreamRange{uint64_t(begin), uint64_t(std::max(begin, end)), uint32_t(step)},
-                                             s.request(layers, lod_level, attributes), memory);
+             const runtime::StreamRange range{uint64_t(begin), uint64_t(std::max(begin, end)), uint32_t(step), loop};
+             return std::make_unique<Stream>(s.shared(), range, s.request(layers, lod_level, attributes), memory, window);
            }, kFramesDoc, py::arg("start") = 0, py::arg("stop") = py::none(), py::arg("step") = 1, py::kw_only(),
-           py::arg("layers") = "all", py::arg("lod_level") = py::none(), py::arg("attributes") = py::none(), py::arg("memory") = 0)
+           py::arg("layers") = "all", py::arg("lod_level") = py::none(), py::arg("attributes") = py::none(), py::arg("memory") = 0,
+           py::arg("window") = 0, py::arg("loop") = false)
       .def("__iter__", [](const Sequence& s) {
              return std::make_unique<Stream>(s.shared(), runtime::StreamRange{0, s.size(), 1}, s.request("all", std::nullopt, std::nullopt), 0);
            }, "Streams every frame (see frames()).")

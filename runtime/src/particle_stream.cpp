@@ -8,7 +8,7 @@
 namespace sluice::runtime {
 namespace {
 
-PipelineOptions pipeline_options(const io::ParticleQuery& query, uint64_t memory_cap) {
+PipelineOptions pipeline_options(const io::ParticleQuery& query, uint64_t memory_cap, uint32_t max_frames) {
   PipelineOptions o;
   o.layers = query.layers;
   if (query.lod_level < 1) o.demand = ViewDemand::uniform(query.lod_level);
@@ -16,24 +16,26 @@ PipelineOptions pipeline_options(const io::ParticleQuery& query, uint64_t memory
   for (const size_t a : query.attributes) attributes.push_back(uint32_t(a));
   o.decode.attributes = attributes;
   o.window.budget.memory_cap = memory_cap;
+  o.window.budget.max_frames = max_frames;
   return o;
 }
 
 }  // namespace
 
 ParticleStream::ParticleStream(std::shared_ptr<const io::ContainerReader> reader, StreamRange range, io::ParticleQuery query,
-                               uint64_t memory_cap)
+                               uint64_t memory_cap, uint32_t max_frames)
     : reader_(std::move(reader)), range_(range), query_(std::move(query)) {
   if (range_.step == 0) throw io::Error({reader_->path()}, "a step of 0 frames");
   range_.stop = std::min(range_.stop, reader_->frame_count());
   count_ = range_.start < range_.stop ? (range_.stop - range_.start + range_.step - 1) / range_.step : 0;
   if (count_ == 0) return;
-  pipeline_ = std::make_unique<Pipeline>(*reader_, allocator_, pipeline_options(query_, memory_cap));
+  if (range_.loop) count_ = UINT64_MAX;
+  pipeline_ = std::make_unique<Pipeline>(*reader_, allocator_, pipeline_options(query_, memory_cap, max_frames));
   PlaybackSchedule schedule;
   schedule.frame_count = range_.stop;
   schedule.start = int64_t(range_.start);
   schedule.stride = range_.step;
-  schedule.end = EndMode::Stop;
+  schedule.end = range_.loop ? EndMode::Loop : EndMode::Stop;
   pipeline_->restart(schedule);
 }
 

@@ -249,3 +249,11 @@ def test_convert_takes_the_command_lines_options(sample_dir, tmp_path):
         sluice.convert(str(sample_dir / "dam_break_3d.pvd"), tmp_path / "x.sluice", planes="tiny")
     with pytest.raises(ValueError, match="level"):
         sluice.convert(str(sample_dir / "dam_break_3d.pvd"), tmp_path / "x.sluice", level=40)
+
+
+def test_a_looping_stream_goes_round(converted):
+    seq = sluice.open(converted)
+    stream = seq.frames(0, 3, loop=True, window=2)
+    assert [next(stream).index for _ in range(7)] == [0, 1, 2, 0, 1, 2, 0]
+    with pytest.raises(TypeError, match="no length"):
+        len(stream)

@@ -23,6 +23,9 @@ namespace sluice::runtime {
 struct StreamRange {
   uint64_t start = 0, stop = 0;  // frames [start, stop)
   uint32_t step = 1;
+  // After the last frame, go round again from frame 0 (the first `stop`
+  // frames, over and over): the stream never ends.
+  bool loop = false;
 };
 
 struct StreamedFrame {
@@ -33,9 +36,10 @@ struct StreamedFrame {
 class ParticleStream {
  public:
   // Shares the reader (a stream outlives the sequence it came from).
-  // `memory_cap`: bytes the window may hold (0: half the available memory).
+  // `memory_cap`: bytes the window may hold (0: half the available memory);
+  // `max_frames`: frames it may hold (0: as many as fit).
   ParticleStream(std::shared_ptr<const io::ContainerReader> reader, StreamRange range, io::ParticleQuery query,
-              uint64_t memory_cap);
+                 uint64_t memory_cap, uint32_t max_frames = 0);
   ~ParticleStream();
   ParticleStream(const ParticleStream&) = delete;
   ParticleStream& operator=(const ParticleStream&) = delete;
@@ -45,7 +49,7 @@ class ParticleStream {
   // `reuse`: arrays of an earlier frame the caller is done with, whose
   // memory the new frame's arrays take over (io::particles_into).
   std::optional<StreamedFrame> next(io::ParticleArrays reuse = {});
-  uint64_t remaining() const;
+  uint64_t remaining() const;  // UINT64_MAX for a loop
   // The frame next() returns next (meaningless once remaining() is 0).
   uint64_t next_frame() const { return range_.start + taken_ * range_.step; }
   uint32_t window_frames() const;  // the prefetch window as planned
