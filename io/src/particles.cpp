@@ -43,8 +43,15 @@ bool blob_keeps(const float* p, float voxel, float level) {
 
 // Removes the particles `level` drops, keeping the order.
 void thin(ParticleArrays& out, float level, float blob_voxel) {
-  std::vector<uint8_t> keeps(65536);
-  for (uint32_t v = 0; v < 65536; ++v) keeps[v] = lod_keeps(uint16_t(v), level) ? 1 : 0;
+  // One decision per possible value, kept per thread for the level last
+  // asked for: a stream thins frame after frame at the same level.
+  thread_local std::vector<uint8_t> keeps;
+  thread_local float keeps_level = -1;
+  if (keeps.empty() || keeps_level != level) {
+    keeps.resize(65536);
+    for (uint32_t v = 0; v < 65536; ++v) keeps[v] = lod_keeps(uint16_t(v), level) ? 1 : 0;
+    keeps_level = level;
+  }
   uint64_t kept = 0;
   for (uint64_t i = 0; i < out.count(); ++i) {
     const bool keep = out.layer[i] == uint8_t(Layer::Blobs) ? blob_keeps(&out.positions[3 * i], blob_voxel, level)
@@ -175,10 +182,10 @@ void particles_into(const FrameHeader& header, std::span<const uint64_t> chunk_f
   const uint64_t n = header.particle_count;
   if (chunk_first.size() != header.chunks.size() || particles.size() < n * decoded_particle_bytes(file.position_coding) ||
       attribute_streams.size() != query.attributes.size()) {
-    throw Error({}, "particles_of: the decoded buffers do not match the frame");
+    throw Error({}, "particles_into: the decoded buffers do not match the frame");
   }
   for (const auto& s : attribute_streams) {
-    if (s.size() < n) throw Error({}, "particles_of: an attribute stream is shorter than the frame");
+    if (s.size() < n) throw Error({}, "particles_into: an attribute stream is shorter than the frame");
   }
   size_arrays(header, query, out);
   tbb::parallel_for(size_t(0), header.chunks.size(), [&](size_t c) {
@@ -187,13 +194,6 @@ void particles_into(const FrameHeader& header, std::span<const uint64_t> chunk_f
   if (query.lod_level < 1) thin(out, query.lod_level, header.blob_voxel);
 }
 
-ParticleArrays particles_of(const FrameHeader& header, std::span<const uint64_t> chunk_first,
-                            std::span<const std::byte> particles, std::span<const std::span<const uint16_t>> attribute_streams,
-                            const FileHeader& file, const ParticleQuery& query) {
-  ParticleArrays out;
-  particles_into(header, chunk_first, particles, attribute_streams, file, query, out);
-  return out;
-}
 
 namespace {
 

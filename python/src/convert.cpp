@@ -26,16 +26,7 @@ class PythonObserver {
 
   import::ConvertObserver observer() {
     import::ConvertObserver o;
-    o.progressed = [this](const import::ConvertProgress& p) {
-      progress_.call_with([&] {
-        py::dict d;
-        d["frames_done"] = p.frames_done;
-        d["frames"] = p.frames;
-        d["input_bytes"] = p.input_bytes;
-        d["output_bytes"] = p.output_bytes;
-        return d;
-      });
-    };
+    o.progressed = [this](const import::ConvertProgress& p) { progress_.call_with([&] { return progress_dict(p); }); };
     o.noted = [this](const import::Note& n) { notes_.push_back(n.text); };
     return o;
   }
@@ -118,6 +109,15 @@ Raises:
 )";
 
 }  // namespace
+
+py::dict progress_dict(const import::ConvertProgress& p) {
+  py::dict d;
+  d["frames_done"] = p.frames_done;
+  d["frames"] = p.frames;
+  d["input_bytes"] = p.input_bytes;
+  d["output_bytes"] = p.output_bytes;
+  return d;
+}
 
 void bind_convert(py::module_& m) {
   m.def("convert",

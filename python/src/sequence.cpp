@@ -13,6 +13,7 @@
 
 #include "arrays.h"
 #include "callback.h"
+#include "convert.h"
 #include "frame.h"
 #include "sluice/import/playable.h"
 #include "sluice/io/error.h"
@@ -58,16 +59,7 @@ class Sequence {
     import::PlayableOptions o;
     o.use = cache ? import::CacheUse::Cache : import::CacheUse::Temporary;
     PythonCallback callback(std::move(progress));
-    o.observer.progressed = [&](const import::ConvertProgress& p) {
-      callback.call_with([&] {
-        py::dict d;
-        d["frames_done"] = p.frames_done;
-        d["frames"] = p.frames;
-        d["input_bytes"] = p.input_bytes;
-        d["output_bytes"] = p.output_bytes;
-        return d;
-      });
-    };
+    o.observer.progressed = [&](const import::ConvertProgress& p) { callback.call_with([&] { return progress_dict(p); }); };
     try {
       py::gil_scoped_release unlocked;
       converted_ = std::make_shared<import::PlayableFile>(import::open_playable(input, o));

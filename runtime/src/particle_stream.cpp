@@ -3,7 +3,6 @@
 #include <vector>
 
 #include "sluice/io/error.h"
-#include "sluice/runtime/error.h"
 
 namespace sluice::runtime {
 namespace {
