@@ -23,7 +23,18 @@ RelayRing::RelayRing(const detail::ContextImpl& ctx, uint32_t slots, uint64_t pi
 
 ResidentArea::~ResidentArea() { ring.wait(relayed.load(std::memory_order_relaxed)); }
 
-RelayRing::~RelayRing() { wait_all(); }
+RelayRing::~RelayRing() {
+  wait_all();
+  // As in ~Renderer: lavapipe's queue thread still touches the timeline
+  // after the host saw its value, so the queue goes idle before the
+  // semaphore and the command buffers are destroyed.
+  bool submitted = false;
+  {
+    const std::lock_guard lock(mutex_);
+    submitted = submitted_ > 0;
+  }
+  if (submitted) ctx_.wait_idle(ctx_.relay_queue);
+}
 
 void RelayRing::wait(uint64_t value) const {
   if (value == 0) return;

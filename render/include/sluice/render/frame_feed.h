@@ -56,6 +56,11 @@ class FrameFeed {
   // `color_attribute`: the attribute's index in the file header (-1: none);
   // the player must decode only that attribute (PipelineOptions::attributes).
   FrameFeed(Renderer& renderer, runtime::Player& player, const StagingAllocator* staging, int color_attribute);
+  // Waits for the last commit's copy: the player may free the buffers it
+  // copies from as soon as the feed is gone.
+  ~FrameFeed();
+  FrameFeed(const FrameFeed&) = delete;
+  FrameFeed& operator=(const FrameFeed&) = delete;
 
   // The views and options the next frames are drawn with, as the player's
   // demand (demand.h, runtime::Player::set_demand): frames are read with
