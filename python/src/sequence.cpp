@@ -4,6 +4,7 @@
 #include <pybind11/stl.h>
 #include <pybind11/stl/filesystem.h>
 
+#include <atomic>
 #include <filesystem>
 #include <memory>
 #include <mutex>
@@ -158,33 +159,105 @@ class Sequence {
   mutable io::ParticleScratch scratch_;
 };
 
-// Iterates frames through the pipeline; outlives its sequence.
+// Iterates frames through the pipeline; outlives its sequence. Frames come
+// as arrays over the pipeline's own buffers (lent, no copy) while Python
+// holds few of them; a loop that keeps more gets copies, so the pipeline
+// can always read ahead.
 class Stream {
  public:
   Stream(std::shared_ptr<const io::ContainerReader> reader, runtime::StreamRange range, Request r, uint64_t memory,
          uint32_t window = 0)
-      : names_(std::move(r.names)), loop_(range.loop), frames_(std::move(reader), range, std::move(r.query), memory, window) {}
+      : names_(std::move(r.names)),
+        loop_(range.loop),
+        lender_(std::make_shared<Lender>(std::move(reader), range, std::move(r.query), memory, window)) {}
 
   Frame next() {
-    std::optional<runtime::StreamedFrame> f;
+    std::optional<runtime::LentFrame> lent;
+    std::optional<runtime::StreamedFrame> copied;
     {
       py::gil_scoped_release unlocked;
-      f = frames_.next(spare_arrays(*pool_, names_.size()));
+      lender_->release_returned();
+      if (lender_->lent.load() < lender_->frames.most_lent()) {
+        lent = lender_->frames.next_lent();
+      } else {
+        copied = lender_->frames.next(spare_arrays(*pool_, names_.size()));
+      }
     }
-    if (!f) throw py::stop_iteration();
-    return make_frame(f->index, std::move(f->arrays), names_, pool_.get());
+    if (copied) return make_frame(copied->index, std::move(copied->arrays), names_, pool_.get());
+    if (!lent) throw py::stop_iteration();
+    return lend_frame(std::move(*lent));
   }
   uint64_t remaining() const {
     if (loop_) throw py::type_error("a looping stream has no length");
-    return frames_.remaining();
+    return lender_->frames.remaining();
   }
-  uint32_t window() const { return frames_.window_frames(); }
+  uint32_t window() const { return lender_->frames.window_frames(); }
 
  private:
+  // The stream, shared with the arrays of the frames it lent: it lives
+  // until the last of them dies.
+  struct Lender {
+    Lender(std::shared_ptr<const io::ContainerReader> reader, runtime::StreamRange range, io::ParticleQuery query,
+           uint64_t memory, uint32_t window)
+        : frames(std::move(reader), range, std::move(query), memory, window) {}
+    // Gives the pipeline back the buffers of frames whose arrays died
+    // (their handles are released here, on the stream's thread, not on
+    // whichever thread dropped the last array).
+    void release_returned() {
+      std::vector<runtime::FrameHandle> done;
+      {
+        const std::lock_guard lock(mutex);
+        done.swap(returned);
+      }
+      done.clear();
+    }
+
+    runtime::ParticleStream frames;
+    std::atomic<uint32_t> lent{0};  // frames whose arrays are alive
+    std::mutex mutex;
+    std::vector<runtime::FrameHandle> returned;  // after `frames`: released before the stream is destroyed
+  };
+
+  // What a lent frame's arrays share: when the last dies, its handle goes
+  // back to the stream.
+  struct Loan {
+    Loan(std::shared_ptr<Lender> l, runtime::FrameHandle h) : lender(std::move(l)), handle(std::move(h)) {}
+    Loan(const Loan&) = delete;
+    Loan& operator=(const Loan&) = delete;
+    std::shared_ptr<Lender> lender;
+    runtime::FrameHandle handle;
+    ~Loan() {
+      const std::lock_guard lock(lender->mutex);
+      lender->returned.push_back(std::move(handle));
+      lender->lent.fetch_sub(1);
+    }
+  };
+
+  template <class T>
+  static py::array_t<T> lend(const std::shared_ptr<Loan>& loan, T* data, std::vector<py::ssize_t> shape) {
+    auto* owner = new std::shared_ptr<Loan>(loan);
+    py::capsule capsule(owner, [](void* p) { delete static_cast<std::shared_ptr<Loan>*>(p); });
+    return py::array_t<T>(std::move(shape), data, capsule);
+  }
+
+  Frame lend_frame(runtime::LentFrame&& f) {
+    lender_->lent.fetch_add(1);
+    auto loan = std::make_shared<Loan>(lender_, std::move(f.handle));
+    Frame out;
+    out.index = f.index;
+    out.time = f.time;
+    const auto n = py::ssize_t(f.arrays.count);
+    out.positions = lend(loan, f.arrays.positions, {n, 3});
+    out.lod = lend(loan, f.arrays.lod, {n});
+    out.layer = lend(loan, f.arrays.layer, {n});
+    for (size_t k = 0; k < names_.size(); ++k) out.attributes[py::str(names_[k])] = lend(loan, f.arrays.attributes[k], {n});
+    return out;
+  }
+
   std::vector<std::string> names_;
   bool loop_ = false;
-  std::shared_ptr<ArrayPool> pool_ = std::make_shared<ArrayPool>();  // the arrays of frames Python let go of
-  runtime::ParticleStream frames_;
+  std::shared_ptr<ArrayPool> pool_ = std::make_shared<ArrayPool>();  // the arrays of copied frames Python let go of
+  std::shared_ptr<Lender> lender_;
 };
 
 const char* kFrameDoc = R"(Reads frame i (negative counts from the end) into numpy arrays.

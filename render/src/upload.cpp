@@ -523,6 +523,9 @@ uint64_t commit_encoded(detail::RendererImpl& r, const EncodedFrameView& frame, 
 
 uint64_t Renderer::commit(const runtime::FrameHandle& frame, int color_attribute, const StagingAllocator* from) {
   if (frame.empty() || frame.failed()) throw Error("commit: an empty or failed frame handle");
+  if (frame.content() == runtime::FrameContent::World) {
+    throw Error("commit: a frame converted to world units (DecodeMode::World) is for array consumers, not the renderer");
+  }
   if (const io::GpuDecodePlan* plan = frame.gpu_plan()) {
     return commit_encoded(*impl_, {&frame.header(), frame.chunk_first(), &frame.buffers(), plan, color_attribute}, from);
   }

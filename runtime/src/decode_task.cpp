@@ -66,7 +66,9 @@ void PipelineCore::decode_chunk(Slot& slot, size_t c) noexcept {
     io::DecodeScratch& scratch = worker >= 0 && uint32_t(worker) < worker_slots() ? scratch_[uint32_t(worker)] : outside_scratch();
     // The slot's location names the file and frame without an allocation per
     // chunk; the chunk is added to the error below.
-    if (slot.layout.encoded_bytes > 0) {  // kept encoded: the GPU decodes it
+    if (world()) {
+      convert_chunk(slot, c, scratch);
+    } else if (slot.layout.encoded_bytes > 0) {  // kept encoded: the GPU decodes it
       // Checked on read: the bytes were hashed as they were copied in.
       io::stage_chunk(slot.record_bytes, slot.header, slot.plan, c, slot.buffers.particles, !slot.checked_on_read,
                       slot.where);
@@ -96,7 +98,8 @@ void PipelineCore::decode_chunk(Slot& slot, size_t c) noexcept {
   }
   const auto ns = std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - t0).count();
   const uint64_t bytes = slot.layout.encoded_bytes > 0 ? chunk.compressed_size
-                                                      : uint64_t(chunk.particle_count) * (stride + 2 * uint64_t(attribute_streams_));
+                         : world()                      ? uint64_t(chunk.particle_count) * stride
+                                                        : uint64_t(chunk.particle_count) * (stride + 2 * uint64_t(attribute_streams_));
   const int worker = tbb::this_task_arena::current_thread_index();
   if (worker >= 0 && uint32_t(worker) < worker_slots()) {
     WorkerCounters& w = workers_[uint32_t(worker)];
@@ -105,6 +108,30 @@ void PipelineCore::decode_chunk(Slot& slot, size_t c) noexcept {
     w.busy_ns.fetch_add(static_cast<uint64_t>(ns), kRelaxed);
   }
   counters_.decoded_bytes.fetch_add(bytes, kRelaxed);
+}
+
+void PipelineCore::convert_chunk(Slot& slot, size_t c, io::DecodeScratch& scratch) {
+  // Per worker: one chunk's decoded particles and attribute streams, which
+  // stay in its cache between the decode and the conversion.
+  thread_local std::vector<std::byte> decoded;
+  thread_local std::vector<std::vector<uint16_t>> streams;
+  thread_local std::vector<uint16_t*> targets;
+  thread_local std::vector<const uint16_t*> sources;
+  const io::ChunkDesc& chunk = slot.header.chunks[c];
+  const io::FileHeader& file = reader_.header();
+  const size_t n = chunk.particle_count;
+  decoded.resize(n * io::decoded_particle_bytes(file.position_coding));
+  streams.resize(attribute_streams_);
+  targets.assign(stream_of_attribute_.size(), nullptr);
+  sources.clear();
+  for (uint32_t k = 0; k < attribute_streams_; ++k) {
+    streams[k].resize(n);
+    targets[attribute_of_stream_[k]] = streams[k].data();
+    sources.push_back(streams[k].data());
+  }
+  io::decode_chunk(slot.record_bytes, chunk, file, io::ChunkDestination{decoded, targets}, scratch, slot.where);
+  io::convert_chunk(chunk, decoded, sources, file.position_coding, attribute_of_stream_, slot.header.particle_count,
+                    slot.chunk_first[c], slot.world);
 }
 
 void PipelineCore::finish_decode(uint32_t s) {

@@ -1,5 +1,6 @@
 #include "sluice/runtime/particle_stream.h"
 
+#include <algorithm>
 #include <vector>
 
 #include "sluice/io/error.h"
@@ -14,6 +15,7 @@ PipelineOptions pipeline_options(const io::ParticleQuery& query, uint64_t memory
   std::vector<uint32_t> attributes;
   for (const size_t a : query.attributes) attributes.push_back(uint32_t(a));
   o.decode.attributes = attributes;
+  o.decode.mode = DecodeMode::World;
   o.window.budget.memory_cap = memory_cap;
   o.window.budget.max_frames = max_frames;
   return o;
@@ -46,7 +48,14 @@ uint32_t ParticleStream::window_frames() const { return pipeline_ ? pipeline_->w
 
 PipelineStats ParticleStream::stats() const { return pipeline_ ? pipeline_->stats() : PipelineStats{}; }
 
-std::optional<StreamedFrame> ParticleStream::next(io::ParticleArrays reuse) {
+uint32_t ParticleStream::most_lent() const {
+  // The pipeline reads ahead while the consumer holds fewer than three
+  // quarters of its window (Pipeline::wait_next): half of that.
+  const uint32_t window = window_frames();
+  return std::max<uint32_t>(1, (window - window / 4) / 2);
+}
+
+std::optional<LentFrame> ParticleStream::next_lent() {
   if (taken_ == count_) return std::nullopt;
   const NextEntry entry = pipeline_->wait_next();
   if (entry.end) return std::nullopt;
@@ -56,13 +65,30 @@ std::optional<StreamedFrame> ParticleStream::next(io::ParticleArrays reuse) {
     const FrameError& e = *handle.error();
     throw io::Error(e.where, e.message);
   }
-  const FrameBuffers& b = handle.buffers();
-  std::vector<std::span<const uint16_t>> streams;
-  for (size_t k = 0; k < query_.attributes.size(); ++k) {
-    streams.emplace_back(b.attributes[k].data(), handle.header().particle_count);
-  }
-  StreamedFrame out{handle.frame(), std::move(reuse)};
-  io::particles_into(handle.header(), handle.chunk_first(), b.particles, streams, reader_->header(), query_, out.arrays);
+  const io::FrameHeader& header = handle.header();
+  LentFrame out;
+  out.index = handle.frame();
+  out.time = header.time;
+  out.arrays = io::world_spans(handle.buffers().particles, header.particle_count, query_.attributes.size());
+  if (query_.lod_level < 1) out.arrays.count = io::thin(out.arrays, query_.lod_level, header.blob_voxel);
+  out.handle = std::move(handle);
+  return out;
+}
+
+std::optional<StreamedFrame> ParticleStream::next(io::ParticleArrays reuse) {
+  std::optional<LentFrame> lent = next_lent();
+  if (!lent) return std::nullopt;
+  const io::ParticleSpans& from = lent->arrays;
+  const uint64_t n = from.count;
+  StreamedFrame out{lent->index, std::move(reuse)};
+  io::ParticleArrays& a = out.arrays;
+  a.time = lent->time;
+  a.bytes_read = 0;
+  a.positions.assign(from.positions, from.positions + 3 * n);
+  a.lod.assign(from.lod, from.lod + n);
+  a.layer.assign(from.layer, from.layer + n);
+  a.attributes.resize(from.attributes.size());
+  for (size_t k = 0; k < from.attributes.size(); ++k) a.attributes[k].assign(from.attributes[k], from.attributes[k] + n);
   return out;
 }
 

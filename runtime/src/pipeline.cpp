@@ -72,7 +72,15 @@ PipelineCore::PipelineCore(const io::ContainerReader& reader, FrameAllocator& al
   }
   const std::optional<std::vector<uint32_t>> none = std::vector<uint32_t>{};  // encoded: nothing decoded on the CPU
   stream_of_attribute_ = stream_map(reader_, (options_.decode.mode == DecodeMode::KeepEncoded) ? none : options_.decode.attributes, attribute_streams_);
-  footprint_ = largest_frame(reader_, attribute_streams_, &allocator_, options_.layers, (options_.decode.mode == DecodeMode::KeepEncoded));
+  attribute_of_stream_.resize(attribute_streams_);
+  for (size_t a = 0; a < stream_of_attribute_.size(); ++a) {
+    if (stream_of_attribute_[a] != ~0u) attribute_of_stream_[stream_of_attribute_[a]] = a;
+  }
+  const bool world = options_.decode.mode == DecodeMode::World;
+  footprint_ = world ? largest_frame(reader_, 0, &allocator_, options_.layers, false,
+                                     uint32_t(io::world_particle_bytes(attribute_streams_)))
+                     : largest_frame(reader_, attribute_streams_, &allocator_, options_.layers,
+                                     options_.decode.mode == DecodeMode::KeepEncoded);
   record_where_.file = reader_.path();
   source_ = options_.read.source ? options_.read.source
                             : std::make_shared<FileRecordSource>(reader_.path(), reader_.descriptor(), options_.read.direct_io,
@@ -352,7 +360,7 @@ std::span<const uint64_t> FrameHandle::chunk_first() const { return owner_->slot
 const FrameLayout& FrameHandle::layout() const { return owner_->slot(slot_).layout; }
 const FrameBuffers& FrameHandle::buffers() const { return owner_->slot(slot_).buffers; }
 FrameContent FrameHandle::content() const {
-  if (!gpu_plan()) return FrameContent::Decoded;
+  if (!gpu_plan()) return owner_->world() ? FrameContent::World : FrameContent::Decoded;
   return layout().resident ? FrameContent::Relayed : FrameContent::Encoded;
 }
 const io::GpuDecodePlan* FrameHandle::gpu_plan() const {

@@ -142,6 +142,8 @@ class PipelineCore {
   FrameAllocator& allocator_;
   const PipelineOptions options_;
 
+  // DecodeMode::World: chunks are converted to world-unit arrays.
+  bool world() const { return options_.decode.mode == DecodeMode::World; }
  private:
   friend class sluice::runtime::Pipeline;
   enum class Start { Pushed, Cancelled, Blocked };
@@ -269,12 +271,15 @@ class PipelineCore {
   // TBB numbers an arena's slots 0..max_concurrency (slot 0 is for a thread
   // joining from outside): one counter per slot.
   uint32_t worker_slots() const { return static_cast<uint32_t>(decode_threads_) + 1; }
+  // A world-unit chunk: decoded into the worker's cache, then converted into the frame's arrays.
+  void convert_chunk(Slot& slot, size_t c, io::DecodeScratch& scratch);
 
   // Fixed at construction.
   std::shared_ptr<RecordSource> source_;
   PieceRelay* relay_ = nullptr;  // the allocator's, for frames kept encoded; null: none
   bool relay_off_ = false;       // the reader thread's: a relayed frame had zstd planes
   std::vector<uint32_t> stream_of_attribute_;  // header attribute -> decoded stream, or ~0u
+  std::vector<size_t> attribute_of_stream_;    // decoded stream -> header attribute
   uint32_t attribute_streams_ = 0;
   FrameFootprint footprint_;
   io::ErrorLocation record_where_;  // the reader thread's: the file, and the frame it parses

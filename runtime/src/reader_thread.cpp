@@ -465,8 +465,13 @@ void PipelineCore::finish_entry(ReaderState& rs, uint32_t s, uint64_t k) {
 void PipelineCore::set_layout(Slot& slot, uint64_t particles, uint64_t encoded_bytes) const {
   slot.layout.frame = slot.frame;
   slot.layout.particles = particles;
-  slot.layout.particle_stride = static_cast<uint32_t>(io::decoded_particle_bytes(reader_.header().position_coding));
-  slot.layout.attribute_streams = attribute_streams_;
+  if (world()) {  // the attributes are float arrays in the particles' block
+    slot.layout.particle_stride = static_cast<uint32_t>(io::world_particle_bytes(attribute_streams_));
+    slot.layout.attribute_streams = 0;
+  } else {
+    slot.layout.particle_stride = static_cast<uint32_t>(io::decoded_particle_bytes(reader_.header().position_coding));
+    slot.layout.attribute_streams = attribute_streams_;
+  }
   slot.layout.encoded_bytes = encoded_bytes;
   slot.layout.resident = false;
 }
@@ -532,12 +537,16 @@ void PipelineCore::prepare_decode(ReaderState& rs, Slot& slot) {
   }
   if (!slot.has_buffers) allocate_buffers(rs, slot);
 
-  bool fits = slot.buffers.particles.size() >= slot.layout.particle_bytes() &&
-              slot.buffers.attributes.size() >= attribute_streams_;
-  for (uint32_t a = 0; fits && a < attribute_streams_; ++a) fits = slot.buffers.attributes[a].size() >= h.particle_count;
+  const uint32_t streams = slot.layout.attribute_streams;
+  bool fits = slot.buffers.particles.size() >= slot.layout.particle_bytes() && slot.buffers.attributes.size() >= streams;
+  for (uint32_t a = 0; fits && a < streams; ++a) fits = slot.buffers.attributes[a].size() >= h.particle_count;
   if (!fits) throw io::Error(reader_.location(slot.frame), "the frame allocator returned buffers smaller than the frame");
   if ((options_.decode.mode == DecodeMode::KeepEncoded)) io::write_tables(slot.plan, slot.buffers.particles);
   slot.attribute_targets.assign(stream_of_attribute_.size(), nullptr);
+  if (world()) {
+    slot.world = io::world_spans(slot.buffers.particles, h.particle_count, attribute_streams_);
+    return;
+  }
   for (size_t a = 0; a < stream_of_attribute_.size(); ++a) {
     if (stream_of_attribute_[a] != ~0u) slot.attribute_targets[a] = slot.buffers.attributes[stream_of_attribute_[a]].data();
   }

@@ -24,6 +24,7 @@
 
 #include "sluice/io/format.h"
 #include "sluice/io/gpu_decode_plan.h"
+#include "sluice/io/particles.h"
 #include "sluice/runtime/demand.h"
 #include "sluice/runtime/frame_allocator.h"
 #include "sluice/runtime/frame_error.h"
@@ -63,6 +64,7 @@ struct Slot {
   FrameBuffers buffers;
   bool has_buffers = false;
   std::vector<uint16_t*> attribute_targets;      // per header attribute; nullptr where not decoded
+  io::ParticleSpans world;                       // DecodeMode::World: the arrays in `buffers.particles`
   uint32_t record = kNoRecord;                   // record buffer in use while decoding
   std::span<const std::byte> record_bytes;       // the frame record inside it (or the prefix the wanted layers need)
   bool table_parsed = false;                     // the table was read first and parsed (`header`) before the payloads

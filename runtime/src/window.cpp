@@ -23,9 +23,10 @@ uint32_t clamp_frames(uint64_t frames) {
 }  // namespace
 
 FrameFootprint largest_frame(const io::ContainerReader& reader, size_t attribute_streams,
-                             const FrameAllocator* allocator, io::LayerSet layers, bool encoded) {
+                             const FrameAllocator* allocator, io::LayerSet layers, bool encoded, uint32_t particle_stride) {
   FrameLayout layout;
-  layout.particle_stride = static_cast<uint32_t>(io::decoded_particle_bytes(reader.header().position_coding));
+  layout.particle_stride =
+      particle_stride > 0 ? particle_stride : static_cast<uint32_t>(io::decoded_particle_bytes(reader.header().position_coding));
   layout.attribute_streams = static_cast<uint32_t>(attribute_streams);
   FrameFootprint f;
   for (const io::FrameIndexEntry& e : reader.index().frames) {

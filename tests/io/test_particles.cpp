@@ -41,6 +41,37 @@ TEST_F(ParticlesFile, EveryParticleEqualsTheExportersValues) {
   EXPECT_EQ(got.bytes_read, reader.index().frames[1].bytes);  // level 1 reads the whole record
 }
 
+// A frame whose arrays outgrow the caches (1.2M particles, 18 MB) is
+// converted with streaming stores, from odd chunk starts too: the same values.
+TEST(ParticlesLargeFrame, StreamingStoresWriteTheExportersValues) {
+  test::TempDir dir;
+  io::FileHeader file = test::test_header(io::PositionCoding::Quantized16);
+  const std::vector<io::ParticleFrame> frames{test::lattice_frame(1'200'003, 0.0)};
+  const auto path = test::write_file(dir.path / "large.sluice", file, frames);
+  io::ContainerReader reader(path);
+  const io::DecodedFrame decoded = io::decode_frame(reader, 0);
+  const std::vector<size_t> attrs{0};
+  const io::ExportFrame expected = io::to_export_frame(decoded, reader.header(), attrs);
+  ASSERT_EQ(expected.count(), 1'200'003u);
+  bool odd_start = false;
+  for (const uint64_t first : decoded.chunk_first) odd_start |= first % 4 != 0;
+  EXPECT_TRUE(odd_start) << "a chunk that starts off a group of four";
+
+  io::ParticleQuery q;
+  q.attributes = attrs;
+  const io::ParticleArrays read = io::read_particles(reader, 0, q);
+  EXPECT_EQ(read.positions, expected.positions);
+  EXPECT_EQ(read.lod, expected.lod);
+  EXPECT_EQ(read.attributes[0], expected.attributes[0]);
+
+  io::ParticleArrays converted;
+  const std::vector<std::span<const uint16_t>> streams{decoded.attributes[0]};
+  io::particles_into(decoded.header, decoded.chunk_first, decoded.particles, streams, reader.header(), q, converted);
+  EXPECT_EQ(converted.positions, expected.positions);
+  EXPECT_EQ(converted.lod, expected.lod);
+  EXPECT_EQ(converted.attributes[0], expected.attributes[0]);
+}
+
 TEST_F(ParticlesFile, ALevelKeepsTheExportersParticlesAndReadsLess) {
   io::ContainerReader reader(path);
   const std::vector<size_t> attrs{0};

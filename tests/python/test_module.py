@@ -115,6 +115,29 @@ def test_streaming_equals_random_access(converted):
     assert [f.index for f in stream] == [11, 12]  # a stream outlives its sequence
 
 
+def test_streamed_arrays_are_lent_and_outlive_their_stream(converted):
+    seq = sluice.open(converted)
+    # A small window: the first frames are lent (arrays over the pipeline's
+    # buffers), the rest of a kept list are copies, and nothing waits forever.
+    stream = seq.frames(window=4)
+    kept = list(stream)
+    assert [f.index for f in kept] == list(range(13))
+    expected = [seq.frame(i) for i in range(13)]
+    del stream, seq
+    gc.collect()
+    for f, g in zip(kept, expected):
+        np.testing.assert_array_equal(f.positions, g.positions)
+        np.testing.assert_array_equal(f.lod, g.lod)
+        np.testing.assert_array_equal(f.layer, g.layer)
+        np.testing.assert_array_equal(f["rho"], g["rho"])
+    # A loop that lets each frame go keeps every frame lent.
+    seq = sluice.open(converted)
+    total = 0
+    for f in seq.frames(window=4):
+        total += len(f.positions)
+    assert total == sum(len(g.positions) for g in expected)
+
+
 def test_surface_layers(converted):
     seq = sluice.open(converted)
     whole, surface = seq.frame(12), seq.frame(12, layers="surface")

@@ -72,6 +72,38 @@ TEST(ParticleStream, FramesEqualReadParticlesInOrder) {
   EXPECT_EQ(stream.remaining(), 0u);
 }
 
+// Lent frames: the workers' world-unit arrays in the pipeline's buffers,
+// equal to read_particles; the consumer may hold most_lent() of them while
+// it asks for the next, and giving them back lets the stream go on.
+TEST(ParticleStream, LentFramesEqualReadParticlesWhileHeld) {
+  test::TempDir dir;
+  const auto reader = std::make_shared<io::ContainerReader>(scattered_file(dir / "s.sluice", 12, 20000));
+  io::ParticleQuery q;
+  q.attributes = {0};
+  q.lod_level = 0.5f;
+  runtime::ParticleStream stream(reader, {0, 12, 1}, q, 64 << 20, 8);
+  ASSERT_GE(stream.most_lent(), 2u);
+  std::vector<runtime::LentFrame> held;
+  uint64_t frame = 0;
+  while (auto lent = stream.next_lent()) {
+    EXPECT_EQ(lent->index, frame);
+    const io::ParticleArrays want = io::read_particles(*reader, frame, q);
+    const io::ParticleSpans& got = lent->arrays;
+    ASSERT_EQ(got.count, want.count());
+    EXPECT_EQ(std::vector<float>(got.positions, got.positions + 3 * got.count), want.positions);
+    EXPECT_EQ(std::vector<uint16_t>(got.lod, got.lod + got.count), want.lod);
+    EXPECT_EQ(std::vector<uint8_t>(got.layer, got.layer + got.count), want.layer);
+    ASSERT_EQ(got.attributes.size(), 1u);
+    EXPECT_EQ(std::vector<float>(got.attributes[0], got.attributes[0] + got.count), want.attributes[0]);
+    EXPECT_EQ(lent->time, want.time);
+    EXPECT_EQ(lent->handle.content(), runtime::FrameContent::World);
+    held.push_back(std::move(*lent));
+    if (held.size() > stream.most_lent()) held.erase(held.begin());  // most_lent() held at the next call
+    ++frame;
+  }
+  EXPECT_EQ(frame, 12u);
+}
+
 TEST(ParticleStream, AUniformLevelReadsOnlyItsTiers) {
   test::TempDir dir;
   const auto reader = std::make_shared<io::ContainerReader>(scattered_file(dir / "s.sluice", 6, 40000));

@@ -81,4 +81,38 @@ void particles_into(const FrameHeader& header, std::span<const uint64_t> chunk_f
                     std::span<const std::span<const uint16_t>> attribute_streams, const FileHeader& file,
                     const ParticleQuery& query, ParticleArrays& out);
 
+// A frame's particles in world units in memory someone else owns (a
+// pipeline's frame buffer, the vectors of a ParticleArrays): `count`
+// particles; arrays as in ParticleArrays.
+struct ParticleSpans {
+  float* positions = nullptr;      // x,y,z interleaved
+  uint16_t* lod = nullptr;
+  uint8_t* layer = nullptr;
+  std::vector<float*> attributes;  // per ParticleQuery::attributes entry
+  uint64_t count = 0;
+};
+
+// Bytes per particle of a frame laid out in one block by world_spans().
+uint64_t world_particle_bytes(size_t attributes);
+// The arrays of `count` particles with `attributes` float arrays in
+// `block` (at least count * world_particle_bytes(attributes) bytes, on 16
+// bytes; io::Error otherwise): positions, each attribute, LOD values, layers.
+ParticleSpans world_spans(std::span<std::byte> block, uint64_t count, size_t attributes);
+
+// One decoded chunk into world units at particle `first` of `out`:
+// `decoded` holds the chunk's particles (decoded_particle_bytes(coding)
+// each), `streams[i]` the quantized values of file attribute
+// `attributes[i]` for the chunk's particles. `frame_particles` (the whole
+// frame's count) picks how to write: a frame larger than the caches is
+// written with streaming stores. Threads: chunks of one frame may be
+// converted concurrently; what they write does not overlap.
+void convert_chunk(const ChunkDesc& chunk, std::span<const std::byte> decoded, std::span<const uint16_t* const> streams,
+                   PositionCoding coding, std::span<const size_t> attributes, uint64_t frame_particles, uint64_t first,
+                   const ParticleSpans& out);
+
+// Keeps, in place and in order, the particles of `spans` that LOD level
+// `level` keeps (blobs by blob_lod_uniform of their cell of `blob_voxel`);
+// returns how many.
+uint64_t thin(const ParticleSpans& spans, float level, float blob_voxel);
+
 }  // namespace sluice::io

@@ -238,7 +238,8 @@ class Renderer {
   // Submits the copy of the staged frame to device memory; returns its
   // upload ticket (see upload_complete()).
   uint64_t commit_frame();
-  // Submits a frame the streaming runtime delivered (FrameHandle, neither
+  // Submits a frame the streaming runtime delivered (FrameHandle, not
+  // FrameContent::World (render::Error), neither
   // empty nor failed; borrowed for the call). A decoded frame: its copy, and
   // the colour from its attribute streams, which hold every attribute or only
   // `color_attribute` (PipelineOptions::decode.attributes; -1: no colour).

@@ -1,8 +1,9 @@
 // sluice/runtime/particle_stream.h: the frames of a sequence in order
 // through the prefetch pipeline (read and decoded ahead on worker threads,
 // the window sized from memory), each converted to world-unit arrays
-// (io/particles.h). What the Python module's `for frame in seq` and the
-// ParaView reader's animation use.
+// (io/particles.h) by the workers as they decode (DecodeMode::World). What
+// the Python module's `for frame in seq` and the ParaView reader's
+// animation use.
 //
 // Ownership: shares the reader, so a stream may outlive whoever opened it.
 // Threads: one thread at a time calls the members (the pipeline's consumer
@@ -33,6 +34,16 @@ struct StreamedFrame {
   io::ParticleArrays arrays;
 };
 
+// A frame whose arrays lie in the pipeline's buffer, lent without a copy:
+// valid while `handle` holds that buffer. Give it back (handle.reset(), or
+// destroy it) on the stream's thread, before the stream is destroyed.
+struct LentFrame {
+  uint64_t index = 0;  // frame number in the file
+  double time = 0;     // seconds
+  io::ParticleSpans arrays;
+  FrameHandle handle;
+};
+
 class ParticleStream {
  public:
   // Shares the reader (a stream outlives the sequence it came from).
@@ -49,6 +60,11 @@ class ParticleStream {
   // `reuse`: arrays of an earlier frame the caller is done with, whose
   // memory the new frame's arrays take over (io::particles_into).
   std::optional<StreamedFrame> next(io::ParticleArrays reuse = {});
+  // As next(), the arrays lent in place (no copy). The caller may hold up to
+  // most_lent() lent frames while it asks for the next; holding more makes
+  // the pipeline's wait_next() throw (it could never read ahead).
+  std::optional<LentFrame> next_lent();
+  uint32_t most_lent() const;
   uint64_t remaining() const;  // UINT64_MAX for a loop
   // The frame next() returns next (meaningless once remaining() is 0).
   uint64_t next_frame() const { return range_.start + taken_ * range_.step; }

@@ -68,6 +68,12 @@ struct ReadSettings {
 
 enum class DecodeMode : uint8_t {
   Cpu,  // TBB workers decode every chunk into the frame's buffers
+  // As Cpu, each chunk then converted to world units while still in the
+  // worker's cache (io::convert_chunk): buffers().particles holds the frame
+  // as io::world_spans() lays it out (float32 positions, one float32 array
+  // per decoded attribute, LOD values, layers), and there are no attribute
+  // streams. For consumers that want plain arrays (runtime::ParticleStream).
+  World,
   // Frames stay encoded for a GPU decoder (io/gpu_decode_plan.h, the
   // renderer's commit): the workers check each chunk's checksum,
   // copy its payload into the frame's buffer and inflate its zstd planes
@@ -177,6 +183,7 @@ class PipelineCore;  // runtime/src/pipeline_core.h
 // What a delivered frame's buffers hold (FrameHandle::content()).
 enum class FrameContent : uint8_t {
   Decoded,  // buffers().particles: decoded particles (io::decoded_particle_bytes each); attributes: decoded streams
+  World,    // buffers().particles: world-unit arrays (DecodeMode::World, io::world_spans); no attribute streams
   Encoded,  // buffers().particles: the staged area that gpu_plan() plans (io/gpu_decode_plan.h), to decode on the GPU
   Relayed,  // already in device memory (layout().resident); buffers().particles is empty, gpu_plan() has the tables
 };

@@ -39,10 +39,14 @@ struct FrameFootprint {
 // `layers`: the layers read (a record's size counts whole: the index does not
 // say where its layers' payloads end); `encoded`: frames stay encoded for a
 // GPU decoder (their record, plus a bound on what the CPU adds: every
-// plane inflated, the chunk plans and the tile table).
+// plane inflated, the chunk plans and the tile table); `particle_stride`:
+// bytes per decoded particle (0: io::decoded_particle_bytes of the file's
+// coding; frames converted to world units give io::world_particle_bytes and
+// no attribute streams).
 FrameFootprint largest_frame(const io::ContainerReader& reader, size_t attribute_streams,
                              const FrameAllocator* allocator = nullptr,
-                             io::LayerSet layers = io::LayerSet::particles(), bool encoded = false);
+                             io::LayerSet layers = io::LayerSet::particles(), bool encoded = false,
+                             uint32_t particle_stride = 0);
 
 struct BudgetOptions {
   uint64_t memory_cap = 0;       // user cap on host bytes (`--memory 8G`); 0: none
