@@ -2,9 +2,6 @@
 
 #include <tbb/parallel_for.h>
 
-#if defined(__SSE2__)
-#include <emmintrin.h>
-#endif
 
 #include <algorithm>
 #include <cmath>
@@ -12,6 +9,7 @@
 #include <memory>
 #include <string>
 
+#include "dequantize.h"
 #include "file.h"
 #include "sluice/io/codec.h"
 #include "sluice/io/error.h"
@@ -41,82 +39,10 @@ bool blob_keeps(const float* p, float voxel, float level) {
   return 1.0 - blob_lod_uniform(cell[0], cell[1], cell[2]) <= level;
 }
 
-// Decoded particles (x, y, z, lod as uint16) into world units, four at a
-// time with SSE2 where there is SSE2: the same single-precision multiply and
-// add as dequantize(), so the same floats. Returns how many particles it
-// did; the caller does the rest (at least the last one: each group's last
-// store writes one float past it, into the next particle's x, which the
-// next group then writes).
-size_t dequantize_fast(const uint16_t* q, size_t n, const float lo[3], const float step[3], float* xyz, uint16_t* lod) {
-#if defined(__SSE2__)
-  const __m128 scale = _mm_setr_ps(step[0], step[1], step[2], 0.0f);
-  const __m128 base = _mm_setr_ps(lo[0], lo[1], lo[2], 0.0f);
-  const __m128i zero = _mm_setzero_si128();
-  size_t i = 0;
-  for (; i + 4 < n; i += 4) {
-    const __m128i a = _mm_loadu_si128(reinterpret_cast<const __m128i*>(q + 4 * i));      // particles i, i+1
-    const __m128i b = _mm_loadu_si128(reinterpret_cast<const __m128i*>(q + 4 * i + 8));  // particles i+2, i+3
-    const __m128i words[4] = {_mm_unpacklo_epi16(a, zero), _mm_unpackhi_epi16(a, zero), _mm_unpacklo_epi16(b, zero),
-                              _mm_unpackhi_epi16(b, zero)};
-    for (size_t k = 0; k < 4; ++k) {
-      const __m128 v = _mm_add_ps(_mm_mul_ps(_mm_cvtepi32_ps(words[k]), scale), base);
-      _mm_storeu_ps(xyz + 3 * (i + k), v);  // x, y, z and one float into the next particle's x
-      lod[i + k] = q[4 * (i + k) + 3];
-    }
-  }
-  return i;
-#else
-  (void)q, (void)n, (void)lo, (void)step, (void)xyz, (void)lod;
-  return 0;
-#endif
-}
-
-// As dequantize_fast() from particle `i` on, for a frame larger than the
-// caches: whole groups of four written with streaming stores, which skip
-// reading the destination's lines first (a third of the conversion's memory
-// traffic). `i` must put xyz + 3 * i on 16 bytes and lod + i on 8; the
-// caller does the rest.
-size_t dequantize_streaming(const uint16_t* q, size_t i, size_t n, const float lo[3], const float step[3], float* xyz,
-                            uint16_t* lod) {
-#if defined(__SSE2__) && defined(__x86_64__)
-  const __m128 scale = _mm_setr_ps(step[0], step[1], step[2], 0.0f);
-  const __m128 base = _mm_setr_ps(lo[0], lo[1], lo[2], 0.0f);
-  const __m128i zero = _mm_setzero_si128();
-  for (; i + 4 <= n; i += 4) {
-    const __m128i a = _mm_loadu_si128(reinterpret_cast<const __m128i*>(q + 4 * i));
-    const __m128i b = _mm_loadu_si128(reinterpret_cast<const __m128i*>(q + 4 * i + 8));
-    const __m128 v0 = _mm_add_ps(_mm_mul_ps(_mm_cvtepi32_ps(_mm_unpacklo_epi16(a, zero)), scale), base);
-    const __m128 v1 = _mm_add_ps(_mm_mul_ps(_mm_cvtepi32_ps(_mm_unpackhi_epi16(a, zero)), scale), base);
-    const __m128 v2 = _mm_add_ps(_mm_mul_ps(_mm_cvtepi32_ps(_mm_unpacklo_epi16(b, zero)), scale), base);
-    const __m128 v3 = _mm_add_ps(_mm_mul_ps(_mm_cvtepi32_ps(_mm_unpackhi_epi16(b, zero)), scale), base);
-    // Four (x, y, z, 0) into three registers of x0 y0 z0 x1 | y1 z1 x2 y2 | z2 x3 y3 z3.
-    const __m128 zx = _mm_shuffle_ps(v0, v1, _MM_SHUFFLE(0, 0, 2, 2));   // z0 z0 x1 x1
-    const __m128 zx2 = _mm_shuffle_ps(v2, v3, _MM_SHUFFLE(0, 0, 2, 2));  // z2 z2 x3 x3
-    _mm_stream_ps(xyz + 3 * i, _mm_shuffle_ps(v0, zx, _MM_SHUFFLE(2, 0, 1, 0)));
-    _mm_stream_ps(xyz + 3 * i + 4, _mm_shuffle_ps(v1, v2, _MM_SHUFFLE(1, 0, 2, 1)));
-    _mm_stream_ps(xyz + 3 * i + 8, _mm_shuffle_ps(zx2, v3, _MM_SHUFFLE(2, 1, 2, 0)));
-    const uint64_t lods = uint64_t(_mm_extract_epi16(a, 3)) | uint64_t(_mm_extract_epi16(a, 7)) << 16 |
-                          uint64_t(_mm_extract_epi16(b, 3)) << 32 | uint64_t(_mm_extract_epi16(b, 7)) << 48;
-    _mm_stream_si64(reinterpret_cast<long long*>(lod + i), static_cast<long long>(lods));
-  }
-  _mm_sfence();  // the streamed lines are visible before the chunk is reported done
-#else
-  (void)q, (void)n, (void)lo, (void)step, (void)xyz, (void)lod;
-#endif
-  return i;
-}
-
 // Whether a frame's converted arrays outgrow the caches, so that writing
 // them through the caches would only evict and re-read: 16 MiB, about the
 // last-level cache of one socket.
 bool outgrows_caches(uint64_t particles) { return particles * (3 * sizeof(float) + sizeof(uint16_t) + 1) > (16ull << 20); }
-
-void dequantize_one(const uint16_t* q, size_t i, const float lo[3], const float step[3], float* xyz, uint16_t* lod) {
-  xyz[3 * i + 0] = lo[0] + float(q[4 * i + 0]) * step[0];
-  xyz[3 * i + 1] = lo[1] + float(q[4 * i + 1]) * step[1];
-  xyz[3 * i + 2] = lo[2] + float(q[4 * i + 2]) * step[2];
-  lod[i] = q[4 * i + 3];
-}
 
 // `out` sized for the frame's particles, reusing its memory.
 void size_arrays(const FrameHeader& header, const ParticleQuery& query, ParticleArrays& out) {
@@ -204,21 +130,22 @@ void convert_chunk(const ChunkDesc& chunk, std::span<const std::byte> decoded, s
   if (coding == PositionCoding::Quantized16) {
     // Decoded particles are 4 uint16 (x, y, z, lod): 8-byte aligned.
     const auto* q = reinterpret_cast<const uint16_t*>(decoded.data());
-    float lo[3], step[3];
+    ChunkScale scale;
     for (int a = 0; a < 3; ++a) {
-      lo[a] = chunk.bounds.min[a];
-      step[a] = (chunk.bounds.max[a] - chunk.bounds.min[a]) * (1.0f / 65535.0f);
+      scale.lo[a] = chunk.bounds.min[a];
+      scale.step[a] = (chunk.bounds.max[a] - chunk.bounds.min[a]) * (1.0f / 65535.0f);
     }
     size_t i = 0;
     if (outgrows_caches(frame_particles) && reinterpret_cast<uintptr_t>(out.positions) % 16 == 0 &&
         reinterpret_cast<uintptr_t>(out.lod) % 8 == 0) {
       // Up to the first particle whose x lies on 16 bytes (its index a multiple of 4).
-      for (; i < n && (first + i) % 4 != 0; ++i) dequantize_one(q, i, lo, step, xyz, lod);
-      i = dequantize_streaming(q, i, n, lo, step, xyz, lod);
+      const size_t head = std::min<size_t>(n, (4 - first % 4) % 4);
+      dequantize_plain(q, 0, head, scale, xyz, lod);
+      i = dequantize_streaming(chosen_streaming_kernel(), q, head, n, scale, xyz, lod);
     } else {
-      i = dequantize_fast(q, n, lo, step, xyz, lod);
+      i = dequantize_cached(q, n, scale, xyz, lod);
     }
-    for (; i < n; ++i) dequantize_one(q, i, lo, step, xyz, lod);
+    dequantize_plain(q, i, n, scale, xyz, lod);
   } else {
     const std::byte* p = decoded.data();
     for (size_t i = 0; i < n; ++i) {

@@ -6,6 +6,7 @@
 #include <random>
 #include <vector>
 
+#include "dequantize.h"
 #include "packed_plane.h"
 #include "quantized_unpack.h"
 #include "sluice/io/codec.h"
@@ -163,4 +164,53 @@ TEST(PackedPlane, FramesDecodeTheSameWithAndWithoutPacking) {
     decode_chunk(zstd.record, zstd.header.chunks[c], header, {b, {}}, scratch, {});
     ASSERT_EQ(a, b) << "chunk " << c;
   }
+}
+
+namespace {
+
+// 16-byte aligned float and uint16 arrays, filled with a marker.
+struct Destination {
+  std::vector<float> xyz_store;
+  std::vector<uint16_t> lod_store;
+  float* xyz;
+  uint16_t* lod;
+  explicit Destination(size_t n) : xyz_store(3 * n + 8, -7.0f), lod_store(n + 8, 0xBEEF) {
+    xyz = xyz_store.data() + (16 - reinterpret_cast<uintptr_t>(xyz_store.data()) % 16) % 16 / sizeof(float);
+    lod = lod_store.data() + (16 - reinterpret_cast<uintptr_t>(lod_store.data()) % 16) % 16 / sizeof(uint16_t);
+  }
+};
+
+}  // namespace
+
+// The streaming kernels write what the plain loop writes, bit for bit, from
+// every start a caller may give (a multiple of four) and at every length.
+TEST(Dequantize, EveryStreamingKernelMatchesThePlainLoop) {
+  std::mt19937 rng(5);
+  std::uniform_int_distribution<int> word(0, 65535);
+  const ChunkScale scale{{-1.5f, 0.25f, 3.0f}, {1.0f / 65535, 2.5f / 65535, 0.01f / 65535}};
+  size_t kernels = 0;
+  for (const StreamingKernel kernel : {StreamingKernel::Sse2, StreamingKernel::Avx2}) {
+    if (!streaming_kernel_runs_here(kernel)) continue;
+    ++kernels;
+    for (size_t n = 0; n < 70; ++n) {
+      for (size_t start = 0; start <= 8 && start <= n; start += 4) {
+        std::vector<uint16_t> q(4 * n);
+        for (auto& v : q) v = uint16_t(word(rng));
+        Destination want(n), got(n);
+        dequantize_plain(q.data(), 0, n, scale, want.xyz, want.lod);
+        dequantize_plain(q.data(), 0, start, scale, got.xyz, got.lod);
+        const size_t done = dequantize_streaming(kernel, q.data(), start, n, scale, got.xyz, got.lod);
+        ASSERT_LE(done, n);
+        EXPECT_LT(n - done, 4u) << "whole groups left undone";
+        dequantize_plain(q.data(), done, n, scale, got.xyz, got.lod);
+        ASSERT_EQ(0, std::memcmp(got.xyz, want.xyz, 3 * n * sizeof(float))) << "n " << n << " start " << start;
+        ASSERT_EQ(0, std::memcmp(got.lod, want.lod, n * sizeof(uint16_t))) << "n " << n << " start " << start;
+        EXPECT_EQ(got.xyz[3 * n], -7.0f) << "wrote past the end";
+        EXPECT_EQ(got.lod[n], 0xBEEF) << "wrote past the end";
+      }
+    }
+  }
+#if defined(__x86_64__)
+  EXPECT_GE(kernels, 1u) << "SSE2 runs on every x86-64";
+#endif
 }
