@@ -65,6 +65,9 @@ std::optional<LentFrame> ParticleStream::next_lent() {
     const FrameError& e = *handle.error();
     throw io::Error(e.where, e.message);
   }
+  // Thinned in place, and the caller may change the lent arrays: never
+  // served again from this buffer (a loop reads the frame again).
+  handle.spoil();
   const io::FrameHeader& header = handle.header();
   LentFrame out;
   out.index = handle.frame();

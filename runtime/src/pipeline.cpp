@@ -355,6 +355,10 @@ void FrameHandle::reset() {
   error_.reset();
 }
 
+void FrameHandle::spoil() {
+  if (owner_) owner_->spoil(slot_);
+}
+
 const io::FrameHeader& FrameHandle::header() const { return owner_->slot(slot_).header; }
 std::span<const uint64_t> FrameHandle::chunk_first() const { return owner_->slot(slot_).chunk_first; }
 const FrameLayout& FrameHandle::layout() const { return owner_->slot(slot_).layout; }

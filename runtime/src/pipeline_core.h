@@ -136,6 +136,8 @@ class PipelineCore {
   void give_back(uint32_t slot);  // a slot back to the reader (a dropped entry, a failed handle)
   void release(uint32_t slot);    // a handle's release: give_back, one handle fewer held
   const Slot& slot(uint32_t s) const { return slots_[s]; }
+  // The consumer's, while it holds the slot's handle (FrameHandle::spoil).
+  void spoil(uint32_t s) { slots_[s].spoiled = true; }
   PipelineStats stats() const;
 
   const io::ContainerReader& reader_;

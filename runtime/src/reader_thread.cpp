@@ -139,7 +139,7 @@ void PipelineCore::collect_returns(ReaderState& rs) {
 
 void PipelineCore::settle(ReaderState& rs, uint32_t s, SlotState state) {
   Slot& slot = slots_[s];
-  if ((state == SlotState::Ready || state == SlotState::Shown) && slot.has_buffers) {
+  if ((state == SlotState::Ready || state == SlotState::Shown) && slot.has_buffers && !slot.spoiled) {
     slot.state.store(SlotState::Cached, kRelaxed);
     rs.cached.push_back(s);
   } else {
@@ -272,6 +272,7 @@ PipelineCore::Start PipelineCore::start_entry(ReaderState& rs, uint64_t k, uint6
 
   Slot& slot = slots_[s];
   slot.frame = frame;
+  slot.spoiled = false;
   slot.generation = rs.generation;
   slot.record = record;
   slot.abandoned.store(false, kRelaxed);

@@ -65,6 +65,10 @@ struct Slot {
   bool has_buffers = false;
   std::vector<uint16_t*> attribute_targets;      // per header attribute; nullptr where not decoded
   io::ParticleSpans world;                       // DecodeMode::World: the arrays in `buffers.particles`
+  // Set by the consumer while it holds the handle (FrameHandle::spoil),
+  // read by the reader once the slot is back: its buffers were changed, so
+  // the frame is never served again from them.
+  bool spoiled = false;
   uint32_t record = kNoRecord;                   // record buffer in use while decoding
   std::span<const std::byte> record_bytes;       // the frame record inside it (or the prefix the wanted layers need)
   bool table_parsed = false;                     // the table was read first and parsed (`header`) before the payloads

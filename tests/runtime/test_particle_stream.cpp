@@ -104,6 +104,26 @@ TEST(ParticleStream, LentFramesEqualReadParticlesWhileHeld) {
   EXPECT_EQ(frame, 12u);
 }
 
+// A loop whose frames all fit in the window: frames lent (thinned in place,
+// perhaps changed by the caller) are read again, never served from the
+// changed buffers.
+TEST(ParticleStream, ALoopNeverServesALentFramesChangedBuffer) {
+  test::TempDir dir;
+  const auto reader = std::make_shared<io::ContainerReader>(scattered_file(dir / "s.sluice", 3, 20000));
+  io::ParticleQuery q;
+  q.lod_level = 0.5f;
+  runtime::ParticleStream stream(reader, {0, 3, 1, true}, q, 64 << 20, 8);
+  for (int k = 0; k < 9; ++k) {
+    std::optional<runtime::LentFrame> lent = stream.next_lent();
+    ASSERT_TRUE(lent);
+    const io::ParticleArrays want = io::read_particles(*reader, lent->index, q);
+    ASSERT_EQ(lent->arrays.count, want.count()) << "pass " << k / 3;
+    EXPECT_EQ(std::vector<float>(lent->arrays.positions, lent->arrays.positions + 3 * want.count()), want.positions);
+    lent->arrays.positions[0] = -1e9f;  // the caller's change
+  }
+  EXPECT_EQ(stream.stats().cache_hits, 0u);
+}
+
 TEST(ParticleStream, AUniformLevelReadsOnlyItsTiers) {
   test::TempDir dir;
   const auto reader = std::make_shared<io::ContainerReader>(scattered_file(dir / "s.sluice", 6, 40000));

@@ -214,6 +214,10 @@ class FrameHandle {
   const io::GpuDecodePlan* gpu_plan() const;
 
   void reset();
+  // Says the holder changed the frame's buffers: once released, the frame is
+  // read again rather than served from them (a loop or seek back would
+  // otherwise get the changed values).
+  void spoil();
 
  private:
   friend class detail::PipelineCore;
