@@ -34,19 +34,27 @@ constexpr uint32_t kW = 200, kH = 120;
 
 // A sloshing pool of 200k particles in layers (surface, blobs, interior),
 // tiered, GPU-decodable: what `sluice synth --gpu-decodable` writes.
-fs::path pool_file() {
-  static const fs::path path = [] {
-    const fs::path p = fs::temp_directory_path() / ("sluice_demand_" + std::to_string(::getpid()) + ".sluice");
+// Written once per test program, removed when it exits.
+struct PoolFile {
+  fs::path path = fs::temp_directory_path() / ("sluice_demand_" + std::to_string(::getpid()) + ".sluice");
+  PoolFile() {
     bench::SynthOptions o;
     o.particles = 200'000;
     o.frames = 2;
-    o.output = p.string();
+    o.output = path.string();
     o.planes = io::PlaneCoding::GpuDecodable;
     o.chunk_particles = 16384;
     bench::write_synthetic(o);
-    return p;
-  }();
-  return path;
+  }
+  ~PoolFile() {
+    std::error_code ignored;
+    fs::remove(path, ignored);
+  }
+};
+
+fs::path pool_file() {
+  static const PoolFile file;
+  return file.path;
 }
 
 struct Shot {
