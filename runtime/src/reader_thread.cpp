@@ -36,8 +36,12 @@ void PipelineCore::reader_main() {
   for (uint32_t s = slot_count_; s-- > 0;) rs.free_slots.push_back(s);
   for (auto r = static_cast<uint32_t>(records_.size()); r-- > 0;) rs.free_records.push_back(r);
   try {
-    while (!stopping_.load(std::memory_order_acquire)) {
+    while (true) {
+      // The wake count is read before anything it guards, stopping_ too: a
+      // stop that came between reading stopping_ and the count was lost
+      // before, and the destructor's join waited for ever (TSan run, CI).
       const uint32_t seen = reader_wake_.load(std::memory_order_acquire);
+      if (stopping_.load(std::memory_order_acquire)) break;
       if (!reader_iteration(rs)) reader_wake_.wait(seen, std::memory_order_acquire);
     }
   } catch (const std::exception& e) {
