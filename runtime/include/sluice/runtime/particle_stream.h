@@ -55,10 +55,10 @@ class ParticleStream {
   ParticleStream(const ParticleStream&) = delete;
   ParticleStream& operator=(const ParticleStream&) = delete;
 
-  // The next frame, or nullopt after the last. Throws io::Error (the
-  // frame's, naming file, frame and chunk) when a frame cannot be read.
-  // `reuse`: arrays of an earlier frame the caller is done with, whose
-  // memory the new frame's arrays take over (io::particles_into).
+  // The next frame as arrays of its own (a copy of next_lent()'s), or
+  // nullopt after the last. Throws io::Error (the frame's, naming file,
+  // frame and chunk) when a frame cannot be read. `reuse`: arrays of an
+  // earlier frame the caller is done with, whose memory the copy takes over.
   std::optional<StreamedFrame> next(io::ParticleArrays reuse = {});
   // As next(), the arrays lent in place (no copy). The caller may hold up to
   // most_lent() lent frames while it asks for the next; holding more makes
