@@ -7,6 +7,9 @@
 #include "commands.h"
 #include "conversion.h"
 #include "human.h"
+#if SLUICE_WITH_MPI
+#include "conversion_mpi.h"
+#endif
 #include "sluice/io/up_axis.h"
 
 namespace sluice::app {
@@ -20,6 +23,7 @@ struct ConvertCommand {
   bool smallest = false, gpu_decodable = false, in_process = false;
   int read_timeout = 120;
   bool force = false;
+  bool mpi = false;  // over the ranks of an MPI job
 };
 
 // The flags that are not fields of import::ConvertOptions as they are typed.
@@ -51,7 +55,14 @@ void run_convert(const ConvertCommand& c) {
   if (std::filesystem::exists(output) && !c.force) {
     throw std::runtime_error(output + " exists; pass --force to overwrite it, or -o to choose another name");
   }
+#if SLUICE_WITH_MPI
+  const std::optional<import::ConvertSummary> converted =
+      c.mpi ? convert_mpi_and_report(o, output, c.report) : convert_and_report(o, output, c.report);
+  if (!converted) return;  // a rank but 0: rank 0 reports
+  const import::ConvertSummary& s = *converted;
+#else
   const import::ConvertSummary s = convert_and_report(o, output, c.report);
+#endif
   const double out = double(std::filesystem::file_size(output));
   const double per = s.particles ? out / double(s.particles) : 0;
   std::printf("wrote %s: %llu frame%s, %s particle%s, %s in -> %s out in %s (%s frames/s)\n", output.c_str(),
@@ -153,6 +164,13 @@ void add_convert(CLI::App& app) {
                 "Read VTK XML files in this process rather than in worker processes (a reader crash on a\n"
                 "damaged file then ends sluice; see docs/import.md)");
   cmd->add_flag("-f,--force", c->force, "Overwrite the output if it exists");
+#if SLUICE_WITH_MPI
+  cmd->add_flag("--mpi", c->mpi,
+                "Convert over the ranks of an MPI job into the one output (MPI-IO), byte for byte what one\n"
+                "process writes: `mpirun -np 16 sluice convert --mpi --jobs 1 'run/*.vtu' -o run.sluice`\n"
+                "(srun the same way). --jobs is threads per rank (default: the node's cores shared among its\n"
+                "ranks). The input must be the same path on every node. docs/convert_mpi.md");
+#endif
   cmd->add_flag("-q,--quiet", c->report.quiet, "No progress bar or notes");
   cmd->callback([c] { run_convert(*c); });
 }

@@ -9,23 +9,13 @@
 
 #include "sluice/io/lod.h"
 #include "sluice/io/outliers.h"
+#include "frame_work.h"
 
 namespace sluice::import {
 
 using namespace sluice::io;  // the container's types: frames, errors, shapes
 using io::Error;  // (not sluice::Error, its base)
 namespace {
-
-struct Work {
-  uint64_t frame = 0;
-  uint64_t input_bytes = 0;
-  std::vector<std::string> repairs;
-  std::optional<FrameShape> shape;
-  bool time_given = false;
-  EncodedFrame encoded;
-  FarReport far;
-  std::optional<Error> error;  // the frame could not be read or encoded
-};
 
 uint64_t source_file_bytes(const FrameSource& source, uint64_t frame) {
   std::error_code ec;
@@ -52,9 +42,9 @@ void remove_particles(ParticleFrame& frame, std::span<const uint32_t> gone) {
   for (auto& values : frame.attributes) values.resize(kept);
 }
 
-Work encode_one(const FrameSource& source, ParticleFrame frame, uint64_t index, const FileHeader& header,
-                const FramesSettings& settings) {
-  Work w;
+FrameWork encode_one(const FrameSource& source, ParticleFrame frame, uint64_t index, const FileHeader& header,
+                     const FramesSettings& settings) {
+  FrameWork w;
   w.frame = index;
   w.time_given = frame.time_given;
   if (settings.drop_far > 0) {
@@ -86,6 +76,19 @@ Work encode_one(const FrameSource& source, ParticleFrame frame, uint64_t index, 
 
 }  // namespace
 
+FrameWork convert_frame(const FrameSource& source, std::optional<ParticleFrame> read, uint64_t f, const FileHeader& header,
+                        const FramesSettings& settings) {
+  try {
+    ParticleFrame frame = read ? std::move(*read) : source.read(f);
+    return encode_one(source, std::move(frame), f, header, settings);
+  } catch (const Error& e) {
+    FrameWork w;
+    w.frame = f;
+    w.error = e;
+    return w;
+  }
+}
+
 FramesResult convert_frames(const FrameSource& source, std::optional<ParticleFrame> first, ContainerWriter& writer,
                              const FramesSettings& settings,
                              const std::function<void(const FrameConverted&)>& on_frame, uint64_t from) {
@@ -107,20 +110,13 @@ FramesResult convert_frames(const FrameSource& source, std::optional<ParticleFra
                                          if (next == frames || stop.load()) fc.stop();
                                          return next++;
                                        }) &
-          tbb::make_filter<uint64_t, Work>(tbb::filter_mode::parallel,
-                                           [&](uint64_t f) {
-                                             try {
-                                               ParticleFrame frame =
-                                                   (f == from && first) ? std::move(*first) : source.read(f);
-                                               return encode_one(source, std::move(frame), f, writer.header(), settings);
-                                             } catch (const Error& e) {
-                                               Work w;
-                                               w.frame = f;
-                                               w.error = e;
-                                               return w;
-                                             }
-                                           }) &
-          tbb::make_filter<Work, void>(tbb::filter_mode::serial_in_order, [&](Work w) {
+          tbb::make_filter<uint64_t, FrameWork>(tbb::filter_mode::parallel,
+                                                [&](uint64_t f) {
+                                                  std::optional<ParticleFrame> read;
+                                                  if (f == from) read = std::move(first);
+                                                  return convert_frame(source, std::move(read), f, writer.header(), settings);
+                                                }) &
+          tbb::make_filter<FrameWork, void>(tbb::filter_mode::serial_in_order, [&](FrameWork w) {
             if (stopped) return;
             if (w.error) {
               if (settings.skip_bad) {

@@ -6,6 +6,7 @@
 #include <algorithm>
 
 #include "file.h"
+#include "sluice/io/assembly.h"
 #include "records.h"
 
 namespace sluice::io {
@@ -17,9 +18,7 @@ ContainerWriter::ContainerWriter(const std::filesystem::path& path, FileHeader h
     if (a.name.empty() || a.name.size() > kMaxNameBytes) throw Error({path_}, "attribute name is empty or too long");
   }
   fd_ = open_or_throw(path_, O_WRONLY | O_CREAT | O_TRUNC);
-  const std::vector<std::byte> bytes = serialize_file_header(header_);
-  write_all(bytes);
-  write_all(serialize_header_copy(bytes));
+  write_all(container_head(header_));
 }
 
 ContainerWriter::~ContainerWriter() {
@@ -64,10 +63,7 @@ void ContainerWriter::update_header(const FileHeader& header) {
 
 void ContainerWriter::finish() {
   if (fd_ < 0) return;
-  const std::vector<std::byte> index = serialize_index(index_.index(), header_.attributes.size());
-  const uint64_t index_offset = offset_;
-  write_all(index);
-  write_all(serialize_footer({index_offset, index.size()}));
+  write_all(container_tail(index_.index(), header_.attributes.size(), offset_));
   if (::fsync(fd_) != 0 || ::close(fd_) != 0) {
     fd_ = -1;
     throw Error({path_}, "could not flush the file to disk");

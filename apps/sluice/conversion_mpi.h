@@ -1,0 +1,20 @@
+// `sluice convert --mpi`: import::convert_mpi() over the ranks mpirun (or
+// srun) started, shown as convert_and_report shows a conversion, by rank 0.
+#pragma once
+
+#include <optional>
+#include <string>
+
+#include "conversion.h"
+
+namespace sluice::app {
+
+// Initializes MPI, converts, finalizes. Rank 0 prints the plan, progress
+// and notes and gets the summary; other ranks print nothing and get none.
+// A stopped conversion is rethrown on rank 0 as convert_and_report does; on
+// other ranks every error ends in ExitCode{1} (rank 0 has said why). An
+// error that is not one of the conversion's own aborts the job.
+std::optional<import::ConvertSummary> convert_mpi_and_report(const import::ConvertOptions& options,
+                                                             const std::string& output, const ConversionReport& report);
+
+}  // namespace sluice::app
