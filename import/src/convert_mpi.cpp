@@ -186,7 +186,7 @@ int threads_per_rank(const ConvertOptions& o, const Ranks& r) {
 }
 
 // Test hook (fault injection): SLUICE_MPI_FAULT=exit:RANK ends that rank
-// (std::_Exit(3), as a crash would) after its first round's records are
+// (std::_Exit(3), as a crash would) once its first round's records are
 // written, so tests see what a rank that dies mid-conversion leaves.
 void injected_fault(const Ranks& r) {
   const char* fault = std::getenv("SLUICE_MPI_FAULT");
@@ -342,7 +342,6 @@ ConvertSummary convert_mpi(const ConvertOptions& o, const std::string& output, M
     } catch (const Error& e) {
       throw ConvertStopped(e, partial, frames_written, false);
     }
-    injected_fault(r);
 
     // Rank 0 indexes and tells what the frames of the round tell, in order.
     WireWriter facts;
@@ -350,6 +349,7 @@ ConvertSummary convert_mpi(const ConvertOptions& o, const std::string& output, M
       if (w.frame <= stop_at) put_facts(facts, w, r.rank, attributes);
     }
     const std::vector<std::byte> all = gather(r, facts.bytes());
+    injected_fault(r);  // (after the gather: every rank's write of the round has returned)
     on_root(r, [&] {
       WireReader read(all);
       while (!read.done()) take_facts(*root, o, header, get_facts(read), r.size);
