@@ -9,6 +9,7 @@ packages=(
   libgtest-dev libbenchmark-dev
   python3-dev pybind11-dev python3-numpy python3-pytest python3-matplotlib
   clang libclang-rt-14-dev
+  openmpi-bin libopenmpi-dev  # convert --mpi, and its test under mpirun
 )
 # The renderer's packages, when the tree has a renderer.
 if [[ -d "$(dirname "$0")/../render/src" ]]; then

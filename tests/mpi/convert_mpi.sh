@@ -12,8 +12,14 @@ set -euo pipefail
 sluice=$1 work=$2 sample=$3
 rm -rf "$work" && mkdir -p "$work" && cd "$work"
 as_root=(); [[ $(id -u) -eq 0 ]] && as_root=(--allow-run-as-root)
+# Under ASan (scripts/test.sh), ranks check memory errors but not leaks:
+# Open MPI leaks about 120 kB at exit from plugins it has unloaded, whose
+# frames LeakSanitizer cannot name, so no suppression can match them alone.
+# The serial conversions here keep leak checking.
+rank_asan="${ASAN_OPTIONS:+$ASAN_OPTIONS:}detect_leaks=0"
 # Each run has a deadline: a rank waiting forever fails the test, it does not hang it.
-mpi() { local n=$1; shift; timeout 180 mpirun "${as_root[@]}" --oversubscribe -np "$n" "$sluice" convert --mpi "$@"; }
+mpirun_() { ASAN_OPTIONS=$rank_asan timeout 180 mpirun "${as_root[@]}" --oversubscribe "$@"; }
+mpi() { local n=$1; shift; mpirun_ -np "$n" "$sluice" convert --mpi "$@"; }
 fail() { echo "FAIL: $*" >&2; exit 1; }
 same() { cmp "$1" "$2" || fail "$2 differs from $1"; echo "ok: $2 is $1 byte for byte"; }
 
@@ -54,7 +60,7 @@ grep -qF "skipped 1 frame that could not be read" skip.err || fail "the skipped 
 same serial_skip.sluice mpi_skip.sluice
 
 echo "--- 4. rank 1 dies after the first round"
-if SLUICE_MPI_FAULT=exit:1 timeout 180 mpirun "${as_root[@]}" --oversubscribe -x SLUICE_MPI_FAULT -np 4 \
+if SLUICE_MPI_FAULT=exit:1 mpirun_ -x SLUICE_MPI_FAULT -np 4 \
      "$sluice" convert --mpi "$sample/dam_break_3d.pvd" -o dead.sluice -q --jobs 1 2> dead.err; then
   fail "mpirun succeeded with a dead rank"
 fi
