@@ -41,11 +41,11 @@ std::optional<import::ConvertSummary> convert_mpi_and_report(const import::Conve
     printer->finish();
     return summary;
   } catch (const import::ConvertStopped& e) {  // every rank stopped alike: rank 0 says why
-    if (!printer) throw ExitCode{1};
+    if (!printer) throw ExitCode{0};
     printer->finish();
     rethrow_with_advice(e);
   } catch (const io::Error&) {  // every rank has the same error: rank 0 says it
-    if (!printer) throw ExitCode{1};
+    if (!printer) throw ExitCode{0};
     printer->finish();
     throw;
   } catch (const std::exception& e) {  // this rank's alone: the others may wait on it in vain

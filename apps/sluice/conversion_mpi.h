@@ -11,9 +11,11 @@ namespace sluice::app {
 
 // Initializes MPI, converts, finalizes. Rank 0 prints the plan, progress
 // and notes and gets the summary; other ranks print nothing and get none.
-// A stopped conversion is rethrown on rank 0 as convert_and_report does; on
-// other ranks every error ends in ExitCode{1} (rank 0 has said why). An
-// error that is not one of the conversion's own aborts the job.
+// A stopped conversion is rethrown on rank 0 as convert_and_report does.
+// Other ranks end in ExitCode{0} once they share the error: one that ended
+// non-zero would make mpirun kill the job, rank 0 perhaps before it has
+// said why; mpirun's status is then rank 0's. An error that is not one the
+// ranks share (an exception on one rank) aborts the job.
 std::optional<import::ConvertSummary> convert_mpi_and_report(const import::ConvertOptions& options,
                                                              const std::string& output, const ConversionReport& report);
 

@@ -14,7 +14,9 @@
 #include <cstdlib>
 #include <filesystem>
 #include <functional>
+#include <map>
 #include <optional>
+#include <thread>
 
 #include "convert_steps.h"
 #include "mpi_messages.h"
@@ -48,8 +50,23 @@ std::vector<std::byte> broadcast(const Ranks& r, std::vector<std::byte> bytes, i
   return bytes;
 }
 
+// Returns once every rank has called it, sleeping meanwhile. MPI's own
+// waits spin on a core, which a rank's reader processes (isolation.h) and
+// the ranks still encoding need: a rank that finished its frames early
+// would slow those that did not.
+void wait_for_all(const Ranks& r) {
+  MPI_Request arrived;
+  MPI_Ibarrier(r.comm, &arrived);
+  for (int done = 0;;) {
+    MPI_Test(&arrived, &done, MPI_STATUS_IGNORE);
+    if (done) return;
+    std::this_thread::sleep_for(std::chrono::microseconds(200));
+  }
+}
+
 // Throws on every rank the error of the lowest rank that has one (none: returns).
 void agree(const Ranks& r, const std::optional<Error>& mine) {
+  wait_for_all(r);  // (rank 0 may have worked long: reading the first frames)
   const int have = mine ? r.rank : INT_MAX;
   int lowest = INT_MAX;
   MPI_Allreduce(&have, &lowest, 1, MPI_INT, MPI_MIN, r.comm);
@@ -233,6 +250,44 @@ void take_facts(Root& root, const ConvertOptions& o, const FileHeader& header, F
   (*root.tally)({f.frame, f.input_bytes, f.repairs, f.shape, f.time_given, f.far});
 }
 
+// What a rank but 0 reads while rank 0 decides the plan: the input opened
+// as rank 0 will most likely open it, and this rank's frames of the first
+// round (rank 0 reads frame 0 and more first: seconds for frames of 10M
+// particles, which the other ranks would otherwise wait out).
+struct EarlyStart {
+  std::unique_ptr<FrameSource> source;
+  SourceOptions options;  // what `source` was opened with
+  std::map<uint64_t, ParticleFrame> frames;
+};
+
+EarlyStart start_early(const ConvertOptions& o, const Ranks& r, uint64_t batch) {
+  EarlyStart early;
+  if (r.root()) return early;
+  try {
+    early.source = open_source(o, early.options);
+  } catch (const Error&) {
+    return {};  // opened again once the plan is known, where its error is agreed
+  }
+  const uint64_t begin = std::min(early.source->frame_count(), batch * uint64_t(r.rank));
+  const uint64_t end = std::min(early.source->frame_count(), begin + batch);
+  std::vector<std::optional<ParticleFrame>> read(end - begin);
+  tbb::parallel_for(begin, end, [&](uint64_t f) {
+    try {
+      read[f - begin] = early.source->read(f);
+    } catch (const Error&) {
+      // read again in its turn, where the error counts
+    }
+  });
+  for (uint64_t f = begin; f < end; ++f) {
+    if (read[f - begin]) early.frames.emplace(f, std::move(*read[f - begin]));
+  }
+  return early;
+}
+
+bool same_options(const SourceOptions& a, const SourceOptions& b) {
+  return a.id_array == b.id_array && a.no_ids == b.no_ids && a.attributes == b.attributes;
+}
+
 }  // namespace
 
 ConvertSummary convert_mpi(const ConvertOptions& o, const std::string& output, MPI_Comm comm,
@@ -245,7 +300,9 @@ ConvertSummary convert_mpi(const ConvertOptions& o, const std::string& output, M
   const int threads = threads_per_rank(o, r);
   const tbb::global_control limit(tbb::global_control::max_allowed_parallelism, size_t(threads));
 
-  // Rank 0 decides; every rank learns the plan.
+  // Rank 0 decides; every rank learns the plan (the others read meanwhile).
+  const uint64_t batch = uint64_t(threads) + 1;
+  EarlyStart early = start_early(o, r, batch);
   std::optional<Root> root;
   WireWriter plan_bytes;
   on_root(r, [&] {
@@ -271,7 +328,12 @@ ConvertSummary convert_mpi(const ConvertOptions& o, const std::string& output, M
   std::unique_ptr<FrameSource> own_source;  // every rank but 0 opens the input as rank 0 did
   on_each(r, [&] {
     if (r.root()) return;
-    own_source = open_isolated(o.input, plan.source, o.isolation);
+    if (early.source && same_options(early.options, plan.source)) {
+      own_source = std::move(early.source);
+    } else {
+      early.frames.clear();  // (rank 0 found repeated ids: they are read again without)
+      own_source = open_isolated(o.input, plan.source, o.isolation);
+    }
     if (own_source->frame_count() != plan.frames) {
       throw Error({o.input}, "rank " + std::to_string(r.rank) + " sees " + std::to_string(own_source->frame_count()) +
                                  " frames, rank 0 " + std::to_string(plan.frames) +
@@ -296,22 +358,27 @@ ConvertSummary convert_mpi(const ConvertOptions& o, const std::string& output, M
   ConvertSummary mine;  // what this rank converted
   uint64_t file_end = head.size(), frames_written = 0;
   uint64_t stop_at = UINT64_MAX;
-  const uint64_t batch = uint64_t(threads) + 1;
   for (uint64_t base = plan.from; base < plan.frames && stop_at == UINT64_MAX; base += batch * uint64_t(r.size)) {
     const Round round{std::min(plan.frames, base + batch * uint64_t(r.rank)),
                       std::min(plan.frames, base + batch * uint64_t(r.rank + 1))};
     std::vector<FrameWork> works(round.end - round.begin);
     tbb::parallel_for(round.begin, round.end, [&](uint64_t f) {
       std::optional<ParticleFrame> read;
-      if (r.root() && f == plan.from) read = std::move(root->prepared.in.first);
+      if (r.root() && f == plan.from) {
+        read = std::move(root->prepared.in.first);
+      } else if (const auto it = early.frames.find(f); it != early.frames.end()) {
+        read = std::move(it->second);
+      }
       works[f - round.begin] = convert_frame(*source, std::move(read), f, header, settings);
     });
 
+    early.frames.clear();
     // The first bad frame of the round stops the conversion after the frames before it.
     uint64_t first_bad = UINT64_MAX;
     for (const FrameWork& w : works) {
       if (w.error && !o.skip_bad) first_bad = std::min(first_bad, w.frame);
     }
+    wait_for_all(r);
     MPI_Allreduce(&first_bad, &stop_at, 1, MPI_UINT64_T, MPI_MIN, comm);
 
     // Where this rank's records go: after every earlier rank's of the round.

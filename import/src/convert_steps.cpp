@@ -3,6 +3,7 @@
 #include "convert_steps.h"
 
 #include <tbb/info.h>
+#include <tbb/parallel_sort.h>
 
 #include <algorithm>
 #include <cmath>
@@ -58,15 +59,7 @@ void read_first(const ConvertOptions& o, Opened& in) {
 
 Opened open_input(const ConvertOptions& o) {
   Opened in;
-  in.options.id_array = o.id_array;
-  in.options.no_ids = o.no_ids;
-  in.options.attributes = o.attributes;
-  in.source = open_isolated(o.input, in.options, o.isolation);
-  if (o.all_attributes) {  // the arrays are known once the source is open: open it again with them
-    in.options.attributes = carried_attributes(o, *in.source);
-    if (!in.options.attributes.empty()) in.source = open_isolated(o.input, in.options, o.isolation);
-  }
-  if (in.source->frame_count() == 0) throw Error({o.input}, "no frames to convert");
+  in.source = open_source(o, in.options);
   read_first(o, in);
   return in;
 }
@@ -119,7 +112,7 @@ float radius_for(const ConvertOptions& o, float spacing, const ParticleFrame& fi
 bool ids_repeat(const ParticleFrame& frame) {
   if (frame.ids.size() < 2) return false;
   std::vector<uint64_t> ids = frame.ids;
-  std::sort(ids.begin(), ids.end());
+  tbb::parallel_sort(ids.begin(), ids.end());  // (10M ids: 0.55 s on one core)
   const size_t distinct = size_t(std::unique(ids.begin(), ids.end()) - ids.begin());
   return double(ids.size() - distinct) > 0.01 * double(ids.size());
 }
@@ -206,6 +199,19 @@ void provisional_up(const ConvertOptions& o, const FrameShape& first_shape, File
 }
 
 }  // namespace
+
+std::unique_ptr<FrameSource> open_source(const ConvertOptions& o, SourceOptions& options) {
+  options.id_array = o.id_array;
+  options.no_ids = o.no_ids;
+  options.attributes = o.attributes;
+  std::unique_ptr<FrameSource> source = open_isolated(o.input, options, o.isolation);
+  if (o.all_attributes) {  // the arrays are known once the source is open: open it again with them
+    options.attributes = carried_attributes(o, *source);
+    if (!options.attributes.empty()) source = open_isolated(o.input, options, o.isolation);
+  }
+  if (source->frame_count() == 0) throw Error({o.input}, "no frames to convert");
+  return source;
+}
 
 FramesSettings frames_settings(const ConvertOptions& o, const FileHeader& header, const Aabb& shape_box) {
   FramesSettings s;

@@ -33,6 +33,11 @@ struct Prepared {
   io::FrameShape first_shape;  // of the first frame with particles (extent only)
 };
 
+// Opens the input as a conversion reads it (the options' id array and
+// attributes, every array with all_attributes); sets `options` to what it
+// was opened with. Throws io::Error (also for an input without frames).
+std::unique_ptr<FrameSource> open_source(const ConvertOptions& o, SourceOptions& options);
+
 // Opens the input and decides what the frames are encoded with. Tells the
 // observer the plan and the notes about the whole input. Throws io::Error.
 Prepared prepare_conversion(const ConvertOptions& o, const ConvertObserver& observer);

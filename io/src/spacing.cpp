@@ -39,6 +39,8 @@ Bulk bulk_box(std::span<const float> xyz, size_t n) {
 
 constexpr int64_t kCells = 2097152;  // per axis: 21 bits of a 63-bit key
 constexpr size_t kMostPerCell = 64;  // neighbours looked at per cell: bounds the work whatever the data
+constexpr int kSeenLog2 = 20;        // bits of the filter over the cells to fill (128 KiB)
+constexpr uint64_t kSeenBits = 1ull << kSeenLog2;
 
 }  // namespace
 
@@ -63,12 +65,32 @@ float estimate_spacing(std::span<const float> xyz, size_t sample) {
     return int64_t(std::clamp(std::isfinite(c) ? c : 0.0, 0.0, double(kCells - 1)));
   };
   auto key = [](int64_t x, int64_t y, int64_t z) { return (uint64_t(x) * kCells + uint64_t(y)) * kCells + uint64_t(z); };
+  // Only the cells around the sampled particles are filled (a 10M-particle
+  // frame took 2.9 s when every cell was): their keys first, then one pass
+  // that keeps, of each, its first kMostPerCell particles in index order.
+  const size_t step = std::max<size_t>(1, n / sample);
   std::unordered_map<uint64_t, std::vector<uint32_t>> grid;
-  grid.reserve(n);
-  for (size_t i = 0; i < n; ++i) grid[key(cell_of(i, 0), cell_of(i, 1), cell_of(i, 2))].push_back(uint32_t(i));
+  std::vector<uint64_t> seen(kSeenBits / 64, 0);  // a filter over the keys: most particles are in no such cell
+  auto seen_bit = [](uint64_t k) { return (k * 0x9E3779B97F4A7C15ull) >> (64 - kSeenLog2); };
+  for (size_t i = 0; i < n; i += step) {
+    const int64_t c[3] = {cell_of(i, 0), cell_of(i, 1), cell_of(i, 2)};
+    for (int dx = -1; dx <= 1; ++dx)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dz = -1; dz <= 1; ++dz) {
+          if (c[0] + dx < 0 || c[1] + dy < 0 || c[2] + dz < 0) continue;
+          const uint64_t k = key(c[0] + dx, c[1] + dy, c[2] + dz);
+          grid.try_emplace(k);
+          seen[seen_bit(k) / 64] |= 1ull << (seen_bit(k) % 64);
+        }
+  }
+  for (size_t i = 0; i < n; ++i) {
+    const uint64_t k = key(cell_of(i, 0), cell_of(i, 1), cell_of(i, 2));
+    if (!(seen[seen_bit(k) / 64] >> (seen_bit(k) % 64) & 1)) continue;
+    const auto it = grid.find(k);
+    if (it != grid.end() && it->second.size() < kMostPerCell) it->second.push_back(uint32_t(i));
+  }
 
   std::vector<float> nearest;
-  const size_t step = std::max<size_t>(1, n / sample);
   for (size_t i = 0; i < n; i += step) {
     double best = INFINITY;
     const int64_t c[3] = {cell_of(i, 0), cell_of(i, 1), cell_of(i, 2)};
