@@ -11,7 +11,7 @@
 # Prints a table, writes it as CSV ($WORK/convert_mpi.csv) for
 # bench/plot_convert_mpi.py.
 #   SLUICE=build/apps/sluice/sluice PARTICLES=10M FRAMES=32 RANKS="1 2 4 8 16" WORK=/tmp/mpibench \
-#     bash bench/convert_mpi.sh
+#     [CORES=16] [SERIAL_ONE=0] [MPIRUN=orterun] bash bench/convert_mpi.sh
 set -euo pipefail
 sluice=$(realpath "${SLUICE:-build/apps/sluice/sluice}")
 particles=${PARTICLES:-1M} frames=${FRAMES:-16} ranks=${RANKS:-"1 2 4"}
@@ -44,14 +44,16 @@ row "bound: cat (page cache)" "$read_s"
 serial_all=$(secs "$sluice" "${convert[@]}" --jobs "$cores" -o serial.sluice)
 row "serial, $cores threads" "$serial_all"
 echo "serial_threads,1,$cores,$serial_all,$(awk -v s="$serial_all" -v f="$frames" 'BEGIN { print f / s }'),yes" >> convert_mpi.csv
-serial_one=$(secs "$sluice" "${convert[@]}" --jobs 1 -o serial1.sluice)
-row "serial, 1 thread" "$serial_one"
-cmp -s serial.sluice serial1.sluice || echo "warning: the serial outputs at $cores and 1 threads differ"
-echo "serial_one,1,1,$serial_one,$(awk -v s="$serial_one" -v f="$frames" 'BEGIN { print f / s }'),yes" >> convert_mpi.csv
+if [[ "${SERIAL_ONE:-1}" == 1 ]]; then  # (SERIAL_ONE=0 leaves it out where time is short)
+  serial_one=$(secs "$sluice" "${convert[@]}" --jobs 1 -o serial1.sluice)
+  row "serial, 1 thread" "$serial_one"
+  cmp -s serial.sluice serial1.sluice || echo "warning: the serial outputs at $cores and 1 threads differ"
+  echo "serial_one,1,1,$serial_one,$(awk -v s="$serial_one" -v f="$frames" 'BEGIN { print f / s }'),yes" >> convert_mpi.csv
+fi
 one_rank=""
 for n in $ranks; do
   bind=core; (( n > cores )) && bind=none  # (more ranks than cores cannot each have one)
-  t=$(secs timeout 3600 mpirun "${as_root[@]}" --oversubscribe --bind-to "$bind" -np "$n" \
+  t=$(secs timeout 3600 "${MPIRUN:-mpirun}" "${as_root[@]}" --oversubscribe --bind-to "$bind" -np "$n" \
         "$sluice" "${convert[@]}" --mpi --jobs 1 -o "mpi$n.sluice")
   same=no; cmp -s serial.sluice "mpi$n.sluice" && same=yes
   [[ -z "$one_rank" ]] && one_rank=$t

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Runs on the GPU machine (see bench/device/README.md): every benchmark the
 # issues ask GPU-machine figures for, in one call. Results go to $OUT.
-#   bash bench/device/run.sh [io] [import] [layers] [band] [render] [stream] [split] [codec] [huge] [embed] [compare] [live] [stereo] [xrsize] [firsthour] [streamcmp] [gpudecode] [gpuquick] [gpupair] [gpuab] [gpu100] [egl] [vtkpeer] [readpath] [importprobe] [relayprobe] [storeab] [gpusplit] [gpuplay] [gpuflight] [gpu100ab] [damf2] [gpusweep] [gpuvar] [relay] [relaytests] [relay100] [gpuplayall] [view] [viewall] [viewio] [tiersize] [tiergpu] [viewfull]   (default: io render stream)
+#   bash bench/device/run.sh [mpi] [io] [import] [layers] [band] [render] [stream] [split] [codec] [huge] [embed] [compare] [live] [stereo] [xrsize] [firsthour] [streamcmp] [gpudecode] [gpuquick] [gpupair] [gpuab] [gpu100] [egl] [vtkpeer] [readpath] [importprobe] [relayprobe] [storeab] [gpusplit] [gpuplay] [gpuflight] [gpu100ab] [damf2] [gpusweep] [gpuvar] [relay] [relaytests] [relay100] [gpuplayall] [view] [viewall] [viewio] [tiersize] [tiergpu] [viewfull]   (default: io render stream)
 set -uo pipefail
 # Folders on the GPU machine (it starts bare each session): SLUICE_SCRATCH holds
 # the unpacked libraries and the files stages write; OUT what comes back.
@@ -33,6 +33,16 @@ log "machine"
 stages=${*:-io render stream}
 for stage in $stages; do
   case $stage in
+    mpi)
+      # Issue "convert over MPI": 1..16 ranks of one thread beside the
+      # threaded serial converter, 32 frames of 10M particles as .vtp
+      # (bench/convert_mpi.sh; needs bench/device/pack_mpi.sh's bundle).
+      tar -C $T -xJf .gpu/mpi.tar.xz
+      (source bench/device/mpi_env.sh
+       run env SLUICE=$S PARTICLES=${MPI_PARTICLES:-10M} FRAMES=${MPI_FRAMES:-32} RANKS="${MPI_RANKS:-1 2 4 8 16}" \
+         SERIAL_ONE=${MPI_SERIAL_ONE:-0} WORK=$T/mpibench bash bench/convert_mpi.sh)
+      cp $T/mpibench/convert_mpi.csv "$OUT/" 2>/dev/null
+      ;;
     io)
       run $S bench io data/dam_break_3d/dam_break_3d.pvd --min-time 1
       [[ -d $T/s/big ]] && run $S bench io "$T/s/big/*.vtu" --min-time 1
