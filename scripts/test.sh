@@ -32,7 +32,7 @@ paraview_dir=(-DParaView_DIR="$(ls -d "$paraview"/usr/lib/*/cmake/paraview-5.11)
 step "Release build and tests"
 # Warnings are errors here (GCC 12 Release; the sanitizer builds add their own false positives).
 BUILD_DIR="$root/build" "$root/scripts/build.sh" -DSLUICE_WERROR=ON "${xr_runtime[@]}" "${paraview_dir[@]}"
-ctest --test-dir "$root/build" --output-on-failure -j "$jobs"
+ctest --test-dir "$root/build" --output-on-failure -j "$jobs" --timeout 900
 [[ "${QUICK:-0}" == 1 ]] && exit 0
 
 step "ASan + UBSan build and tests"
@@ -42,7 +42,7 @@ BUILD_DIR="$root/build-asan" "$root/scripts/build.sh" -DSLUICE_SANITIZE=address,
 lvp=$(ls /usr/lib/*/libvulkan_lvp.so 2>/dev/null | head -1 || true)
 LD_PRELOAD=${lvp} ASAN_OPTIONS=detect_leaks=1:verify_asan_link_order=0 UBSAN_OPTIONS=print_stacktrace=1 \
   LSAN_OPTIONS=suppressions=$root/tests/lsan.supp \
-  ctest --test-dir "$root/build-asan" --output-on-failure -j "$jobs" -LE long -E '^LayersQuality\.'
+  ctest --test-dir "$root/build-asan" --output-on-failure -j "$jobs" --timeout 900 -LE long -E '^LayersQuality\.'
 # (Left out: label "long" (the first-view walk-through, the GPU stream
 # benchmarks, the package example) and the LayersQuality image sweeps run
 # in the Release step only; their code runs under the sanitizers through
@@ -62,7 +62,8 @@ if [[ -d "$root/runtime" ]]; then
   # libvtk*, which is not instrumented (TSan reports its hand-offs).
   for t in runtime/sluice_runtime_tests sluice_io_tests; do
     echo "--- $t"
-    TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1" "$root/build-tsan/tests/$t" --gtest_brief=1
+    # A deadline: a hang fails this step in 20 minutes instead of using up CI's 90.
+    TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1" timeout --signal=ABRT 1200 "$root/build-tsan/tests/$t" --gtest_brief=1
   done
 fi
 
