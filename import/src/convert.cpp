@@ -4,12 +4,16 @@
 #include "sluice/import/convert.h"
 
 #include <tbb/global_control.h>
+#include <tbb/info.h>
 
 #include <chrono>
 #include <filesystem>
+#include <map>
 #include <optional>
 
 #include "convert_steps.h"
+#include "frame_work.h"
+#include "read_ahead.h"
 #include "sluice/import/freed_memory.h"
 #include "sluice/io/output_lock.h"
 #include "sluice/io/writer.h"
@@ -31,8 +35,13 @@ ConvertSummary convert(const ConvertOptions& o, const std::string& output, const
   std::optional<tbb::global_control> limit;
   if (o.jobs > 0) limit.emplace(tbb::global_control::max_allowed_parallelism, size_t(o.jobs));
 
+  // Frames 1 ... jobs are read while frame 0 decides the header.
+  ReadAhead ahead(o, 1, uint64_t(o.jobs > 0 ? o.jobs : tbb::info::default_concurrency()));
   Prepared prepared = prepare_conversion(o, observer);
   Opened& in = prepared.in;
+  std::map<uint64_t, ParticleFrame> read = ahead.take(in.options);
+  read.erase(read.begin(), read.upper_bound(in.from));  // skipped, or frame `from`, read by the decisions
+  read.emplace(in.from, std::move(*in.first));
   FileHeader& header = prepared.header;
   const FramesSettings& settings = prepared.settings;
 
@@ -43,7 +52,7 @@ ConvertSummary convert(const ConvertOptions& o, const std::string& output, const
   FrameTally tally(o, in, header, settings, observer, rewrite, [&writer] { return writer.bytes_written(); });
   FramesResult result;
   try {
-    result = convert_frames(*in.source, std::move(in.first), writer, settings, std::ref(tally), in.from);
+    result = convert_frames_from(*in.source, std::move(read), writer, settings, std::ref(tally), in.from);
   } catch (const Error& e) {
     if (writer.failed()) throw ConvertStopped(e, partial, writer.frames_written(), false);
     tell_totals(o, tally, in.skipped, observer);

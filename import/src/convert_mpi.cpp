@@ -20,6 +20,7 @@
 
 #include "convert_steps.h"
 #include "mpi_messages.h"
+#include "read_ahead.h"
 #include "sluice/import/freed_memory.h"
 #include "sluice/io/assembly.h"
 #include "sluice/io/output_lock.h"
@@ -250,43 +251,6 @@ void take_facts(Root& root, const ConvertOptions& o, const FileHeader& header, F
   (*root.tally)({f.frame, f.input_bytes, f.repairs, f.shape, f.time_given, f.far});
 }
 
-// What a rank but 0 reads while rank 0 decides the plan: the input opened
-// as rank 0 will most likely open it, and this rank's frames of the first
-// round (rank 0 reads frame 0 and more first: seconds for frames of 10M
-// particles, which the other ranks would otherwise wait out).
-struct EarlyStart {
-  std::unique_ptr<FrameSource> source;
-  SourceOptions options;  // what `source` was opened with
-  std::map<uint64_t, ParticleFrame> frames;
-};
-
-EarlyStart start_early(const ConvertOptions& o, const Ranks& r, uint64_t batch) {
-  EarlyStart early;
-  if (r.root()) return early;
-  try {
-    early.source = open_source(o, early.options);
-  } catch (const Error&) {
-    return {};  // opened again once the plan is known, where its error is agreed
-  }
-  const uint64_t begin = std::min(early.source->frame_count(), batch * uint64_t(r.rank));
-  const uint64_t end = std::min(early.source->frame_count(), begin + batch);
-  std::vector<std::optional<ParticleFrame>> read(end - begin);
-  tbb::parallel_for(begin, end, [&](uint64_t f) {
-    try {
-      read[f - begin] = early.source->read(f);
-    } catch (const Error&) {
-      // read again in its turn, where the error counts
-    }
-  });
-  for (uint64_t f = begin; f < end; ++f) {
-    if (read[f - begin]) early.frames.emplace(f, std::move(*read[f - begin]));
-  }
-  return early;
-}
-
-bool same_options(const SourceOptions& a, const SourceOptions& b) {
-  return a.id_array == b.id_array && a.no_ids == b.no_ids && a.attributes == b.attributes;
-}
 
 }  // namespace
 
@@ -302,7 +266,12 @@ ConvertSummary convert_mpi(const ConvertOptions& o, const std::string& output, M
 
   // Rank 0 decides; every rank learns the plan (the others read meanwhile).
   const uint64_t batch = uint64_t(threads) + 1;
-  EarlyStart early = start_early(o, r, batch);
+  // (what rank 0 does first takes seconds for large frames: read_ahead.h)
+  std::optional<ReadAhead> early;
+  if (!r.root()) {
+    early.emplace(o, batch * uint64_t(r.rank), batch);
+    early->finish();
+  }
   std::optional<Root> root;
   WireWriter plan_bytes;
   on_root(r, [&] {
@@ -326,14 +295,12 @@ ConvertSummary convert_mpi(const ConvertOptions& o, const std::string& output, M
   settings.time_step = plan.time_step;
   const size_t attributes = header.attributes.size();
   std::unique_ptr<FrameSource> own_source;  // every rank but 0 opens the input as rank 0 did
+  std::map<uint64_t, ParticleFrame> early_frames;
   on_each(r, [&] {
     if (r.root()) return;
-    if (early.source && same_options(early.options, plan.source)) {
-      own_source = std::move(early.source);
-    } else {
-      early.frames.clear();  // (rank 0 found repeated ids: they are read again without)
-      own_source = open_isolated(o.input, plan.source, o.isolation);
-    }
+    early_frames = early->take(plan.source);
+    own_source = early->take_source(plan.source);
+    if (!own_source) own_source = open_isolated(o.input, plan.source, o.isolation);
     if (own_source->frame_count() != plan.frames) {
       throw Error({o.input}, "rank " + std::to_string(r.rank) + " sees " + std::to_string(own_source->frame_count()) +
                                  " frames, rank 0 " + std::to_string(plan.frames) +
@@ -366,13 +333,13 @@ ConvertSummary convert_mpi(const ConvertOptions& o, const std::string& output, M
       std::optional<ParticleFrame> read;
       if (r.root() && f == plan.from) {
         read = std::move(root->prepared.in.first);
-      } else if (const auto it = early.frames.find(f); it != early.frames.end()) {
+      } else if (const auto it = early_frames.find(f); it != early_frames.end()) {
         read = std::move(it->second);
       }
       works[f - round.begin] = convert_frame(*source, std::move(read), f, header, settings);
     });
 
-    early.frames.clear();
+    early_frames.clear();
     // The first bad frame of the round stops the conversion after the frames before it.
     uint64_t first_bad = UINT64_MAX;
     for (const FrameWork& w : works) {

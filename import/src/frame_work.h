@@ -2,6 +2,7 @@
 // and convert_mpi (each rank) do to every frame before writing it.
 #pragma once
 
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -26,5 +27,12 @@ struct FrameWork {
 // file, never thrown. Thread-safe (source.read is).
 FrameWork convert_frame(const FrameSource& source, std::optional<io::ParticleFrame> read, uint64_t f,
                         const io::FileHeader& header, const FramesSettings& settings);
+
+// convert_frames (frames.h) with frames already read: `read` holds some
+// frames by index (from ReadAhead, and frame `from`); the rest are read in
+// their turn.
+FramesResult convert_frames_from(const FrameSource& source, std::map<uint64_t, io::ParticleFrame> read,
+                                 io::ContainerWriter& writer, const FramesSettings& settings,
+                                 const std::function<void(const FrameConverted&)>& on_frame, uint64_t from);
 
 }  // namespace sluice::import

@@ -6,6 +6,7 @@
 #include <atomic>
 #include <exception>
 #include <filesystem>
+#include <map>
 
 #include "sluice/io/lod.h"
 #include "sluice/io/outliers.h"
@@ -92,6 +93,14 @@ FrameWork convert_frame(const FrameSource& source, std::optional<ParticleFrame> 
 FramesResult convert_frames(const FrameSource& source, std::optional<ParticleFrame> first, ContainerWriter& writer,
                              const FramesSettings& settings,
                              const std::function<void(const FrameConverted&)>& on_frame, uint64_t from) {
+  std::map<uint64_t, ParticleFrame> read;
+  if (first) read.emplace(from, std::move(*first));
+  return convert_frames_from(source, std::move(read), writer, settings, on_frame, from);
+}
+
+FramesResult convert_frames_from(const FrameSource& source, std::map<uint64_t, ParticleFrame> read,
+                                 ContainerWriter& writer, const FramesSettings& settings,
+                                 const std::function<void(const FrameConverted&)>& on_frame, uint64_t from) {
   const uint64_t frames = source.frame_count();
   FramesResult result;
   uint64_t next = from;
@@ -112,9 +121,12 @@ FramesResult convert_frames(const FrameSource& source, std::optional<ParticleFra
                                        }) &
           tbb::make_filter<uint64_t, FrameWork>(tbb::filter_mode::parallel,
                                                 [&](uint64_t f) {
-                                                  std::optional<ParticleFrame> read;
-                                                  if (f == from) read = std::move(first);
-                                                  return convert_frame(source, std::move(read), f, writer.header(), settings);
+                                                  // (entries are taken by one task each: no two touch one)
+                                                  std::optional<ParticleFrame> frame;
+                                                  if (const auto it = read.find(f); it != read.end()) {
+                                                    frame = std::move(it->second);
+                                                  }
+                                                  return convert_frame(source, std::move(frame), f, writer.header(), settings);
                                                 }) &
           tbb::make_filter<FrameWork, void>(tbb::filter_mode::serial_in_order, [&](FrameWork w) {
             if (stopped) return;

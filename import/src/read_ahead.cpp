@@ -1,0 +1,56 @@
+#include "read_ahead.h"
+
+#include <algorithm>
+
+#include "convert_steps.h"
+
+namespace sluice::import {
+namespace {
+
+bool same_but_ids(const SourceOptions& a, const SourceOptions& b) {
+  return a.id_array == b.id_array && a.attributes == b.attributes;
+}
+
+}  // namespace
+
+ReadAhead::ReadAhead(const ConvertOptions& o, uint64_t first, uint64_t count) : first_(first) {
+  try {
+    source_ = open_source(o, options_);
+  } catch (const io::Error&) {
+    return;  // the conversion opens it again, where the error counts
+  }
+  const uint64_t end = std::min(source_->frame_count(), first + count);
+  frames_.resize(end > first ? end - first : 0);
+  for (size_t i = 0; i < frames_.size(); ++i) {
+    reads_.run([this, i] {
+      try {
+        frames_[i] = source_->read(first_ + i);
+      } catch (const io::Error&) {
+        // read again in its turn
+      }
+    });
+  }
+}
+
+ReadAhead::~ReadAhead() { reads_.wait(); }
+
+std::map<uint64_t, io::ParticleFrame> ReadAhead::take(const SourceOptions& used) {
+  reads_.wait();
+  std::map<uint64_t, io::ParticleFrame> out;
+  if (!source_ || !same_but_ids(options_, used)) return out;
+  for (size_t i = 0; i < frames_.size(); ++i) {
+    if (!frames_[i]) continue;
+    if (used.no_ids && !options_.no_ids) frames_[i]->ids.clear();  // as the conversion does to frame 0
+    out.emplace(first_ + i, std::move(*frames_[i]));
+  }
+  frames_.clear();
+  return out;
+}
+
+std::unique_ptr<FrameSource> ReadAhead::take_source(const SourceOptions& used) {
+  reads_.wait();
+  if (!source_ || !same_but_ids(options_, used) || used.no_ids != options_.no_ids) return nullptr;
+  return std::move(source_);
+}
+
+}  // namespace sluice::import

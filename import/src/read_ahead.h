@@ -1,0 +1,55 @@
+// Frames read while the conversion is still deciding how to encode them.
+//
+// Rank 0 of an MPI conversion, and the serial converter, read frame 0 (and
+// more) and decide the header before any other frame is encoded: seconds for
+// frames of 10M particles, during which the other cores (or ranks) would
+// wait. A ReadAhead opens the input itself, as a conversion opens it
+// (open_source), and reads frames [first, first + count) on TBB tasks
+// meanwhile; take() hands them over once the decisions are made.
+//
+// A frame that fails to read is left out (the conversion reads it again in
+// its turn, where the error counts). Threads: construct, take and destroy
+// on one thread; the reads run on TBB's. Errors: none thrown (an input that
+// does not open reads nothing here).
+#pragma once
+
+#include <tbb/task_group.h>
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <optional>
+#include <vector>
+
+#include "sluice/import/convert.h"
+
+namespace sluice::import {
+
+class ReadAhead {
+ public:
+  ReadAhead(const ConvertOptions& o, uint64_t first, uint64_t count);
+  ~ReadAhead();  // waits for the reads
+  // Waits for the reads, helping with them: for a caller with nothing else
+  // to do meanwhile (with one TBB thread, the reads run only in a wait).
+  void finish() { reads_.wait(); }
+  ReadAhead(const ReadAhead&) = delete;
+  ReadAhead& operator=(const ReadAhead&) = delete;
+
+  // Waits for the reads and hands over the frames read, by frame index, as
+  // `used` (the options the conversion opened the input with) reads them:
+  // when `used` drops the ids (they repeat), theirs are dropped too; when it
+  // differs otherwise, none are handed over.
+  std::map<uint64_t, io::ParticleFrame> take(const SourceOptions& used);
+  // After take(): the source the frames were read from, if `used` matched
+  // its options (so the caller need not open the input again).
+  std::unique_ptr<FrameSource> take_source(const SourceOptions& used);
+
+ private:
+  SourceOptions options_;
+  std::unique_ptr<FrameSource> source_;
+  uint64_t first_ = 0;
+  std::vector<std::optional<io::ParticleFrame>> frames_;
+  tbb::task_group reads_;
+};
+
+}  // namespace sluice::import
