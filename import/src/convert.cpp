@@ -39,7 +39,7 @@ ConvertSummary convert(const ConvertOptions& o, const std::string& output, const
   ReadAhead ahead(o, 1, uint64_t(o.jobs > 0 ? o.jobs : tbb::info::default_concurrency()));
   Prepared prepared = prepare_conversion(o, observer);
   Opened& in = prepared.in;
-  std::map<uint64_t, ParticleFrame> read = ahead.take(in.options);
+  std::map<uint64_t, ParticleFrame> read = std::move(ahead.take(in.options).frames);
   read.erase(read.begin(), read.upper_bound(in.from));  // skipped, or frame `from`, read by the decisions
   read.emplace(in.from, std::move(*in.first));
   FileHeader& header = prepared.header;

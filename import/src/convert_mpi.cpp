@@ -298,8 +298,9 @@ ConvertSummary convert_mpi(const ConvertOptions& o, const std::string& output, M
   std::map<uint64_t, ParticleFrame> early_frames;
   on_each(r, [&] {
     if (r.root()) return;
-    early_frames = early->take(plan.source);
-    own_source = early->take_source(plan.source);
+    ReadAhead::Taken taken = early->take(plan.source);
+    early_frames = std::move(taken.frames);
+    own_source = std::move(taken.source);
     if (!own_source) own_source = open_isolated(o.input, plan.source, o.isolation);
     if (own_source->frame_count() != plan.frames) {
       throw Error({o.input}, "rank " + std::to_string(r.rank) + " sees " + std::to_string(own_source->frame_count()) +

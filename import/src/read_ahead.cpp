@@ -34,23 +34,19 @@ ReadAhead::ReadAhead(const ConvertOptions& o, uint64_t first, uint64_t count) : 
 
 ReadAhead::~ReadAhead() { reads_.wait(); }
 
-std::map<uint64_t, io::ParticleFrame> ReadAhead::take(const SourceOptions& used) {
+ReadAhead::Taken ReadAhead::take(const SourceOptions& used) {
   reads_.wait();
-  std::map<uint64_t, io::ParticleFrame> out;
+  Taken out;
   if (!source_ || !same_but_ids(options_, used)) return out;
   for (size_t i = 0; i < frames_.size(); ++i) {
     if (!frames_[i]) continue;
     if (used.no_ids && !options_.no_ids) frames_[i]->ids.clear();  // as the conversion does to frame 0
-    out.emplace(first_ + i, std::move(*frames_[i]));
+    out.frames.emplace(first_ + i, std::move(*frames_[i]));
   }
   frames_.clear();
+  if (used.no_ids == options_.no_ids) out.source = std::move(source_);
+  source_.reset();
   return out;
-}
-
-std::unique_ptr<FrameSource> ReadAhead::take_source(const SourceOptions& used) {
-  reads_.wait();
-  if (!source_ || !same_but_ids(options_, used) || used.no_ids != options_.no_ids) return nullptr;
-  return std::move(source_);
 }
 
 }  // namespace sluice::import

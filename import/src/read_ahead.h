@@ -35,14 +35,18 @@ class ReadAhead {
   ReadAhead(const ReadAhead&) = delete;
   ReadAhead& operator=(const ReadAhead&) = delete;
 
-  // Waits for the reads and hands over the frames read, by frame index, as
-  // `used` (the options the conversion opened the input with) reads them:
-  // when `used` drops the ids (they repeat), theirs are dropped too; when it
-  // differs otherwise, none are handed over.
-  std::map<uint64_t, io::ParticleFrame> take(const SourceOptions& used);
-  // After take(): the source the frames were read from, if `used` matched
-  // its options (so the caller need not open the input again).
-  std::unique_ptr<FrameSource> take_source(const SourceOptions& used);
+  struct Taken {
+    std::map<uint64_t, io::ParticleFrame> frames;  // by frame index
+    // The source they were read from, when `used` is what it was opened
+    // with (a caller that needs one need not open the input again). Drop it
+    // otherwise: its reader processes (isolation.h) hold memory.
+    std::unique_ptr<FrameSource> source;
+  };
+  // Waits for the reads and hands over the frames read as `used` (the
+  // options the conversion opened the input with) reads them: when `used`
+  // drops the ids (they repeat), theirs are dropped too; when it differs
+  // otherwise, none are handed over. Once only.
+  Taken take(const SourceOptions& used);
 
  private:
   SourceOptions options_;
