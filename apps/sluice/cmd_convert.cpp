@@ -52,15 +52,23 @@ std::string default_output(const std::string& input) {
 void run_convert(const ConvertCommand& c) {
   const import::ConvertOptions o = options_from(c);
   const std::string output = c.output.empty() ? default_output(o.input) : c.output;
-  if (std::filesystem::exists(output) && !c.force) {
-    throw std::runtime_error(output + " exists; pass --force to overwrite it, or -o to choose another name");
-  }
+  const auto refuse_existing = [&] {
+    if (std::filesystem::exists(output) && !c.force) {
+      throw std::runtime_error(output + " exists; pass --force to overwrite it, or -o to choose another name");
+    }
+  };
 #if SLUICE_WITH_MPI
+  if (!c.mpi) refuse_existing();  // (under MPI, rank 0 alone checks: one message, not one per rank)
   const std::optional<import::ConvertSummary> converted =
-      c.mpi ? convert_mpi_and_report(o, output, c.report) : convert_and_report(o, output, c.report);
+      c.mpi ? convert_mpi_and_report(o, output, c.report, refuse_existing) : convert_and_report(o, output, c.report);
   if (!converted) return;  // a rank but 0: rank 0 reports
   const import::ConvertSummary& s = *converted;
 #else
+  refuse_existing();
+  if (c.mpi) {
+    throw std::runtime_error("--mpi: this sluice was built without MPI; build it where libopenmpi-dev is installed "
+                             "(CMake option SLUICE_MPI), or convert without --mpi");
+  }
   const import::ConvertSummary s = convert_and_report(o, output, c.report);
 #endif
   const double out = double(std::filesystem::file_size(output));
@@ -164,13 +172,11 @@ void add_convert(CLI::App& app) {
                 "Read VTK XML files in this process rather than in worker processes (a reader crash on a\n"
                 "damaged file then ends sluice; see docs/import.md)");
   cmd->add_flag("-f,--force", c->force, "Overwrite the output if it exists");
-#if SLUICE_WITH_MPI
   cmd->add_flag("--mpi", c->mpi,
                 "Convert over the ranks of an MPI job into the one output (MPI-IO), byte for byte what one\n"
                 "process writes: `mpirun -np 16 sluice convert --mpi --jobs 1 'run/*.vtu' -o run.sluice`\n"
                 "(srun the same way). --jobs is threads per rank (default: the node's cores shared among its\n"
                 "ranks). The input must be the same path on every node. docs/convert_mpi.md");
-#endif
   cmd->add_flag("-q,--quiet", c->report.quiet, "No progress bar or notes");
   cmd->callback([c] { run_convert(*c); });
 }

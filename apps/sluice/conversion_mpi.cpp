@@ -30,8 +30,21 @@ class MpiSession {
 }  // namespace
 
 std::optional<import::ConvertSummary> convert_mpi_and_report(const import::ConvertOptions& options,
-                                                             const std::string& output, const ConversionReport& report) {
+                                                             const std::string& output, const ConversionReport& report,
+                                                             const std::function<void()>& check) {
   MpiSession mpi;
+  int refused = 0;
+  if (mpi.rank() == 0 && check) {
+    try {
+      check();
+    } catch (...) {
+      refused = 1;
+      MPI_Bcast(&refused, 1, MPI_INT, 0, MPI_COMM_WORLD);
+      throw;
+    }
+  }
+  MPI_Bcast(&refused, 1, MPI_INT, 0, MPI_COMM_WORLD);
+  if (refused) throw ExitCode{0};  // (a rank but 0: rank 0 says why)
   std::optional<ConversionPrinter> printer;
   if (mpi.rank() == 0) printer.emplace(report);
   try {

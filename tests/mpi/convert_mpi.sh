@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # `sluice convert --mpi` against the serial conversion (CTest mpi.convert):
 #   1. byte-identical output at 1, 2 and 4 ranks, on the bundled sample and on
-#      a synthetic series whose frames hold from 1,200 to 40,000 particles;
+#      a synthetic series whose frames hold from 1,223 to 40,000 particles;
+#      an output that exists is refused once (by rank 0), left as it was;
 #   2. a damaged frame read on rank 2 stops every rank with the serial
 #      message (and the rank), the output as the serial one keeps it;
 #   3. --skip-bad under MPI gives the serial file;
@@ -38,6 +39,11 @@ for n in 1 2 4; do
   mpi "$n" 'uneven/*.vtp' -o "uneven_$n.sluice" -q --jobs 2
   same serial_uneven.sluice "uneven_$n.sluice"
 done
+
+echo "--- 1b. an output that exists, without --force: refused once, by rank 0"
+if mpi 4 "$sample/dam_break_3d.pvd" -a rho -o sample_4.sluice -q 2> exists.err; then fail "overwrote without --force"; fi
+[[ $(grep -c "sample_4.sluice exists; pass --force" exists.err) == 1 ]] || { cat exists.err; fail "not said once"; }
+same serial_sample.sluice sample_4.sluice
 
 echo "--- 2. a damaged frame, read on rank 2 (4 ranks, 2 frames each a round: frames 4 and 5)"
 mkdir damaged
