@@ -11,7 +11,7 @@
 # Prints a table, writes it as CSV ($WORK/convert_mpi.csv) for
 # bench/plot_convert_mpi.py.
 #   SLUICE=build/apps/sluice/sluice PARTICLES=10M FRAMES=32 RANKS="1 2 4 8 16" WORK=/tmp/mpibench \
-#     [CORES=16] [SERIAL_ONE=0] [MPIRUN=orterun] bash bench/convert_mpi.sh
+#     [CORES=16] [SERIAL_ONE=0] [MPIRUN=orterun] [BASE_SLUICE=other/sluice] bash bench/convert_mpi.sh
 set -euo pipefail
 sluice=$(realpath "${SLUICE:-build/apps/sluice/sluice}")
 particles=${PARTICLES:-1M} frames=${FRAMES:-16} ranks=${RANKS:-"1 2 4"}
@@ -43,6 +43,12 @@ echo
 row "bound: cat (page cache)" "$read_s"
 serial_all=$(secs "$sluice" "${convert[@]}" --jobs "$cores" -o serial.sluice)
 row "serial, $cores threads" "$serial_all"
+if [[ -n "${BASE_SLUICE:-}" ]]; then  # another build's serial converter beside this one's, alternated 3 times
+  for i in 1 2 3; do
+    row "serial, $cores threads, base" "$(secs "$BASE_SLUICE" "${convert[@]}" --jobs "$cores" -o base.sluice)"
+    row "serial, $cores threads" "$(secs "$sluice" "${convert[@]}" --jobs "$cores" -o serial.sluice)"
+  done
+fi
 echo "serial_threads,1,$cores,$serial_all,$(awk -v s="$serial_all" -v f="$frames" 'BEGIN { print f / s }'),yes" >> convert_mpi.csv
 if [[ "${SERIAL_ONE:-1}" == 1 ]]; then  # (SERIAL_ONE=0 leaves it out where time is short)
   serial_one=$(secs "$sluice" "${convert[@]}" --jobs 1 -o serial1.sluice)

@@ -39,8 +39,9 @@ for stage in $stages; do
       # (bench/convert_mpi.sh; needs bench/device/pack_mpi.sh's bundle).
       tar -C $T -xJf .gpu/mpi.tar.xz
       (source bench/device/mpi_env.sh
+       base=; [[ -x .gpu/sluice_base ]] && base=$(realpath .gpu/sluice_base)  # (pack.sh BASE=...: its serial converter beside)
        run env SLUICE=$S PARTICLES=${MPI_PARTICLES:-10M} FRAMES=${MPI_FRAMES:-32} RANKS="${MPI_RANKS:-1 2 4 8 16}" \
-         SERIAL_ONE=${MPI_SERIAL_ONE:-0} WORK=$T/mpibench bash bench/convert_mpi.sh)
+         SERIAL_ONE=${MPI_SERIAL_ONE:-0} BASE_SLUICE=$base WORK=$T/mpibench bash bench/convert_mpi.sh)
       cp $T/mpibench/convert_mpi.csv "$OUT/" 2>/dev/null
       ;;
     io)
