@@ -7,7 +7,6 @@
 
 #include "file.h"
 #include "sluice/io/assembly.h"
-#include "records.h"
 
 namespace sluice::io {
 
@@ -48,14 +47,12 @@ void ContainerWriter::append(EncodedFrame frame) {
 void ContainerWriter::update_header(const FileHeader& header) {
   if (fd_ < 0) throw Error({path_}, "header update after finish");
   if (failed_) throw Error({path_}, "an earlier write to this file failed; the header is not rewritten");
-  const std::vector<std::byte> bytes = serialize_file_header(header);
-  if (bytes.size() != serialize_file_header(header_).size() || header.attributes.size() != header_.attributes.size() ||
+  const std::vector<std::byte> head = container_head(header);
+  if (head.size() != container_head(header_).size() || header.attributes.size() != header_.attributes.size() ||
       header.position_coding != header_.position_coding) {
     throw Error({path_}, "header update would change its size or the frames' layout");
   }
-  const std::vector<std::byte> copy = serialize_header_copy(bytes);
-  if (::pwrite(fd_, bytes.data(), bytes.size(), 0) != ssize_t(bytes.size()) ||
-      ::pwrite(fd_, copy.data(), copy.size(), off_t(bytes.size())) != ssize_t(copy.size())) {
+  if (::pwrite(fd_, head.data(), head.size(), 0) != ssize_t(head.size())) {
     throw Error({path_}, "could not rewrite the file header");
   }
   header_ = header;

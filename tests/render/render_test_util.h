@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
+#include <cmath>
 #include <cstdio>
 #include <memory>
 
@@ -48,6 +50,26 @@ class ValidationGuard {
  private:
   uint64_t before_;
 };
+
+// A camera at `eye` looking at `target`, z up, near plane 0.05.
+inline Camera camera_at(Vec3 eye, Vec3 target, float fov = 40) {
+  Camera c;
+  c.eye = eye;
+  c.target = target;
+  c.up = {0, 0, 1};
+  c.fov_deg = fov;
+  c.near = 0.05f;
+  return c;
+}
+
+// Eye-space direction through the centre of pixel (x, y) of a width x height
+// image (z = -1), as the shaders compute it, in double.
+inline std::array<double, 3> pixel_ray(const Camera& cam, uint32_t x, uint32_t y, uint32_t width, uint32_t height) {
+  const double t = std::tan(double(cam.fov_deg) * M_PI / 360.0);
+  const double aspect = double(width) / height;
+  const double nx = (x + 0.5) / width * 2 - 1, ny = (y + 0.5) / height * 2 - 1;
+  return {nx * t * aspect, -ny * t, -1.0};
+}
 
 // A camera `distance` in front of the origin on -y, looking along +y, z up,
 // 40 degrees, near plane 0.05.

@@ -54,16 +54,6 @@ Particles lattice(int n, int layers, float jitter, uint32_t seed) {
   return p;
 }
 
-Camera oblique_camera() {
-  Camera c;
-  c.eye = {0.4f, -1.7f, 1.3f};
-  c.target = {0, 0, 0};
-  c.up = {0, 0, 1};
-  c.fov_deg = 40;
-  c.near = 0.05f;
-  return c;
-}
-
 // A pixel of the fluid's top: its world position, its shaded normal's angle
 // from +z, and the thickness along its ray.
 struct TopPixel {
@@ -78,7 +68,7 @@ std::vector<TopPixel> top_pixels(const Particles& p, float window) {
   const SceneInfo scene = scene_for_points(p.xyz, kSpacing);
   testing::OffscreenRenderer r(context(), scene, kW, kH);
   upload_points(r, p.xyz, p.lod);
-  const Camera cam = oblique_camera();
+  const Camera cam = testing::camera_at({0.4f, -1.7f, 1.3f}, {0, 0, 0});
   FluidOptions o;
   o.display_mode = DisplayMode::FilteredSurfaceNormal;
   o.ground = false;
@@ -90,14 +80,12 @@ std::vector<TopPixel> top_pixels(const Particles& p, float window) {
   const Mat4 to_world = inverse(view);
   const Vec4 up = view * Vec4{0, 0, 1, 0};
   const Vec3 truth = normalize({up.x, up.y, up.z});
-  const double t = std::tan(double(cam.fov_deg) * M_PI / 360.0);
   std::vector<TopPixel> out;
   for (uint32_t y = 0; y < kH; ++y) {
     for (uint32_t x = 0; x < kW; ++x) {
       const float* px = &surface[(size_t(y) * kW + x) * 4];
       if (px[3] <= 0) continue;
-      const double nx = (x + 0.5) / kW * 2 - 1, ny = (y + 0.5) / kH * 2 - 1;
-      const double d[3] = {nx * t * kW / kH, -ny * t, -1.0};
+      const std::array<double, 3> d = testing::pixel_ray(cam, x, y, kW, kH);
       const Vec4 w = to_world * Vec4{float(d[0] * px[3]), float(d[1] * px[3]), float(d[2] * px[3]), 1};
       if (std::fabs(w.x) > window || std::fabs(w.y) > window) continue;
       const Vec3 n = normalize({px[0], px[1], px[2]});

@@ -34,23 +34,10 @@ FluidOptions plain(DisplayMode mode, float radius) {
   return o;
 }
 
-Camera camera_at(Vec3 eye, Vec3 target, float fov = 40) {
-  Camera c;
-  c.eye = eye;
-  c.target = target;
-  c.up = {0, 0, 1};
-  c.fov_deg = fov;
-  c.near = 0.05f;
-  return c;
-}
+using testing::camera_at;
 
-// Eye-space direction through a pixel centre (z = -1), as the shaders do it, in double.
-std::array<double, 3> pixel_ray(const Camera& cam, uint32_t x, uint32_t y) {
-  const double t = std::tan(double(cam.fov_deg) * M_PI / 360.0);
-  const double aspect = double(kW) / kH;
-  const double nx = (x + 0.5) / kW * 2 - 1, ny = (y + 0.5) / kH * 2 - 1;
-  return {nx * t * aspect, -ny * t, -1.0};
-}
+// Eye-space direction through a pixel centre of this file's images.
+std::array<double, 3> pixel_ray(const Camera& cam, uint32_t x, uint32_t y) { return testing::pixel_ray(cam, x, y, kW, kH); }
 
 // Depth along the view axis of the nearest sphere hit, 0 if none; `margin`
 // is h^2 / r^2 of that hit (how far inside the silhouette the ray passes).
