@@ -5,7 +5,10 @@
 #      then `sluice export` to .vtp, one file per frame, with a .pvd);
 #   2. the machine's bounds beside the figures: reading the input from the
 #      page cache (cat), and the serial converter with every core;
-#   3. the serial converter with 1 thread, then `convert --mpi --jobs 1` at
+#   3. the bound of N ranks on these cores: N one-thread serial converters
+#      at once, each on its own frames/N frames, beside one of them alone
+#      (INDEPENDENT=0 leaves it out; it needs frames divisible by the cores);
+#   4. the serial converter with 1 thread, then `convert --mpi --jobs 1` at
 #      each rank count; every output compared byte for byte with the serial
 #      one.
 # Prints a table, writes it as CSV ($WORK/convert_mpi.csv) for
@@ -37,8 +40,10 @@ read_s=$(secs cat series/*.vtp)
 convert=(convert series/frame.pvd -a speed -q -f)
 
 echo "config,ranks,threads_per_rank,seconds,frames_per_s,identical" > convert_mpi.csv
-row() { printf '%-28s %6s s  %7.2f frames/s  %7.1f MB/s in\n' "$1" "$2" "$(awk -v s="$2" -v f="$frames" 'BEGIN { print f / s }')" \
-          "$(awk -v s="$2" -v b="$input_bytes" 'BEGIN { print b / s / 1e6 }')"; }
+row() {  # LABEL SECONDS [FRAMES, default all: the input bytes are scaled to them]
+  local f=${3:-$frames}
+  printf '%-28s %6s s  %7.2f frames/s  %7.1f MB/s in\n' "$1" "$2" "$(awk -v s="$2" -v f="$f" 'BEGIN { print f / s }')" \
+    "$(awk -v s="$2" -v b="$input_bytes" -v f="$f" -v all="$frames" 'BEGIN { print b * f / all / s / 1e6 }')"; }
 echo
 row "bound: cat (page cache)" "$read_s"
 serial_all=$(secs "$sluice" "${convert[@]}" --jobs "$cores" -o serial.sluice)
@@ -55,6 +60,31 @@ if [[ "${SERIAL_ONE:-1}" == 1 ]]; then  # (SERIAL_ONE=0 leaves it out where time
   row "serial, 1 thread" "$serial_one"
   cmp -s serial.sluice serial1.sluice || echo "warning: the serial outputs at $cores and 1 threads differ"
   echo "serial_one,1,1,$serial_one,$(awk -v s="$serial_one" -v f="$frames" 'BEGIN { print f / s }'),yes" >> convert_mpi.csv
+fi
+# The machine's own bound for N ranks of one thread: N one-thread serial
+# conversions of frames/N frames each, at once, each bound to its own core,
+# with no MPI between them. What they lose against one conversion alone is
+# what the cores lose when all are busy (shared caches, memory bandwidth,
+# clocks), which no division of the work among ranks can win back.
+independent() {  # N PER: N converters of PER frames each; prints the seconds until the last one finishes
+  local n=$1 per=$2 k pids=()
+  rm -rf parts; for (( k = 0; k < n; k++ )); do
+    mkdir -p "parts/$k"
+    ls series/*.vtp | sort -V | sed -n "$(( k * per + 1 )),$(( (k + 1) * per ))p" | xargs -I{} ln -s "$(pwd)/{}" "parts/$k/"
+  done
+  local t0=$EPOCHREALTIME
+  for (( k = 0; k < n; k++ )); do
+    taskset -c $(( k % cores )) "$sluice" convert "parts/$k" -a speed -q -f --jobs 1 -o "parts/$k.sluice" > /dev/null 2>&1 & pids+=($!)
+  done
+  for k in "${pids[@]}"; do wait "$k" || { echo "an independent converter failed" >&2; return 1; }; done
+  awk -v a="$t0" -v b="$EPOCHREALTIME" 'BEGIN { printf "%.3f", b - a }'; rm -rf parts; }
+if [[ "${INDEPENDENT:-1}" == 1 ]] && (( frames % cores == 0 )); then
+  alone=$(independent 1 $(( frames / cores ))); row "bound: 1 converter alone" "$alone" $(( frames / cores ))
+  many=$(independent "$cores" $(( frames / cores )))
+  printf '%s  x%5.2f of 1 alone (ideal %d)\n' "$(row "bound: $cores converters at once" "$many")" \
+    "$(awk -v a="$alone" -v b="$many" -v n="$cores" 'BEGIN { print a / b * n }')" "$cores"
+  echo "independent,1,1,$alone,$(awk -v s="$alone" -v f="$(( frames / cores ))" 'BEGIN { print f / s }'),-" >> convert_mpi.csv
+  echo "independent,$cores,1,$many,$(awk -v s="$many" -v f="$frames" 'BEGIN { print f / s }'),-" >> convert_mpi.csv
 fi
 one_rank=""
 for n in $ranks; do
