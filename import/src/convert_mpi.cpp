@@ -63,7 +63,7 @@ struct Root {
 
 // Rank 0 takes one frame's facts: into the index and the tally, or the
 // skipped list, or the stop.
-void take_facts(Root& root, const ConvertOptions& o, const FileHeader& header, FrameFacts f, int ranks) {
+void take_facts(Root& root, const ConvertOptions& o, FrameFacts f, int ranks) {
   if (f.error) {
     const Error& e = *f.error;
     if (o.skip_bad) {
@@ -74,12 +74,10 @@ void take_facts(Root& root, const ConvertOptions& o, const FileHeader& header, F
                                         std::to_string(ranks) + ")");
     return;
   }
-  const FrameHeader table =
-      parse_frame_table_bytes(f.table, header.attributes.size(), {"the frame table of rank " + std::to_string(f.rank)});
-  root.index.add(table, root.written_end);
+  root.index.add(f.summary, root.written_end);
   root.written_end += f.record_bytes;
   root.summary.frames++;
-  root.summary.particles += count_in(table, LayerSet::particles());
+  root.summary.particles += f.summary.entry.count_in(LayerSet::particles());
   root.summary.input_bytes += f.input_bytes;
   (*root.tally)({f.frame, f.input_bytes, f.repairs, f.shape, f.time_given, f.far});
 }
@@ -251,13 +249,13 @@ class MpiConversion {
   void tell_root(const std::vector<FrameWork>& works) {
     WireWriter facts;
     for (const FrameWork& w : works) {
-      if (w.frame <= stop_at_) put_facts(facts, w, r_.rank, header_.attributes.size());
+      if (w.frame <= stop_at_) put_facts(facts, w, r_.rank);
     }
     const std::vector<std::byte> all = gather(r_, facts.bytes());
     injected_fault(r_);  // (after the gather: every rank's write of the round has returned)
     on_root(r_, [&] {
       WireReader read(all);
-      while (!read.done()) take_facts(*root_, o_, header_, get_facts(read), r_.size);
+      while (!read.done()) take_facts(*root_, o_, get_facts(read), r_.size);
     });
   }
 

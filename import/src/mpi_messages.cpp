@@ -93,7 +93,7 @@ Plan get_plan(WireReader& r) {
   return p;
 }
 
-void put_facts(WireWriter& w, const FrameWork& work, int rank, size_t attribute_count) {
+void put_facts(WireWriter& w, const FrameWork& work, int rank) {
   w.put(work.frame);
   w.put(rank);
   w.put<uint8_t>(work.error.has_value());
@@ -102,7 +102,10 @@ void put_facts(WireWriter& w, const FrameWork& work, int rank, size_t attribute_
     return;
   }
   w.put<uint64_t>(work.encoded.record.size());
-  w.put_bytes(io::frame_table(work.encoded, attribute_count));
+  const io::FrameSummary summary = io::summarize_frame(work.encoded.header);
+  w.put(summary.entry);
+  w.put<uint64_t>(summary.attribute_ranges.size());
+  for (const std::array<float, 2>& range : summary.attribute_ranges) w.put(range);
   w.put(work.input_bytes);
   w.put<uint64_t>(work.repairs.size());
   for (const std::string& repair : work.repairs) w.put_string(repair);
@@ -121,8 +124,10 @@ FrameFacts get_facts(WireReader& r) {
     return f;
   }
   f.record_bytes = r.get<uint64_t>();
-  const std::span<const std::byte> table = r.get_bytes();
-  f.table.assign(table.begin(), table.end());
+  f.summary.entry = r.get<io::FrameIndexEntry>();
+  const uint64_t ranges = r.get<uint64_t>();
+  if (ranges > r.remaining() / sizeof(std::array<float, 2>)) throw io::Error({}, "a message between MPI ranks is cut short");
+  for (uint64_t a = 0; a < ranges; ++a) f.summary.attribute_ranges.push_back(r.get<std::array<float, 2>>());
   f.input_bytes = r.get<uint64_t>();
   const uint64_t repairs = r.get<uint64_t>();
   for (uint64_t i = 0; i < repairs; ++i) f.repairs.push_back(r.get_string());

@@ -29,14 +29,14 @@ struct Plan {
 void put_plan(WireWriter& w, const Plan& p);
 Plan get_plan(WireReader& r);
 
-// A frame as rank 0 needs it: the table of a frame written (or the error
-// of one that was not) and what the tally is told.
+// A frame as rank 0 needs it: the summary of a frame written for the index
+// (or the error of one that was not) and what the tally is told.
 struct FrameFacts {
   uint64_t frame = 0;
   std::optional<io::Error> error;
   int rank = 0;                 // that read it
   uint64_t record_bytes = 0;
-  std::vector<std::byte> table;  // io::frame_table of the record
+  io::FrameSummary summary;  // of the record's table
   uint64_t input_bytes = 0;
   std::vector<std::string> repairs;
   std::optional<io::FrameShape> shape;
@@ -44,7 +44,7 @@ struct FrameFacts {
   io::FarReport far;
 };
 // `w` as written (numbered) by rank `rank`.
-void put_facts(WireWriter& w, const FrameWork& work, int rank, size_t attribute_count);
+void put_facts(WireWriter& w, const FrameWork& work, int rank);
 FrameFacts get_facts(WireReader& r);
 
 }  // namespace sluice::import

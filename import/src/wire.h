@@ -51,6 +51,7 @@ class WireReader {
     return {reinterpret_cast<const char*>(b.data()), b.size()};
   }
   bool done() const { return at_ == bytes_.size(); }
+  size_t remaining() const { return bytes_.size() - at_; }
 
  private:
   std::span<const std::byte> take(uint64_t n) {

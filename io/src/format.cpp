@@ -449,17 +449,36 @@ uint64_t FrameIndexEntry::count_in(LayerSet set) const {
   return n;
 }
 
-void IndexBuilder::add(const FrameHeader& frame, uint64_t offset) {
+FrameSummary summarize_frame(const FrameHeader& frame) {
+  FrameSummary s;
+  s.entry = index_entry_for(frame, 0);
   for (const ChunkDesc& c : frame.chunks) {
-    for (size_t a = 0; a < c.attribute_ranges.size() && a < index_.attribute_ranges.size(); ++a) {
-      auto& range = index_.attribute_ranges[a];
-      range[0] = have_ranges_ ? std::min(range[0], c.attribute_ranges[a][0]) : c.attribute_ranges[a][0];
-      range[1] = have_ranges_ ? std::max(range[1], c.attribute_ranges[a][1]) : c.attribute_ranges[a][1];
+    if (s.attribute_ranges.empty()) {
+      s.attribute_ranges.assign(c.attribute_ranges.begin(), c.attribute_ranges.end());
+      continue;
     }
-    have_ranges_ = true;
+    for (size_t a = 0; a < c.attribute_ranges.size() && a < s.attribute_ranges.size(); ++a) {
+      s.attribute_ranges[a][0] = std::min(s.attribute_ranges[a][0], c.attribute_ranges[a][0]);
+      s.attribute_ranges[a][1] = std::max(s.attribute_ranges[a][1], c.attribute_ranges[a][1]);
+    }
   }
-  index_.bounds.extend(frame.bounds);
-  index_.frames.push_back(index_entry_for(frame, offset));
+  return s;
+}
+
+void IndexBuilder::add(const FrameHeader& frame, uint64_t offset) { add(summarize_frame(frame), offset); }
+
+void IndexBuilder::add(const FrameSummary& frame, uint64_t offset) {
+  const bool has_chunks = frame.entry.chunk_count > 0;
+  for (size_t a = 0; has_chunks && a < frame.attribute_ranges.size() && a < index_.attribute_ranges.size(); ++a) {
+    auto& range = index_.attribute_ranges[a];
+    range[0] = have_ranges_ ? std::min(range[0], frame.attribute_ranges[a][0]) : frame.attribute_ranges[a][0];
+    range[1] = have_ranges_ ? std::max(range[1], frame.attribute_ranges[a][1]) : frame.attribute_ranges[a][1];
+  }
+  have_ranges_ = have_ranges_ || has_chunks;
+  index_.bounds.extend(frame.entry.bounds);
+  FrameIndexEntry entry = frame.entry;
+  entry.offset = offset;
+  index_.frames.push_back(entry);
 }
 
 }  // namespace sluice::io

@@ -224,12 +224,23 @@ struct FrameIndex {
   std::vector<std::array<float, 2>> attribute_ranges; // observed over every frame
 };
 
+// What the index keeps of one frame: its entry (offset 0 until placed) and
+// the range of each attribute over its chunks. Kilobytes where the frame's
+// chunk table is megabytes: an MPI conversion's ranks send rank 0 this.
+struct FrameSummary {
+  FrameIndexEntry entry;
+  std::vector<std::array<float, 2>> attribute_ranges;  // empty: the frame has no chunks
+};
+FrameSummary summarize_frame(const FrameHeader& frame);
+
 // Accumulates the frame index as frames are written or recovered: entries,
-// global bounds and the observed range of each attribute.
+// global bounds and the observed range of each attribute. Adding a frame's
+// summary gives the index adding the frame gives.
 class IndexBuilder {
  public:
   explicit IndexBuilder(size_t attribute_count) { index_.attribute_ranges.assign(attribute_count, {0.f, 0.f}); }
   void add(const FrameHeader& frame, uint64_t offset);
+  void add(const FrameSummary& frame, uint64_t offset);
   const FrameIndex& index() const { return index_; }
 
  private:
