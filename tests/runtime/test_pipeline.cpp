@@ -512,6 +512,18 @@ TEST(ThreadSplit, OneReaderPerFourCoresFromEightCoresOn) {
   EXPECT_EQ(default_thread_split(64).read, 4);
 }
 
+TEST(ThreadSplit, WorldFramesTakeOneReaderPerEightCores) {
+  // Their workers convert every chunk to float arrays as well: half as many readers.
+  EXPECT_EQ(default_thread_split(2, DecodeMode::World).read, 1);
+  EXPECT_EQ(default_thread_split(2, DecodeMode::World).decode, 2);
+  EXPECT_EQ(default_thread_split(8, DecodeMode::World).read, 1);
+  EXPECT_EQ(default_thread_split(8, DecodeMode::World).decode, 7);
+  EXPECT_EQ(default_thread_split(16, DecodeMode::World).read, 2);
+  EXPECT_EQ(default_thread_split(16, DecodeMode::World).decode, 14);
+  EXPECT_EQ(default_thread_split(64, DecodeMode::World).read, 4);
+  EXPECT_EQ(default_thread_split(64, DecodeMode::World).decode, 60);
+}
+
 TEST(ThreadSplit, FramesKeptEncodedReadOnThirteenSixteenthsOfTheCores) {
   // The reads check the chunks; the workers only inflate zstd planes:
   // thirteen sixteenths of the cores read, 1 to 13.
