@@ -12,7 +12,8 @@
 #      each rank count; every output compared byte for byte with the serial
 #      one.
 # Prints a table, writes it as CSV ($WORK/convert_mpi.csv) for
-# bench/plot_convert_mpi.py.
+# bench/plot_convert_mpi.py, and each MPI run's timeline (every rank's steps,
+# SLUICE_MPI_TIMELINE) as $WORK/timeline_RANKS.csv for bench/plot_mpi_timeline.py.
 #   SLUICE=build/apps/sluice/sluice PARTICLES=10M FRAMES=32 RANKS="1 2 4 8 16" WORK=/tmp/mpibench \
 #     [CORES=16] [SERIAL_ONE=0] [MPIRUN=orterun] [BASE_SLUICE=other/sluice] bash bench/convert_mpi.sh
 set -euo pipefail
@@ -89,7 +90,7 @@ fi
 one_rank=""
 for n in $ranks; do
   bind=core; (( n > cores )) && bind=none  # (more ranks than cores cannot each have one)
-  t=$(secs timeout 3600 "${MPIRUN:-mpirun}" "${as_root[@]}" --oversubscribe --bind-to "$bind" -np "$n" \
+  t=$(SLUICE_MPI_TIMELINE="$work/timeline_$n.csv" secs timeout 3600 "${MPIRUN:-mpirun}" "${as_root[@]}" --oversubscribe --bind-to "$bind" -np "$n" \
         "$sluice" "${convert[@]}" --mpi --jobs 1 -o "mpi$n.sluice")
   same=no; cmp -s serial.sluice "mpi$n.sluice" && same=yes
   [[ -z "$one_rank" ]] && one_rank=$t

@@ -42,7 +42,7 @@ for stage in $stages; do
        base=; [[ -x .gpu/sluice_base ]] && base=$(realpath .gpu/sluice_base)  # (pack.sh BASE=...: its serial converter beside)
        run env SLUICE=$S PARTICLES=${MPI_PARTICLES:-10M} FRAMES=${MPI_FRAMES:-32} RANKS="${MPI_RANKS:-1 2 4 8 16}" \
          SERIAL_ONE=${MPI_SERIAL_ONE:-0} BASE_SLUICE=$base WORK=$T/mpibench bash bench/convert_mpi.sh)
-      cp $T/mpibench/convert_mpi.csv "$OUT/" 2>/dev/null
+      cp $T/mpibench/convert_mpi.csv $T/mpibench/timeline_*.csv "$OUT/" 2>/dev/null
       ;;
     io)
       run $S bench io data/dam_break_3d/dam_break_3d.pvd --min-time 1

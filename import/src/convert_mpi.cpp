@@ -18,6 +18,7 @@
 #include "convert_steps.h"
 #include "mpi_collectives.h"
 #include "mpi_messages.h"
+#include "mpi_timeline.h"
 #include "read_ahead.h"
 #include "sluice/import/freed_memory.h"
 #include "sluice/io/assembly.h"
@@ -28,6 +29,13 @@ namespace sluice::import {
 using namespace sluice::io;  // the container's types: frames, headers, indexes
 using io::Error;  // (not sluice::Error, its base)
 namespace {
+
+Ranks ranks_of(MPI_Comm comm) {
+  Ranks r{comm};
+  MPI_Comm_rank(comm, &r.rank);
+  MPI_Comm_size(comm, &r.size);
+  return r;
+}
 
 // Threads per rank: given, or the node's cores shared among its ranks.
 int threads_per_rank(const ConvertOptions& o, const Ranks& r) {
@@ -86,9 +94,7 @@ void take_facts(Root& root, const ConvertOptions& o, FrameFacts f, int ranks) {
 class MpiConversion {
  public:
   MpiConversion(const ConvertOptions& o, const std::string& output, MPI_Comm comm, const ConvertObserver& observer)
-      : o_(o), output_(output), partial_(output + ".partial"), observer_(observer), r_{comm} {
-    MPI_Comm_rank(comm, &r_.rank);
-    MPI_Comm_size(comm, &r_.size);
+      : o_(o), output_(output), partial_(output + ".partial"), observer_(observer), r_(ranks_of(comm)), timeline_(r_) {
     threads_ = threads_per_rank(o, r_);
     batch_ = uint64_t(threads_) + 1;
   }
@@ -102,6 +108,7 @@ class MpiConversion {
       convert_round(base);
     }
     finish();
+    timeline_.write(r_);
     return summary();
   }
 
@@ -110,8 +117,14 @@ class MpiConversion {
   // others read their first frames meanwhile (what rank 0 does first takes
   // seconds for large frames: read_ahead.h).
   void decide() {
+    const auto span = timeline_.span("decide");
+    // Rank 0 reads the rest of its first block meanwhile too (frame 0 it
+    // reads to decide), or it would end the first round last.
     std::optional<ReadAhead> early;
-    if (!r_.root()) {
+    if (r_.root()) {
+      early.emplace(o_, 1, batch_ - 1);
+    } else {
+      const auto reading = timeline_.span("read ahead");
       early.emplace(o_, batch_ * uint64_t(r_.rank), batch_);
       early->finish();
     }
@@ -138,12 +151,13 @@ class MpiConversion {
     if (early) {
       ReadAhead::Taken taken = early->take(plan_.source);
       early_frames_ = std::move(taken.frames);
-      own_source_ = std::move(taken.source);
+      if (!r_.root()) own_source_ = std::move(taken.source);  // (rank 0 reads through the one it decided with)
     }
   }
 
   // Every rank but 0 opens the input as rank 0 did (unless its read-ahead did).
   void open_input() {
+    const auto span = timeline_.span("open input");
     on_each(r_, [&] {
       if (r_.root()) return;
       if (!own_source_) own_source_ = open_isolated(o_.input, plan_.source, o_.isolation);
@@ -158,6 +172,7 @@ class MpiConversion {
 
   // The output's lock and `.partial`, its head; rank 0's index and tally.
   void start_file() {
+    const auto span = timeline_.span("start file");
     on_root(r_, [&] { root_->lock.emplace(output_); });
     file_.emplace(r_, partial_);
     const std::vector<std::byte> head = container_head(header_);
@@ -185,8 +200,11 @@ class MpiConversion {
     for (const FrameWork& w : works) {
       if (w.error && !o_.skip_bad) first_bad = std::min(first_bad, w.frame);
     }
-    wait_for_all(r_);
-    MPI_Allreduce(&first_bad, &stop_at_, 1, MPI_UINT64_T, MPI_MIN, r_.comm);
+    {
+      const auto span = timeline_.span("wait");
+      wait_for_all(r_);
+      MPI_Allreduce(&first_bad, &stop_at_, 1, MPI_UINT64_T, MPI_MIN, r_.comm);
+    }
     write_block(works);
     tell_root(works);
   }
@@ -201,6 +219,7 @@ class MpiConversion {
       } else if (const auto it = early_frames_.find(f); it != early_frames_.end()) {
         read = std::move(it->second);
       }
+      const auto span = timeline_.span(read ? "encode" : "read and encode", int64_t(f));
       works[f - begin] = convert_frame(*source_, std::move(read), f, header_, settings_);
     });
     early_frames_.clear();
@@ -231,6 +250,7 @@ class MpiConversion {
       mine_.particles += count_in(w.encoded.header, LayerSet::particles());
       mine_.input_bytes += w.input_bytes;
     }
+    const auto span = timeline_.span("write");
     const int code = file_->write_records_at_all(file_end_ + before[0], records);
     try {
       std::optional<Error> failed;
@@ -247,6 +267,7 @@ class MpiConversion {
 
   // Rank 0 indexes the round's frames and tells what they tell, in order.
   void tell_root(const std::vector<FrameWork>& works) {
+    const auto span = timeline_.span("tell rank 0");
     WireWriter facts;
     for (const FrameWork& w : works) {
       if (w.frame <= stop_at_) put_facts(facts, w, r_.rank);
@@ -262,6 +283,7 @@ class MpiConversion {
   // The stop, if any, on every rank; then rank 0 ends the file as convert()
   // does: totals, the up axis, the index; closed, renamed.
   void finish() {
+    const auto span = timeline_.span("finish");
     std::optional<Error> stopped;
     if (stop_at_ != UINT64_MAX) {
       WireWriter w;
@@ -308,6 +330,7 @@ class MpiConversion {
   const ConvertObserver& observer_;
   const std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
   Ranks r_;
+  Timeline timeline_;  // SLUICE_MPI_TIMELINE (mpi_timeline.h)
   int threads_ = 1;
   uint64_t batch_ = 2;  // frames a rank takes a round
 

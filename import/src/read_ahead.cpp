@@ -22,7 +22,7 @@ ReadAhead::ReadAhead(const ConvertOptions& o, uint64_t first, uint64_t count) : 
   const uint64_t end = std::min(source_->frame_count(), first + count);
   frames_.resize(end > first ? end - first : 0);
   for (size_t i = 0; i < frames_.size(); ++i) {
-    reads_.run([this, i] {
+    reads_.emplace_back([this, i] {
       try {
         frames_[i] = source_->read(first_ + i);
       } catch (const io::Error&) {
@@ -32,10 +32,16 @@ ReadAhead::ReadAhead(const ConvertOptions& o, uint64_t first, uint64_t count) : 
   }
 }
 
-ReadAhead::~ReadAhead() { reads_.wait(); }
+ReadAhead::~ReadAhead() { finish(); }
+
+void ReadAhead::finish() {
+  for (std::thread& t : reads_) {
+    if (t.joinable()) t.join();
+  }
+}
 
 ReadAhead::Taken ReadAhead::take(const SourceOptions& used) {
-  reads_.wait();
+  finish();
   Taken out;
   if (!source_ || !same_but_ids(options_, used)) return out;
   for (size_t i = 0; i < frames_.size(); ++i) {

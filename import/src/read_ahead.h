@@ -4,21 +4,25 @@
 // more) and decide the header before any other frame is encoded: seconds for
 // frames of 10M particles, during which the other cores (or ranks) would
 // wait. A ReadAhead opens the input itself, as a conversion opens it
-// (open_source), and reads frames [first, first + count) on TBB tasks
-// meanwhile; take() hands them over once the decisions are made.
+// (open_source), and reads frames [first, first + count) meanwhile; take()
+// hands them over once the decisions are made.
+//
+// The reads run on threads of their own, one a frame, not on TBB's: a
+// conversion of one thread (--jobs 1, an MPI rank's usual share) has no
+// TBB thread to spare while it decides, and a VTK frame's parsing happens
+// in a reader process (isolation.h), so these threads mostly wait.
 //
 // A frame that fails to read is left out (the conversion reads it again in
 // its turn, where the error counts). Threads: construct, take and destroy
-// on one thread; the reads run on TBB's. Errors: none thrown (an input that
-// does not open reads nothing here).
+// on one thread. Errors: none thrown (an input that does not open reads
+// nothing here).
 #pragma once
-
-#include <tbb/task_group.h>
 
 #include <cstdint>
 #include <map>
 #include <memory>
 #include <optional>
+#include <thread>
 #include <vector>
 
 #include "sluice/import/convert.h"
@@ -29,9 +33,8 @@ class ReadAhead {
  public:
   ReadAhead(const ConvertOptions& o, uint64_t first, uint64_t count);
   ~ReadAhead();  // waits for the reads
-  // Waits for the reads, helping with them: for a caller with nothing else
-  // to do meanwhile (with one TBB thread, the reads run only in a wait).
-  void finish() { reads_.wait(); }
+  // Waits for the reads.
+  void finish();
   ReadAhead(const ReadAhead&) = delete;
   ReadAhead& operator=(const ReadAhead&) = delete;
 
@@ -53,7 +56,7 @@ class ReadAhead {
   std::unique_ptr<FrameSource> source_;
   uint64_t first_ = 0;
   std::vector<std::optional<io::ParticleFrame>> frames_;
-  tbb::task_group reads_;
+  std::vector<std::thread> reads_;  // last: joined before the frames they fill die
 };
 
 }  // namespace sluice::import

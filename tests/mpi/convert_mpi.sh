@@ -3,6 +3,7 @@
 #   1. byte-identical output at 1, 2 and 4 ranks, on the bundled sample and on
 #      a synthetic series whose frames hold from 1,223 to 40,000 particles;
 #      an output that exists is refused once (by rank 0), left as it was;
+#      SLUICE_MPI_TIMELINE writes every rank's steps;
 #   2. a damaged frame read on rank 2 stops every rank with the serial
 #      message (and the rank), the output as the serial one keeps it;
 #   3. --skip-bad under MPI gives the serial file;
@@ -39,6 +40,14 @@ for n in 1 2 4; do
   mpi "$n" 'uneven/*.vtp' -o "uneven_$n.sluice" -q --jobs 2
   same serial_uneven.sluice "uneven_$n.sluice"
 done
+
+echo "--- 1a. SLUICE_MPI_TIMELINE: every rank's steps, every frame's encoding once"
+SLUICE_MPI_TIMELINE=timeline.csv mpi 4 'uneven/*.vtp' -o uneven_timeline.sluice -q --jobs 1
+same serial_uneven.sluice uneven_timeline.sluice
+[[ $(head -1 timeline.csv) == "rank,step,frame,start_s,end_s" ]] || fail "timeline: no header"
+for r in 0 1 2 3; do grep -q "^$r,write,-1," timeline.csv || fail "timeline: rank $r's write missing"; done
+[[ $(grep -cE '^[0-3],(read and )?encode,[0-9]+,' timeline.csv) == 10 ]] || { cat timeline.csv; fail "timeline: not 10 frames encoded"; }
+awk -F, 'NR > 1 && !($5 >= $4 && $4 >= 0) { exit 1 }' timeline.csv || fail "timeline: a span ends before it starts"
 
 echo "--- 1b. an output that exists, without --force: refused once, by rank 0"
 if mpi 4 "$sample/dam_break_3d.pvd" -a rho -o sample_4.sluice -q 2> exists.err; then fail "overwrote without --force"; fi
