@@ -25,8 +25,8 @@ ReadAhead::ReadAhead(const ConvertOptions& o, uint64_t first, uint64_t count) : 
     reads_.emplace_back([this, i] {
       try {
         frames_[i] = source_->read(first_ + i);
-      } catch (const io::Error&) {
-        // read again in its turn
+      } catch (...) {
+        // read again in its turn, where what it throws counts
       }
     });
   }
