@@ -598,6 +598,29 @@ void require_attributes(const SourceOptions& options, const std::vector<std::str
   }
 }
 
+// The file whose point arrays stand for the series': the first of the
+// first frames (at most 16) whose arrays read. A damaged first file is then
+// frame 0's error when that frame is read, where --skip-bad can leave it
+// out, instead of the whole input's; when none reads, the first one's error.
+struct SeriesArrays {
+  std::string file;
+  std::vector<std::string> names;
+};
+SeriesArrays series_arrays(const std::vector<FrameFiles>& frames) {
+  constexpr size_t kTries = 16;
+  std::optional<Error> first_error;
+  for (size_t f = 0; f < std::min(frames.size(), kTries); ++f) {
+    try {
+      const std::string& file = frames[f].files.front();
+      return {file, file_arrays(file)};
+    } catch (const Error& e) {
+      if (!first_error) first_error = e;
+    }
+  }
+  if (!first_error) throw Error({}, "the input holds no frames");
+  throw *first_error;
+}
+
 }  // namespace
 
 std::unique_ptr<FrameSource> open_source(const std::string& spec, const SourceOptions& options) {
@@ -607,10 +630,10 @@ std::unique_ptr<FrameSource> open_source(const std::string& spec, const SourceOp
   for (const auto& frame : plan.frames) {
     for (const auto& file : frame.files) info.third_party_reader = info.third_party_reader || needs_vtk(require_readable(file));
   }
-  const std::string& first = plan.frames.front().files.front();
-  info.arrays = file_arrays(first);
-  info.id_array = resolve_id_array(options, info.arrays, first);
-  require_attributes(options, info.arrays, first);
+  SeriesArrays arrays = series_arrays(plan.frames);
+  info.arrays = std::move(arrays.names);
+  info.id_array = resolve_id_array(options, info.arrays, arrays.file);
+  require_attributes(options, info.arrays, arrays.file);
   return std::make_unique<SeriesSource>(std::move(plan.frames), std::move(info), options);
 }
 

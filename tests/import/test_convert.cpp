@@ -112,6 +112,35 @@ TEST(ImportConvert, ABadFrameStopsAfterKeepingTheFramesBeforeIt) {
   EXPECT_TRUE(heard.heard(Notice::Skipped));
 }
 
+TEST(ImportConvert, ADamagedFirstFileIsFrameZerosErrorWhichSkipBadLeavesOut) {
+  // The series' arrays come from the first file that reads, so a damaged
+  // first file no longer stops the whole input before any frame is read.
+  sluice::test::TempDir dir;
+  for (const auto& entry : fs::directory_iterator(SLUICE_SAMPLE_DIR)) {
+    if (entry.path().extension() == ".vtu") fs::copy_file(entry.path(), dir / entry.path().filename());
+  }
+  const fs::path first = dir / "dam_break_3d_fluid_00000.vtu";
+  ASSERT_TRUE(fs::exists(first));
+  fs::resize_file(first, 5000);  // cut inside its first array
+  ConvertOptions o;
+  o.input = (dir / "*.vtu").string();
+  const std::string out = (dir / "out.sluice").string();
+  try {
+    sluice::import::convert(o, out);
+    FAIL() << "frame 0 is damaged";
+  } catch (const sluice::io::Error& e) {
+    EXPECT_NE(std::string(e.what()).find("dam_break_3d_fluid_00000.vtu"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("frame 0"), std::string::npos) << e.what();
+  }
+  o.skip_bad = true;
+  const sluice::import::ConvertSummary s = sluice::import::convert(o, out);
+  EXPECT_EQ(s.frames, 12u);
+  ASSERT_EQ(s.skipped.size(), 1u);
+  EXPECT_EQ(s.skipped[0].frame, 0u);
+  const sluice::io::ContainerReader reader(out);
+  EXPECT_EQ(reader.frame_count(), 12u);
+}
+
 TEST(ImportConvert, TheBundledSampleThroughTheDefaultWorker) {
   sluice::test::TempDir dir;
   ConvertOptions o;
