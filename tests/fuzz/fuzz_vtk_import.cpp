@@ -41,8 +41,9 @@ void check_bound_with_outlier(sluice::io::ParticleFrame frame, const uint8_t* da
   h.precision_bits = kDefaultPrecisionBits;
   // A spacing so small that the stated bound underflows to 0 promises what
   // no encoding can keep (found by this target, 2026-12-05: a frame with a
-  // 1e-30 coordinate); the property is checked for bounds above 0 only, and
-  // that case is left to an issue of its own (tests/data/fuzz/findings/).
+  // 1e-30 coordinate). The converter no longer states such a spacing
+  // (ImportConvert.ASpacingWhoseBoundUnderflowsIsNotStated, the input in
+  // tests/data/fuzz/findings/), so the property is checked where it can hold.
   if (!(position_bound(h) > 0)) return;
   const std::vector<uint16_t> lod = lod_values(frame.ids, n);
   FrameInput in;

@@ -15,6 +15,7 @@
 
 #include "../io/test_util.h"
 #include "sluice/import/convert.h"
+#include "sluice/io/maintenance.h"
 #include "sluice/import/playable.h"
 #include "sluice/io/reader.h"
 
@@ -139,6 +140,31 @@ TEST(ImportConvert, ADamagedFirstFileIsFrameZerosErrorWhichSkipBadLeavesOut) {
   EXPECT_EQ(s.skipped[0].frame, 0u);
   const sluice::io::ContainerReader reader(out);
   EXPECT_EQ(reader.frame_count(), 12u);
+}
+
+TEST(ImportConvert, ASpacingWhoseBoundUnderflowsIsNotStated) {
+  // fuzz_vtk_import's frame (tests/data/fuzz/findings/vtk_import_bound_underflow):
+  // particles 1e-45 apart beside others 1e31 away estimate a spacing of
+  // 5.6e-45, whose position bound rounds to 0. The file then promised
+  // exactness with 16-bit positions, and its own verify found it 4e26 off.
+  sluice::test::TempDir dir;
+  std::ofstream(dir / "frame.csv") << "x,y,z\n0,-0.5,1\n0,1e-45,0\n3e-45,0,4e-45\n0,6e-45,0\n7e-45,0,8e-45\n"
+                                      "5.7742524e+31,0,0\n8192,-0.2299365,2.839981e+29\n";
+  ConvertOptions o;
+  o.input = (dir / "frame.csv").string();
+  const std::string out = (dir / "out.sluice").string();
+  const sluice::import::ConvertSummary s = sluice::import::convert(o, out);
+  EXPECT_EQ(s.header.particle_spacing, 0.0f) << "no spacing stated rather than one with a bound of 0";
+  const sluice::io::VerifyReport report = sluice::io::verify_container(out);
+  EXPECT_TRUE(report.problems.empty()) << report.problems.front();
+
+  o.spacing = 1e-44f;  // given, it is refused with what to do
+  try {
+    sluice::import::convert(o, (dir / "given.sluice").string());
+    FAIL() << "a spacing whose bound underflows was accepted";
+  } catch (const sluice::io::Error& e) {
+    EXPECT_NE(std::string(e.what()).find("too small"), std::string::npos) << e.what();
+  }
 }
 
 TEST(ImportConvert, TheBundledSampleThroughTheDefaultWorker) {
