@@ -57,6 +57,7 @@ layout(push_constant) uniform Push {
   uint n1;          // floor((d / h)^3): L1 voxels with at most this many particles select L2
   float reach2;     // (min(2h, d))^2: a particle with nobody nearer is isolated
   uint with_blobs;
+  uvec2 ellipsoids; // Vec4s[3 n]: each particle's scaled axes (band_ellipsoids); 0: not computed
 } pc;
 
 // Region k of `words` 32-bit words from `base`, as its own address, so that

@@ -27,12 +27,47 @@ struct BandClassifier::Impl {
   double gpu_ms = -1;
   std::vector<BandClassifier::PassTime> pass_ms;
   bool hashed = false;
-  Buffer upload, xyz, readback;  // grown to the largest frame seen
+  Buffer upload, xyz, readback, axes;  // grown to the largest frame seen
 
   explicit Impl(detail::ContextImpl& c) : ctx(c), passes(c) {
     const auto families = ctx.physical.getQueueFamilyProperties();
     timestamps = ctx.graphics_family < families.size() && families[ctx.graphics_family].timestampValidBits > 0;
     stamps = vk::raii::QueryPool(ctx.device, vk::QueryPoolCreateInfo({}, vk::QueryType::eTimestamp, kStamps));
+  }
+
+  // Grows the buffers to n particles and copies xyz into the staging one.
+  void stage(std::span<const float> positions, uint64_t readback_bytes) {
+    const uint64_t n = positions.size() / 3;
+    grow_buffer(ctx, upload, n * 12, vk::BufferUsageFlagBits::eTransferSrc, MemoryKind::Upload);
+    grow_buffer(ctx, xyz, n * 12,
+                vk::BufferUsageFlagBits::eStorageBuffer | vk::BufferUsageFlagBits::eShaderDeviceAddress |
+                    vk::BufferUsageFlagBits::eTransferDst,
+                MemoryKind::DeviceLocal);
+    grow_buffer(ctx, readback, readback_bytes, vk::BufferUsageFlagBits::eTransferDst, MemoryKind::Readback);
+    std::memcpy(upload.mapped, positions.data(), n * 12);
+  }
+
+  // Records the upload and the passes of `run`, with timestamps.
+  void record(vk::CommandBuffer cmd, const BandRun& run) {
+    cmd.copyBuffer(*upload.buffer, *xyz.buffer, vk::BufferCopy(0, 0, run.n * 12));
+    memory_barrier(cmd, Stage::eTransfer, Access::eTransferWrite, Stage::eComputeShader | Stage::eTransfer,
+                   Access::eShaderRead | Access::eTransferWrite);
+    uint32_t stamp = 0;
+    if (timestamps) {
+      cmd.resetQueryPool(*stamps, 0, kStamps);
+      cmd.writeTimestamp2(Stage::eAllCommands, *stamps, stamp++);
+    }
+    passes.record(cmd, run, [&](const char*) {
+      if (timestamps) cmd.writeTimestamp2(Stage::eAllCommands, *stamps, stamp++);
+    });
+  }
+
+  // The grid's verdict: throws where the box's voxels outgrow 32-bit keys.
+  static void require_fits(const BandParams& params) {
+    if (params.fits) return;
+    throw Error("BandClassifier: the particles' box holds " + std::to_string(params.dims[0]) + " x " +
+                std::to_string(params.dims[1]) + " x " + std::to_string(params.dims[2]) +
+                " voxels, more than 32-bit keys address; classify on the CPU");
   }
 
   void read_timestamps() {
@@ -68,28 +103,11 @@ io::NarrowBand BandClassifier::classify(std::span<const float> xyz, const io::Na
   if (n == 0) return out;
 
   r.passes.reserve(n, o.blobs);
-  grow_buffer(r.ctx, r.upload, n * 12, vk::BufferUsageFlagBits::eTransferSrc, MemoryKind::Upload);
-  grow_buffer(r.ctx, r.xyz, n * 12,
-           vk::BufferUsageFlagBits::eStorageBuffer | vk::BufferUsageFlagBits::eShaderDeviceAddress |
-               vk::BufferUsageFlagBits::eTransferDst,
-           MemoryKind::DeviceLocal);
   // Params, layers, blob_of; the blobs go through it in a second copy.
-  grow_buffer(r.ctx, r.readback, sizeof(BandParams) + n * (o.blobs ? 16 : 4), vk::BufferUsageFlagBits::eTransferDst,
-              MemoryKind::Readback);
-  std::memcpy(r.upload.mapped, xyz.data(), n * 12);
+  r.stage(xyz, sizeof(BandParams) + n * (o.blobs ? 16 : 4));
   const BandRun run{.n = n, .xyz = r.xyz.address, .diameter = o.diameter, .voxel = out.voxel, .blobs = o.blobs};
   r.ctx.run_once([&](vk::CommandBuffer cmd) {
-    cmd.copyBuffer(*r.upload.buffer, *r.xyz.buffer, vk::BufferCopy(0, 0, n * 12));
-    memory_barrier(cmd, Stage::eTransfer, Access::eTransferWrite, Stage::eComputeShader | Stage::eTransfer,
-                   Access::eShaderRead | Access::eTransferWrite);
-    uint32_t stamp = 0;
-    if (r.timestamps) {
-      cmd.resetQueryPool(*r.stamps, 0, kStamps);
-      cmd.writeTimestamp2(Stage::eAllCommands, *r.stamps, stamp++);
-    }
-    r.passes.record(cmd, run, [&](const char*) {
-      if (r.timestamps) cmd.writeTimestamp2(Stage::eAllCommands, *r.stamps, stamp++);
-    });
+    r.record(cmd, run);
     const vk::Buffer particles = *r.passes.particles.buffer;
     cmd.copyBuffer(*r.passes.params.buffer, *r.readback.buffer, vk::BufferCopy(0, 0, sizeof(BandParams)));
     cmd.copyBuffer(particles, *r.readback.buffer, vk::BufferCopy(BandPasses::kLayerWord * n * 4, sizeof(BandParams), n * 4));
@@ -104,11 +122,7 @@ io::NarrowBand BandClassifier::classify(std::span<const float> xyz, const io::Na
   BandParams params;
   std::memcpy(&params, r.readback.mapped, sizeof params);
   r.hashed = params.dense == 0;
-  if (!params.fits) {
-    throw Error("BandClassifier: the particles' box holds " + std::to_string(params.dims[0]) + " x " +
-                             std::to_string(params.dims[1]) + " x " + std::to_string(params.dims[2]) +
-                             " voxels, more than 32-bit keys address; classify on the CPU");
-  }
+  Impl::require_fits(params);
   const auto* words = reinterpret_cast<const uint32_t*>(static_cast<const std::byte*>(r.readback.mapped) + sizeof params);
   for (uint64_t i = 0; i < n; ++i) out.layer[i] = io::BandLayer(words[i] & 3u);
   for (size_t l = 0; l < 4; ++l) out.counts[l] = params.counts[l];
@@ -127,6 +141,38 @@ io::NarrowBand BandClassifier::classify(std::span<const float> xyz, const io::Na
     for (uint64_t k = 0; k < blobs; ++k) {
       out.blobs[k].centroid = {b[4 * k], b[4 * k + 1], b[4 * k + 2]};
       std::memcpy(&out.blobs[k].count, &b[4 * k + 3], 4);
+    }
+  }
+  return out;
+}
+
+std::vector<std::array<float, 9>> BandClassifier::ellipsoids(std::span<const float> xyz, float diameter) {
+  if (!(diameter > 0)) throw Error("BandClassifier: the particle diameter must be positive");
+  Impl& r = *impl_;
+  const uint64_t n = xyz.size() / 3;
+  if (n > BandPasses::kMaxParticles) throw Error("BandClassifier: more than 2^28 particles");
+  std::vector<std::array<float, 9>> out(n);
+  if (n == 0) return out;
+  r.passes.reserve(n, false);
+  grow_buffer(r.ctx, r.axes, n * 48, vk::BufferUsageFlagBits::eStorageBuffer | vk::BufferUsageFlagBits::eShaderDeviceAddress |
+                                         vk::BufferUsageFlagBits::eTransferSrc,
+              MemoryKind::DeviceLocal);
+  r.stage(xyz, sizeof(BandParams) + n * 48);
+  const BandRun run{.n = n, .xyz = r.xyz.address, .diameter = diameter, .voxel = 2 * diameter, .ellipsoids = r.axes.address};
+  r.ctx.run_once([&](vk::CommandBuffer cmd) {
+    r.record(cmd, run);
+    cmd.copyBuffer(*r.passes.params.buffer, *r.readback.buffer, vk::BufferCopy(0, 0, sizeof(BandParams)));
+    cmd.copyBuffer(*r.axes.buffer, *r.readback.buffer, vk::BufferCopy(0, sizeof(BandParams), n * 48));
+    memory_barrier(cmd, Stage::eTransfer, Access::eTransferWrite, Stage::eHost, Access::eHostRead);
+  });
+  r.read_timestamps();
+  BandParams params;
+  std::memcpy(&params, r.readback.mapped, sizeof params);
+  Impl::require_fits(params);
+  const auto* axes = reinterpret_cast<const float*>(static_cast<const std::byte*>(r.readback.mapped) + sizeof params);
+  for (uint64_t i = 0; i < n; ++i) {
+    for (int k = 0; k < 3; ++k) {
+      for (int a = 0; a < 3; ++a) out[i][size_t(3 * k + a)] = axes[4 * (3 * i + uint64_t(k)) + uint64_t(a)];
     }
   }
   return out;

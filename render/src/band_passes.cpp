@@ -24,12 +24,13 @@ struct BandPush {
   float reach2;
   uint32_t with_blobs;
   uint32_t pad;  // to the 8-byte alignment of the addresses; not in the shader's block
+  uint64_t ellipsoids;
 };
-static_assert(sizeof(BandPush) == 88);
+static_assert(sizeof(BandPush) == 96);
 
 constexpr std::array kPasses{Shader::BandBounds, Shader::BandGrid,  Shader::BandInsert,
                              Shader::BandVoxels, Shader::BandL1,    Shader::BandL2,
-                             Shader::BandScatter, Shader::BandParticles, Shader::BandBlobs};
+                             Shader::BandScatter, Shader::BandParticles, Shader::BandBlobs, Shader::BandEllipsoids};
 constexpr uint32_t kMaxGroups = 65535;  // the guaranteed maxComputeWorkGroupCount[0]
 constexpr uint32_t kEmpty = std::numeric_limits<uint32_t>::max();
 
@@ -90,6 +91,7 @@ void BandPasses::record(vk::CommandBuffer cmd, const BandRun& run, const std::fu
   const float reach = std::min(2 * run.diameter, run.voxel);
   push.reach2 = reach * reach;
   push.with_blobs = run.blobs ? 1 : 0;
+  push.ellipsoids = run.ellipsoids;
 
   BandParams initial{};
   std::fill(std::begin(initial.lo), std::end(initial.lo), kEmpty);
@@ -103,7 +105,8 @@ void BandPasses::record(vk::CommandBuffer cmd, const BandRun& run, const std::fu
   cmd.pushConstants<BandPush>(*layout_, vk::ShaderStageFlagBits::eCompute, 0, push);
   for (size_t p = 0; p < pipelines_.size(); ++p) {
     const Shader s = kPasses[p];
-    if (s != Shader::BandBlobs || run.blobs) {
+    const bool wanted = s == Shader::BandBlobs ? run.blobs : s == Shader::BandEllipsoids ? run.ellipsoids != 0 : true;
+    if (wanted) {
       cmd.bindPipeline(vk::PipelineBindPoint::eCompute, *pipelines_[p]);
       // Passes loop over their items in rounds, so any group count covers
       // them; over the slots for BandVoxels, one for BandGrid.

@@ -37,6 +37,9 @@ struct BandRun {
   float diameter = 0;            // h (> 0)
   float voxel = 0;               // d (> 0)
   bool blobs = false;
+  // Where each particle's ellipsoid goes (band_ellipsoids.comp: 3 vec4 of
+  // scaled axes per particle, 48 n bytes); 0: none computed.
+  vk::DeviceAddress ellipsoids = 0;
 };
 
 class BandPasses {
@@ -63,7 +66,7 @@ class BandPasses {
 
   // Every step's name, in the order record() reports them.
   static constexpr const char* kSteps[] = {"fills", "bounds", "grid", "insert", "voxels", "L1",
-                                           "L2", "scatter", "particles", "blobs"};
+                                           "L2", "scatter", "particles", "blobs", "ellipsoids"};
 
   // Results: Params; per particle (5 n words) LAYER at 3n and BLOB_OF at 4n;
   // blobs (vec4: centroid, count bits) and their mean attributes (float).

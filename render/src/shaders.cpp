@@ -76,6 +76,9 @@ const uint32_t kBandGather[] =
 const uint32_t kBandApply[] =
 #include "band_apply.comp.inc"
     ;
+const uint32_t kBandEllipsoids[] =
+#include "band_ellipsoids.comp.inc"
+    ;
 const uint32_t kDecode[] =
 #include "decode.comp.inc"
     ;
@@ -115,6 +118,7 @@ std::span<const uint32_t> spirv(Shader s) {
     case Shader::BandBlobs: return kBandBlobs;
     case Shader::BandGather: return kBandGather;
     case Shader::BandApply: return kBandApply;
+    case Shader::BandEllipsoids: return kBandEllipsoids;
     case Shader::Decode: return kDecode;
   }
   return {};

@@ -34,6 +34,7 @@ enum class Shader {
   BandBlobs,
   BandGather,
   BandApply,
+  BandEllipsoids,
   Decode,
 };
 

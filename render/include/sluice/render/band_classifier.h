@@ -13,6 +13,7 @@
 // (a Renderer on the same Context, for one).
 #pragma once
 
+#include <array>
 #include <memory>
 #include <span>
 #include <vector>
@@ -39,6 +40,15 @@ class BandClassifier {
   // render::Error when the grid does not fit 32-bit keys or memory
   // runs out.
   io::NarrowBand classify(std::span<const float> xyz, const io::NarrowBandOptions& options);
+
+  // Each particle's ellipsoid, as anisotropic particles draw it (Yu & Turk
+  // 2013, shaders/band_ellipsoids.comp): from the weighted covariance of
+  // the particles within 2 x `diameter` of it, its axes, each scaled by its
+  // radius in units of the particle's radius, axis by axis (x, y, z of the
+  // first, then the second, then the third). The radii keep the sphere's
+  // volume and differ at most 4 times; a particle with fewer than 6 others
+  // near it is a sphere (the identity). Throws as classify() does.
+  std::vector<std::array<float, 9>> ellipsoids(std::span<const float> xyz, float diameter);
 
   // GPU time of the last classify() (its passes, from timestamps; not the
   // upload or the read-back), milliseconds; < 0 when the device has no

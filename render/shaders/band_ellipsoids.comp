@@ -1,0 +1,97 @@
+#version 460
+// Anisotropic particles (Yu & Turk 2013), after band_scatter: each
+// particle's ellipsoid from the weighted covariance of the particles within
+// one voxel side of it (its voxel's list and the 26 around it), weights
+// 1 - (r / side)^3. Writes per particle three vec4 (w unused): the
+// ellipsoid's axes, each scaled by its radius in units of the particle's
+// radius. The radii keep the sphere's volume (their product is 1), the
+// largest is at most kMaxRatio times the smallest, and a particle with
+// fewer than kMinNeighbours near it stays a sphere (identity axes).
+#include "band.glsl"
+
+layout(buffer_reference, std430, buffer_reference_align = 16) writeonly buffer Axes { vec4 v[]; };
+
+const uint kMinNeighbours = 6u;
+const float kMaxRatio = 4.0;
+
+struct Moments {
+  float w0;  // sum of weights
+  vec3 w1;   // weighted sum of offsets from the particle
+  mat3 w2;   // weighted sum of their outer products
+  uint near; // particles within reach, the particle itself included
+};
+
+void gather_slot(uint s, vec3 p, inout Moments m) {
+  if (s == kEmpty) return;
+  uint end = START(s);
+  for (uint k = end - COUNT(s); k < end; ++k) {
+    vec3 d = particle(LIST(k)) - p;
+    float q = length(d) / pc.side;
+    if (q >= 1.0) continue;
+    float w = 1.0 - q * q * q;
+    m.w0 += w;
+    m.w1 += w * d;
+    m.w2 += w * outerProduct(d, d);
+    m.near += 1u;
+  }
+}
+
+// Eigenvalues and eigenvectors (columns) of symmetric `a`: cyclic Jacobi
+// rotations, each zeroing one off-diagonal pair.
+void eigen(mat3 a, out vec3 values, out mat3 vectors) {
+  mat3 v = mat3(1.0);
+  for (int sweep = 0; sweep < 6; ++sweep) {
+    for (int p = 0; p < 2; ++p) {
+      for (int q = p + 1; q < 3; ++q) {
+        float apq = a[q][p];
+        if (abs(apq) <= 1e-12 * (abs(a[p][p]) + abs(a[q][q]))) continue;
+        float theta = (a[q][q] - a[p][p]) / (2.0 * apq);
+        float t = (theta >= 0.0 ? 1.0 : -1.0) / (abs(theta) + sqrt(theta * theta + 1.0));
+        float c = inversesqrt(t * t + 1.0);
+        float s = t * c;
+        mat3 j = mat3(1.0);
+        j[p][p] = c;
+        j[q][q] = c;
+        j[q][p] = s;   // row p, column q
+        j[p][q] = -s;  // row q, column p
+        a = transpose(j) * a * j;
+        v = v * j;
+      }
+    }
+  }
+  values = vec3(a[0][0], a[1][1], a[2][2]);
+  vectors = v;
+}
+
+void main() {
+  Params g = Params(pc.params);
+  if (g.fits == 0u || pc.ellipsoids == uvec2(0u)) return;
+  Axes out_axes = Axes(pc.ellipsoids);
+  for (uint i = first_item() + gl_LocalInvocationIndex; i < pc.n; i += round_stride()) {
+    vec3 p = particle(i);
+    uint s = SLOT(i);
+    uvec3 c = cell_of_key(key_of_slot(s, g), g);
+    Moments m = Moments(0.0, vec3(0.0), mat3(0.0), 0u);
+    for (int dx = -1; dx <= 1; ++dx)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dz = -1; dz <= 1; ++dz) {
+          ivec3 d = ivec3(dx, dy, dz);
+          gather_slot(d == ivec3(0) ? s : neighbour_slot(c, d, g), p, m);
+        }
+    mat3 axes = mat3(1.0);
+    if (m.near - 1u >= kMinNeighbours) {
+      vec3 mean = m.w1 / m.w0;
+      mat3 covariance = m.w2 / m.w0 - outerProduct(mean, mean);
+      vec3 values;
+      mat3 vectors;
+      eigen(covariance, values, vectors);
+      float largest = max(values.x, max(values.y, values.z));
+      if (largest > 0.0) {
+        vec3 clamped = max(values, vec3(largest / kMaxRatio));
+        vec3 radii = clamped / pow(clamped.x * clamped.y * clamped.z, 1.0 / 3.0);
+        axes = mat3(vectors[0] * radii.x, vectors[1] * radii.y, vectors[2] * radii.z);
+      }
+    }
+    for (int k = 0; k < 3; ++k) out_axes.v[3u * i + uint(k)] = vec4(axes[k], 0.0);
+  }
+}

@@ -1,0 +1,129 @@
+// Anisotropic particles' ellipsoids (BandClassifier::ellipsoids, the pass
+// shaders/band_ellipsoids.comp) against what the geometry says: a particle
+// with few neighbours is a sphere; inside a cubic lattice it is a sphere;
+// in a plane it is flattened along the plane's normal by the largest ratio
+// (radii 4^(1/3), 4^(1/3), 4^(1/3) / 4); on a dense line it is stretched
+// along it (16^(1/3), then 16^(1/3) / 4 twice). Tolerance 1e-3 on radii,
+// 1e-3 on the cosine of axis directions; no validation message.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <vector>
+
+#include "render_test_util.h"
+#include "sluice/render/band_classifier.h"
+
+namespace sluice::render {
+namespace {
+
+using testing::context;
+using testing::ValidationGuard;
+
+BandClassifier& classifier() {
+  static BandClassifier c(context());
+  return c;
+}
+
+struct Axis {
+  std::array<double, 3> direction;  // unit
+  double radius;                    // in particle radii
+};
+
+// The three axes of particle i's ellipsoid, shortest first.
+std::vector<Axis> axes_of(const std::array<float, 9>& e) {
+  std::vector<Axis> out;
+  for (int k = 0; k < 3; ++k) {
+    const double x = e[size_t(3 * k)], y = e[size_t(3 * k + 1)], z = e[size_t(3 * k + 2)];
+    const double r = std::sqrt(x * x + y * y + z * z);
+    out.push_back({{x / r, y / r, z / r}, r});
+  }
+  std::sort(out.begin(), out.end(), [](const Axis& a, const Axis& b) { return a.radius < b.radius; });
+  return out;
+}
+
+double alignment(const std::array<double, 3>& a, const std::array<double, 3>& b) {
+  return std::abs(a[0] * b[0] + a[1] * b[1] + a[2] * b[2]);
+}
+
+// A rotation that takes z to `n` (unit), applied to p.
+std::array<float, 3> rotated(std::array<double, 3> p, const std::array<double, 3>& n) {
+  // Rodrigues about z x n.
+  const double c = n[2], ax = -n[1], ay = n[0];  // axis (unnormalized) = z x n = (-n.y, n.x, 0)
+  const double s = std::sqrt(ax * ax + ay * ay);
+  if (s < 1e-12) return {float(p[0]), float(p[1]), float(c * p[2])};
+  const double kx = ax / s, ky = ay / s;  // unit axis, kz = 0
+  const double dot = kx * p[0] + ky * p[1];
+  const std::array<double, 3> cross{ky * p[2], -kx * p[2], kx * p[1] - ky * p[0]};
+  std::array<float, 3> out{};
+  const double along[3] = {kx, ky, 0.0};
+  for (int a = 0; a < 3; ++a) out[size_t(a)] = float(p[size_t(a)] * c + cross[size_t(a)] * s + along[a] * dot * (1 - c));
+  return out;
+}
+
+TEST(Ellipsoids, AParticleWithFewNeighboursIsItsSphere) {
+  ValidationGuard guard;
+  const float h = 0.1f;
+  // One alone, and a cluster of 4 (each has 3 others near: fewer than 6).
+  const std::vector<float> xyz{5, 5, 5, 0, 0, 0, h, 0, 0, 0, h, 0, 0, 0, h};
+  const auto e = classifier().ellipsoids(xyz, h);
+  ASSERT_EQ(e.size(), 5u);
+  for (size_t i = 0; i < e.size(); ++i) {
+    for (int k = 0; k < 9; ++k) EXPECT_EQ(e[i][size_t(k)], k % 4 == 0 ? 1.0f : 0.0f) << "particle " << i << ", entry " << k;
+  }
+}
+
+TEST(Ellipsoids, InsideACubicLatticeAParticleIsItsSphere) {
+  ValidationGuard guard;
+  const float h = 0.1f;
+  std::vector<float> xyz;
+  for (int x = 0; x < 9; ++x)
+    for (int y = 0; y < 9; ++y)
+      for (int z = 0; z < 9; ++z) xyz.insert(xyz.end(), {float(x) * h, float(y) * h, float(z) * h});
+  const auto e = classifier().ellipsoids(xyz, h);
+  const size_t centre = (4 * 9 + 4) * 9 + 4;
+  for (const Axis& a : axes_of(e[centre])) EXPECT_NEAR(a.radius, 1.0, 1e-3);
+}
+
+TEST(Ellipsoids, InAPlaneAParticleIsFlattenedAlongItsNormal) {
+  ValidationGuard guard;
+  const float h = 0.1f;
+  const double len = std::sqrt(0.36 + 0.64 + 0.25);
+  const std::array<double, 3> normal{0.6 / len, 0.8 / len, 0.5 / len};  // a plane at no axis-aligned angle
+  std::vector<float> xyz;
+  for (int x = -10; x <= 10; ++x)
+    for (int y = -10; y <= 10; ++y) {
+      const auto p = rotated({x * double(h), y * double(h), 0.0}, normal);
+      xyz.insert(xyz.end(), {p[0] + 1.0f, p[1] + 1.0f, p[2] + 1.0f});
+    }
+  const auto e = classifier().ellipsoids(xyz, h);
+  const size_t centre = 10 * 21 + 10;
+  const std::vector<Axis> axes = axes_of(e[centre]);
+  const double flat = std::cbrt(4.0) / 4.0, wide = std::cbrt(4.0);
+  EXPECT_NEAR(axes[0].radius, flat, 1e-3);
+  EXPECT_NEAR(alignment(axes[0].direction, normal), 1.0, 1e-3) << "the short axis is the plane's normal";
+  EXPECT_NEAR(axes[1].radius, wide, 1e-3);
+  EXPECT_NEAR(axes[2].radius, wide, 1e-3);
+}
+
+TEST(Ellipsoids, OnADenseLineAParticleIsStretchedAlongIt) {
+  ValidationGuard guard;
+  const float h = 0.1f;
+  const std::array<double, 3> along{0.0, 0.6, 0.8};
+  std::vector<float> xyz;
+  for (int k = -40; k <= 40; ++k) {
+    const double t = k * double(h) / 4;  // 4 a spacing: 14 others within 2h
+    xyz.insert(xyz.end(), {float(1 + t * along[0]), float(1 + t * along[1]), float(1 + t * along[2])});
+  }
+  const auto e = classifier().ellipsoids(xyz, h);
+  const std::vector<Axis> axes = axes_of(e[40]);
+  const double r = std::cbrt(16.0);
+  EXPECT_NEAR(axes[2].radius, r, 1e-3);
+  EXPECT_NEAR(alignment(axes[2].direction, along), 1.0, 1e-3) << "the long axis is the line";
+  EXPECT_NEAR(axes[0].radius, r / 4, 1e-3);
+  EXPECT_NEAR(axes[1].radius, r / 4, 1e-3);
+}
+
+}  // namespace
+}  // namespace sluice::render
