@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <memory>
 
+#include "sluice/render/band_classifier.h"
 #include "sluice/render/context.h"
 #include "sluice/render/inspection.h"
 #include "sluice/render/offscreen.h"
@@ -30,6 +31,12 @@ inline Context& context() {
     return c;
   }();
   return *ctx;
+}
+
+// One GPU narrow-band classifier per test binary (its pipelines are built once).
+inline BandClassifier& band_classifier() {
+  static BandClassifier c(context());
+  return c;
 }
 
 // Checks that no validation error happened since construction.

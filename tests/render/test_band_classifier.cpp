@@ -23,20 +23,15 @@
 namespace sluice::render {
 namespace {
 
-using testing::context;
 using testing::ValidationGuard;
-
-BandClassifier& classifier() {
-  static BandClassifier c(context());
-  return c;
-}
+using testing::band_classifier;
 
 // Every particle's layer, the counts and the voxels equal; blobs: each GPU
 // blob holds exactly the particles of one CPU blob, at the same centroid.
 void expect_same_band(std::span<const float> xyz, const io::NarrowBandOptions& o, const char* what) {
   const io::NarrowBand cpu = io::classify_narrow_band(xyz, o);
-  const io::NarrowBand gpu = classifier().classify(xyz, o);
-  std::printf("%s: %zu particles, voxels %s\n", what, cpu.layer.size(), classifier().last_hashed() ? "hashed" : "by cell");
+  const io::NarrowBand gpu = band_classifier().classify(xyz, o);
+  std::printf("%s: %zu particles, voxels %s\n", what, cpu.layer.size(), band_classifier().last_hashed() ? "hashed" : "by cell");
   ASSERT_EQ(gpu.layer.size(), cpu.layer.size()) << what;
   size_t differ = 0, first = 0;
   for (size_t i = 0; i < cpu.layer.size(); ++i) {
@@ -146,11 +141,11 @@ TEST(BandClassifierGpu, SameLayersAsTheCpuWhenVoxelsAreHashed) {
   const float h = 0.02f;
   std::vector<float> xyz = jittered_pool_with_spray(h, 4);
   for (int k = 0; k < 20; ++k) xyz.insert(xyz.end(), {(300.f + 7.f * float(k)) * h, -250.f * h + float(k) * h, (260.f - 3.f * float(k)) * h});
-  (void)classifier().classify(xyz, {.diameter = h});
-  EXPECT_TRUE(classifier().last_hashed());
+  (void)band_classifier().classify(xyz, {.diameter = h});
+  EXPECT_TRUE(band_classifier().last_hashed());
   expect_same_band(xyz, {.diameter = h, .blobs = true}, "pool with far droplets");
-  (void)classifier().classify(lattice_box(17, 0.1f), {.diameter = 0.1f});
-  EXPECT_FALSE(classifier().last_hashed());
+  (void)band_classifier().classify(lattice_box(17, 0.1f), {.diameter = 0.1f});
+  EXPECT_FALSE(band_classifier().last_hashed());
 }
 
 TEST(BandClassifierGpu, SameLayersAsTheCpuOnTheSyntheticPool) {
@@ -184,12 +179,12 @@ TEST(BandClassifierGpu, RefusesWhatItCannotDoAndSaysSo) {
   // axis, beyond 32-bit keys. The CPU classifier manages; the GPU refuses.
   const std::vector<float> far = {0, 0, 0, 1000, 1000, 1000};
   EXPECT_EQ(io::classify_narrow_band(far, {.diameter = 0.001f}).surface(), 2u);
-  EXPECT_THROW((void)classifier().classify(far, {.diameter = 0.001f}), std::runtime_error);
-  EXPECT_THROW((void)classifier().classify(far, {.diameter = 0}), sluice::render::Error);
-  EXPECT_THROW((void)classifier().classify(far, {.diameter = 1, .f2 = io::F2Test::Asymmetry}), sluice::render::Error);
+  EXPECT_THROW((void)band_classifier().classify(far, {.diameter = 0.001f}), std::runtime_error);
+  EXPECT_THROW((void)band_classifier().classify(far, {.diameter = 0}), sluice::render::Error);
+  EXPECT_THROW((void)band_classifier().classify(far, {.diameter = 1, .f2 = io::F2Test::Asymmetry}), sluice::render::Error);
   // And it still works afterwards.
   expect_same_band(lattice_box(6, 0.1f), {.diameter = 0.1f}, "box after a refusal");
-  EXPECT_TRUE(classifier().classify({}, {.diameter = 1}).layer.empty());
+  EXPECT_TRUE(band_classifier().classify({}, {.diameter = 1}).layer.empty());
 }
 
 }  // namespace

@@ -18,13 +18,8 @@
 namespace sluice::render {
 namespace {
 
-using testing::context;
 using testing::ValidationGuard;
-
-BandClassifier& classifier() {
-  static BandClassifier c(context());
-  return c;
-}
+using testing::band_classifier;
 
 struct Axis {
   std::array<double, 3> direction;  // unit
@@ -67,7 +62,7 @@ TEST(Ellipsoids, AParticleWithFewNeighboursIsItsSphere) {
   const float h = 0.1f;
   // One alone, and a cluster of 4 (each has 3 others near: fewer than 6).
   const std::vector<float> xyz{5, 5, 5, 0, 0, 0, h, 0, 0, 0, h, 0, 0, 0, h};
-  const auto e = classifier().ellipsoids(xyz, h);
+  const auto e = band_classifier().ellipsoids(xyz, h);
   ASSERT_EQ(e.size(), 5u);
   for (size_t i = 0; i < e.size(); ++i) {
     for (int k = 0; k < 9; ++k) EXPECT_EQ(e[i][size_t(k)], k % 4 == 0 ? 1.0f : 0.0f) << "particle " << i << ", entry " << k;
@@ -81,7 +76,7 @@ TEST(Ellipsoids, InsideACubicLatticeAParticleIsItsSphere) {
   for (int x = 0; x < 9; ++x)
     for (int y = 0; y < 9; ++y)
       for (int z = 0; z < 9; ++z) xyz.insert(xyz.end(), {float(x) * h, float(y) * h, float(z) * h});
-  const auto e = classifier().ellipsoids(xyz, h);
+  const auto e = band_classifier().ellipsoids(xyz, h);
   const size_t centre = (4 * 9 + 4) * 9 + 4;
   for (const Axis& a : axes_of(e[centre])) EXPECT_NEAR(a.radius, 1.0, 1e-3);
 }
@@ -97,7 +92,7 @@ TEST(Ellipsoids, InAPlaneAParticleIsFlattenedAlongItsNormal) {
       const auto p = rotated({x * double(h), y * double(h), 0.0}, normal);
       xyz.insert(xyz.end(), {p[0] + 1.0f, p[1] + 1.0f, p[2] + 1.0f});
     }
-  const auto e = classifier().ellipsoids(xyz, h);
+  const auto e = band_classifier().ellipsoids(xyz, h);
   const size_t centre = 10 * 21 + 10;
   const std::vector<Axis> axes = axes_of(e[centre]);
   const double flat = std::cbrt(4.0) / 4.0, wide = std::cbrt(4.0);
@@ -116,7 +111,7 @@ TEST(Ellipsoids, OnADenseLineAParticleIsStretchedAlongIt) {
     const double t = k * double(h) / 4;  // 4 a spacing: 14 others within 2h
     xyz.insert(xyz.end(), {float(1 + t * along[0]), float(1 + t * along[1]), float(1 + t * along[2])});
   }
-  const auto e = classifier().ellipsoids(xyz, h);
+  const auto e = band_classifier().ellipsoids(xyz, h);
   const std::vector<Axis> axes = axes_of(e[40]);
   const double r = std::cbrt(16.0);
   EXPECT_NEAR(axes[2].radius, r, 1e-3);
