@@ -15,7 +15,11 @@
 # bench/plot_convert_mpi.py, and each MPI run's timeline (every rank's steps,
 # SLUICE_MPI_TIMELINE) as $WORK/timeline_RANKS.csv for bench/plot_mpi_timeline.py.
 #   SLUICE=build/apps/sluice/sluice PARTICLES=10M FRAMES=32 RANKS="1 2 4 8 16" WORK=/tmp/mpibench \
-#     [CORES=16] [SERIAL_ONE=0] [MPIRUN=orterun] [BASE_SLUICE=other/sluice] bash bench/convert_mpi.sh
+#     [CORES=16] [SERIAL_ONE=0] [MPIRUN=orterun] [BASE_SLUICE=other/sluice] \
+#     [ALT_ENV="OMPI_MCA_fcoll=individual" [ALT_RANKS="16"]] bash bench/convert_mpi.sh
+# ALT_ENV runs each rank count of ALT_RANKS (default: all) a second time with
+# those variables set: an MPI-IO setting against the default, in the same
+# run (timeline_RANKS_alt.csv).
 set -euo pipefail
 sluice=$(realpath "${SLUICE:-build/apps/sluice/sluice}")
 particles=${PARTICLES:-1M} frames=${FRAMES:-16} ranks=${RANKS:-"1 2 4"}
@@ -88,16 +92,23 @@ if [[ "${INDEPENDENT:-1}" == 1 ]] && (( frames % cores == 0 )); then
   echo "independent,$cores,1,$many,$(awk -v s="$many" -v f="$frames" 'BEGIN { print f / s }'),-" >> convert_mpi.csv
 fi
 one_rank=""
-for n in $ranks; do
-  bind=core; (( n > cores )) && bind=none  # (more ranks than cores cannot each have one)
-  t=$(SLUICE_MPI_TIMELINE="$work/timeline_$n.csv" secs timeout 3600 "${MPIRUN:-mpirun}" "${as_root[@]}" --oversubscribe --bind-to "$bind" -np "$n" \
+mpi_row() {  # RANKS CONFIG [VAR=VALUE ...]: one `convert --mpi` run with those variables set
+  local n=$1 config=$2; shift 2
+  local bind=core; (( n > cores )) && bind=none  # (more ranks than cores cannot each have one)
+  local suffix=""; [[ $config != mpi ]] && suffix=_alt
+  local t; t=$( (( $# )) && export "$@"; SLUICE_MPI_TIMELINE="$work/timeline_$n$suffix.csv" secs \
+        timeout 3600 "${MPIRUN:-mpirun}" "${as_root[@]}" --oversubscribe --bind-to "$bind" -np "$n" \
         "$sluice" "${convert[@]}" --mpi --jobs 1 -o "mpi$n.sluice")
-  same=no; cmp -s serial.sluice "mpi$n.sluice" && same=yes
+  local same=no; cmp -s serial.sluice "mpi$n.sluice" && same=yes
   [[ -z "$one_rank" ]] && one_rank=$t
   printf '%s  x%5.2f of 1 rank (ideal %2d), %4.2f of serial with %d threads, identical: %s\n' \
-    "$(row "mpi, $n ranks x 1 thread" "$t")" "$(awk -v a="$one_rank" -v b="$t" 'BEGIN { print a / b }')" "$n" \
+    "$(row "$config, $n ranks x 1 thread" "$t")" "$(awk -v a="$one_rank" -v b="$t" 'BEGIN { print a / b }')" "$n" \
     "$(awk -v a="$serial_all" -v b="$t" 'BEGIN { print a / b }')" "$cores" "$same"
-  echo "mpi,$n,1,$t,$(awk -v s="$t" -v f="$frames" 'BEGIN { print f / s }'),$same" >> convert_mpi.csv
-  rm -f "mpi$n.sluice"
+  echo "$config,$n,1,$t,$(awk -v s="$t" -v f="$frames" 'BEGIN { print f / s }'),$same" >> convert_mpi.csv
+  rm -f "mpi$n.sluice"; }
+for n in $ranks; do
+  mpi_row "$n" mpi
+  # shellcheck disable=SC2086  # (ALT_ENV is a list of VAR=VALUE words)
+  if [[ -n "${ALT_ENV:-}" && " ${ALT_RANKS:-$ranks} " == *" $n "* ]]; then mpi_row "$n" "mpi $ALT_ENV" $ALT_ENV; fi
 done
 echo; echo "csv: $work/convert_mpi.csv"

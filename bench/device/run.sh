@@ -41,7 +41,7 @@ for stage in $stages; do
       (source bench/device/mpi_env.sh
        base=; [[ -x .gpu/sluice_base ]] && base=$(realpath .gpu/sluice_base)  # (pack.sh BASE=...: its serial converter beside)
        run env SLUICE=$S PARTICLES=${MPI_PARTICLES:-10M} FRAMES=${MPI_FRAMES:-32} RANKS="${MPI_RANKS:-1 2 4 8 16}" \
-         SERIAL_ONE=${MPI_SERIAL_ONE:-0} BASE_SLUICE=$base WORK=$T/mpibench bash bench/convert_mpi.sh)
+         SERIAL_ONE=${MPI_SERIAL_ONE:-0} BASE_SLUICE=$base ALT_ENV="${MPI_ALT_ENV:-}" ALT_RANKS="${MPI_ALT_RANKS:-}" WORK=$T/mpibench bash bench/convert_mpi.sh)
       cp $T/mpibench/convert_mpi.csv $T/mpibench/timeline_*.csv "$OUT/" 2>/dev/null
       ;;
     io)
