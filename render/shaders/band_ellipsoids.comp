@@ -2,14 +2,16 @@
 // Anisotropic particles (Yu & Turk 2013), after band_scatter: each
 // particle's ellipsoid from the weighted covariance of the particles within
 // one voxel side of it (its voxel's list and the 26 around it), weights
-// 1 - (r / side)^3. Writes per particle three vec4 (w unused): the
-// ellipsoid's axes, each scaled by its radius in units of the particle's
-// radius. The radii keep the sphere's volume (their product is 1), the
-// largest is at most kMaxRatio times the smallest, and a particle with
-// fewer than kMinNeighbours near it stays a sphere (identity axes).
+// 1 - (r / side)^3. Writes per particle its shape matrix A = R S^2 R^T
+// (R: the ellipsoid's axes, S: its radii in units of the particle's
+// radius), so that the ellipsoid of a particle of radius r at c is
+// (x - c)^T A^-1 (x - c) <= r^2, as 6 halves in 3 words (xx xy, xz yy,
+// yz zz; common.glsl's load_shape reads them). The radii keep the sphere's
+// volume (their product is 1), the largest is at most kMaxRatio times the
+// smallest (so at most kMaxRatio^(2/3) = common.glsl's kLongestAxis), and a
+// particle with fewer than kMinNeighbours near it stays a sphere (A = I).
+// Entries marked in pc.marks (blobs) are neither shaped nor neighbours.
 #include "band.glsl"
-
-layout(buffer_reference, std430, buffer_reference_align = 16) writeonly buffer Axes { vec4 v[]; };
 
 const uint kMinNeighbours = 6u;
 const float kMaxRatio = 4.0;
@@ -21,11 +23,17 @@ struct Moments {
   uint near; // particles within reach, the particle itself included
 };
 
+bool marked(uint i) {
+  return pc.marks != uvec2(0u) && ((Uints(pc.marks).v[i >> 5] >> (i & 31u)) & 1u) != 0u;
+}
+
 void gather_slot(uint s, vec3 p, inout Moments m) {
   if (s == kEmpty) return;
   uint end = START(s);
   for (uint k = end - COUNT(s); k < end; ++k) {
-    vec3 d = particle(LIST(k)) - p;
+    uint j = LIST(k);
+    if (marked(j)) continue;
+    vec3 d = particle(j) - p;
     float q = length(d) / pc.side;
     if (q >= 1.0) continue;
     float w = 1.0 - q * q * q;
@@ -63,11 +71,21 @@ void eigen(mat3 a, out vec3 values, out mat3 vectors) {
   vectors = v;
 }
 
+void store(uint i, mat3 a) {
+  Uints out_shapes = Uints(pc.shapes);
+  out_shapes.v[3u * i] = packHalf2x16(vec2(a[0][0], a[1][0]));
+  out_shapes.v[3u * i + 1u] = packHalf2x16(vec2(a[2][0], a[1][1]));
+  out_shapes.v[3u * i + 2u] = packHalf2x16(vec2(a[2][1], a[2][2]));
+}
+
 void main() {
   Params g = Params(pc.params);
-  if (g.fits == 0u || pc.ellipsoids == uvec2(0u)) return;
-  Axes out_axes = Axes(pc.ellipsoids);
+  if (g.fits == 0u || pc.shapes == uvec2(0u)) return;
   for (uint i = first_item() + gl_LocalInvocationIndex; i < pc.n; i += round_stride()) {
+    if (marked(i)) {
+      store(i, mat3(1.0));
+      continue;
+    }
     vec3 p = particle(i);
     uint s = SLOT(i);
     uvec3 c = cell_of_key(key_of_slot(s, g), g);
@@ -78,7 +96,7 @@ void main() {
           ivec3 d = ivec3(dx, dy, dz);
           gather_slot(d == ivec3(0) ? s : neighbour_slot(c, d, g), p, m);
         }
-    mat3 axes = mat3(1.0);
+    mat3 shape = mat3(1.0);
     if (m.near - 1u >= kMinNeighbours) {
       vec3 mean = m.w1 / m.w0;
       mat3 covariance = m.w2 / m.w0 - outerProduct(mean, mean);
@@ -89,9 +107,10 @@ void main() {
       if (largest > 0.0) {
         vec3 clamped = max(values, vec3(largest / kMaxRatio));
         vec3 radii = clamped / pow(clamped.x * clamped.y * clamped.z, 1.0 / 3.0);
-        axes = mat3(vectors[0] * radii.x, vectors[1] * radii.y, vectors[2] * radii.z);
+        shape = vectors * mat3(radii.x * radii.x, 0.0, 0.0, 0.0, radii.y * radii.y, 0.0, 0.0, 0.0, radii.z * radii.z) *
+                transpose(vectors);
       }
     }
-    for (int k = 0; k < 3; ++k) out_axes.v[3u * i + uint(k)] = vec4(axes[k], 0.0);
+    store(i, shape);
   }
 }

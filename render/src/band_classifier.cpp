@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "band_passes.h"
+#include "half.h"
 #include "sluice/render/error.h"
 
 namespace sluice::render {
@@ -27,7 +28,7 @@ struct BandClassifier::Impl {
   double gpu_ms = -1;
   std::vector<BandClassifier::PassTime> pass_ms;
   bool hashed = false;
-  Buffer upload, xyz, readback, axes;  // grown to the largest frame seen
+  Buffer upload, xyz, readback, shapes;  // grown to the largest frame seen
 
   explicit Impl(detail::ContextImpl& c) : ctx(c), passes(c) {
     const auto families = ctx.physical.getQueueFamilyProperties();
@@ -146,34 +147,33 @@ io::NarrowBand BandClassifier::classify(std::span<const float> xyz, const io::Na
   return out;
 }
 
-std::vector<std::array<float, 9>> BandClassifier::ellipsoids(std::span<const float> xyz, float diameter) {
+std::vector<std::array<float, 6>> BandClassifier::ellipsoids(std::span<const float> xyz, float diameter) {
   if (!(diameter > 0)) throw Error("BandClassifier: the particle diameter must be positive");
   Impl& r = *impl_;
   const uint64_t n = xyz.size() / 3;
   if (n > BandPasses::kMaxParticles) throw Error("BandClassifier: more than 2^28 particles");
-  std::vector<std::array<float, 9>> out(n);
+  std::vector<std::array<float, 6>> out(n);
   if (n == 0) return out;
   r.passes.reserve(n, false);
-  grow_buffer(r.ctx, r.axes, n * 48, vk::BufferUsageFlagBits::eStorageBuffer | vk::BufferUsageFlagBits::eShaderDeviceAddress |
-                                         vk::BufferUsageFlagBits::eTransferSrc,
+  grow_buffer(r.ctx, r.shapes, n * 12, vk::BufferUsageFlagBits::eStorageBuffer | vk::BufferUsageFlagBits::eShaderDeviceAddress |
+                                           vk::BufferUsageFlagBits::eTransferSrc,
               MemoryKind::DeviceLocal);
-  r.stage(xyz, sizeof(BandParams) + n * 48);
-  const BandRun run{.n = n, .xyz = r.xyz.address, .diameter = diameter, .voxel = 2 * diameter, .ellipsoids = r.axes.address};
+  r.stage(xyz, sizeof(BandParams) + n * 12);
+  const BandRun run{
+      .n = n, .xyz = r.xyz.address, .diameter = diameter, .voxel = 2 * diameter, .layers = false, .shapes = r.shapes.address};
   r.ctx.run_once([&](vk::CommandBuffer cmd) {
     r.record(cmd, run);
     cmd.copyBuffer(*r.passes.params.buffer, *r.readback.buffer, vk::BufferCopy(0, 0, sizeof(BandParams)));
-    cmd.copyBuffer(*r.axes.buffer, *r.readback.buffer, vk::BufferCopy(0, sizeof(BandParams), n * 48));
+    cmd.copyBuffer(*r.shapes.buffer, *r.readback.buffer, vk::BufferCopy(0, sizeof(BandParams), n * 12));
     memory_barrier(cmd, Stage::eTransfer, Access::eTransferWrite, Stage::eHost, Access::eHostRead);
   });
   r.read_timestamps();
   BandParams params;
   std::memcpy(&params, r.readback.mapped, sizeof params);
   Impl::require_fits(params);
-  const auto* axes = reinterpret_cast<const float*>(static_cast<const std::byte*>(r.readback.mapped) + sizeof params);
+  const auto* halves = reinterpret_cast<const uint16_t*>(static_cast<const std::byte*>(r.readback.mapped) + sizeof params);
   for (uint64_t i = 0; i < n; ++i) {
-    for (int k = 0; k < 3; ++k) {
-      for (int a = 0; a < 3; ++a) out[i][size_t(3 * k + a)] = axes[4 * (3 * i + uint64_t(k)) + uint64_t(a)];
-    }
+    for (size_t k = 0; k < 6; ++k) out[i][k] = half_to_float(halves[6 * i + k]);
   }
   return out;
 }

@@ -24,9 +24,9 @@ struct BandPush {
   float reach2;
   uint32_t with_blobs;
   uint32_t pad;  // to the 8-byte alignment of the addresses; not in the shader's block
-  uint64_t ellipsoids;
+  uint64_t shapes, marks;
 };
-static_assert(sizeof(BandPush) == 96);
+static_assert(sizeof(BandPush) == 104);
 
 constexpr std::array kPasses{Shader::BandBounds, Shader::BandGrid,  Shader::BandInsert,
                              Shader::BandVoxels, Shader::BandL1,    Shader::BandL2,
@@ -91,7 +91,8 @@ void BandPasses::record(vk::CommandBuffer cmd, const BandRun& run, const std::fu
   const float reach = std::min(2 * run.diameter, run.voxel);
   push.reach2 = reach * reach;
   push.with_blobs = run.blobs ? 1 : 0;
-  push.ellipsoids = run.ellipsoids;
+  push.shapes = run.shapes;
+  push.marks = run.marks;
 
   BandParams initial{};
   std::fill(std::begin(initial.lo), std::end(initial.lo), kEmpty);
@@ -105,7 +106,11 @@ void BandPasses::record(vk::CommandBuffer cmd, const BandRun& run, const std::fu
   cmd.pushConstants<BandPush>(*layout_, vk::ShaderStageFlagBits::eCompute, 0, push);
   for (size_t p = 0; p < pipelines_.size(); ++p) {
     const Shader s = kPasses[p];
-    const bool wanted = s == Shader::BandBlobs ? run.blobs : s == Shader::BandEllipsoids ? run.ellipsoids != 0 : true;
+    const bool classifying = s == Shader::BandL1 || s == Shader::BandL2 || s == Shader::BandParticles;
+    const bool wanted = s == Shader::BandBlobs ? run.blobs
+                        : s == Shader::BandEllipsoids ? run.shapes != 0
+                        : classifying ? run.layers
+                                      : true;
     if (wanted) {
       cmd.bindPipeline(vk::PipelineBindPoint::eCompute, *pipelines_[p]);
       // Passes loop over their items in rounds, so any group count covers

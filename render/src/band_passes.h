@@ -37,9 +37,15 @@ struct BandRun {
   float diameter = 0;            // h (> 0)
   float voxel = 0;               // d (> 0)
   bool blobs = false;
-  // Where each particle's ellipsoid goes (band_ellipsoids.comp: 3 vec4 of
-  // scaled axes per particle, 48 n bytes); 0: none computed.
-  vk::DeviceAddress ellipsoids = 0;
+  // The classification's own passes (L1, L2, particles); off where only
+  // the ellipsoids are wanted.
+  bool layers = true;
+  // Where each particle's ellipsoid goes (band_ellipsoids.comp: its shape
+  // matrix as 6 halves, 12 n bytes); 0: none computed.
+  vk::DeviceAddress shapes = 0;
+  // A bit per entry (32-bit words), 1: a blob among the positions, not a
+  // particle: no ellipsoid, no neighbour; 0: every entry is a particle.
+  vk::DeviceAddress marks = 0;
 };
 
 class BandPasses {

@@ -5,23 +5,11 @@
 #include <cstdint>
 #include <cstring>
 
+#include "half.h"
 #include "renderer_impl.h"
 #include "sluice/render/error.h"
 
 namespace sluice::render {
-namespace {
-
-// IEEE half to float (the thickness targets where 32-bit float blending is missing).
-float half_to_float(uint16_t h) {
-  const uint32_t sign = uint32_t(h >> 15) << 31, exponent = (h >> 10) & 31, mantissa = h & 1023;
-  if (exponent == 0) return (sign ? -1.f : 1.f) * std::ldexp(float(mantissa), -24);
-  uint32_t bits = sign | ((exponent == 31 ? 255u : exponent + 112u) << 23) | (mantissa << 13);
-  float f;
-  std::memcpy(&f, &bits, 4);
-  return f;
-}
-
-}  // namespace
 
 std::vector<float> read_surface(Renderer& renderer) {
   detail::RendererImpl& r = renderer_impl(renderer);

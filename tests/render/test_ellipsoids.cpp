@@ -3,8 +3,10 @@
 // with few neighbours is a sphere; inside a cubic lattice it is a sphere;
 // in a plane it is flattened along the plane's normal by the largest ratio
 // (radii 4^(1/3), 4^(1/3), 4^(1/3) / 4); on a dense line it is stretched
-// along it (16^(1/3), then 16^(1/3) / 4 twice). Tolerance 1e-3 on radii,
-// 1e-3 on the cosine of axis directions; no validation message.
+// along it (16^(1/3), then 16^(1/3) / 4 twice). The GPU gives each shape
+// matrix in half precision; the test finds its axes in double. Tolerance
+// 2e-3 on radii (halves: 1e-3 relative on the squared radii), 1e-3 on the
+// cosine of axis directions; no validation message.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -26,15 +28,48 @@ struct Axis {
   double radius;                    // in particle radii
 };
 
-// The three axes of particle i's ellipsoid, shortest first.
-std::vector<Axis> axes_of(const std::array<float, 9>& e) {
-  std::vector<Axis> out;
-  for (int k = 0; k < 3; ++k) {
-    const double x = e[size_t(3 * k)], y = e[size_t(3 * k + 1)], z = e[size_t(3 * k + 2)];
-    const double r = std::sqrt(x * x + y * y + z * z);
-    out.push_back({{x / r, y / r, z / r}, r});
+// Eigenvalues and unit eigenvectors (columns) of a symmetric 3x3 matrix:
+// cyclic Jacobi rotations in double, independent of the shader's.
+void jacobi(std::array<std::array<double, 3>, 3> a, std::array<double, 3>& values,
+            std::array<std::array<double, 3>, 3>& vectors) {
+  vectors = {{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}};
+  for (int sweep = 0; sweep < 50; ++sweep) {
+    for (int p = 0; p < 2; ++p) {
+      for (int q = p + 1; q < 3; ++q) {
+        if (std::abs(a[p][q]) < 1e-15) continue;
+        const double theta = (a[q][q] - a[p][p]) / (2 * a[p][q]);
+        const double t = (theta >= 0 ? 1.0 : -1.0) / (std::abs(theta) + std::sqrt(theta * theta + 1));
+        const double c = 1 / std::sqrt(t * t + 1), s = t * c;
+        for (int k = 0; k < 3; ++k) {  // a = J^T a J, v = v J
+          const double akp = a[k][p], akq = a[k][q];
+          a[k][p] = c * akp - s * akq;
+          a[k][q] = s * akp + c * akq;
+        }
+        for (int k = 0; k < 3; ++k) {
+          const double apk = a[p][k], aqk = a[q][k];
+          a[p][k] = c * apk - s * aqk;
+          a[q][k] = s * apk + c * aqk;
+        }
+        for (int k = 0; k < 3; ++k) {
+          const double vkp = vectors[k][p], vkq = vectors[k][q];
+          vectors[k][p] = c * vkp - s * vkq;
+          vectors[k][q] = s * vkp + c * vkq;
+        }
+      }
+    }
   }
-  std::sort(out.begin(), out.end(), [](const Axis& a, const Axis& b) { return a.radius < b.radius; });
+  values = {a[0][0], a[1][1], a[2][2]};
+}
+
+// The three axes of a shape matrix A = R S^2 R^T, shortest first.
+std::vector<Axis> axes_of(const std::array<float, 6>& e) {
+  const std::array<std::array<double, 3>, 3> a{{{e[0], e[1], e[2]}, {e[1], e[3], e[4]}, {e[2], e[4], e[5]}}};
+  std::array<double, 3> values{};
+  std::array<std::array<double, 3>, 3> vectors{};
+  jacobi(a, values, vectors);
+  std::vector<Axis> out;
+  for (int k = 0; k < 3; ++k) out.push_back({{vectors[0][k], vectors[1][k], vectors[2][k]}, std::sqrt(std::max(values[k], 0.0))});
+  std::sort(out.begin(), out.end(), [](const Axis& x, const Axis& y) { return x.radius < y.radius; });
   return out;
 }
 
@@ -64,9 +99,8 @@ TEST(Ellipsoids, AParticleWithFewNeighboursIsItsSphere) {
   const std::vector<float> xyz{5, 5, 5, 0, 0, 0, h, 0, 0, 0, h, 0, 0, 0, h};
   const auto e = band_classifier().ellipsoids(xyz, h);
   ASSERT_EQ(e.size(), 5u);
-  for (size_t i = 0; i < e.size(); ++i) {
-    for (int k = 0; k < 9; ++k) EXPECT_EQ(e[i][size_t(k)], k % 4 == 0 ? 1.0f : 0.0f) << "particle " << i << ", entry " << k;
-  }
+  const std::array<float, 6> identity{1, 0, 0, 1, 0, 1};
+  for (size_t i = 0; i < e.size(); ++i) EXPECT_EQ(e[i], identity) << "particle " << i;
 }
 
 TEST(Ellipsoids, InsideACubicLatticeAParticleIsItsSphere) {
@@ -78,7 +112,7 @@ TEST(Ellipsoids, InsideACubicLatticeAParticleIsItsSphere) {
       for (int z = 0; z < 9; ++z) xyz.insert(xyz.end(), {float(x) * h, float(y) * h, float(z) * h});
   const auto e = band_classifier().ellipsoids(xyz, h);
   const size_t centre = (4 * 9 + 4) * 9 + 4;
-  for (const Axis& a : axes_of(e[centre])) EXPECT_NEAR(a.radius, 1.0, 1e-3);
+  for (const Axis& a : axes_of(e[centre])) EXPECT_NEAR(a.radius, 1.0, 2e-3);
 }
 
 TEST(Ellipsoids, InAPlaneAParticleIsFlattenedAlongItsNormal) {
@@ -96,10 +130,10 @@ TEST(Ellipsoids, InAPlaneAParticleIsFlattenedAlongItsNormal) {
   const size_t centre = 10 * 21 + 10;
   const std::vector<Axis> axes = axes_of(e[centre]);
   const double flat = std::cbrt(4.0) / 4.0, wide = std::cbrt(4.0);
-  EXPECT_NEAR(axes[0].radius, flat, 1e-3);
+  EXPECT_NEAR(axes[0].radius, flat, 2e-3);
   EXPECT_NEAR(alignment(axes[0].direction, normal), 1.0, 1e-3) << "the short axis is the plane's normal";
-  EXPECT_NEAR(axes[1].radius, wide, 1e-3);
-  EXPECT_NEAR(axes[2].radius, wide, 1e-3);
+  EXPECT_NEAR(axes[1].radius, wide, 2e-3);
+  EXPECT_NEAR(axes[2].radius, wide, 2e-3);
 }
 
 TEST(Ellipsoids, OnADenseLineAParticleIsStretchedAlongIt) {
@@ -114,10 +148,10 @@ TEST(Ellipsoids, OnADenseLineAParticleIsStretchedAlongIt) {
   const auto e = band_classifier().ellipsoids(xyz, h);
   const std::vector<Axis> axes = axes_of(e[40]);
   const double r = std::cbrt(16.0);
-  EXPECT_NEAR(axes[2].radius, r, 1e-3);
+  EXPECT_NEAR(axes[2].radius, r, 2e-3);
   EXPECT_NEAR(alignment(axes[2].direction, along), 1.0, 1e-3) << "the long axis is the line";
-  EXPECT_NEAR(axes[0].radius, r / 4, 1e-3);
-  EXPECT_NEAR(axes[1].radius, r / 4, 1e-3);
+  EXPECT_NEAR(axes[0].radius, r / 4, 2e-3);
+  EXPECT_NEAR(axes[1].radius, r / 4, 2e-3);
 }
 
 }  // namespace

@@ -43,12 +43,14 @@ class BandClassifier {
 
   // Each particle's ellipsoid, as anisotropic particles draw it (Yu & Turk
   // 2013, shaders/band_ellipsoids.comp): from the weighted covariance of
-  // the particles within 2 x `diameter` of it, its axes, each scaled by its
-  // radius in units of the particle's radius, axis by axis (x, y, z of the
-  // first, then the second, then the third). The radii keep the sphere's
-  // volume and differ at most 4 times; a particle with fewer than 6 others
-  // near it is a sphere (the identity). Throws as classify() does.
-  std::vector<std::array<float, 9>> ellipsoids(std::span<const float> xyz, float diameter);
+  // the particles within 2 x `diameter` of it, its shape matrix
+  // A = R S^2 R^T (R: the ellipsoid's axes; S: its radii in units of the
+  // particle's radius), so that the particle of radius r at c covers
+  // (x - c)^T A^-1 (x - c) <= r^2. Entries xx, xy, xz, yy, yz, zz, as the
+  // GPU keeps them (half precision: about 1e-3 relative). The radii keep
+  // the sphere's volume and differ at most 4 times; a particle with fewer
+  // than 6 others near it is a sphere (A = I). Throws as classify() does.
+  std::vector<std::array<float, 6>> ellipsoids(std::span<const float> xyz, float diameter);
 
   // GPU time of the last classify() (its passes, from timestamps; not the
   // upload or the read-back), milliseconds; < 0 when the device has no
