@@ -35,6 +35,7 @@ layout(push_constant) uniform Push {
   uvec2 blobs;       // Vec4s: centroid, count bits
   uvec2 blob_attr;   // Floats: blob mean attribute
   uvec2 surface;     // Words: [0] 1 when valid, then one bit per particle (1: surface)
+  uvec2 marks;       // band_gather: Words, a bit per entry, 1: a blob chunk's (zeroed before); or 0
   uint n;
   uint chunk_count;
   uint room;         // blobs that fit after the particles

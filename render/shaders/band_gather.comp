@@ -1,7 +1,9 @@
 #version 460
 // Narrow band of a frame without layers, step 1: the frame's particles as
 // float positions (and colour attribute values) for the classifier. One
-// workgroup per chunk, decoding as every pass of a view does.
+// workgroup per chunk, decoding as every pass of a view does. For the
+// ellipsoids of a frame with blob chunks: their entries marked, so that
+// band_ellipsoids leaves them out.
 #include "band_frame.glsl"
 
 void main() {
@@ -18,5 +20,6 @@ void main() {
     xyz.v[3u * i + 1u] = pos.y;
     xyz.v[3u * i + 2u] = pos.z;
     if (pc.attributes != uvec2(0u)) Floats(pc.attr).v[i] = attribute_value(pc.attributes, c, i);
+    if (c.kind == 1u && pc.marks != uvec2(0u)) atomicOr(Words(pc.marks).v[i >> 5], 1u << (i & 31u));
   }
 }

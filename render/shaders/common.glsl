@@ -77,13 +77,22 @@ layout(push_constant) uniform Push {
   uvec2 args;
   uvec2 big;    // Items: draw-list indices of the large splats
   uvec2 surface;  // Surface of a frame classified on the GPU (src/frame_band.h), or 0
+  uvec2 shapes;   // Shapes: anisotropic particles' shape matrices (src/frame_band.h), or 0: spheres
   uint chunk_count;
   uint param0;  // per pass: filter direction, thickness pass flag, ...
   uint param1;
   uint param2;
 } pc;
 
+// [0]: 1 once written; then per particle of the frame, 3 words: its
+// ellipsoid's shape matrix A as 6 halves (xx xy, xz yy, yz zz;
+// band_ellipsoids.comp writes them).
+layout(buffer_reference, std430, buffer_reference_align = 4) readonly buffer Shapes { uint w[]; };
+
 const uint kBlock = 256;  // particles per cull workgroup
+// The longest an ellipsoid's axis gets, in particle radii: its radii are at
+// most 4 times apart and their product is 1 (band_ellipsoids.comp), 4^(2/3).
+const float kLongestAxis = 2.5198421;
 
 // World position and stable LOD value of particle `index` of chunk `c`.
 void decode_particle(Chunk c, uint index, out vec3 pos, out uint lod_value) {
@@ -96,7 +105,17 @@ struct DrawItem {
   float attr;    // colour attribute, 0..1
   float count;   // blobs: particles the blob stands for; 0: a particle
   float sigma;   // blobs: the splat's standard deviation (world)
+  bool ellipsoid;  // anisotropic: the particle is the ellipsoid (x - pos)^T shape^-1 (x - pos) <= radius^2
+  mat3 shape;      // world; identity unless `ellipsoid`
 };
+
+mat3 load_shape(uint index) {
+  Shapes s = Shapes(pc.shapes);
+  vec2 a = unpackHalf2x16(s.w[1u + 3u * index]);
+  vec2 b = unpackHalf2x16(s.w[2u + 3u * index]);
+  vec2 c = unpackHalf2x16(s.w[3u + 3u * index]);
+  return mat3(a.x, a.y, b.x, a.y, b.y, c.x, b.x, c.x, c.y);
+}
 
 // A blob's splat (section 4 of papers/001, eq. 4.2, normalized): a Gaussian
 // across the view whose integral is `count` particle volumes, so the blobs
@@ -122,12 +141,15 @@ DrawItem load_item(uint item) {
   Chunk c = Chunks(pc.chunks).c[block.x];
   DrawItem it;
   uint lod_value;
-  decode_particle(c, c.first + (block.y & 0x7fffffffu) + (d.y & 0xffu), it.pos, lod_value);
+  uint index = c.first + (block.y & 0x7fffffffu) + (d.y & 0xffu);
+  decode_particle(c, index, it.pos, lod_value);
   float growth = float((d.y >> 8) & 0xfffu) * (1.0 / 4095.0);
   it.radius = g.radius.x * (1.0 + growth * (g.lod.w - 1.0));
   it.attr = float(d.y >> 20) * (1.0 / 4095.0);
   it.count = 0.0;
   it.sigma = 0.0;
+  it.ellipsoid = c.kind == 0u && pc.shapes != uvec2(0u) && Shapes(pc.shapes).w[0] != 0u;
+  it.shape = it.ellipsoid ? load_shape(index) : mat3(1.0);
   if (c.kind == 1u) {
     float grow = 1.0 + growth * (g.lod.w - 1.0);  // density-preserving LOD: it stands for grow^3 times as many
     it.count = float(lod_value) * grow * grow * grow;
@@ -156,6 +178,52 @@ void sphere_bounds(vec3 c, float r, vec4 vp, out vec2 lo, out vec2 hi) {
   vec2 ty = tangent_range(c.y, d, r) * -g.proj.y + g.frustum.y;   // ndc y (flipped: image rows go down)
   lo = (vec2(tx.x, min(ty.x, ty.y)) * 0.5 + 0.5) * vp.xy;
   hi = (vec2(tx.y, max(ty.x, ty.y)) * 0.5 + 0.5) * vp.xy;
+}
+
+// An ellipsoid in eye space: its quadric matrix Q = radius^2 V shape V^T
+// (V: the view's rotation), so that it is (x - c)^T Q^-1 (x - c) <= 1.
+mat3 eye_quadric(DrawItem it) {
+  mat3 v = mat3(g.view);
+  return it.radius * it.radius * (v * it.shape * transpose(v));
+}
+
+// tan(angle) range along one image axis a (x or y) covered by an ellipsoid
+// at eye-space c with quadric Q: the planes x_a + u z = 0 through the eye
+// that touch it, (c_a + u c_z)^2 = Q_aa + 2 u Q_az + u^2 Q_zz.
+vec2 quadric_range(float ca, float cz, float qaa, float qaz, float qzz) {
+  float a = cz * cz - qzz;
+  if (a <= 0.0) return vec2(-1e6, 1e6);  // it reaches the eye's plane
+  float b = ca * cz - qaz;
+  float root = sqrt(max(b * b - a * (ca * ca - qaa), 0.0));
+  return vec2((-b - root) / a, (-b + root) / a);
+}
+
+// The exact screen-space bounding box (pixels of a viewport `vp`) of the
+// perspective projection of an ellipsoid at eye-space c with quadric q.
+void ellipsoid_bounds(vec3 c, mat3 q, vec4 vp, out vec2 lo, out vec2 hi) {
+  vec2 tx = quadric_range(c.x, c.z, q[0][0], q[2][0], q[2][2]) * g.proj.x + g.frustum.x;
+  vec2 ty = quadric_range(c.y, c.z, q[1][1], q[2][1], q[2][2]) * -g.proj.y + g.frustum.y;
+  lo = (vec2(tx.x, min(ty.x, ty.y)) * 0.5 + 0.5) * vp.xy;
+  hi = (vec2(tx.y, max(ty.x, ty.y)) * 0.5 + 0.5) * vp.xy;
+}
+
+// A ray from the eye along unit n against the ellipsoid at eye-space c with
+// inverse quadric b = Q^-1: false on a miss; else the distance along n to
+// the near hit and the chord through it. Solved from the ray's closest
+// approach to the centre, so small, far ellipsoids stay exact in float.
+bool ray_ellipsoid(vec3 c, mat3 b, vec3 n, out float near, out float chord) {
+  float tc = dot(n, c);
+  vec3 p = c - tc * n;  // the centre, seen from the closest approach
+  vec3 bn = b * n;
+  float qa = dot(n, bn), qb = dot(p, bn), qc = dot(p, b * p) - 1.0;
+  float disc = qb * qb - qa * qc;
+  near = 0.0;
+  chord = 0.0;
+  if (disc < 0.0) return false;
+  float root = sqrt(disc);
+  near = tc + (qb - root) / qa;
+  chord = 2.0 * root / qa;
+  return true;
 }
 
 // Eye-space ray direction through a pixel (not normalized; z = -1), with the

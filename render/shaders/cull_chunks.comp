@@ -6,10 +6,10 @@
 
 layout(local_size_x = 64) in;
 
-// Largest distance any particle's sphere (or blob's splat) reaches beyond its centre.
+// Largest distance any particle's sphere or ellipsoid (or blob's splat) reaches beyond its centre.
 float reach(Chunk c) {
   if (c.kind == 1u) return kBlobReach * blob_sigma(c.voxel, g.radius.x);
-  float r = g.radius.x;
+  float r = pc.shapes != uvec2(0u) ? g.radius.x * kLongestAxis : g.radius.x;
   return g.modes.x == 2u ? r * g.lod.w : r;
 }
 

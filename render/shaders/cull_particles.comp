@@ -84,20 +84,23 @@ void main() {
     }
   }
   float r = blob ? r0 : r0 * scale;
+  // Anisotropic particles reach up to their longest axis.
+  float reach = blob || pc.shapes == uvec2(0u) ? r : r * kLongestAxis;
   if (keep && !inside) {
     // In some eye's frustum, and not too near or too large in any.
     bool seen = false, fits = true;
     for (eye = 0u; eye < views[0].stereo.x; ++eye) {
       bool in_eye = true;
       for (int i = 0; i < 5; ++i) {
-        if (dot(g.planes[i].xyz, pos) + g.planes[i].w < -r) in_eye = false;
+        if (dot(g.planes[i].xyz, pos) + g.planes[i].w < -reach) in_eye = false;
       }
       seen = seen || in_eye;
       // Near-camera culling: too close, or a splat too large for the filter.
       // A blob goes when its particles would (its splat is wide by design).
       float dist = -(g.view * vec4(pos, 1.0)).z;  // along the view axis
+      // (An ellipsoid's whole reach stays off the near plane; its size is its sphere's.)
       float rn = blob ? g.radius.x : r;
-      if (dist - rn < max(g.eye.w, g.radius.w)) fits = false;
+      if (dist - (blob ? rn : reach) < max(g.eye.w, g.radius.w)) fits = false;
       if (2.0 * rn * g.proj.y * g.viewport.y * 0.5 > g.radius.z * max(dist - rn, 1e-20)) fits = false;
     }
     eye = 0u;

@@ -22,6 +22,9 @@ struct Sphere {
   float attr;
   float count;  // blobs: particles; 0: a sphere
   float sigma;  // blobs
+  bool ellipsoid;  // anisotropic particles: q and b describe it, r does not
+  mat3 q;          // its eye-space quadric (eye_quadric) and q^-1
+  mat3 b;
 };
 
 Sphere load(uint item) {
@@ -32,46 +35,58 @@ Sphere load(uint item) {
   s.attr = it.attr;
   s.count = it.count;
   s.sigma = it.sigma;
+  s.ellipsoid = it.ellipsoid;
+  s.q = s.ellipsoid ? eye_quadric(it) : mat3(1.0);
+  s.b = s.ellipsoid ? inverse(s.q) : mat3(1.0);
   return s;
 }
 
 // Pixels [lo, hi) whose centres can fall inside the sphere's projection.
 void pixel_box(Sphere s, vec4 vp, out ivec2 lo, out ivec2 hi) {
   vec2 a, b;
-  sphere_bounds(s.c, s.r, vp, a, b);
+  if (s.ellipsoid) {
+    ellipsoid_bounds(s.c, s.q, vp, a, b);
+  } else {
+    sphere_bounds(s.c, s.r, vp, a, b);
+  }
   lo = clamp(ivec2(floor(a)), ivec2(0), ivec2(vp.xy));
   hi = clamp(ivec2(ceil(b)), ivec2(0), ivec2(vp.xy));
 }
 
-// h^2 of the pixel's ray against the sphere (< 0: miss) and the hit depth.
-float ray_sphere(Sphere s, ivec2 p, vec4 k, out float z) {
+// The pixel's ray against the particle: false on a miss; else the hit's
+// depth and, for spheres and ellipsoids, the chord through it, for blobs
+// the ray's squared distance from the centroid.
+bool ray_hit(Sphere s, ivec2 p, vec4 k, out float z, out float chord) {
   vec3 dir = eye_ray(vec2(p) + 0.5, k);
   float inv_len = inversesqrt(dot(dir, dir));
   vec3 n = dir * inv_len;
+  if (s.ellipsoid) {
+    float near;
+    bool hit = ray_ellipsoid(s.c, s.b, n, near, chord);
+    z = near * inv_len;  // dir.z = -1: distance along the ray * |n.z|
+    return hit;
+  }
   float tc = dot(n, s.c);
   vec3 perp = s.c - tc * n;
   float h2 = s.r * s.r - dot(perp, perp);
   z = (tc - sqrt(max(h2, 0.0))) * inv_len;
-  return h2;
+  chord = s.count > 0.0 ? s.r * s.r - h2 : 2.0 * sqrt(max(h2, 0.0));
+  return h2 >= 0.0;
 }
 
 void depth_pixel(Sphere s, ivec2 p) {
-  float z;
-  if (ray_sphere(s, p, g.ray, z) < 0.0) return;
+  float z, chord;
+  if (!ray_hit(s, p, g.ray, z, chord)) return;
   uint bits = floatBitsToUint(z);
   ivec3 q = ivec3(p, eye);
   if (imageLoad(depth_u, q).x > bits) imageAtomicMin(depth_u, q, bits);
 }
 
 void thickness_pixel(Sphere s, ivec2 p, bool attr) {
-  float z;
-  float h2 = ray_sphere(s, p, g.thick_ray, z);
-  if (h2 < 0.0) return;
-  float chord = 2.0 * sqrt(h2) * g.splat.x;
-  if (s.count > 0.0) {
-    // h2 = reach^2 - (distance of the blob from the ray)^2.
-    chord = blob_thickness(s.count, s.sigma, s.r * s.r - h2) * g.splat.x;
-  }
+  float z, chord;
+  if (!ray_hit(s, p, g.thick_ray, z, chord)) return;
+  if (s.count > 0.0) chord = blob_thickness(s.count, s.sigma, chord);  // (chord: the squared distance)
+  chord *= g.splat.x;
   uint t = uint(chord + 0.5);
   if (t == 0u) return;
   imageAtomicAdd(thick_u, ivec3(p, eye), t);

@@ -12,11 +12,11 @@ namespace {
 
 // Mirrors Push in band_frame.glsl.
 struct FramePush {
-  uint64_t particles, chunks, attributes, xyz, attr, params, layers, blobs, blob_attr, surface;
+  uint64_t particles, chunks, attributes, xyz, attr, params, layers, blobs, blob_attr, surface, marks;
   uint32_t n, chunk_count, room, float_positions, step;
   uint32_t pad;  // to the 8-byte alignment of the addresses; not in the shader's block
 };
-static_assert(sizeof(FramePush) == 104);
+static_assert(sizeof(FramePush) == 112);
 
 // 2D dispatch of `groups` workgroups (x at most 65535).
 void dispatch(vk::CommandBuffer cmd, uint64_t groups) {
@@ -28,6 +28,7 @@ void dispatch(vk::CommandBuffer cmd, uint64_t groups) {
 
 uint64_t blob_room(uint64_t particles) { return std::max<uint64_t>(particles / 4, 1024); }
 uint64_t surface_words(uint64_t particles) { return 1 + (particles + 31) / 32; }
+uint64_t shapes_bytes(uint64_t particles) { return 4 + 12 * particles; }
 
 GpuChunk blob_chunk_row(std::span<const GpuChunk> table, uint64_t particles, float voxel) {
   GpuChunk row{};
@@ -59,40 +60,58 @@ FrameBand::FrameBand(detail::ContextImpl& ctx, float diameter) : ctx_(ctx), diam
   apply_ = compute_pipeline(ctx.device, layout_, Shader::BandApply);
 }
 
-void FrameBand::record(vk::CommandBuffer cmd, FrameSet& set, bool float_positions,
+void FrameBand::record(vk::CommandBuffer cmd, FrameSet& set, bool float_positions, Wanted wanted,
                        const std::function<void(Buffer&&)>& retire) {
   const uint64_t n = set.particle_count;
-  constexpr auto usage = vk::BufferUsageFlagBits::eStorageBuffer | vk::BufferUsageFlagBits::eShaderDeviceAddress;
+  const bool blobs_in = !wanted.classify && !set.unlayered;  // a layered set's blob rows, among the positions
+  constexpr auto usage = vk::BufferUsageFlagBits::eStorageBuffer | vk::BufferUsageFlagBits::eShaderDeviceAddress |
+                         vk::BufferUsageFlagBits::eTransferDst;
   grow_buffer(ctx_, xyz_, n * 12, usage, MemoryKind::DeviceLocal, retire);
-  grow_buffer(ctx_, attr_, n * 4, usage, MemoryKind::DeviceLocal, retire);
-  passes_.reserve(n, true, retire);
+  if (wanted.classify) grow_buffer(ctx_, attr_, n * 4, usage, MemoryKind::DeviceLocal, retire);
+  if (wanted.shapes && blobs_in) grow_buffer(ctx_, marks_, surface_words(n) * 4, usage, MemoryKind::DeviceLocal, retire);
+  passes_.reserve(n, wanted.classify, retire);
 
+  const bool attributes = wanted.classify && set.has_attribute;
   FramePush push{};
   push.particles = set.particles.address;
   push.chunks = set.chunks.address;
-  push.attributes = set.has_attribute ? set.attributes.address : 0;
+  push.attributes = attributes ? set.attributes.address : 0;
   push.xyz = xyz_.address;
-  push.attr = set.has_attribute ? attr_.address : 0;
+  push.attr = attributes ? attr_.address : 0;
   push.params = passes_.params.address;
   push.layers = passes_.particles.address + BandPasses::kLayerWord * n * 4;
   push.blobs = passes_.blobs.address;
   push.blob_attr = passes_.blob_attr.address;
   push.surface = set.surface.address;
+  push.marks = wanted.shapes && blobs_in ? marks_.address : 0;
   push.n = uint32_t(n);
   push.chunk_count = set.chunk_count;
   push.room = uint32_t(blob_room(n));
   push.float_positions = float_positions ? 1 : 0;
 
+  if (push.marks) {
+    cmd.fillBuffer(*marks_.buffer, 0, surface_words(n) * 4, 0);
+    BandPasses::barrier(cmd);
+  }
   cmd.bindPipeline(vk::PipelineBindPoint::eCompute, *gather_);
   cmd.pushConstants<FramePush>(*layout_, vk::ShaderStageFlagBits::eCompute, 0, push);
   dispatch(cmd, set.chunk_count);
   BandPasses::barrier(cmd);
+  // The shapes after the validity word (4 bytes: their words stay aligned).
   passes_.record(cmd, BandRun{.n = n,
                               .xyz = xyz_.address,
-                              .attr = set.has_attribute ? attr_.address : 0,
+                              .attr = attributes ? attr_.address : 0,
                               .diameter = diameter_,
                               .voxel = voxel(),
-                              .blobs = true});
+                              .blobs = wanted.classify,
+                              .layers = wanted.classify,
+                              .shapes = wanted.shapes ? set.shapes.address + 4 : 0,
+                              .marks = push.marks});
+  if (wanted.shapes) {
+    cmd.fillBuffer(*set.shapes.buffer, 0, 4, 1);
+    BandPasses::barrier(cmd);
+  }
+  if (!wanted.classify) return;
   cmd.bindPipeline(vk::PipelineBindPoint::eCompute, *apply_);
   for (uint32_t step : {0u, 1u}) {
     push.step = step;

@@ -128,6 +128,7 @@ void PassRecorder::begin_view(uint32_t globals_offset, const FrameSet* frame, ui
       pc_.chunk_count += 1;  // the blobs' row
       pc_.surface = frame->surface.address;
     }
+    if (frame->shaped) pc_.shapes = frame->shapes.address;
   }
   pc_.blocks = r_.blocks.address;
   pc_.draws = r_.draws.address;
@@ -137,10 +138,20 @@ void PassRecorder::begin_view(uint32_t globals_offset, const FrameSet* frame, ui
   memory_barrier(cmd_, Stage::eAllCommands, Access::eMemoryWrite, Stage::eAllCommands, Access::eMemoryRead | Access::eMemoryWrite);
 }
 
-void PassRecorder::classify(FrameSet& frame) {
-  r_.band->record(cmd_, frame, r_.scene.coding == io::PositionCoding::Float32, [&](Buffer&& b) { r_.retire(std::move(b)); });
-  memory_barrier(cmd_, Stage::eComputeShader, Access::eShaderStorageWrite, Stage::eComputeShader,
+void PassRecorder::prepare(FrameSet& frame) {
+  const FrameBand::Wanted wanted{.classify = frame.band_eligible && !frame.classified,
+                                 .shapes = frame.shape_eligible && !frame.shaped};
+  if (!wanted.classify && !wanted.shapes) return;
+  r_.band->record(cmd_, frame, r_.scene.coding == io::PositionCoding::Float32, wanted,
+                  [&](Buffer&& b) { r_.retire(std::move(b)); });
+  memory_barrier(cmd_, Stage::eComputeShader | Stage::eTransfer, Access::eShaderStorageWrite | Access::eTransferWrite,
+                 Stage::eComputeShader | Stage::eVertexShader | Stage::eFragmentShader,
                  Access::eShaderStorageRead | Access::eShaderStorageWrite);
+  frame.shaped = frame.shaped || wanted.shapes;
+  if (!wanted.classify) {
+    stamp("ellipsoids");
+    return;
+  }
   frame.classified = true;
   // What came of it, for FrameStats::classification.
   memory_barrier(cmd_, Stage::eComputeShader, Access::eShaderStorageWrite, Stage::eCopy, Access::eTransferRead);

@@ -20,9 +20,10 @@ class PassRecorder {
   // Binds the view's uniforms (dynamic offset: a Globals per eye) and the
   // frame's buffers; `layers` eyes are drawn by the passes that follow.
   void begin_view(uint32_t globals_offset, const FrameSet* frame, uint32_t layers);
-  // A frame without layers, first drawn: its narrow band on the GPU
-  // (frame_band.h), once; the views then draw its surface and blobs.
-  void classify(FrameSet& frame);
+  // A frame first drawn: its narrow band on the GPU if it came without
+  // layers, its particles' ellipsoids if anisotropic (frame_band.h), once;
+  // the views then draw its surface and blobs, and the ellipsoids.
+  void prepare(FrameSet& frame);
   void cull();                          // chunks -> blocks -> particles -> draw list
   void splat();                         // compute splatting of depth and thickness, then resolve
   void raster_spheres();                // point sprites: exact depth, additive thickness

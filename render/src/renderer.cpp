@@ -282,7 +282,7 @@ Renderer::Renderer(Context& context, const SceneInfo& scene, const RendererOptio
                                   MemoryKind::Readback);
   }
   r.create_pipelines();
-  if (options.classify_unlayered) {
+  if (options.classify_unlayered || options.anisotropic) {
     const float h = scene.particle_spacing > 0 ? scene.particle_spacing : 2 * scene.particle_radius;
     if (h > 0) r.band = std::make_unique<FrameBand>(r.ctx, h);
   }
@@ -459,7 +459,7 @@ FrameSync Renderer::record(VkCommandBuffer command_buffer, const RenderTarget& t
 
   PassRecorder pass(r, vk::CommandBuffer(command_buffer), slot, slot_index);
   pass.begin_frame(target, direct);
-  if (frame && frame->band_eligible && !frame->classified) pass.classify(*frame);
+  if (frame) pass.prepare(*frame);
   // Mono: each view its own pass over the targets. A 2-layer target: both
   // eyes in one pass (one cull, every screen-space pass over both layers).
   const uint32_t passes = layers == 2 ? 1 : uint32_t(views.size());

@@ -58,6 +58,10 @@ struct FrameSet {
   bool band_eligible = false;      // uploaded with room for blobs: to be classified when first drawn
   bool classified = false;         // its classification is recorded: draw surface + blobs
   Buffer surface;                  // frame_band.h: validity word, a bit per particle
+  // With RendererOptions::anisotropic: each particle's ellipsoid, computed when first drawn.
+  bool shape_eligible = false;     // sized for them
+  bool shaped = false;             // their computation is recorded
+  Buffer shapes;                   // frame_band.h (shapes_bytes): validity word, 3 words per particle
   // Frames committed encoded (commit_encoded): the staged area, the decode's
   // error words (host-visible), its command buffer and timestamps.
   Buffer encoded, decode_errors, decode_tiles;
@@ -136,7 +140,7 @@ struct detail::RendererImpl {
   int shown = -1;              // set record() draws
   int staged = -1;             // set stage_frame() filled
   size_t stride = 8;
-  std::unique_ptr<FrameBand> band;  // with options.classify_unlayered and a known particle size
+  std::unique_ptr<FrameBand> band;  // with options.classify_unlayered or .anisotropic, and a known particle size
   vk::raii::Semaphore upload_done{nullptr};  // timeline: value = uploads submitted (copies, or decodes after them)
   uint64_t upload_value = 0;
   uint64_t last_decode_ticket = 0;           // the upload value the last decode signals (graphics queue)

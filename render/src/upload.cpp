@@ -298,6 +298,11 @@ uint64_t upload_frame(detail::RendererImpl& r, FrameSet& set, UploadSource parti
   r.ensure(set.chunks, std::max<uint64_t>(rows * sizeof(GpuChunk), 16), kDeviceUsage, MemoryKind::DeviceLocal);
   r.ensure(set.attributes, std::max<uint64_t>((n + room) * 2 + 4, 16), kDeviceUsage, MemoryKind::DeviceLocal);
   if (set.band_eligible) r.ensure(set.surface, surface_words(n) * 4, kDeviceUsage, MemoryKind::DeviceLocal);
+  // Anisotropic particles: their shapes, once the first draw computes them
+  // (the same 4 GB limit: band_ellipsoids indexes them from the start).
+  set.shaped = false;
+  set.shape_eligible = r.band && r.options.anisotropic && n > 0 && n <= BandPasses::kMaxParticles && shapes_bytes(n) < k4G;
+  if (set.shape_eligible) r.ensure(set.shapes, shapes_bytes(n), kDeviceUsage, MemoryKind::DeviceLocal);
   r.ensure(r.blocks, std::max<uint64_t>(blocks * 8, 16), kDeviceUsage, MemoryKind::DeviceLocal);
   r.ensure(r.draws, std::max<uint64_t>((n + room) * 8, 16), kDeviceUsage, MemoryKind::DeviceLocal);
   // Large splats: up to one entry per drawn item and eye (two eyes in one pass).
@@ -335,6 +340,7 @@ uint64_t upload_frame(detail::RendererImpl& r, FrameSet& set, UploadSource parti
     cmd.updateBuffer<GpuChunk>(*set.chunks.buffer, chunks * sizeof(GpuChunk), row);
     cmd.fillBuffer(*set.surface.buffer, 0, 4, 0);
   }
+  if (set.shape_eligible) cmd.fillBuffer(*set.shapes.buffer, 0, 4, 0);  // spheres until its shapes are written
   if (set.has_attribute && n > 0 && !encoded) {
     // Rounded up to 4 bytes: every source has room (streams are padded).
     cmd.copyBuffer(attribute_src.buffer, *set.attributes.buffer,

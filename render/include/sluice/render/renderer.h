@@ -205,6 +205,17 @@ struct RendererOptions {
   // and room for n/4 blobs after the particles; a frame with more blobs, or
   // whose grid is too large, is drawn whole.
   bool classify_unlayered = false;
+  // Anisotropic particles (Yu & Turk 2013): each particle drawn as an
+  // ellipsoid from the covariance of its neighbours within 2h (h = the
+  // scene's particle spacing, else twice its radius), flat where the fluid
+  // is flat, so a resting surface shades smooth instead of showing the
+  // particles' lattice. Computed on the GPU when a frame is first drawn (a
+  // pass "ellipsoids" in FrameStats, or part of "classify"), 12 bytes per
+  // particle and the classifier's scratch; each radius at most 4 times
+  // another, volume kept; a particle with fewer than 6 others near it stays
+  // a sphere, as do blobs. Needs a known particle size; otherwise, and for
+  // a frame of more than 2^28 particles, particles stay spheres.
+  bool anisotropic = false;
 };
 
 namespace detail {
