@@ -2,11 +2,15 @@
 // Anisotropic particles (Yu & Turk 2013), after band_scatter: each
 // particle's ellipsoid from the weighted covariance of the particles within
 // one voxel side of it (its voxel's list and the 26 around it), weights
-// 1 - (r / side)^3. Writes per particle its shape matrix A = R S^2 R^T
-// (R: the ellipsoid's axes, S: its radii in units of the particle's
-// radius), so that the ellipsoid of a particle of radius r at c is
-// (x - c)^T A^-1 (x - c) <= r^2, as 6 halves in 3 words (xx xy, xz yy,
-// yz zz; common.glsl's load_shape reads them). The radii keep the sphere's
+// 1 - (r / side)^3. Writes per particle 5 words (common.glsl's load_item
+// reads them): its shape matrix A = R S^2 R^T (R: the ellipsoid's axes,
+// S: its radii in units of the particle's radius), so that the ellipsoid
+// of a particle of radius r at c is (x - c)^T A^-1 (x - c) <= r^2, as 6
+// halves in 3 words (xx xy, xz yy, yz zz); then its centre's shift, 3
+// halves in units of h = side / 2 (x y, z 0): Yu & Turk's smoothing of the
+// centres, c = x + kSmoothing (weighted mean of the neighbours - x), which
+// takes the jitter out of a resting surface (and pulls it in by a fraction
+// of h, as in their paper). The radii keep the sphere's
 // volume (their product is 1), the largest is at most kMaxRatio times the
 // smallest (so at most kMaxRatio^(2/3) = common.glsl's kLongestAxis), and a
 // particle with fewer than kMinNeighbours near it stays a sphere (A = I).
@@ -15,6 +19,7 @@
 
 const uint kMinNeighbours = 6u;
 const float kMaxRatio = 4.0;
+const float kSmoothing = 0.9;  // Yu & Turk's lambda
 
 struct Moments {
   float w0;  // sum of weights
@@ -71,11 +76,14 @@ void eigen(mat3 a, out vec3 values, out mat3 vectors) {
   vectors = v;
 }
 
-void store(uint i, mat3 a) {
+void store(uint i, mat3 a, vec3 shift) {
   Uints out_shapes = Uints(pc.shapes);
-  out_shapes.v[3u * i] = packHalf2x16(vec2(a[0][0], a[1][0]));
-  out_shapes.v[3u * i + 1u] = packHalf2x16(vec2(a[2][0], a[1][1]));
-  out_shapes.v[3u * i + 2u] = packHalf2x16(vec2(a[2][1], a[2][2]));
+  out_shapes.v[5u * i] = packHalf2x16(vec2(a[0][0], a[1][0]));
+  out_shapes.v[5u * i + 1u] = packHalf2x16(vec2(a[2][0], a[1][1]));
+  out_shapes.v[5u * i + 2u] = packHalf2x16(vec2(a[2][1], a[2][2]));
+  vec3 in_h = shift * (2.0 / pc.side);
+  out_shapes.v[5u * i + 3u] = packHalf2x16(in_h.xy);
+  out_shapes.v[5u * i + 4u] = packHalf2x16(vec2(in_h.z, 0.0));
 }
 
 void main() {
@@ -83,7 +91,7 @@ void main() {
   if (g.fits == 0u || pc.shapes == uvec2(0u)) return;
   for (uint i = first_item() + gl_LocalInvocationIndex; i < pc.n; i += round_stride()) {
     if (marked(i)) {
-      store(i, mat3(1.0));
+      store(i, mat3(1.0), vec3(0.0));
       continue;
     }
     vec3 p = particle(i);
@@ -97,8 +105,10 @@ void main() {
           gather_slot(d == ivec3(0) ? s : neighbour_slot(c, d, g), p, m);
         }
     mat3 shape = mat3(1.0);
+    vec3 shift = vec3(0.0);
     if (m.near - 1u >= kMinNeighbours) {
       vec3 mean = m.w1 / m.w0;
+      shift = kSmoothing * mean;
       mat3 covariance = m.w2 / m.w0 - outerProduct(mean, mean);
       vec3 values;
       mat3 vectors;
@@ -111,6 +121,6 @@ void main() {
                 transpose(vectors);
       }
     }
-    store(i, shape);
+    store(i, shape, shift);
   }
 }

@@ -84,9 +84,10 @@ layout(push_constant) uniform Push {
   uint param2;
 } pc;
 
-// [0]: 1 once written; then per particle of the frame, 3 words: its
-// ellipsoid's shape matrix A as 6 halves (xx xy, xz yy, yz zz;
-// band_ellipsoids.comp writes them).
+// [0]: 1 once written; [1]: h (float, world), then per particle of the
+// frame 5 words (band_ellipsoids.comp writes them): its ellipsoid's shape
+// matrix A as 6 halves (xx xy, xz yy, yz zz), its centre's shift in units
+// of h as 3 halves (x y, z 0).
 layout(buffer_reference, std430, buffer_reference_align = 4) readonly buffer Shapes { uint w[]; };
 
 const uint kBlock = 256;  // particles per cull workgroup
@@ -109,12 +110,22 @@ struct DrawItem {
   mat3 shape;      // world; identity unless `ellipsoid`
 };
 
-mat3 load_shape(uint index) {
+// Particle `index`'s ellipsoid: its shape matrix; its centre's shift (world).
+mat3 load_shape(uint index, out vec3 shift) {
   Shapes s = Shapes(pc.shapes);
-  vec2 a = unpackHalf2x16(s.w[1u + 3u * index]);
-  vec2 b = unpackHalf2x16(s.w[2u + 3u * index]);
-  vec2 c = unpackHalf2x16(s.w[3u + 3u * index]);
+  uint at = 2u + 5u * index;
+  vec2 a = unpackHalf2x16(s.w[at]);
+  vec2 b = unpackHalf2x16(s.w[at + 1u]);
+  vec2 c = unpackHalf2x16(s.w[at + 2u]);
+  shift = vec3(unpackHalf2x16(s.w[at + 3u]), unpackHalf2x16(s.w[at + 4u]).x) * uintBitsToFloat(s.w[1]);
   return mat3(a.x, a.y, b.x, a.y, b.y, c.x, b.x, c.x, c.y);
+}
+
+// How far an ellipsoid's centre may move from its particle: kSmoothing
+// times the reach of its neighbours, 2h (band_ellipsoids.comp).
+float largest_shift() {
+  if (pc.shapes == uvec2(0u) || Shapes(pc.shapes).w[0] == 0u) return 0.0;
+  return 1.8 * uintBitsToFloat(Shapes(pc.shapes).w[1]);
 }
 
 // A blob's splat (section 4 of papers/001, eq. 4.2, normalized): a Gaussian
@@ -149,7 +160,12 @@ DrawItem load_item(uint item) {
   it.count = 0.0;
   it.sigma = 0.0;
   it.ellipsoid = c.kind == 0u && pc.shapes != uvec2(0u) && Shapes(pc.shapes).w[0] != 0u;
-  it.shape = it.ellipsoid ? load_shape(index) : mat3(1.0);
+  it.shape = mat3(1.0);
+  if (it.ellipsoid) {
+    vec3 shift;
+    it.shape = load_shape(index, shift);
+    it.pos += shift;
+  }
   if (c.kind == 1u) {
     float grow = 1.0 + growth * (g.lod.w - 1.0);  // density-preserving LOD: it stands for grow^3 times as many
     it.count = float(lod_value) * grow * grow * grow;

@@ -10,7 +10,7 @@ layout(local_size_x = 64) in;
 float reach(Chunk c) {
   if (c.kind == 1u) return kBlobReach * blob_sigma(c.voxel, g.radius.x);
   float r = pc.shapes != uvec2(0u) ? g.radius.x * kLongestAxis : g.radius.x;
-  return g.modes.x == 2u ? r * g.lod.w : r;
+  return (g.modes.x == 2u ? r * g.lod.w : r) + largest_shift();
 }
 
 bool aabb_visible(vec3 lo, vec3 hi, float r) {

@@ -84,8 +84,8 @@ void main() {
     }
   }
   float r = blob ? r0 : r0 * scale;
-  // Anisotropic particles reach up to their longest axis.
-  float reach = blob || pc.shapes == uvec2(0u) ? r : r * kLongestAxis;
+  // Anisotropic particles reach up to their longest axis from their shifted centre.
+  float reach = blob || pc.shapes == uvec2(0u) ? r : r * kLongestAxis + largest_shift();
   if (keep && !inside) {
     // In some eye's frustum, and not too near or too large in any.
     bool seen = false, fits = true;

@@ -147,24 +147,24 @@ io::NarrowBand BandClassifier::classify(std::span<const float> xyz, const io::Na
   return out;
 }
 
-std::vector<std::array<float, 6>> BandClassifier::ellipsoids(std::span<const float> xyz, float diameter) {
+std::vector<BandClassifier::Ellipsoid> BandClassifier::ellipsoids(std::span<const float> xyz, float diameter) {
   if (!(diameter > 0)) throw Error("BandClassifier: the particle diameter must be positive");
   Impl& r = *impl_;
   const uint64_t n = xyz.size() / 3;
   if (n > BandPasses::kMaxParticles) throw Error("BandClassifier: more than 2^28 particles");
-  std::vector<std::array<float, 6>> out(n);
+  std::vector<Ellipsoid> out(n);
   if (n == 0) return out;
   r.passes.reserve(n, false);
-  grow_buffer(r.ctx, r.shapes, n * 12, vk::BufferUsageFlagBits::eStorageBuffer | vk::BufferUsageFlagBits::eShaderDeviceAddress |
+  grow_buffer(r.ctx, r.shapes, n * 20, vk::BufferUsageFlagBits::eStorageBuffer | vk::BufferUsageFlagBits::eShaderDeviceAddress |
                                            vk::BufferUsageFlagBits::eTransferSrc,
               MemoryKind::DeviceLocal);
-  r.stage(xyz, sizeof(BandParams) + n * 12);
+  r.stage(xyz, sizeof(BandParams) + n * 20);
   const BandRun run{
       .n = n, .xyz = r.xyz.address, .diameter = diameter, .voxel = 2 * diameter, .layers = false, .shapes = r.shapes.address};
   r.ctx.run_once([&](vk::CommandBuffer cmd) {
     r.record(cmd, run);
     cmd.copyBuffer(*r.passes.params.buffer, *r.readback.buffer, vk::BufferCopy(0, 0, sizeof(BandParams)));
-    cmd.copyBuffer(*r.shapes.buffer, *r.readback.buffer, vk::BufferCopy(0, sizeof(BandParams), n * 12));
+    cmd.copyBuffer(*r.shapes.buffer, *r.readback.buffer, vk::BufferCopy(0, sizeof(BandParams), n * 20));
     memory_barrier(cmd, Stage::eTransfer, Access::eTransferWrite, Stage::eHost, Access::eHostRead);
   });
   r.read_timestamps();
@@ -173,7 +173,9 @@ std::vector<std::array<float, 6>> BandClassifier::ellipsoids(std::span<const flo
   Impl::require_fits(params);
   const auto* halves = reinterpret_cast<const uint16_t*>(static_cast<const std::byte*>(r.readback.mapped) + sizeof params);
   for (uint64_t i = 0; i < n; ++i) {
-    for (size_t k = 0; k < 6; ++k) out[i][k] = half_to_float(halves[6 * i + k]);
+    const uint16_t* h = halves + 10 * i;
+    for (size_t k = 0; k < 6; ++k) out[i].shape[k] = half_to_float(h[k]);
+    for (size_t k = 0; k < 3; ++k) out[i].shift[k] = half_to_float(h[6 + k]) * diameter;
   }
   return out;
 }

@@ -41,7 +41,7 @@ struct BandRun {
   // the ellipsoids are wanted.
   bool layers = true;
   // Where each particle's ellipsoid goes (band_ellipsoids.comp: its shape
-  // matrix as 6 halves, 12 n bytes); 0: none computed.
+  // matrix and centre shift as 9 halves in 5 words, 20 n bytes); 0: none.
   vk::DeviceAddress shapes = 0;
   // A bit per entry (32-bit words), 1: a blob among the positions, not a
   // particle: no ellipsoid, no neighbour; 0: every entry is a particle.

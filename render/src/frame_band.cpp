@@ -2,6 +2,7 @@
 #include "frame_band.h"
 
 #include <algorithm>
+#include <cstring>
 #include <limits>
 
 #include "renderer_impl.h"
@@ -28,7 +29,7 @@ void dispatch(vk::CommandBuffer cmd, uint64_t groups) {
 
 uint64_t blob_room(uint64_t particles) { return std::max<uint64_t>(particles / 4, 1024); }
 uint64_t surface_words(uint64_t particles) { return 1 + (particles + 31) / 32; }
-uint64_t shapes_bytes(uint64_t particles) { return 4 + 12 * particles; }
+uint64_t shapes_bytes(uint64_t particles) { return 8 + 20 * particles; }
 
 GpuChunk blob_chunk_row(std::span<const GpuChunk> table, uint64_t particles, float voxel) {
   GpuChunk row{};
@@ -97,7 +98,7 @@ void FrameBand::record(vk::CommandBuffer cmd, FrameSet& set, bool float_position
   cmd.pushConstants<FramePush>(*layout_, vk::ShaderStageFlagBits::eCompute, 0, push);
   dispatch(cmd, set.chunk_count);
   BandPasses::barrier(cmd);
-  // The shapes after the validity word (4 bytes: their words stay aligned).
+  // The shapes after the validity word and h.
   passes_.record(cmd, BandRun{.n = n,
                               .xyz = xyz_.address,
                               .attr = attributes ? attr_.address : 0,
@@ -105,9 +106,12 @@ void FrameBand::record(vk::CommandBuffer cmd, FrameSet& set, bool float_position
                               .voxel = voxel(),
                               .blobs = wanted.classify,
                               .layers = wanted.classify,
-                              .shapes = wanted.shapes ? set.shapes.address + 4 : 0,
+                              .shapes = wanted.shapes ? set.shapes.address + 8 : 0,
                               .marks = push.marks});
   if (wanted.shapes) {
+    uint32_t h_bits;
+    std::memcpy(&h_bits, &diameter_, 4);
+    cmd.fillBuffer(*set.shapes.buffer, 4, 4, h_bits);
     cmd.fillBuffer(*set.shapes.buffer, 0, 4, 1);
     BandPasses::barrier(cmd);
   }

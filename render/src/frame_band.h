@@ -5,8 +5,8 @@
 // bit and the blobs written after the particles with a chunk row of their
 // own (band_apply.comp). The cull pass then skips interior particles.
 // The same run gives anisotropic particles (RendererOptions::anisotropic)
-// their ellipsoids, for any frame: one shape matrix per particle
-// (band_ellipsoids.comp) in the set's `shapes`.
+// their ellipsoids, for any frame: a shape matrix and centre shift per
+// particle (band_ellipsoids.comp) in the set's `shapes`.
 #pragma once
 
 #include <memory>
@@ -28,7 +28,7 @@ uint64_t blob_room(uint64_t particles);
 uint64_t surface_words(uint64_t particles);
 
 // Bytes of a set's shapes buffer: a validity word (1 once its ellipsoids
-// are written), then 3 words per particle (common.glsl's Shapes).
+// are written), h (float), then 5 words per particle (common.glsl's Shapes).
 uint64_t shapes_bytes(uint64_t particles);
 
 // The blobs' chunk row, all but its count (which the GPU writes): the box

@@ -289,7 +289,7 @@ uint64_t upload_frame(detail::RendererImpl& r, FrameSet& set, UploadSource parti
   set.classified = false;
   // Every array the classification indexes stays below 4 GB (see band.glsl).
   constexpr uint64_t k4G = uint64_t(1) << 32;
-  set.band_eligible = r.band && set.unlayered && n > 0 && n <= BandPasses::kMaxParticles &&
+  set.band_eligible = r.band && r.options.classify_unlayered && set.unlayered && n > 0 && n <= BandPasses::kMaxParticles &&
                       (n + blob_room(n)) * r.stride < k4G;
   const uint64_t room = set.band_eligible ? blob_room(n) : 0;
   blocks += (room + 255) / 256;
@@ -340,7 +340,7 @@ uint64_t upload_frame(detail::RendererImpl& r, FrameSet& set, UploadSource parti
     cmd.updateBuffer<GpuChunk>(*set.chunks.buffer, chunks * sizeof(GpuChunk), row);
     cmd.fillBuffer(*set.surface.buffer, 0, 4, 0);
   }
-  if (set.shape_eligible) cmd.fillBuffer(*set.shapes.buffer, 0, 4, 0);  // spheres until its shapes are written
+  if (set.shape_eligible) cmd.fillBuffer(*set.shapes.buffer, 0, 8, 0);  // spheres until its shapes are written
   if (set.has_attribute && n > 0 && !encoded) {
     // Rounded up to 4 bytes: every source has room (streams are padded).
     cmd.copyBuffer(attribute_src.buffer, *set.attributes.buffer,

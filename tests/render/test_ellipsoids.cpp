@@ -2,7 +2,9 @@
 // shaders/band_ellipsoids.comp) against what the geometry says: a particle
 // with few neighbours is a sphere; inside a cubic lattice it is a sphere;
 // in a plane it is flattened along the plane's normal by the largest ratio
-// (radii 4^(1/3), 4^(1/3), 4^(1/3) / 4); on a dense line it is stretched
+// (radii 4^(1/3), 4^(1/3), 4^(1/3) / 4) and stays in it; on a lattice's
+// flat top it moves inward (Yu & Turk's smoothing of the centres); on a
+// dense line it is stretched
 // along it (16^(1/3), then 16^(1/3) / 4 twice). The GPU gives each shape
 // matrix in half precision; the test finds its axes in double. Tolerance
 // 2e-3 on radii (halves: 1e-3 relative on the squared radii), 1e-3 on the
@@ -100,7 +102,11 @@ TEST(Ellipsoids, AParticleWithFewNeighboursIsItsSphere) {
   const auto e = band_classifier().ellipsoids(xyz, h);
   ASSERT_EQ(e.size(), 5u);
   const std::array<float, 6> identity{1, 0, 0, 1, 0, 1};
-  for (size_t i = 0; i < e.size(); ++i) EXPECT_EQ(e[i], identity) << "particle " << i;
+  const std::array<float, 3> none{0, 0, 0};
+  for (size_t i = 0; i < e.size(); ++i) {
+    EXPECT_EQ(e[i].shape, identity) << "particle " << i;
+    EXPECT_EQ(e[i].shift, none) << "particle " << i;
+  }
 }
 
 TEST(Ellipsoids, InsideACubicLatticeAParticleIsItsSphere) {
@@ -112,7 +118,37 @@ TEST(Ellipsoids, InsideACubicLatticeAParticleIsItsSphere) {
       for (int z = 0; z < 9; ++z) xyz.insert(xyz.end(), {float(x) * h, float(y) * h, float(z) * h});
   const auto e = band_classifier().ellipsoids(xyz, h);
   const size_t centre = (4 * 9 + 4) * 9 + 4;
-  for (const Axis& a : axes_of(e[centre])) EXPECT_NEAR(a.radius, 1.0, 2e-3);
+  for (const Axis& a : axes_of(e[centre].shape)) EXPECT_NEAR(a.radius, 1.0, 2e-3);
+  for (float s : e[centre].shift) EXPECT_NEAR(s, 0.0f, 2e-3f * h) << "inside, the neighbours balance";
+}
+
+// Yu & Turk's smoothing: a particle on a lattice's top face moves inward by
+// 0.9 times its neighbours' weighted mean offset (computed here in double).
+TEST(Ellipsoids, OnAFlatTopAParticleMovesInwardBySmoothing) {
+  ValidationGuard guard;
+  const float h = 0.1f;
+  std::vector<float> xyz;
+  for (int x = 0; x < 9; ++x)
+    for (int y = 0; y < 9; ++y)
+      for (int z = 0; z < 5; ++z) xyz.insert(xyz.end(), {float(x) * h, float(y) * h, float(z) * h});
+  const auto e = band_classifier().ellipsoids(xyz, h);
+  const size_t top = (4 * 9 + 4) * 5 + 4;
+  double sum_w = 0, mean[3] = {0, 0, 0};
+  for (size_t j = 0; j < xyz.size() / 3; ++j) {
+    double d[3], r2 = 0;
+    for (int a = 0; a < 3; ++a) d[a] = double(xyz[3 * j + size_t(a)]) - xyz[3 * top + size_t(a)], r2 += d[a] * d[a];
+    const double q = std::sqrt(r2) / (2 * double(h));
+    if (q >= 1) continue;
+    const double w = 1 - q * q * q;
+    sum_w += w;
+    for (int a = 0; a < 3; ++a) mean[a] += w * d[a];
+  }
+  const double down = 0.9 * mean[2] / sum_w;
+  EXPECT_LT(down, -0.3 * h) << "the expectation itself: inward, by a good fraction of h";
+  EXPECT_NEAR(e[top].shift[0], 0.0f, 2e-3f * h);
+  EXPECT_NEAR(e[top].shift[1], 0.0f, 2e-3f * h);
+  EXPECT_NEAR(e[top].shift[2], down, 2e-3 * h);
+  EXPECT_LT(axes_of(e[top].shape)[0].radius, 0.9) << "and flattened";
 }
 
 TEST(Ellipsoids, InAPlaneAParticleIsFlattenedAlongItsNormal) {
@@ -128,12 +164,13 @@ TEST(Ellipsoids, InAPlaneAParticleIsFlattenedAlongItsNormal) {
     }
   const auto e = band_classifier().ellipsoids(xyz, h);
   const size_t centre = 10 * 21 + 10;
-  const std::vector<Axis> axes = axes_of(e[centre]);
+  const std::vector<Axis> axes = axes_of(e[centre].shape);
   const double flat = std::cbrt(4.0) / 4.0, wide = std::cbrt(4.0);
   EXPECT_NEAR(axes[0].radius, flat, 2e-3);
   EXPECT_NEAR(alignment(axes[0].direction, normal), 1.0, 1e-3) << "the short axis is the plane's normal";
   EXPECT_NEAR(axes[1].radius, wide, 2e-3);
   EXPECT_NEAR(axes[2].radius, wide, 2e-3);
+  for (float s : e[centre].shift) EXPECT_NEAR(s, 0.0f, 2e-3f * h) << "in the plane, the neighbours balance";
 }
 
 TEST(Ellipsoids, OnADenseLineAParticleIsStretchedAlongIt) {
@@ -146,7 +183,7 @@ TEST(Ellipsoids, OnADenseLineAParticleIsStretchedAlongIt) {
     xyz.insert(xyz.end(), {float(1 + t * along[0]), float(1 + t * along[1]), float(1 + t * along[2])});
   }
   const auto e = band_classifier().ellipsoids(xyz, h);
-  const std::vector<Axis> axes = axes_of(e[40]);
+  const std::vector<Axis> axes = axes_of(e[40].shape);
   const double r = std::cbrt(16.0);
   EXPECT_NEAR(axes[2].radius, r, 2e-3);
   EXPECT_NEAR(alignment(axes[2].direction, along), 1.0, 1e-3) << "the long axis is the line";

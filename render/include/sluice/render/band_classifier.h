@@ -42,15 +42,23 @@ class BandClassifier {
   io::NarrowBand classify(std::span<const float> xyz, const io::NarrowBandOptions& options);
 
   // Each particle's ellipsoid, as anisotropic particles draw it (Yu & Turk
-  // 2013, shaders/band_ellipsoids.comp): from the weighted covariance of
-  // the particles within 2 x `diameter` of it, its shape matrix
-  // A = R S^2 R^T (R: the ellipsoid's axes; S: its radii in units of the
-  // particle's radius), so that the particle of radius r at c covers
-  // (x - c)^T A^-1 (x - c) <= r^2. Entries xx, xy, xz, yy, yz, zz, as the
-  // GPU keeps them (half precision: about 1e-3 relative). The radii keep
-  // the sphere's volume and differ at most 4 times; a particle with fewer
-  // than 6 others near it is a sphere (A = I). Throws as classify() does.
-  std::vector<std::array<float, 6>> ellipsoids(std::span<const float> xyz, float diameter);
+  // 2013, shaders/band_ellipsoids.comp), from the particles within
+  // 2 x `diameter` of it, weighted 1 - (r / 2 diameter)^3:
+  // - shape: from their covariance, the matrix A = R S^2 R^T (R: the
+  //   ellipsoid's axes; S: its radii in units of the particle's radius), so
+  //   that the particle of radius r at centre c covers
+  //   (x - c)^T A^-1 (x - c) <= r^2; entries xx, xy, xz, yy, yz, zz. The
+  //   radii keep the sphere's volume and differ at most 4 times.
+  // - shift: c minus the particle's position (world units): 0.9 times
+  //   their weighted mean offset from it (the paper's smoothing, lambda).
+  // A particle with fewer than 6 others near it is its sphere (A = I, no
+  // shift). Half precision, as the GPU keeps them: about 1e-3 relative
+  // (the shift: of the diameter). Throws as classify() does.
+  struct Ellipsoid {
+    std::array<float, 6> shape;
+    std::array<float, 3> shift;
+  };
+  std::vector<Ellipsoid> ellipsoids(std::span<const float> xyz, float diameter);
 
   // GPU time of the last classify() (its passes, from timestamps; not the
   // upload or the read-back), milliseconds; < 0 when the device has no
