@@ -70,6 +70,7 @@ void run_render(const RenderCommand& o, const ViewSettings& v) {
   so.decode = decode_site(o.decode);
   so.motion = render::ViewMotion::Fixed;
   so.up = v.up_override();
+  so.renderer.anisotropic = v.anisotropic();
   render::Stream stream(context, input.path(), so);
   const io::ContainerReader& reader = stream.reader();
   // A list (0,25,50) plays every frame between its first and last and draws those listed.
@@ -99,10 +100,10 @@ void run_render(const RenderCommand& o, const ViewSettings& v) {
   const render::View view = render::camera_view(camera, {0, 0, width, height});
   stream.set_views({&view, 1});
   if (!o.quiet) {
-    std::fprintf(stderr, "rendering %s frames %llu..%llu at %ux%u on %s (%s)\n  camera \"%s\"\n  layers: %s\n",
+    std::fprintf(stderr, "rendering %s frames %llu..%llu at %ux%u on %s (%s)\n  camera \"%s\"\n  layers: %s\n  particles: %s\n",
                  o.input.c_str(), (unsigned long long)first, (unsigned long long)last, width, height,
                  context.device().name.c_str(), context.device().type.c_str(), camera.to_string().c_str(),
-                 layers_text(reader, first, so.layers).c_str());
+                 layers_text(reader, first, so.layers).c_str(), so.renderer.anisotropic ? "ellipsoids" : "spheres");
   }
 
   std::unique_ptr<render::VideoWriter> writer;
@@ -250,6 +251,9 @@ void add_bench_render(CLI::App& bench) {
   cmd->add_flag("--stereo", o->stereo,
                 "Two eyes of --size each (as a headset: e.g. --size 2064x2208), both in one pass into a 2-layer target,\n"
                 "against the same two views as two mono passes");
+  cmd->add_flag("--ellipsoids", o->ellipsoids,
+                "Also draw each synthetic frame with anisotropic particles (--particles ellipsoids), with the time\n"
+                "their ellipsoids take once per frame");
   cmd->callback([o, sizes, size, vtk_max] {
     if (!o->vtk_peer.empty()) o->vtk = true;
     const std::vector<uint64_t> most = bench::parse_counts(*vtk_max);

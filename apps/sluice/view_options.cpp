@@ -65,6 +65,12 @@ render::LodOptions ViewSettings::lod_options() const {
   return l;
 }
 
+bool ViewSettings::anisotropic() const {
+  if (particles == "spheres") return false;
+  if (particles == "ellipsoids") return true;
+  throw std::runtime_error("--particles " + particles + ": say spheres or ellipsoids");
+}
+
 render::Camera ViewSettings::camera(const render::SceneInfo& scene, float aspect, render::ScreenRect free) const {
   render::Camera c = render::Camera::framing(scene.bounds, up_direction(scene), aspect, fov, free);
   if (!camera_text.empty()) {
@@ -120,6 +126,11 @@ void add_view_options(CLI::App& cmd, ViewSettings& v) {
                  "ThicknessAndVolumeColorFilterRadius, px of the thickness buffer")->capture_default_str()->group(look);
   cmd.add_option("--thickness-iterations", f.thickness_and_volume_color_filter_iterations,
                  "ThicknessAndVolumeColorFilterIterations")->capture_default_str()->group(look);
+  cmd.add_option("--particles", v.particles,
+                 "spheres, or ellipsoids: each particle flattened and stretched along its neighbours (anisotropic,\n"
+                 "Yu & Turk 2013), so resting water shades flat; costs a pass once per frame and 20 bytes a particle")
+      ->capture_default_str()
+      ->group(look);
   cmd.add_option("--splat", v.splat, "Sphere splatting: compute (atomics), raster (point sprites) or auto (raster on CPU devices)")
       ->capture_default_str()->group(look);
   cmd.add_flag("--full-res-thickness", v.full_res_thickness, "Thickness buffer at full resolution (default: half)")->group(look);

@@ -28,12 +28,16 @@ struct ViewSettings {
   bool no_ground = false, full_res_thickness = false;
   std::string lod_mode = "off";
   std::string environment;  // equirectangular PNG; empty: the procedural sky
+  std::string particles = "spheres";  // --particles: spheres or ellipsoids (anisotropic)
   render::LodOptions lod;
 
   render::ContextOptions context_options() const;
   // Throws std::runtime_error on a bad name (display, filter, attribute, ...).
   render::FluidOptions fluid_options(const render::SceneInfo& scene) const;
   render::LodOptions lod_options() const;
+  // --particles ellipsoids (render::RendererOptions::anisotropic); throws
+  // std::runtime_error on another word than spheres or ellipsoids.
+  bool anisotropic() const;
   // The default framing (in `free`, the part of the image left uncovered)
   // or --camera.
   render::Camera camera(const render::SceneInfo& scene, float aspect, render::ScreenRect free = {}) const;

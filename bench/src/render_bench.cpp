@@ -98,6 +98,7 @@ struct Case {
   render::FrameStats stats;  // median over repeats, per pass
   double wall_ms = 0;        // render() call: submit to fence, median
   double vtk_ms = -1;        // peer, when run
+  double ellipsoids_ms = -1; // anisotropic particles: their pass, at the frame's first draw
 };
 
 
@@ -105,7 +106,12 @@ struct Case {
 Case measure(render::Renderer& r, render::OffscreenTarget& out, std::span<const render::View> views,
              const render::FluidOptions& fluid, const render::LodOptions& lod, int repeats) {
   Case c;
-  out.render(r, views, fluid, lod);  // warm-up: first-use costs (shader JIT on lavapipe)
+  // Warm-up: first-use costs (shader JIT on lavapipe), and the frame's
+  // once-per-frame passes (the ellipsoids), timed here.
+  const render::FrameStats first = out.render(r, views, fluid, lod);
+  for (const render::PassTime& p : first.passes) {
+    if (p.name == "ellipsoids") c.ellipsoids_ms = p.ms;
+  }
   std::map<std::string, std::vector<double>> passes;
   std::vector<double> total, wall;
   render::FrameStats last;
@@ -350,6 +356,13 @@ void run_render_bench(const RenderBenchOptions& o) {
       if (o.vtk && f.particles <= o.vtk_max) xyz = render::synthetic_points(f);
       run_frame("synthetic " + count_name(n), r, f.scene, &xyz);
     }
+    if (o.ellipsoids) {
+      render::RendererOptions anisotropic;
+      anisotropic.anisotropic = true;
+      render::Renderer r(context, f.scene, anisotropic);
+      render::upload_synthetic(r, f);
+      run_frame("synthetic " + count_name(n) + ", ellipsoids", r, f.scene, nullptr);
+    }
     if (o.layers) {
       std::fprintf(stderr, "classifying the narrow band of %s particles...\n", count_name(n).c_str());
       const LayeredFrame layered = layered_frame(f);
@@ -368,7 +381,7 @@ void run_render_bench(const RenderBenchOptions& o) {
   if (!cases.empty()) {
     for (const render::PassTime& p : cases[0].stats.passes) header.push_back(p.name);
   }
-  header.insert(header.end(), {"GPU ms", "wall ms", "cull Mp/ms", "upload ms"});
+  header.insert(header.end(), {"GPU ms", "wall ms", "cull Mp/ms", "upload ms", "ellipsoids ms (once a frame)"});
   Table passes(header);
   for (const Case& c : cases) {
     std::vector<std::string> row{c.name, count_name(c.particles), c.lod, count_name(c.stats.drawn)};
@@ -381,6 +394,7 @@ void run_render_bench(const RenderBenchOptions& o) {
     row.push_back(num(c.wall_ms, 1));
     row.push_back(cull > 0 ? num(double(c.particles) / 1e6 / cull, 2) : "-");
     row.push_back(num(c.stats.upload_ms, 2));
+    row.push_back(c.ellipsoids_ms < 0 ? "-" : num(c.ellipsoids_ms, 2));
     passes.row(row);
   }
   passes.print("Per-pass time (ms, from timestamps; 'wall' is the render() call, submit to fence)");
@@ -390,12 +404,12 @@ void run_render_bench(const RenderBenchOptions& o) {
     if (!cases.empty()) {
       for (const render::PassTime& p : cases[0].stats.passes) csv << "," << p.name << "_ms";
     }
-    csv << ",gpu_ms,wall_ms,vtk_ms,device\n";
+    csv << ",gpu_ms,wall_ms,vtk_ms,ellipsoids_ms,device\n";
     for (const Case& c : cases) {
       csv << '"' << c.name << "\"," << c.particles << ",\"" << c.lod << "\"," << c.stats.drawn;
       for (const render::PassTime& p : c.stats.passes) csv << "," << p.ms;
       csv << "," << c.stats.gpu_ms << "," << c.wall_ms << "," << (c.vtk_ms < 0 ? std::string() : std::to_string(c.vtk_ms))
-          << ",\"" << dev.name << "\"\n";
+          << "," << (c.ellipsoids_ms < 0 ? std::string() : std::to_string(c.ellipsoids_ms)) << ",\"" << dev.name << "\"\n";
     }
     if (!csv) throw std::runtime_error(o.csv + ": cannot write");
     std::printf("\nwrote %s\n", o.csv.c_str());

@@ -36,6 +36,10 @@ struct RenderBenchOptions {
   // apart for data shown 1.5 m across), both in one pass into a 2-layer
   // target, against the same two views as two mono passes side by side.
   bool stereo = false;
+  // Also draw each frame with anisotropic particles (RendererOptions::
+  // anisotropic): rows named ", ellipsoids", with the ellipsoids' own pass
+  // (computed once per frame, at its first draw) in a column of its own.
+  bool ellipsoids = false;
 };
 
 // Runs the benchmark and prints its tables to stdout.
