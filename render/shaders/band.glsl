@@ -57,6 +57,7 @@ layout(push_constant) uniform Push {
   uint n1;          // floor((d / h)^3): L1 voxels with at most this many particles select L2
   float reach2;     // (min(2h, d))^2: a particle with nobody nearer is isolated
   uint with_blobs;
+  uint step;        // band_ellipsoids: 0 the centres' shifts, 1 the shapes
   uvec2 shapes;     // Uints[5 n]: each particle's ellipsoid, its shape matrix and centre shift (band_ellipsoids); 0: none
   uvec2 marks;      // Uints[(n + 31) / 32]: a bit per entry, 1: a blob, not a particle (no shape, no neighbour); 0: none
 } pc;

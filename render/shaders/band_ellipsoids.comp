@@ -1,25 +1,32 @@
 #version 460
-// Anisotropic particles (Yu & Turk 2013), after band_scatter: each
-// particle's ellipsoid from the weighted covariance of the particles within
-// one voxel side of it (its voxel's list and the 26 around it), weights
-// 1 - (r / side)^3. Writes per particle 5 words (common.glsl's load_item
-// reads them): its shape matrix A = R S^2 R^T (R: the ellipsoid's axes,
-// S: its radii in units of the particle's radius), so that the ellipsoid
-// of a particle of radius r at c is (x - c)^T A^-1 (x - c) <= r^2, as 6
-// halves in 3 words (xx xy, xz yy, yz zz); then its centre's shift, 3
-// halves in units of h = side / 2 (x y, z 0): Yu & Turk's smoothing of the
-// centres, c = x + kSmoothing (weighted mean of the neighbours - x), which
-// takes the jitter out of a resting surface (and pulls it in by a fraction
-// of h, as in their paper). The radii keep the sphere's
-// volume (their product is 1), the largest is at most kMaxRatio times the
-// smallest (so at most kMaxRatio^(2/3) = common.glsl's kLongestAxis), and a
-// particle with fewer than kMinNeighbours near it stays a sphere (A = I).
+// Anisotropic particles (Yu & Turk 2013), after band_scatter, in two steps
+// (pc.step) over the particles within one voxel side of each (its voxel's
+// list and the 26 around it), weighted 1 - (r / side)^3 by their distance:
+// 0. its centre's shift: Yu & Turk's smoothing of the centres,
+//    c = x + lambda (weighted mean of the neighbours - x), which takes the
+//    jitter out of a resting surface and pulls it in by a fraction of h;
+//    drawn with lambda = kSmoothing;
+// 1. its shape, from the weighted covariance of the neighbours' centres
+//    smoothed with lambda = kShapeSmoothing (Yu & Turk's 0.9), about its
+//    own: the smoothing takes the jitter out of the orientations too,
+//    while the drawn centres move less, so that thin sheets keep their
+//    thickness (measured in docs/render.md, "Flat water"):
+//    A = R S^2 R^T (R: the ellipsoid's axes, S: its
+//    radii in units of the particle's radius), so that the ellipsoid of a
+//    particle of radius r at c is (x - c)^T A^-1 (x - c) <= r^2.
+// Per particle 5 words (common.glsl's load_item reads them): A as 6 halves
+// in 3 words (xx xy, xz yy, yz zz), then the shift as 3 halves in units of
+// h = side / 2 (x y, z 0). The radii keep the sphere's volume (their
+// product is 1), the largest is at most kMaxRatio times the smallest (so at
+// most kMaxRatio^(2/3) = common.glsl's kLongestAxis), and a particle with
+// fewer than kMinNeighbours near it stays a sphere (A = I, no shift).
 // Entries marked in pc.marks (blobs) are neither shaped nor neighbours.
 #include "band.glsl"
 
 const uint kMinNeighbours = 6u;
 const float kMaxRatio = 4.0;
-const float kSmoothing = 0.9;  // Yu & Turk's lambda
+const float kSmoothing = 0.5;       // lambda of the drawn centres (common.glsl's largest_shift)
+const float kShapeSmoothing = 0.9;  // lambda of the centres the shapes are taken from
 
 struct Moments {
   float w0;  // sum of weights
@@ -32,16 +39,27 @@ bool marked(uint i) {
   return pc.marks != uvec2(0u) && ((Uints(pc.marks).v[i >> 5] >> (i & 31u)) & 1u) != 0u;
 }
 
-void gather_slot(uint s, vec3 p, inout Moments m) {
+// Step 0's shift of particle j (world), as step 1 reads it back.
+vec3 shift_of(uint j) {
+  Uints shapes = Uints(pc.shapes);
+  vec2 xy = unpackHalf2x16(shapes.v[5u * j + 3u]);
+  return vec3(xy, unpackHalf2x16(shapes.v[5u * j + 4u]).x) * (0.5 * pc.side);
+}
+
+// The neighbours in slot s of the particle at p: weighted by their distance
+// from p; their offsets taken from `centre` (step 0: p; step 1: its
+// centre smoothed for shapes, to theirs).
+void gather_slot(uint s, vec3 p, vec3 centre, inout Moments m) {
   if (s == kEmpty) return;
   uint end = START(s);
   for (uint k = end - COUNT(s); k < end; ++k) {
     uint j = LIST(k);
     if (marked(j)) continue;
-    vec3 d = particle(j) - p;
-    float q = length(d) / pc.side;
+    vec3 x = particle(j);
+    float q = length(x - p) / pc.side;
     if (q >= 1.0) continue;
     float w = 1.0 - q * q * q;
+    vec3 d = (pc.step == 0u ? x : x + (kShapeSmoothing / kSmoothing) * shift_of(j)) - centre;
     m.w0 += w;
     m.w1 += w * d;
     m.w2 += w * outerProduct(d, d);
@@ -76,14 +94,32 @@ void eigen(mat3 a, out vec3 values, out mat3 vectors) {
   vectors = v;
 }
 
-void store(uint i, mat3 a, vec3 shift) {
-  Uints out_shapes = Uints(pc.shapes);
-  out_shapes.v[5u * i] = packHalf2x16(vec2(a[0][0], a[1][0]));
-  out_shapes.v[5u * i + 1u] = packHalf2x16(vec2(a[2][0], a[1][1]));
-  out_shapes.v[5u * i + 2u] = packHalf2x16(vec2(a[2][1], a[2][2]));
+void store_shape(uint i, mat3 a) {
+  Uints shapes = Uints(pc.shapes);
+  shapes.v[5u * i] = packHalf2x16(vec2(a[0][0], a[1][0]));
+  shapes.v[5u * i + 1u] = packHalf2x16(vec2(a[2][0], a[1][1]));
+  shapes.v[5u * i + 2u] = packHalf2x16(vec2(a[2][1], a[2][2]));
+}
+
+void store_shift(uint i, vec3 shift) {
+  Uints shapes = Uints(pc.shapes);
   vec3 in_h = shift * (2.0 / pc.side);
-  out_shapes.v[5u * i + 3u] = packHalf2x16(in_h.xy);
-  out_shapes.v[5u * i + 4u] = packHalf2x16(vec2(in_h.z, 0.0));
+  shapes.v[5u * i + 3u] = packHalf2x16(in_h.xy);
+  shapes.v[5u * i + 4u] = packHalf2x16(vec2(in_h.z, 0.0));
+}
+
+// Volume-keeping radii proportional to the covariance's eigenvalues (Yu &
+// Turk's choice), clamped to kMaxRatio: the shape matrix.
+mat3 shape_of(mat3 covariance) {
+  vec3 values;
+  mat3 vectors;
+  eigen(covariance, values, vectors);
+  float largest = max(values.x, max(values.y, values.z));
+  if (!(largest > 0.0)) return mat3(1.0);
+  vec3 clamped = max(values, vec3(largest / kMaxRatio));
+  vec3 radii = clamped / pow(clamped.x * clamped.y * clamped.z, 1.0 / 3.0);
+  return vectors * mat3(radii.x * radii.x, 0.0, 0.0, 0.0, radii.y * radii.y, 0.0, 0.0, 0.0, radii.z * radii.z) *
+         transpose(vectors);
 }
 
 void main() {
@@ -91,10 +127,12 @@ void main() {
   if (g.fits == 0u || pc.shapes == uvec2(0u)) return;
   for (uint i = first_item() + gl_LocalInvocationIndex; i < pc.n; i += round_stride()) {
     if (marked(i)) {
-      store(i, mat3(1.0), vec3(0.0));
+      if (pc.step == 0u) store_shift(i, vec3(0.0));
+      if (pc.step == 1u) store_shape(i, mat3(1.0));
       continue;
     }
     vec3 p = particle(i);
+    vec3 centre = pc.step == 0u ? p : p + (kShapeSmoothing / kSmoothing) * shift_of(i);
     uint s = SLOT(i);
     uvec3 c = cell_of_key(key_of_slot(s, g), g);
     Moments m = Moments(0.0, vec3(0.0), mat3(0.0), 0u);
@@ -102,25 +140,14 @@ void main() {
       for (int dy = -1; dy <= 1; ++dy)
         for (int dz = -1; dz <= 1; ++dz) {
           ivec3 d = ivec3(dx, dy, dz);
-          gather_slot(d == ivec3(0) ? s : neighbour_slot(c, d, g), p, m);
+          gather_slot(d == ivec3(0) ? s : neighbour_slot(c, d, g), p, centre, m);
         }
-    mat3 shape = mat3(1.0);
-    vec3 shift = vec3(0.0);
-    if (m.near - 1u >= kMinNeighbours) {
-      vec3 mean = m.w1 / m.w0;
-      shift = kSmoothing * mean;
-      mat3 covariance = m.w2 / m.w0 - outerProduct(mean, mean);
-      vec3 values;
-      mat3 vectors;
-      eigen(covariance, values, vectors);
-      float largest = max(values.x, max(values.y, values.z));
-      if (largest > 0.0) {
-        vec3 clamped = max(values, vec3(largest / kMaxRatio));
-        vec3 radii = clamped / pow(clamped.x * clamped.y * clamped.z, 1.0 / 3.0);
-        shape = vectors * mat3(radii.x * radii.x, 0.0, 0.0, 0.0, radii.y * radii.y, 0.0, 0.0, 0.0, radii.z * radii.z) *
-                transpose(vectors);
-      }
+    bool shaped = m.near - 1u >= kMinNeighbours;
+    vec3 mean = m.w1 / m.w0;
+    if (pc.step == 0u) {
+      store_shift(i, shaped ? kSmoothing * mean : vec3(0.0));
+    } else {
+      store_shape(i, shaped ? shape_of(m.w2 / m.w0 - outerProduct(mean, mean)) : mat3(1.0));
     }
-    store(i, shape, shift);
   }
 }

@@ -122,10 +122,10 @@ mat3 load_shape(uint index, out vec3 shift) {
 }
 
 // How far an ellipsoid's centre may move from its particle: kSmoothing
-// times the reach of its neighbours, 2h (band_ellipsoids.comp).
+// (0.5) times the reach of its neighbours, 2h (band_ellipsoids.comp).
 float largest_shift() {
   if (pc.shapes == uvec2(0u) || Shapes(pc.shapes).w[0] == 0u) return 0.0;
-  return 1.8 * uintBitsToFloat(Shapes(pc.shapes).w[1]);
+  return uintBitsToFloat(Shapes(pc.shapes).w[1]);
 }
 
 // A blob's splat (section 4 of papers/001, eq. 4.2, normalized): a Gaussian

@@ -23,7 +23,7 @@ struct BandPush {
   uint32_t n1;
   float reach2;
   uint32_t with_blobs;
-  uint32_t pad;  // to the 8-byte alignment of the addresses; not in the shader's block
+  uint32_t step;
   uint64_t shapes, marks;
 };
 static_assert(sizeof(BandPush) == 104);
@@ -114,10 +114,17 @@ void BandPasses::record(vk::CommandBuffer cmd, const BandRun& run, const std::fu
     if (wanted) {
       cmd.bindPipeline(vk::PipelineBindPoint::eCompute, *pipelines_[p]);
       // Passes loop over their items in rounds, so any group count covers
-      // them; over the slots for BandVoxels, one for BandGrid.
+      // them; over the slots for BandVoxels, one for BandGrid. The
+      // ellipsoids take two steps (band_ellipsoids.comp).
       const uint32_t groups = s == Shader::BandGrid ? 1 : groups_for(s == Shader::BandVoxels ? capacity : n);
-      cmd.dispatch(groups, 1, 1);
-      barrier(cmd);
+      for (uint32_t step = 0; step < (s == Shader::BandEllipsoids ? 2u : 1u); ++step) {
+        if (step > 0) {
+          push.step = step;
+          cmd.pushConstants<BandPush>(*layout_, vk::ShaderStageFlagBits::eCompute, 0, push);
+        }
+        cmd.dispatch(groups, 1, 1);
+        barrier(cmd);
+      }
     }
     if (after) after(kSteps[p + 1]);
   }

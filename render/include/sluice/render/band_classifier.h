@@ -44,13 +44,15 @@ class BandClassifier {
   // Each particle's ellipsoid, as anisotropic particles draw it (Yu & Turk
   // 2013, shaders/band_ellipsoids.comp), from the particles within
   // 2 x `diameter` of it, weighted 1 - (r / 2 diameter)^3:
-  // - shape: from their covariance, the matrix A = R S^2 R^T (R: the
-  //   ellipsoid's axes; S: its radii in units of the particle's radius), so
-  //   that the particle of radius r at centre c covers
-  //   (x - c)^T A^-1 (x - c) <= r^2; entries xx, xy, xz, yy, yz, zz. The
-  //   radii keep the sphere's volume and differ at most 4 times.
-  // - shift: c minus the particle's position (world units): 0.9 times
-  //   their weighted mean offset from it (the paper's smoothing, lambda).
+  // - shift: c minus the particle's position (world units), the centre
+  //   it is drawn at: 0.5 times their weighted mean offset from it (the
+  //   paper's smoothing of the centres, lambda);
+  // - shape: the matrix A = R S^2 R^T (R: the ellipsoid's axes; S: its
+  //   radii in units of the particle's radius), so that the particle of
+  //   radius r at centre c covers (x - c)^T A^-1 (x - c) <= r^2; entries
+  //   xx, xy, xz, yy, yz, zz. From the covariance of their centres
+  //   smoothed with lambda 0.9 (the paper's), about its own. The radii keep
+  //   the sphere's volume and differ at most 4 times.
   // A particle with fewer than 6 others near it is its sphere (A = I, no
   // shift). Half precision, as the GPU keeps them: about 1e-3 relative
   // (the shift: of the diameter). Throws as classify() does.
