@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Runs on the GPU machine (see bench/device/README.md): every benchmark the
 # issues ask GPU-machine figures for, in one call. Results go to $OUT.
-#   bash bench/device/run.sh [mpi] [io] [import] [layers] [band] [render] [stream] [split] [codec] [huge] [embed] [compare] [live] [stereo] [xrsize] [firsthour] [streamcmp] [gpudecode] [gpuquick] [gpupair] [gpuab] [gpu100] [egl] [vtkpeer] [readpath] [importprobe] [relayprobe] [storeab] [gpusplit] [gpuplay] [gpuflight] [gpu100ab] [damf2] [gpusweep] [gpuvar] [relay] [relaytests] [relay100] [gpuplayall] [view] [viewall] [viewio] [tiersize] [tiergpu] [viewfull]   (default: io render stream)
+#   bash bench/device/run.sh [mpi] [io] [import] [layers] [band] [render] [stream] [split] [codec] [huge] [embed] [compare] [live] [stereo] [aniso] [xrsize] [firsthour] [streamcmp] [gpudecode] [gpuquick] [gpupair] [gpuab] [gpu100] [egl] [vtkpeer] [readpath] [importprobe] [relayprobe] [storeab] [gpusplit] [gpuplay] [gpuflight] [gpu100ab] [damf2] [gpusweep] [gpuvar] [relay] [relaytests] [relay100] [gpuplayall] [view] [viewall] [viewio] [tiersize] [tiergpu] [viewfull]   (default: io render stream)
 set -uo pipefail
 # Folders on the GPU machine (it starts bare each session): SLUICE_SCRATCH holds
 # the unpacked libraries and the files stages write; OUT what comes back.
@@ -122,6 +122,21 @@ for stage in $stages; do
       run $S bench render --sizes 1M --repeats 3 >/dev/null  # warm-up
       run $S bench render --stereo --repeats 7 --sizes 1M,10M,100M --size 2064x2208
       run $S bench render --stereo --repeats 7 --sizes 10M,100M --size 2064x2208 --layers --with-depth
+      ;;
+    aniso)  # anisotropic particles: 10M every particle, both eyes at 2064x2208 with a host depth image,
+            # spheres and ellipsoids, against pack.sh's BASE (today's binary) alternated; then 4K mono and the sample
+      B=.gpu/sluice_base
+      run $S bench render --sizes 1M --repeats 3 >/dev/null  # warm-up
+      for i in 1 2; do
+        [[ -x $B ]] && run $B bench render --stereo --with-depth --repeats 7 --sizes 10M --size 2064x2208 --csv "$OUT/aniso_base_$i.csv"
+        run $S bench render --stereo --with-depth --repeats 7 --sizes 10M --size 2064x2208 --ellipsoids --csv "$OUT/aniso_$i.csv"
+      done
+      run $S bench render --repeats 7 --sizes 10M,100M --size 3840x2160 --ellipsoids --csv "$OUT/aniso_4k.csv"
+      $S convert data/dam_break_3d/dam_break_3d.pvd -o $T/dam.sluice -a rho -q -f
+      for p in spheres ellipsoids; do
+        run $S render $T/dam.sluice --frames 12 --out "$OUT/dam_$p.png" --size 1920x1080 --particles $p --stats -q \
+          --camera "eye=2.6,-1.2,0.45;target=0.7,0,0.22;up=0,0,1;fov=45"
+      done
       ;;
     xrsize)  # one eye at 2064x2208: shading into the image against the present pass with a host depth image
       run $S bench render --sizes 1M --repeats 3 >/dev/null  # warm-up
