@@ -25,22 +25,23 @@ __all__ = ["open", "convert", "export", "render", "Sequence", "Frame", "FrameStr
 _last_renderer = None  # (key, Renderer): consecutive renders of one file reuse it
 
 
-def render(seq, frame, size=(960, 540), *, camera=None, layers="surface", color=None, **look):
+def render(seq, frame, size=(960, 540), *, camera=None, layers="surface", color=None, particles="spheres", **look):
     """Draws frame `frame` of `seq` (a Sequence or a path) as liquid.
 
     Returns a uint8 RGBA array (height, width, 4). `camera` is None (frame
     the data) or a string in `sluice render --camera` form; `color` names an
-    attribute to colour by; `look` takes Renderer.render's keywords:
-    lod_level, display, ground. Consecutive calls for one file, size, layers
-    and colour reuse one sluice.Renderer; make Renderers yourself to keep
+    attribute to colour by; `particles` is 'spheres' or 'ellipsoids'
+    (anisotropic); `look` takes Renderer.render's keywords: lod_level,
+    display, ground. Consecutive calls for one file, size, layers, colour
+    and particles reuse one sluice.Renderer; make Renderers yourself to keep
     several.
     """
     global _last_renderer
     if Renderer is None:
         raise Error("this sluice module was built without the Vulkan renderer")
     path = seq.path if isinstance(seq, Sequence) else str(seq)
-    key = (path, tuple(size), layers, color)
+    key = (path, tuple(size), layers, color, particles)
     if _last_renderer is None or _last_renderer[0] != key:
         _last_renderer = None  # release the old one before making the next
-        _last_renderer = (key, Renderer(path, size=tuple(size), layers=layers, color=color))
+        _last_renderer = (key, Renderer(path, size=tuple(size), layers=layers, color=color, particles=particles))
     return _last_renderer[1].render(frame, camera=camera, **look)

@@ -40,10 +40,16 @@ io::LayerSet layer_set(const std::string& layers) {
   throw py::value_error("layers must be 'surface' (the narrow band and blobs, drawn by default) or 'all', not '" + layers + "'");
 }
 
+bool anisotropic(const std::string& particles) {
+  if (particles == "spheres") return false;
+  if (particles == "ellipsoids") return true;
+  throw py::value_error("particles must be 'spheres' (the default) or 'ellipsoids' (anisotropic), not '" + particles + "'");
+}
+
 class Renderer {
  public:
   Renderer(const std::filesystem::path& path, std::pair<uint32_t, uint32_t> size, const std::string& layers,
-           std::optional<std::string> color)
+           std::optional<std::string> color, const std::string& particles)
       : context_(shared_context()), color_(std::move(color)) {
     if (size.first < 16 || size.second < 16 || size.first > 16384 || size.second > 16384) {
       throw py::value_error("size must be (width, height) between 16 and 16384 pixels");
@@ -59,6 +65,7 @@ class Renderer {
     so.player.on_error = runtime::ErrorPolicy::Stop;
     so.layers = layer_set(layers);
     so.motion = render::ViewMotion::Fixed;
+    so.renderer.anisotropic = anisotropic(particles);
     stream_ = std::make_unique<render::Stream>(*context_, path, so);
     target_ = std::make_unique<render::OffscreenTarget>(*context_, size.first, size.second);
     if (color_) {
@@ -198,12 +205,15 @@ void bind_renderer(py::module_& m) {
 
 color: an attribute to colour by (viridis over the file's range); fixed
 for the Renderer's life, since frames decode only that attribute.
+particles: 'spheres', or 'ellipsoids': each particle flattened and
+stretched along its neighbours (anisotropic, `sluice render --particles`).
 Uses the first discrete GPU, else an integrated one, else lavapipe (CPU).
 One Vulkan context is shared by every Renderer of the process.
 )")
-      .def(py::init<const std::filesystem::path&, std::pair<uint32_t, uint32_t>, const std::string&, std::optional<std::string>>(),
+      .def(py::init<const std::filesystem::path&, std::pair<uint32_t, uint32_t>, const std::string&, std::optional<std::string>,
+                    const std::string&>(),
            py::arg("path"), py::kw_only(), py::arg("size") = std::pair<uint32_t, uint32_t>{960, 540},
-           py::arg("layers") = "surface", py::arg("color") = py::none())
+           py::arg("layers") = "surface", py::arg("color") = py::none(), py::arg("particles") = "spheres")
       .def("render", &Renderer::draw, kRenderDoc, py::arg("i"), py::kw_only(), py::arg("camera") = py::none(),
            py::arg("lod_level") = py::none(), py::arg("display") = "transparent", py::arg("ground") = true)
       .def_property_readonly("color", &Renderer::color, "The attribute coloured by, or None.")

@@ -45,6 +45,20 @@ def test_frames_colour_and_lod_change_the_picture(renderer, converted):
     np.testing.assert_array_equal(again, last)  # nothing left over from the other looks
 
 
+def test_ellipsoids_are_the_cli_picture_and_differ_from_spheres(renderer, converted, sluice_exe, tmp_path):
+    spheres = renderer.render(12)
+    ellipsoids = sluice.Renderer(converted, size=(320, 180), particles="ellipsoids")
+    img = ellipsoids.render(12, camera=renderer.camera)
+    assert np.abs(img.astype(int) - spheres.astype(int)).max() > 30
+    out = tmp_path / "cli.png"
+    subprocess.run([str(sluice_exe), "render", str(converted), "--frames", "12", "--size", "320x180", "-o", str(out),
+                    "--camera", renderer.camera, "--particles", "ellipsoids", "-q"], check=True)
+    cli = np.rint(matplotlib.image.imread(out) * 255).astype(np.uint8)
+    assert np.abs(cli.astype(int) - img.astype(int)).max() <= 2
+    with pytest.raises(ValueError, match="particles"):
+        sluice.Renderer(converted, size=(64, 64), particles="cubes")
+
+
 def test_a_given_camera_is_used(renderer):
     renderer.render(5, camera="eye=0.5,-3,1;target=0.5,0.5,0.2;fov=30")
     assert "eye=0.5,-3,1" in renderer.camera.replace(" ", "")
