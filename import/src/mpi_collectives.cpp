@@ -93,7 +93,15 @@ std::string mpi_error_text(int code) {
 }
 
 SharedFile::SharedFile(const Ranks& r, const std::string& path) : path_(path) {
-  const int opened = MPI_File_open(r.comm, path.c_str(), MPI_MODE_CREATE | MPI_MODE_WRONLY, MPI_INFO_NULL, &file_);
+  // Each rank writes one contiguous range a round: no collective buffering
+  // (the standard's hint, and ROMIO's own name for it; OMPIO takes its
+  // choice from the environment, which `sluice convert --mpi` sets).
+  MPI_Info hints;
+  MPI_Info_create(&hints);
+  MPI_Info_set(hints, "collective_buffering", "false");
+  MPI_Info_set(hints, "romio_cb_write", "disable");
+  const int opened = MPI_File_open(r.comm, path.c_str(), MPI_MODE_CREATE | MPI_MODE_WRONLY, hints, &file_);
+  MPI_Info_free(&hints);
   std::optional<Error> failed;
   if (opened != MPI_SUCCESS) failed = Error({path}, "rank " + std::to_string(r.rank) + " could not create it: " + mpi_error_text(opened));
   try {
