@@ -90,6 +90,11 @@ layout(push_constant) uniform Push {
 // of h as 3 halves (x y, z 0).
 layout(buffer_reference, std430, buffer_reference_align = 4) readonly buffer Shapes { uint w[]; };
 
+// Whether this pipeline draws anisotropic particles (specialization
+// constant 0, shaders.h's compute_pipeline): false leaves their code out, so
+// the spheres' splatting keeps its speed.
+layout(constant_id = 0) const bool kEllipsoids = false;
+
 const uint kBlock = 256;  // particles per cull workgroup
 // The longest an ellipsoid's axis gets, in particle radii: its radii are at
 // most 4 times apart and their product is 1 (band_ellipsoids.comp), 4^(2/3).
@@ -159,7 +164,7 @@ DrawItem load_item(uint item) {
   it.attr = float(d.y >> 20) * (1.0 / 4095.0);
   it.count = 0.0;
   it.sigma = 0.0;
-  it.ellipsoid = c.kind == 0u && pc.shapes != uvec2(0u) && Shapes(pc.shapes).w[0] != 0u;
+  it.ellipsoid = kEllipsoids && c.kind == 0u && pc.shapes != uvec2(0u) && Shapes(pc.shapes).w[0] != 0u;
   it.shape = mat3(1.0);
   if (it.ellipsoid) {
     vec3 shift;

@@ -196,16 +196,19 @@ void PassRecorder::splat() {
     memory_barrier(cmd_, Stage::eComputeShader, Access::eShaderStorageWrite, Stage::eComputeShader | Stage::eDrawIndirect,
                    Access::eShaderStorageRead | Access::eShaderStorageWrite | Access::eIndirectCommandRead);
   };
+  // Frames with ellipsoids through the pipeline that draws them (the
+  // spheres' own is leaner: GPU ms in docs/render.md).
+  const vk::Pipeline splat_pipeline = pc_.shapes != 0 && *r_.splat_ellipsoids ? *r_.splat_ellipsoids : *r_.splat;
   if (have_frame_) {
     args_then(1);
-    cmd_.bindPipeline(vk::PipelineBindPoint::eCompute, *r_.splat);
+    cmd_.bindPipeline(vk::PipelineBindPoint::eCompute, splat_pipeline);
     for (uint32_t e = 0; e < layers_; ++e) {  // eyes in turn (splat.comp says why)
       push(0, e);
       cmd_.dispatchIndirect(*r_.args.buffer, offsetof(GpuArgs, splat_x));
       compute_to_compute();
     }
     args_then(2);
-    cmd_.bindPipeline(vk::PipelineBindPoint::eCompute, *r_.splat);
+    cmd_.bindPipeline(vk::PipelineBindPoint::eCompute, splat_pipeline);
     push(1);
     cmd_.dispatchIndirect(*r_.args.buffer, offsetof(GpuArgs, big_x));
     compute_to_compute();

@@ -23,12 +23,16 @@ vk::raii::ShaderModule module(const vk::raii::Device& device, Shader s) {
   return vk::raii::ShaderModule(device, vk::ShaderModuleCreateInfo({}, code.size_bytes(), code.data()));
 }
 
-// Point sprites into one colour target (and optionally reversed-z depth).
+// Point sprites into one colour target (and optionally reversed-z depth);
+// `ellipsoids`: common.glsl's kEllipsoids, as compute_pipeline's.
 vk::raii::Pipeline sphere_pipeline(const vk::raii::Device& device, const vk::raii::PipelineLayout& layout, Shader fragment,
-                                   vk::Format color, bool depth, bool additive, uint32_t view_mask) {
+                                   vk::Format color, bool depth, bool additive, uint32_t view_mask, bool ellipsoids) {
   const vk::raii::ShaderModule vs = module(device, Shader::SphereVert);
   const vk::raii::ShaderModule fs = module(device, fragment);
-  const std::array stages{vk::PipelineShaderStageCreateInfo({}, vk::ShaderStageFlagBits::eVertex, *vs, "main"),
+  const vk::Bool32 value = ellipsoids ? VK_TRUE : VK_FALSE;
+  const vk::SpecializationMapEntry entry(0, 0, sizeof value);
+  const vk::SpecializationInfo specialization(1, &entry, sizeof value, &value);
+  const std::array stages{vk::PipelineShaderStageCreateInfo({}, vk::ShaderStageFlagBits::eVertex, *vs, "main", &specialization),
                           vk::PipelineShaderStageCreateInfo({}, vk::ShaderStageFlagBits::eFragment, *fs, "main")};
   vk::PipelineVertexInputStateCreateInfo vertex_input;
   vk::PipelineInputAssemblyStateCreateInfo assembly({}, vk::PrimitiveTopology::ePointList);
@@ -100,16 +104,19 @@ void detail::RendererImpl::create_pipelines() {
   cull_args = compute_pipeline(device, layout, Shader::CullArgs);
   cull_particles = compute_pipeline(device, layout, Shader::CullParticles);
   splat = compute_pipeline(device, layout, Shader::Splat);
+  if (options.anisotropic) splat_ellipsoids = compute_pipeline(device, layout, Shader::Splat, true);
   resolve = compute_pipeline(device, layout, Shader::Resolve);
   filter_depth = compute_pipeline(device, layout, Shader::FilterDepth);
   filter_thickness = compute_pipeline(device, layout, Shader::FilterThickness);
   composite = compute_pipeline(device, layout, Shader::Composite);
-  // Point sprites into one layer, or into both eyes' layers at once (multiview).
+  // Point sprites into one layer, or into both eyes' layers at once
+  // (multiview); spheres only, unless the renderer draws ellipsoids.
   for (uint32_t layers = 1; layers <= 2; ++layers) {
     const uint32_t mask = view_mask(layers);
-    depth_pass[layers - 1] = sphere_pipeline(device, layout, Shader::SphereDepthFrag, vk::Format::eR32Sfloat, true, false, mask);
-    thickness_pass[layers - 1] =
-        sphere_pipeline(device, layout, Shader::SphereThicknessFrag, targets.thick_format, false, true, mask);
+    depth_pass[layers - 1] = sphere_pipeline(device, layout, Shader::SphereDepthFrag, vk::Format::eR32Sfloat, true, false, mask,
+                                             options.anisotropic);
+    thickness_pass[layers - 1] = sphere_pipeline(device, layout, Shader::SphereThicknessFrag, targets.thick_format, false,
+                                                 true, mask, options.anisotropic);
   }
 }
 

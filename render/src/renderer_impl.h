@@ -105,6 +105,7 @@ struct detail::RendererImpl {
   vk::raii::Pipeline cull_chunks{nullptr}, cull_args{nullptr}, cull_particles{nullptr};
   std::array<vk::raii::Pipeline, 2> depth_pass{nullptr, nullptr}, thickness_pass{nullptr, nullptr};  // [eyes - 1]
   vk::raii::Pipeline splat{nullptr}, resolve{nullptr};
+  vk::raii::Pipeline splat_ellipsoids{nullptr};  // with options.anisotropic (common.glsl's kEllipsoids)
   vk::raii::Pipeline filter_depth{nullptr}, filter_thickness{nullptr}, composite{nullptr};
   struct PresentPipeline {
     vk::Format color, depth;

@@ -84,11 +84,15 @@ const uint32_t kDecode[] =
     ;
 }  // namespace
 
-vk::raii::Pipeline compute_pipeline(const vk::raii::Device& device, const vk::raii::PipelineLayout& layout, Shader s) {
+vk::raii::Pipeline compute_pipeline(const vk::raii::Device& device, const vk::raii::PipelineLayout& layout, Shader s,
+                                    bool ellipsoids) {
   const std::span<const uint32_t> code = spirv(s);
   const vk::raii::ShaderModule m(device, vk::ShaderModuleCreateInfo({}, code.size_bytes(), code.data()));
+  const vk::Bool32 value = ellipsoids ? VK_TRUE : VK_FALSE;
+  const vk::SpecializationMapEntry entry(0, 0, sizeof value);  // constant_id 0: common.glsl's kEllipsoids
+  const vk::SpecializationInfo specialization(1, &entry, sizeof value, &value);
   const vk::ComputePipelineCreateInfo info(
-      {}, vk::PipelineShaderStageCreateInfo({}, vk::ShaderStageFlagBits::eCompute, *m, "main"), *layout);
+      {}, vk::PipelineShaderStageCreateInfo({}, vk::ShaderStageFlagBits::eCompute, *m, "main", &specialization), *layout);
   return vk::raii::Pipeline(device, nullptr, info);
 }
 

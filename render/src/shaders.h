@@ -41,6 +41,10 @@ enum class Shader {
 std::span<const uint32_t> spirv(Shader s);
 
 // A compute pipeline of shader `s` ("main") with `layout`.
-vk::raii::Pipeline compute_pipeline(const vk::raii::Device& device, const vk::raii::PipelineLayout& layout, Shader s);
+// `ellipsoids`: common.glsl's kEllipsoids (specialization constant 0),
+// which shaders that draw particles read to leave the ellipsoids' code out
+// of the sphere pipelines.
+vk::raii::Pipeline compute_pipeline(const vk::raii::Device& device, const vk::raii::PipelineLayout& layout, Shader s,
+                                    bool ellipsoids = false);
 
 }  // namespace sluice::render
