@@ -155,7 +155,10 @@ class VoxelGrid {
     for (int a = 0; a < 3; ++a) {
       // Coordinates 1 .. dims-2: cell 0 and the last are the outside.
       const float extent = box_.hi[a] >= box_.lo[a] ? box_.hi[a] - box_.lo[a] : 0.0f;
-      const float extent_cells = std::floor(extent * inverse_side_ + 0.25f);
+      float extent_cells = std::floor(extent * inverse_side_ + 0.25f);
+      // A side so small that its inverse overflows, on a flat axis: 0 x inf
+      // (found by fuzz_vtk_import, tests/data/fuzz/vtk/flat_axis_overflowing_voxel.vtk).
+      if (std::isnan(extent_cells)) extent_cells = 0.0f;
       dims_[a] = int64_t(std::min(extent_cells + 3.0f, float(kAxisCells)));
       cells *= uint64_t(dims_[a]);
       origin_[a] = box_.lo[a] - 0.25f * side_;
