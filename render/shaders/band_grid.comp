@@ -19,6 +19,7 @@ void main() {
     precise float extent = hi >= lo ? hi - lo : 0.0;
     precise float scaled = extent * pc.inverse;
     precise float cells = floor(scaled + 0.25);
+    if (isnan(cells)) cells = 0.0;  // 0 x an overflowed inverse, as the CPU takes it
     g.dims[a] = uint(min(cells + 3.0, kAxisCells));
     precise float quarter = 0.25 * pc.side;
     precise float origin = lo - quarter;
