@@ -131,6 +131,7 @@ for stage in $stages; do
         [[ -x $B ]] && run $B bench render --stereo --with-depth --repeats 7 --sizes 10M --size 2064x2208 --csv "$OUT/aniso_base_$i.csv"
         run $S bench render --stereo --with-depth --repeats 7 --sizes 10M --size 2064x2208 --ellipsoids --csv "$OUT/aniso_$i.csv"
       done
+      [[ -n "${ANISO_QUICK:-}" ]] && continue  # (the stereo pair only)
       run $S bench render --repeats 7 --sizes 10M,100M --size 3840x2160 --ellipsoids --csv "$OUT/aniso_4k.csv"
       $S convert data/dam_break_3d/dam_break_3d.pvd -o $T/dam.sluice -a rho -q -f
       for p in spheres ellipsoids; do
