@@ -54,10 +54,11 @@ void run_play_gpu(const PlayOptions& o, const WindowPlayOptions& w) {
   if (!o.quiet) {
     std::fprintf(stderr,
                  "playing %s through the renderer on %s (%s) at %ux%u: %llu frames at %.4g fps, display %.4g Hz, %s; "
-                 "frames decoded on the %s\n",
+                 "frames decoded on the %s; particles as %s\n",
                  o.file.c_str(), context.device().name.c_str(), context.device().type.c_str(), width, height,
                  (unsigned long long)reader.frame_count(), player.frame_rate(), display_hz,
-                 runtime::end_mode_name(so.player.end), gpu_decode ? "GPU" : "CPU");
+                 runtime::end_mode_name(so.player.end), gpu_decode ? "GPU" : "CPU",
+                 so.renderer.anisotropic ? "ellipsoids" : "spheres");
   }
 
   using Steady = std::chrono::steady_clock;

@@ -90,6 +90,7 @@ void run_xr(const XrOptions& o) {
   sopts.clock = &clock;
   render::Stream stream(session.context(), p.file, sopts);
   const render::SceneInfo& scene = stream.scene();
+  if (!p.quiet && sopts.renderer.anisotropic) std::fprintf(stderr, "xr: particles as ellipsoids (anisotropic)\n");
   o.view.apply_environment(stream.renderer());
   render::LodOptions lod = o.view.lod_options();
   stream.set_look(o.view.fluid_options(scene), lod);
