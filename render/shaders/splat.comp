@@ -54,15 +54,15 @@ void pixel_box(Sphere s, vec4 vp, out ivec2 lo, out ivec2 hi) {
 }
 
 // The pixel's ray against the particle: false on a miss; else the hit's
-// depth and, for spheres and ellipsoids, the chord through it, for blobs
-// the ray's squared distance from the centroid.
-bool ray_hit(Sphere s, ivec2 p, vec4 k, out float z, out float chord) {
+// depth and the thickness the particle adds along the ray (world): the
+// chord through a sphere or ellipsoid, a blob's Gaussian.
+bool ray_hit(Sphere s, ivec2 p, vec4 k, out float z, out float thickness) {
   vec3 dir = eye_ray(vec2(p) + 0.5, k);
   float inv_len = inversesqrt(dot(dir, dir));
   vec3 n = dir * inv_len;
   if (s.ellipsoid) {
     float near;
-    bool hit = ray_ellipsoid(s.c, s.b, n, near, chord);
+    bool hit = ray_ellipsoid(s.c, s.b, n, near, thickness);
     z = near * inv_len;  // dir.z = -1: distance along the ray * |n.z|
     return hit;
   }
@@ -70,27 +70,28 @@ bool ray_hit(Sphere s, ivec2 p, vec4 k, out float z, out float chord) {
   vec3 perp = s.c - tc * n;
   float h2 = s.r * s.r - dot(perp, perp);
   z = (tc - sqrt(max(h2, 0.0))) * inv_len;
-  chord = s.count > 0.0 ? s.r * s.r - h2 : 2.0 * sqrt(max(h2, 0.0));
-  return h2 >= 0.0;
+  if (h2 < 0.0) return false;
+  // (For a blob, r^2 - h2 is the ray's squared distance from its centroid.)
+  thickness = s.count > 0.0 ? blob_thickness(s.count, s.sigma, s.r * s.r - h2) : 2.0 * sqrt(h2);
+  return true;
 }
 
 void depth_pixel(Sphere s, ivec2 p) {
-  float z, chord;
-  if (!ray_hit(s, p, g.ray, z, chord)) return;
+  float z, thickness;
+  if (!ray_hit(s, p, g.ray, z, thickness)) return;
   uint bits = floatBitsToUint(z);
   ivec3 q = ivec3(p, eye);
   if (imageLoad(depth_u, q).x > bits) imageAtomicMin(depth_u, q, bits);
 }
 
 void thickness_pixel(Sphere s, ivec2 p, bool attr) {
-  float z, chord;
-  if (!ray_hit(s, p, g.thick_ray, z, chord)) return;
-  if (s.count > 0.0) chord = blob_thickness(s.count, s.sigma, chord);  // (chord: the squared distance)
-  chord *= g.splat.x;
-  uint t = uint(chord + 0.5);
+  float z, thickness;
+  if (!ray_hit(s, p, g.thick_ray, z, thickness)) return;
+  float fixed_point = thickness * g.splat.x;
+  uint t = uint(fixed_point + 0.5);
   if (t == 0u) return;
   imageAtomicAdd(thick_u, ivec3(p, eye), t);
-  if (attr) imageAtomicAdd(thick_attr_u, ivec3(p, eye), uint(chord * s.attr + 0.5));
+  if (attr) imageAtomicAdd(thick_attr_u, ivec3(p, eye), uint(fixed_point * s.attr + 0.5));
 }
 
 void main() {

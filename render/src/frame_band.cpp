@@ -2,7 +2,7 @@
 #include "frame_band.h"
 
 #include <algorithm>
-#include <cstring>
+#include <bit>
 #include <limits>
 
 #include "renderer_impl.h"
@@ -64,12 +64,12 @@ FrameBand::FrameBand(detail::ContextImpl& ctx, float diameter) : ctx_(ctx), diam
 void FrameBand::record(vk::CommandBuffer cmd, FrameSet& set, bool float_positions, Wanted wanted,
                        const std::function<void(Buffer&&)>& retire) {
   const uint64_t n = set.particle_count;
-  const bool blobs_in = !wanted.classify && !set.unlayered;  // a layered set's blob rows, among the positions
+  const uint64_t mark_words = (n + 31) / 32;  // a layered set's blob rows are among the positions
   constexpr auto usage = vk::BufferUsageFlagBits::eStorageBuffer | vk::BufferUsageFlagBits::eShaderDeviceAddress |
                          vk::BufferUsageFlagBits::eTransferDst;
   grow_buffer(ctx_, xyz_, n * 12, usage, MemoryKind::DeviceLocal, retire);
   if (wanted.classify) grow_buffer(ctx_, attr_, n * 4, usage, MemoryKind::DeviceLocal, retire);
-  if (wanted.shapes && blobs_in) grow_buffer(ctx_, marks_, surface_words(n) * 4, usage, MemoryKind::DeviceLocal, retire);
+  if (wanted.shapes) grow_buffer(ctx_, marks_, mark_words * 4, usage, MemoryKind::DeviceLocal, retire);
   passes_.reserve(n, wanted.classify, retire);
 
   const bool attributes = wanted.classify && set.has_attribute;
@@ -84,14 +84,14 @@ void FrameBand::record(vk::CommandBuffer cmd, FrameSet& set, bool float_position
   push.blobs = passes_.blobs.address;
   push.blob_attr = passes_.blob_attr.address;
   push.surface = set.surface.address;
-  push.marks = wanted.shapes && blobs_in ? marks_.address : 0;
+  push.marks = wanted.shapes ? marks_.address : 0;
   push.n = uint32_t(n);
   push.chunk_count = set.chunk_count;
   push.room = uint32_t(blob_room(n));
   push.float_positions = float_positions ? 1 : 0;
 
   if (push.marks) {
-    cmd.fillBuffer(*marks_.buffer, 0, surface_words(n) * 4, 0);
+    cmd.fillBuffer(*marks_.buffer, 0, mark_words * 4, 0);
     BandPasses::barrier(cmd);
   }
   cmd.bindPipeline(vk::PipelineBindPoint::eCompute, *gather_);
@@ -109,9 +109,7 @@ void FrameBand::record(vk::CommandBuffer cmd, FrameSet& set, bool float_position
                               .shapes = wanted.shapes ? set.shapes.address + 8 : 0,
                               .marks = push.marks});
   if (wanted.shapes) {
-    uint32_t h_bits;
-    std::memcpy(&h_bits, &diameter_, 4);
-    cmd.fillBuffer(*set.shapes.buffer, 4, 4, h_bits);
+    cmd.fillBuffer(*set.shapes.buffer, 4, 4, std::bit_cast<uint32_t>(diameter_));
     cmd.fillBuffer(*set.shapes.buffer, 0, 4, 1);
     BandPasses::barrier(cmd);
   }

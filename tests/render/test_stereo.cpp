@@ -54,6 +54,36 @@ struct Drawn {
   FrameStats stats;
 };
 
+// Draws `views` (one per layer) into fresh host images of that many layers,
+// colour and D32 depth, and reads every layer back.
+Drawn draw_into_host(testing::TestHost& host, Renderer& renderer, std::span<const View> views, const FluidOptions& fluid,
+                     const LodOptions& lod) {
+  using U = vk::ImageUsageFlagBits;
+  const uint32_t layers = uint32_t(views.size());
+  testing::TestHost::Image color = host.image(kW, kH, vk::Format::eR8G8B8A8Unorm, U::eColorAttachment | U::eTransferSrc, layers);
+  testing::TestHost::Image depth = host.image(kW, kH, vk::Format::eD32Sfloat, U::eDepthStencilAttachment | U::eTransferSrc, layers);
+  RenderTarget t;
+  t.width = kW;
+  t.height = kH;
+  t.color_image = *color.image;
+  t.color_view = *color.view;
+  t.color_format = VK_FORMAT_R8G8B8A8_UNORM;
+  t.color_layout_after = VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL;
+  t.depth_image = *depth.image;
+  t.depth_view = *depth.view;
+  t.depth_format = VK_FORMAT_D32_SFLOAT;
+  t.depth_layout_after = VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL;
+  t.layer_count = layers;
+  host.submit([&](vk::CommandBuffer c) { renderer.record(c, t, views, fluid, lod); });
+  Drawn d;
+  for (uint32_t l = 0; l < layers; ++l) {
+    d.color[l] = host.read(color, kW, kH, l);
+    d.depth[l] = host.read(depth, kW, kH, l);
+  }
+  d.stats = renderer.last_stats();
+  return d;
+}
+
 class Stereo : public ::testing::TestWithParam<std::tuple<Splatting, bool>> {};
 
 TEST_P(Stereo, BothEyesInOnePassMatchEachEyeDrawnAlone) {
@@ -70,33 +100,9 @@ TEST_P(Stereo, BothEyesInOnePassMatchEachEyeDrawnAlone) {
     const std::array<View, 2> views = eyes(cam, 0.08f * f.scene.bounds.diagonal());
     FluidOptions fluid;
     fluid.splatting = splatting;
-    using U = vk::ImageUsageFlagBits;
-    // Draws `layers` eyes starting at `first` into fresh host images of that many layers.
+    // Draws `layers` eyes starting at `first`.
     const auto draw = [&](uint32_t first, uint32_t layers, const LodOptions& lod) {
-      testing::TestHost::Image color = host.image(kW, kH, vk::Format::eR8G8B8A8Unorm, U::eColorAttachment | U::eTransferSrc, layers);
-      testing::TestHost::Image depth =
-          host.image(kW, kH, vk::Format::eD32Sfloat, U::eDepthStencilAttachment | U::eTransferSrc, layers);
-      RenderTarget t;
-      t.width = kW;
-      t.height = kH;
-      t.color_image = *color.image;
-      t.color_view = *color.view;
-      t.color_format = VK_FORMAT_R8G8B8A8_UNORM;
-      t.color_layout_after = VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL;
-      t.depth_image = *depth.image;
-      t.depth_view = *depth.view;
-      t.depth_format = VK_FORMAT_D32_SFLOAT;
-      t.depth_layout_after = VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL;
-      t.layer_count = layers;
-      FrameSync sync;
-      host.submit([&](vk::CommandBuffer c) { sync = renderer.record(c, t, std::span(&views[first], layers), fluid, lod); });
-      Drawn d;
-      for (uint32_t l = 0; l < layers; ++l) {
-        d.color[l] = host.read(color, kW, kH, l);
-        d.depth[l] = host.read(depth, kW, kH, l);
-      }
-      d.stats = renderer.last_stats();
-      return d;
+      return draw_into_host(host, renderer, std::span(&views[first], layers), fluid, lod);
     };
     for (const bool with_lod : {false, true}) {
       LodOptions lod;
@@ -154,7 +160,6 @@ TEST(Anisotropic, ComputeAndRasterSplattingDrawTheSameEllipsoids) {
     const SyntheticFluid f = synthetic_fluid(30000);
     const Camera cam = Camera::framing(f.scene.bounds, Vec3{0, 0, 1}, float(kW) / kH);
     const std::array<View, 1> view{camera_view(cam, {0, 0, kW, kH})};
-    using U = vk::ImageUsageFlagBits;
     for (const bool anisotropic : {false, true}) {
       RendererOptions options;
       options.anisotropic = anisotropic;
@@ -162,26 +167,9 @@ TEST(Anisotropic, ComputeAndRasterSplattingDrawTheSameEllipsoids) {
       upload_synthetic(renderer, f);
       std::array<Drawn, 2> drawn;
       for (const Splatting s : {Splatting::Compute, Splatting::Raster}) {
-        testing::TestHost::Image color = host.image(kW, kH, vk::Format::eR8G8B8A8Unorm, U::eColorAttachment | U::eTransferSrc, 1);
-        testing::TestHost::Image depth = host.image(kW, kH, vk::Format::eD32Sfloat, U::eDepthStencilAttachment | U::eTransferSrc, 1);
-        RenderTarget t;
-        t.width = kW;
-        t.height = kH;
-        t.color_image = *color.image;
-        t.color_view = *color.view;
-        t.color_format = VK_FORMAT_R8G8B8A8_UNORM;
-        t.color_layout_after = VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL;
-        t.depth_image = *depth.image;
-        t.depth_view = *depth.view;
-        t.depth_format = VK_FORMAT_D32_SFLOAT;
-        t.depth_layout_after = VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL;
         FluidOptions fluid;
         fluid.splatting = s;
-        host.submit([&](vk::CommandBuffer c) { renderer.record(c, t, view, fluid, {}); });
-        Drawn& d = drawn[s == Splatting::Compute ? 0 : 1];
-        d.color[0] = host.read(color, kW, kH, 0);
-        d.depth[0] = host.read(depth, kW, kH, 0);
-        d.stats = renderer.last_stats();
+        drawn[s == Splatting::Compute ? 0 : 1] = draw_into_host(host, renderer, view, fluid, {});
       }
       size_t both = 0, only_one = 0;
       double worst = 0;
