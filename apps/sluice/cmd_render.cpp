@@ -247,7 +247,11 @@ void add_bench_render(CLI::App& bench) {
                 "Also draw each synthetic frame classified into the narrow band: its surface and voxel blobs, and all\n"
                 "its particles from the same chunks");
   cmd->add_flag("--with-depth", o->with_depth,
-                "Render into a target with a depth image, as a host with its own geometry does (adds the present pass)");
+                "Render into a target with a depth image, as a host with its own geometry does: shading tests the fluid\n"
+                "against it and writes it, through a copy out and back (--present-pass: the raster pass instead)");
+  cmd->add_flag("--present-pass", o->present_pass,
+                "With --with-depth: a depth image that allows no copies, as some hosts give, so a full-viewport raster\n"
+                "pass draws the fluid into it (slow on GPUs with few raster units)");
   cmd->add_flag("--stereo", o->stereo,
                 "Two eyes of --size each (as a headset: e.g. --size 2064x2208), both in one pass into a 2-layer target,\n"
                 "against the same two views as two mono passes");

@@ -270,6 +270,7 @@ void run_render_bench(const RenderBenchOptions& o) {
   render::Context context(co);
   render::OffscreenOptions oo;
   oo.depth = o.with_depth;
+  oo.depth_transfer = !o.present_pass;
   render::OffscreenTarget out(context, o.width, o.height, oo);
   // Stereo: both eyes in one 2-layer target, and the same eyes side by side.
   std::unique_ptr<render::OffscreenTarget> stereo_out, pair_out;
@@ -285,7 +286,9 @@ void run_render_bench(const RenderBenchOptions& o) {
   std::printf("device: %s (%s, %s)%s\n", dev.name.c_str(), dev.type.c_str(), dev.driver.c_str(),
               dev.type == "cpu" ? "  -- a CPU implementation: these are CPU milliseconds, not GPU ones" : "");
   std::printf("host: %s, %d cores; splatting %s; target %s\n", cpu_model().c_str(), core_count(), o.splat.c_str(),
-              o.with_depth ? "colour + depth (present pass with the depth test)" : "colour only (shading writes it)");
+              !o.with_depth    ? "colour only (shading writes it)"
+              : o.present_pass ? "colour + depth (present pass with the depth test)"
+                               : "colour + depth (shading tests and writes it, depth copied in and out)");
   if (!o.images.empty()) fs::create_directories(o.images);
 
   render::FluidOptions fluid;  // transparent fluid, narrow-range filter, defaults

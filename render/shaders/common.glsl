@@ -82,6 +82,7 @@ layout(push_constant) uniform Push {
   uint param0;  // per pass: filter direction, thickness pass flag, ...
   uint param1;
   uint param2;
+  uvec2 host_depth;  // HostDepth: the host's depth of this view, copied out for the shading pass to test and write, or 0
 } pc;
 
 // [0]: 1 once written; [1]: h (float, world), then per particle of the

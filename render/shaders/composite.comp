@@ -51,6 +51,32 @@ vec3 scene_behind(vec3 pe, vec3 bent_world, float depth) {
   return g.stereo.z != 0u ? pow(c, vec3(2.2)) : c;
 }
 
+// The host's depth of this view (pc.host_depth, passes.cpp's
+// shade_with_host_depth): a word per pixel, eyes after each other.
+layout(buffer_reference, std430, buffer_reference_align = 4) buffer HostDepth { uint w[]; };
+
+// The present pass's depth test, done here (pc.param2 bit 1): the fluid
+// (eye depth z > 0) is drawn where its depth under the host's projection
+// passes the host's (reversed depth: greater or equal), and writes it; a
+// pixel without fluid gets the background where the host drew nothing, if
+// the background is on (bit 0 clear). Bit 2: the copy is X8_D24, compared
+// and stored in its 24 bits as the attachment would.
+bool host_depth_test(ivec2 p, float z) {
+  HostDepth host_depth = HostDepth(pc.host_depth);
+  uint at = (eye * uint(g.viewport.y) + uint(p.y)) * uint(g.viewport.x) + uint(p.x);
+  uint bits = host_depth.w[at];
+  bool d24 = (pc.param2 & 4u) != 0u;
+  float host = d24 ? float(bits & 0xffffffu) * (1.0 / 16777215.0) : uintBitsToFloat(bits);
+  bool reversed = g.proj.w < 0.5;  // the far plane at depth 0
+  if (z <= 0.0) return (pc.param2 & 1u) == 0u && (reversed ? host <= g.proj.w : host >= g.proj.w);
+  float d = clamp(g.frustum.z + g.frustum.w / z, 0.0, 1.0);
+  uint d_bits = d24 ? uint(d * 16777215.0 + 0.5) : floatBitsToUint(d);
+  if (d24) d = float(d_bits) * (1.0 / 16777215.0);
+  if (reversed ? d < host : d > host) return false;
+  host_depth.w[at] = d24 ? (bits & 0xff000000u) | d_bits : d_bits;
+  return true;
+}
+
 vec3 to_srgb(vec3 c) {
   c = max(c, 0.0);
   c = c / (1.0 + 0.12 * c);  // gentle shoulder for the sun glint
@@ -122,8 +148,9 @@ void main() {
   }
   bool raw_view = mode >= 2u && mode <= 7u;
   // pc.param0, param1: the view's origin in the output; param2 bit 0: leave
-  // pixels without fluid alone (the caller's image, background off).
-  bool store = fluid || (pc.param2 & 1u) == 0u;
+  // pixels without fluid alone (the caller's image, background off); bit 1:
+  // the host's depth decides (host_depth_test).
+  bool store = (pc.param2 & 2u) != 0u ? host_depth_test(p, z) : fluid || (pc.param2 & 1u) == 0u;
   if (store) imageStore(out_color, ivec3(p + ivec2(pc.param0, pc.param1), eye), vec4(raw_view ? clamp(color, 0.0, 1.0) : to_srgb(color), 1.0));
   if (g.display.z != 0u) imageStore(out_aux, ivec3(p, eye), vec4(n, fluid ? z : 0.0));
 }

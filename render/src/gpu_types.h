@@ -38,8 +38,9 @@ static_assert(sizeof(Globals) == 2 * 64 + 27 * 16);
 struct PushConstants {
   uint64_t particles = 0, chunks = 0, attributes = 0, blocks = 0, draws = 0, args = 0, big = 0, surface = 0, shapes = 0;
   uint32_t chunk_count = 0, param0 = 0, param1 = 0, param2 = 0;
+  uint64_t host_depth = 0;  // the shading pass's copy of the host's depth (passes.cpp, shade)
 };
-static_assert(sizeof(PushConstants) == 88);
+static_assert(sizeof(PushConstants) == 96);
 
 // Args in common.glsl.
 struct GpuArgs {

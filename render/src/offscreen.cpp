@@ -47,7 +47,8 @@ struct detail::OffscreenTargetImpl {
     color = create_texture(ctx, {width, height}, vk::Format::eR8G8B8A8Unorm, U::eColorAttachment | U::eStorage | U::eTransferSrc,
                            options.layers);
     if (options.depth) {
-      depth = create_texture(ctx, {width, height}, vk::Format::eD32Sfloat, U::eDepthStencilAttachment, options.layers);
+      const vk::ImageUsageFlags copies = options.depth_transfer ? U::eTransferSrc | U::eTransferDst : vk::ImageUsageFlags{};
+      depth = create_texture(ctx, {width, height}, vk::Format::eD32Sfloat, U::eDepthStencilAttachment | copies, options.layers);
     }
     for (Slot& s : slots) {
       s.readback = options.read_back ? create_buffer(ctx, vk::DeviceSize(width) * height * 4, vk::BufferUsageFlagBits::eTransferDst,
@@ -118,6 +119,7 @@ FrameStats OffscreenTarget::render(Renderer& renderer, std::span<const View> vie
     target.depth_view = static_cast<VkImageView>(*o.depth.view);
     target.depth_format = VK_FORMAT_D32_SFLOAT;
     target.depth_layout_before = VK_IMAGE_LAYOUT_UNDEFINED;
+    target.depth_transfer = o.options.depth_transfer;
   }
   target.background = background;
   target.layer_count = o.options.layers;

@@ -49,6 +49,18 @@ bool is_srgb(vk::Format f) {
   }
 }
 
+Output output_path(const RenderTarget& target) {
+  const bool shading_writes = target.color_storage && !is_srgb(vk::Format(target.color_format)) &&
+                              (target.background || target.color_layout_before != VK_IMAGE_LAYOUT_UNDEFINED);
+  if (!shading_writes) return Output::Present;
+  if (!target.depth_view) return Output::Direct;
+  // 4-byte texels in a copy of the depth aspect: float, or X8_D24 (the shading pass reads and writes both).
+  const VkFormat f = target.depth_format;
+  const bool four_bytes = f == VK_FORMAT_D32_SFLOAT || f == VK_FORMAT_D32_SFLOAT_S8_UINT || f == VK_FORMAT_D24_UNORM_S8_UINT ||
+                          f == VK_FORMAT_X8_D24_UNORM_PACK32;
+  return target.depth_transfer && four_bytes ? Output::DepthInShading : Output::Present;
+}
+
 PassRecorder::PassRecorder(detail::RendererImpl& r, vk::CommandBuffer cmd, FrameSlot& slot, uint32_t slot_index)
     : r_(r), cmd_(cmd), slot_(slot), first_stamp_(slot_index * kStampsPerSlot) {}
 
@@ -75,7 +87,8 @@ void PassRecorder::compute_to_compute() {
                  Access::eShaderStorageRead | Access::eShaderStorageWrite | Access::eShaderSampledRead);
 }
 
-void PassRecorder::begin_frame(const RenderTarget& target, bool direct) {
+void PassRecorder::begin_frame(const RenderTarget& target, Output output) {
+  const bool direct = output != Output::Present;
   if (r_.timestamps_valid) {
     cmd_.resetQueryPool(*r_.timestamps, first_stamp_, kStampsPerSlot);
     cmd_.writeTimestamp2(Stage::eAllCommands, *r_.timestamps, first_stamp_);
@@ -106,8 +119,8 @@ void PassRecorder::begin_frame(const RenderTarget& target, bool direct) {
   to.push_back(host_barrier(target.color_image, vk::ImageAspectFlagBits::eColor, target, target.color_layout_before,
                             direct ? vk::ImageLayout::eGeneral : vk::ImageLayout::eAttachmentOptimal));
   if (target.depth_image) {
-    to.push_back(host_barrier(target.depth_image, depth_aspect(target.depth_format), target,
-                              target.depth_layout_before, vk::ImageLayout::eAttachmentOptimal));
+    to.push_back(host_barrier(target.depth_image, depth_aspect(target.depth_format), target, target.depth_layout_before,
+                              output == Output::DepthInShading ? vk::ImageLayout::eGeneral : vk::ImageLayout::eAttachmentOptimal));
   }
   cmd_.pipelineBarrier2(vk::DependencyInfo({}, {}, {}, to));
 }
@@ -305,6 +318,40 @@ void PassRecorder::shade(const Viewport& origin, bool fluid_only) {
   stamp("shade");
 }
 
+void PassRecorder::shade_with_host_depth(const RenderTarget& target, const View& view, bool first) {
+  const vk::Image depth(target.depth_image);
+  const vk::ImageLayout general = vk::ImageLayout::eGeneral;
+  const Viewport& v = view.viewport;
+  // The far plane of the view's projection (reversed depth: 0), as the present pass clears to.
+  const float far = view.projection.at(2, 3) > 0 ? 0.0f : 1.0f;
+  if (first && target.depth_layout_before == VK_IMAGE_LAYOUT_UNDEFINED) {
+    // What an UNDEFINED layout promises: the whole image at the far plane.
+    const vk::ImageSubresourceRange range(vk::ImageAspectFlagBits::eDepth, 0, 1, target.base_layer, layers_);
+    cmd_.clearDepthStencilImage(depth, general, vk::ClearDepthStencilValue(far, 0), range);
+    memory_barrier(cmd_, Stage::eClear, Access::eTransferWrite, Stage::eCopy, Access::eTransferRead);
+  }
+  const vk::BufferImageCopy region(0, 0, 0,
+                                   vk::ImageSubresourceLayers(vk::ImageAspectFlagBits::eDepth, 0, target.base_layer, layers_),
+                                   vk::Offset3D(int32_t(v.x), int32_t(v.y), 0), vk::Extent3D(v.width, v.height, 1));
+  cmd_.copyImageToBuffer(depth, general, *r_.host_depth.buffer, region);
+  memory_barrier(cmd_, Stage::eCopy, Access::eTransferWrite, Stage::eComputeShader,
+                 Access::eShaderStorageRead | Access::eShaderStorageWrite);
+  stamp("depth in");
+  pc_.host_depth = r_.host_depth.address;
+  // param2: bit 0 background off (pixels without fluid left alone), bit 1
+  // the host's depth test, bit 2 its copy is X8_D24 (else float).
+  const bool d24 = target.depth_format == VK_FORMAT_D24_UNORM_S8_UINT || target.depth_format == VK_FORMAT_X8_D24_UNORM_PACK32;
+  cmd_.bindPipeline(vk::PipelineBindPoint::eCompute, *r_.composite);
+  push(v.x, v.y, (target.background ? 0u : 1u) | 2u | (d24 ? 4u : 0u));
+  const auto g = groups(r_.targets.size, 8);
+  cmd_.dispatch(g[0], g[1], layers_);
+  pc_.host_depth = 0;
+  stamp("shade");
+  memory_barrier(cmd_, Stage::eComputeShader, Access::eShaderStorageWrite, Stage::eCopy, Access::eTransferRead);
+  cmd_.copyBufferToImage(*r_.host_depth.buffer, depth, general, region);
+  stamp("depth out");
+}
+
 void PassRecorder::present(const RenderTarget& target, const View& view, bool first) {
   // One layer at a time (a 2-layer target: each eye's layer through a view
   // of its own): a full-screen pass per eye costs little, and lavapipe (Mesa
@@ -373,7 +420,8 @@ void PassRecorder::present_layer(const RenderTarget& target, VkImageView color_v
   cmd_.endRendering();
 }
 
-void PassRecorder::end_frame(const RenderTarget& target, bool direct) {
+void PassRecorder::end_frame(const RenderTarget& target, Output output) {
+  const bool direct = output != Output::Present;
   memory_barrier(cmd_, Stage::eComputeShader | Stage::eDrawIndirect, Access::eShaderStorageWrite | Access::eIndirectCommandRead,
                  Stage::eCopy, Access::eTransferRead);
   cmd_.copyBuffer(*r_.args.buffer, *slot_.readback.buffer, vk::BufferCopy(0, 0, sizeof(GpuArgs)));
@@ -392,7 +440,8 @@ void PassRecorder::end_frame(const RenderTarget& target, bool direct) {
                                vk::ImageLayout(target.color_layout_after)));
   if (target.depth_image) {
     after.push_back(host_barrier(target.depth_image, depth_aspect(target.depth_format), target,
-                                 VK_IMAGE_LAYOUT_ATTACHMENT_OPTIMAL, vk::ImageLayout(target.depth_layout_after)));
+                                 output == Output::DepthInShading ? VK_IMAGE_LAYOUT_GENERAL : VK_IMAGE_LAYOUT_ATTACHMENT_OPTIMAL,
+                                 vk::ImageLayout(target.depth_layout_after)));
   }
   cmd_.pipelineBarrier2(vk::DependencyInfo({}, {}, {}, after));
 }

@@ -9,14 +9,24 @@
 
 namespace sluice::render {
 
+// How the shaded fluid reaches the caller's images.
+enum class Output {
+  Direct,          // the shading pass writes the colour image (storage, no depth image)
+  DepthInShading,  // the shading pass also tests and writes the host's depth, copied out and back (RenderTarget::depth_transfer)
+  Present,         // into sluice's image, then a full-viewport raster pass with the depth test
+};
+// The cheapest of the three `target` allows.
+Output output_path(const RenderTarget& target);
+
 class PassRecorder {
  public:
   PassRecorder(detail::RendererImpl& r, vk::CommandBuffer cmd, FrameSlot& slot, uint32_t slot_index);
 
   // Orders the frame after everything before it on the queue, initializes
   // new targets, moves the caller's images to attachment layouts.
-  // `direct`: shading writes the caller's colour image (GENERAL layout).
-  void begin_frame(const RenderTarget& target, bool direct);
+  // Direct and DepthInShading: shading writes the caller's colour image
+  // (GENERAL layout); DepthInShading: the depth image is in GENERAL too.
+  void begin_frame(const RenderTarget& target, Output output);
   // Binds the view's uniforms (dynamic offset: a Globals per eye) and the
   // frame's buffers; `layers` eyes are drawn by the passes that follow.
   void begin_view(uint32_t globals_offset, const FrameSet* frame, uint32_t layers);
@@ -31,11 +41,16 @@ class PassRecorder {
   // Normals, shading, background (compute), into binding 9 at `origin`;
   // `fluid_only`: pixels without fluid are left alone.
   void shade(const Viewport& origin, bool fluid_only);
+  // Output::DepthInShading: the view's region of the host's depth copied
+  // out (or, `first` with an UNDEFINED depth image, the image cleared to
+  // the far plane), shading that tests the fluid against it as the present
+  // pass would and writes colour and depth, and the depth copied back.
+  void shade_with_host_depth(const RenderTarget& target, const View& view, bool first);
   // The shaded view into the caller's images; `first` view of the frame
   // clears what the target's UNDEFINED layouts discard.
   void present(const RenderTarget& target, const View& view, bool first);
   // Counters back to the host; the caller's images to their after layouts.
-  void end_frame(const RenderTarget& target, bool direct);
+  void end_frame(const RenderTarget& target, Output output);
 
  private:
   void present_layer(const RenderTarget& target, VkImageView color, VkImageView depth, const View& view, bool first,

@@ -445,11 +445,15 @@ FrameSync Renderer::record(VkCommandBuffer command_buffer, const RenderTarget& t
   r.pick_shown_set();
   r.ensure_targets(size.width, size.height, options.half_resolution_thickness, layers);
   if (slot.set_generation != r.targets.generation + (r.environment_generation << 32)) r.write_descriptors(slot);
-  // Shading straight into the caller's image where it allows storage and no
-  // depth test is needed; else into sluice's image, then the present pass.
-  const bool direct = target.color_storage && !target.depth_view && !is_srgb(vk::Format(target.color_format)) &&
-                      (target.background || target.color_layout_before != VK_IMAGE_LAYOUT_UNDEFINED);
+  const Output output = output_path(target);
+  const bool direct = output != Output::Present;
   r.bind_output(slot, direct ? r.array_view_of(target) : static_cast<VkImageView>(*r.targets.color.view));
+  if (output == Output::DepthInShading) {
+    r.ensure(r.host_depth, vk::DeviceSize(size.width) * size.height * layers * 4,
+             vk::BufferUsageFlagBits::eStorageBuffer | vk::BufferUsageFlagBits::eShaderDeviceAddress |
+                 vk::BufferUsageFlagBits::eTransferSrc | vk::BufferUsageFlagBits::eTransferDst,
+             MemoryKind::DeviceLocal);
+  }
   r.bind_scene_color(slot, target);
   FrameSet* frame = r.shown >= 0 ? &r.sets[size_t(r.shown)] : nullptr;
   if (frame) frame->last_drawn = r.frames_recorded;
@@ -465,7 +469,7 @@ FrameSync Renderer::record(VkCommandBuffer command_buffer, const RenderTarget& t
   slot.decode_errors = frame && frame->decoded_on_gpu ? frame->decode_errors_found : 0;
 
   PassRecorder pass(r, vk::CommandBuffer(command_buffer), slot, slot_index);
-  pass.begin_frame(target, direct);
+  pass.begin_frame(target, output);
   if (frame) pass.prepare(*frame);
   // Mono: each view its own pass over the targets. A 2-layer target: both
   // eyes in one pass (one cull, every screen-space pass over both layers).
@@ -497,14 +501,16 @@ FrameSync Renderer::record(VkCommandBuffer command_buffer, const RenderTarget& t
       pass.raster_spheres();
     }
     pass.filters(options);
-    if (direct) {
+    if (output == Output::Direct) {
       pass.shade(views[v].viewport, !target.background);
+    } else if (output == Output::DepthInShading) {
+      pass.shade_with_host_depth(target, views[v], v == 0);
     } else {
       pass.shade({}, false);
       pass.present(target, views[v], v == 0);
     }
   }
-  pass.end_frame(target, direct);
+  pass.end_frame(target, output);
   ++r.frames_recorded;
   FrameSync sync;
   sync.upload_semaphore = static_cast<VkSemaphore>(*r.upload_done);

@@ -128,6 +128,9 @@ struct detail::RendererImpl {
   // Counters and work lists written and read by the GPU only (ordered by
   // barriers on the graphics queue, so frames in flight share them).
   Buffer args, blocks, draws, big;
+  // The host's depth of one view (its layers x viewport, 4 bytes a pixel), copied out for
+  // the shading pass to test and write, then back (Output::DepthInShading).
+  Buffer host_depth;
   std::vector<FrameSlot> slots;
   vk::raii::QueryPool timestamps{nullptr};  // frames_in_flight * kStampsPerSlot
   bool timestamps_valid = false;

@@ -79,7 +79,9 @@ FluidOptions opaque() {
   return o;
 }
 
-class Occlusion : public ::testing::TestWithParam<bool> {};  // reversed depth?
+// Reversed depth?  The shading pass tests and writes the host's depth
+// (images that allow storage and copies), or the present pass does?
+class Occlusion : public ::testing::TestWithParam<std::tuple<bool, bool>> {};
 
 TEST_P(Occlusion, HostDepthHidesTheFluidAndTheFluidHidesTheHost) {
   TestHost host;
@@ -90,13 +92,15 @@ TEST_P(Occlusion, HostDepthHidesTheFluidAndTheFluidHidesTheHost) {
     Renderer renderer(context, scene);
     upload_points(renderer, kTwoSpheres, std::vector<uint16_t>(2, 0), {}, 1);
 
-    const bool reversed = GetParam();
+    const auto [reversed, in_shading] = GetParam();
     const Camera cam = front_camera();
     View view = camera_view(cam, {0, 0, kW, kH});
     if (!reversed) view.projection = standard_projection(cam.fov_deg, float(kW) / kH, 0.5f, 20.0f);
     using U = vk::ImageUsageFlagBits;
-    TestHost::Image color = host.image(kW, kH, vk::Format::eR8G8B8A8Unorm, U::eColorAttachment | U::eTransferSrc);
-    TestHost::Image depth = host.image(kW, kH, vk::Format::eD32Sfloat, U::eDepthStencilAttachment | U::eTransferSrc);
+    const vk::ImageUsageFlags storage = in_shading ? U::eStorage : vk::ImageUsageFlags{};
+    const vk::ImageUsageFlags copy_in = in_shading ? U::eTransferDst : vk::ImageUsageFlags{};
+    TestHost::Image color = host.image(kW, kH, vk::Format::eR8G8B8A8Unorm, U::eColorAttachment | U::eTransferSrc | storage);
+    TestHost::Image depth = host.image(kW, kH, vk::Format::eD32Sfloat, U::eDepthStencilAttachment | U::eTransferSrc | copy_in);
     // The host's geometry: a wall in front of the left sphere (red), one
     // behind the right sphere (blue); the spheres span 3.6 .. 4.4 in depth.
     const float near_wall = depth_at(view.projection, 3.2f), far_wall = depth_at(view.projection, 4.8f);
@@ -110,6 +114,8 @@ TEST_P(Occlusion, HostDepthHidesTheFluidAndTheFluidHidesTheHost) {
     target.depth_layout_before = VK_IMAGE_LAYOUT_ATTACHMENT_OPTIMAL;
     target.depth_layout_after = VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL;
     target.background = false;
+    target.color_storage = in_shading;
+    target.depth_transfer = in_shading;
     FrameSync sync;
     host.submit([&](vk::CommandBuffer c) {
       using S = vk::PipelineStageFlagBits2;
@@ -138,6 +144,9 @@ TEST_P(Occlusion, HostDepthHidesTheFluidAndTheFluidHidesTheHost) {
       sync = renderer.record(static_cast<VkCommandBuffer>(c), target, {&view, 1}, opaque(), {});
     });
     // (host.submit waits on no semaphore: upload_points already waited for its copy.)
+    const FrameStats stats = renderer.last_stats();
+    ASSERT_FALSE(stats.passes.empty());
+    EXPECT_EQ(stats.passes.back().name, in_shading ? "depth out" : "present");
     const std::vector<uint32_t> rgba = host.read(color, kW, kH);
     const std::vector<uint32_t> depth_bits = host.read(depth, kW, kH);
     const auto at = [&](int x, int y) { return rgba[size_t(y) * kW + size_t(x)]; };
@@ -164,14 +173,18 @@ TEST_P(Occlusion, HostDepthHidesTheFluidAndTheFluidHidesTheHost) {
     EXPECT_NEAR(written, depth_at(view.projection, 3.6f), std::fabs(depth_at(view.projection, 3.6f) - depth_at(view.projection, 3.7f)));
     EXPECT_EQ(depth_px(2, 2), near_wall);
     EXPECT_EQ(depth_px(int(kW) - 3, 2), far_wall);
-    std::printf("%s depth: %zu fluid pixels over the far wall, depth at the sphere's centre %.5f (expected %.5f)\n",
-                reversed ? "reversed" : "standard", right_fluid, written, depth_at(view.projection, 3.6f));
+    std::printf("%s depth, %s: %zu fluid pixels over the far wall, depth at the sphere's centre %.5f (expected %.5f)\n",
+                reversed ? "reversed" : "standard", in_shading ? "shading writes it" : "present pass", right_fluid, written,
+                depth_at(view.projection, 3.6f));
   }
   expect_clean(host);
 }
 
-INSTANTIATE_TEST_SUITE_P(Embedding, Occlusion, ::testing::Values(true, false),
-                         [](const ::testing::TestParamInfo<bool>& i) { return i.param ? "reversed" : "standard"; });
+INSTANTIATE_TEST_SUITE_P(Embedding, Occlusion, ::testing::Combine(::testing::Bool(), ::testing::Bool()),
+                         [](const ::testing::TestParamInfo<std::tuple<bool, bool>>& i) {
+                           return std::string(std::get<0>(i.param) ? "reversed" : "standard") +
+                                  (std::get<1>(i.param) ? "_shading_writes_depth" : "_present_pass");
+                         });
 
 double psnr_region(const std::vector<uint8_t>& a, uint32_t aw, uint32_t ax, const std::vector<uint8_t>& b, uint32_t bw,
                    uint32_t bx, uint32_t w, uint32_t h) {

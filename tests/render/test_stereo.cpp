@@ -55,13 +55,19 @@ struct Drawn {
 };
 
 // Draws `views` (one per layer) into fresh host images of that many layers,
-// colour and D32 depth, and reads every layer back.
+// colour and D32 depth, and reads every layer back. `in_shading`: images
+// that allow storage and copies, so the shading pass tests and writes the
+// depth (RenderTarget::depth_transfer); else the present pass does.
 Drawn draw_into_host(testing::TestHost& host, Renderer& renderer, std::span<const View> views, const FluidOptions& fluid,
-                     const LodOptions& lod) {
+                     const LodOptions& lod, bool in_shading = false) {
   using U = vk::ImageUsageFlagBits;
   const uint32_t layers = uint32_t(views.size());
-  testing::TestHost::Image color = host.image(kW, kH, vk::Format::eR8G8B8A8Unorm, U::eColorAttachment | U::eTransferSrc, layers);
-  testing::TestHost::Image depth = host.image(kW, kH, vk::Format::eD32Sfloat, U::eDepthStencilAttachment | U::eTransferSrc, layers);
+  const vk::ImageUsageFlags storage = in_shading ? U::eStorage : vk::ImageUsageFlags{};
+  const vk::ImageUsageFlags copy_in = in_shading ? U::eTransferDst : vk::ImageUsageFlags{};
+  testing::TestHost::Image color =
+      host.image(kW, kH, vk::Format::eR8G8B8A8Unorm, U::eColorAttachment | U::eTransferSrc | storage, layers);
+  testing::TestHost::Image depth =
+      host.image(kW, kH, vk::Format::eD32Sfloat, U::eDepthStencilAttachment | U::eTransferSrc | copy_in, layers);
   RenderTarget t;
   t.width = kW;
   t.height = kH;
@@ -74,6 +80,8 @@ Drawn draw_into_host(testing::TestHost& host, Renderer& renderer, std::span<cons
   t.depth_format = VK_FORMAT_D32_SFLOAT;
   t.depth_layout_after = VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL;
   t.layer_count = layers;
+  t.color_storage = in_shading;
+  t.depth_transfer = in_shading;
   host.submit([&](vk::CommandBuffer c) { renderer.record(c, t, views, fluid, lod); });
   Drawn d;
   for (uint32_t l = 0; l < layers; ++l) {
@@ -192,6 +200,41 @@ TEST(Anisotropic, ComputeAndRasterSplattingDrawTheSameEllipsoids) {
       EXPECT_LE(only_one, both / 1000);
       EXPECT_LT(worst, 1e-5);
       EXPECT_GT(db, 60.0);
+    }
+  }
+  EXPECT_EQ(host.errors.load(), 0) << (host.messages.empty() ? "" : host.messages[0]);
+}
+
+// Both eyes in one pass into a host's colour and depth: the shading pass's
+// own depth test and write (images that allow storage and copies) give the
+// present pass's pixels and depth, in each layer.
+TEST(Stereo, ShadingWritesTheHostsDepthAsThePresentPassDoes) {
+  testing::TestHost host;
+  {
+    Context context(host.handles());
+    const SyntheticFluid f = synthetic_fluid(30000);
+    Renderer renderer(context, f.scene);
+    upload_synthetic(renderer, f);
+    const Camera cam = Camera::framing(f.scene.bounds, Vec3{0, 0, 1}, float(kW) / kH);
+    const std::array<View, 2> views = eyes(cam, 0.08f * f.scene.bounds.diagonal());
+    const Drawn present = draw_into_host(host, renderer, views, FluidOptions{}, {}, false);
+    const Drawn shading = draw_into_host(host, renderer, views, FluidOptions{}, {}, true);
+    EXPECT_EQ(present.stats.passes.back().name, "present");
+    EXPECT_EQ(shading.stats.passes.back().name, "depth out");
+    for (size_t e = 0; e < 2; ++e) {
+      size_t color_differs = 0, depth_differs = 0, fluid_pixels = 0;
+      for (size_t i = 0; i < present.depth[e].size(); ++i) {
+        color_differs += present.color[e][i] != shading.color[e][i];
+        depth_differs += present.depth[e][i] != shading.depth[e][i];
+        fluid_pixels += present.depth[e][i] != 0;  // reversed depth: 0 is the far plane
+      }
+      std::printf("eye %zu: %zu fluid pixels; colour differs at %zu, depth at %zu\n", e, fluid_pixels, color_differs,
+                  depth_differs);
+      ASSERT_GT(fluid_pixels, size_t(kW) * kH / 20);
+      EXPECT_EQ(color_differs, 0u);
+      // The same formula for the depth, compiled into two shaders: at most a
+      // rounding step apart, and then only at a few pixels.
+      EXPECT_LE(depth_differs, fluid_pixels / 1000);
     }
   }
   EXPECT_EQ(host.errors.load(), 0) << (host.messages.empty() ? "" : host.messages[0]);

@@ -31,7 +31,8 @@ struct RenderBenchOptions {
   // and all its particles from the same chunks, for the narrow band's saving.
   bool layers = false;
   bool with_depth = false;      // render into a target with a depth image, as a host with its own geometry does
-                                // (the present pass with the depth test; without, shading writes the image)
+                                // (shading tests and writes it, through two copies; without, shading writes the image)
+  bool present_pass = false;    // with_depth: a depth image without transfer usage, so the present pass draws into it
   // Stereo rows instead of mono ones: two eyes of width x height each (64 mm
   // apart for data shown 1.5 m across), both in one pass into a 2-layer
   // target, against the same two views as two mono passes side by side.

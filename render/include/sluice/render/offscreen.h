@@ -21,6 +21,10 @@ namespace sluice::render {
 struct OffscreenOptions {
   uint32_t frames_in_flight = 1;  // at most the renderer's
   bool depth = false;             // also a D32 depth image, cleared to the far plane each frame
+  // The depth image allows transfers (RenderTarget::depth_transfer): the
+  // shading pass tests and writes it. Off: the present pass does (the path
+  // of hosts whose depth images allow no copies).
+  bool depth_transfer = true;
   bool read_back = true;          // copy each frame out for read_rgba8() (layer 0)
   // 2: an image of two layers drawn as a stereo pair in one pass
   // (RenderTarget::layer_count); render() then takes two views.

@@ -138,6 +138,15 @@ struct RenderTarget {
   VkImage depth_image = VK_NULL_HANDLE;
   VkImageView depth_view = VK_NULL_HANDLE;  // as color_view: 2D, or 2D_ARRAY of layer_count layers
   VkFormat depth_format = VK_FORMAT_UNDEFINED;  // D16, D32, D24S8, D32S8
+  // The depth image was created with VK_IMAGE_USAGE_TRANSFER_SRC_BIT and
+  // TRANSFER_DST_BIT, and its format is D32, D32S8 or D24S8. Then, with
+  // color_storage, the shading pass tests the fluid against the host's depth
+  // and writes colour and depth itself (the depth through a copy out of the
+  // image and one back: two copies of the viewport), and the present pass
+  // is skipped: on the H100 the two eyes of 2064x2208 cost 2.6 ms through
+  // the present pass (docs/measurements.md). The depth image is in GENERAL
+  // layout while the recorded commands run; the stencil is left alone.
+  bool depth_transfer = false;
   VkImageLayout depth_layout_before = VK_IMAGE_LAYOUT_UNDEFINED;
   VkImageLayout depth_layout_after = VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL;
   uint32_t base_layer = 0;   // the first array layer drawn
