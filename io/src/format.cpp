@@ -481,4 +481,12 @@ void IndexBuilder::add(const FrameSummary& frame, uint64_t offset) {
   index_.frames.push_back(entry);
 }
 
+ValueBounds record_value_bounds(const std::vector<ChunkDesc>& records, size_t c) {
+  ValueBounds b;
+  const uint8_t tier = records[c].tier;
+  if (tier > 0) b.hi = uint16_t(kTierFloor[tier - 1] - 1);
+  if (c + 1 < records.size() && records[c + 1].continues_cell) b.lo = uint16_t(kTierFloor[records[c + 1].tier - 1]);
+  return b;
+}
+
 }  // namespace sluice::io

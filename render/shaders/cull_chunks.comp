@@ -39,6 +39,25 @@ bool aabb_inside(vec3 lo, vec3 hi, float r) {
   return r * g.proj.y * g.viewport.y <= g.radius.z * (nearest - r);
 }
 
+// Whether the LOD test (cull_particles.comp) can keep any particle of the
+// chunk: its largest LOD value (GpuChunk::lod_hi) at the largest importance
+// any eye gives a point of its box (the centre weight at most 1, the
+// nearest distance). A file's tiers make most of a far cell's records fail
+// here: they are dropped without reading a particle.
+bool lod_may_keep(Chunk c) {
+  if (views[0].modes.x == 0u || views[0].modes.y != 0u) return true;  // LOD off, or random terms from positions
+  uint highest = c.lod_range >> 16;
+  if (highest >= 65535u) return true;
+  float u = float(highest + 1u) * (1.0 / 65536.0);  // above any value's (v + 0.5) / 65536, and a blob's bound
+  float w = 0.0;
+  for (eye = 0u; eye < views[0].stereo.x; ++eye) {
+    vec3 outside = max(max(c.lo - g.eye.xyz, g.eye.xyz - c.hi), vec3(0.0));
+    w = max(w, 1.0 / (max(length(outside), 1e-20) * g.lod.z));
+  }
+  eye = 0u;
+  return w * -log(1.0 - u) >= g.lod.y * (1.0 - 1e-3);  // (a margin for the particle pass's rounding)
+}
+
 void main() {
   uint i = gl_GlobalInvocationID.y * (gl_NumWorkGroups.x * 64u) + gl_GlobalInvocationID.x;
   if (i >= pc.chunk_count) return;
@@ -51,7 +70,7 @@ void main() {
     visible = visible || aabb_visible(c.lo, c.hi, r);
     inside_all = inside_all && aabb_inside(c.lo, c.hi, r);
   }
-  if (!visible) return;
+  if (!visible || !lod_may_keep(c)) return;
   Args args = Args(pc.args);
   atomicAdd(args.visible_chunks, 1u);
   uint blocks = (c.count + kBlock - 1u) / kBlock;

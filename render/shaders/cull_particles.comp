@@ -2,6 +2,7 @@
 // Per particle: dequantize, frustum and near-camera culling (thesis 3.4),
 // continuous LOD (thesis 3.1, see include/sluice/render/lod.h), and
 // compaction of the survivors into the draw list and the indirect draw.
+#extension GL_KHR_shader_subgroup_ballot : require
 #include "common.glsl"
 
 layout(local_size_x = 256) in;
@@ -42,9 +43,11 @@ void main() {
   bool keep = local < c.count;
   uint index = c.first + min(local, c.count - 1u);
 
-  vec3 pos;
-  uint lod_value;
-  decode_particle(c, index, pos, lod_value);
+  // Inside every eye's frustum with LOD off, nothing about a particle's
+  // position decides: it is not read.
+  vec3 pos = vec3(0.0);
+  uint lod_value = 0u;
+  if (!inside || views[0].modes.x != 0u) decode_particle(c, index, pos, lod_value);
   bool blob = c.kind == 1u;
 
   // A frame classified on the GPU: its interior particles are not drawn
@@ -113,8 +116,12 @@ void main() {
     t = clamp((value - g.color.x) * g.color.y, 0.0, 1.0);
   }
 
-  uint slot = 0u;
-  if (keep) slot = atomicAdd(s_count, 1u);
+  // Compaction: a subgroup's kept particles take consecutive slots, one
+  // shared atomic per subgroup.
+  uvec4 ballot = subgroupBallot(keep);
+  uint subgroup_base = 0u;
+  if (subgroupElect()) subgroup_base = atomicAdd(s_count, subgroupBallotBitCount(ballot));
+  uint slot = subgroupBroadcastFirst(subgroup_base) + subgroupBallotExclusiveBitCount(ballot);
   barrier();
   if (gl_LocalInvocationIndex == 0u) s_base = s_count == 0u ? 0u : atomicAdd(args.vertex_count, s_count);
   barrier();

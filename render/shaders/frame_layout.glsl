@@ -14,6 +14,8 @@ struct Chunk {
   vec2 attr_range;
   uint kind;    // 0: particles; 1: voxel blobs (the LOD value holds the particle count)
   float voxel;  // blobs: side of their voxels (world)
+  uint lod_range;  // the LOD values' bounds: lowest | highest << 16 (GpuChunk::lod_lo, lod_hi)
+  uint reserved0, reserved1, reserved2;
 };
 
 layout(buffer_reference, std430, buffer_reference_align = 8) readonly buffer Particles8 { uvec2 v[]; };

@@ -1,6 +1,7 @@
 // Particles from code rather than files (see synthetic.h).
 #include "sluice/render/synthetic.h"
 #include "sluice/render/error.h"
+#include "sluice/io/lod.h"
 
 #include <tbb/parallel_for.h>
 
@@ -58,17 +59,99 @@ Grid make_grid(float s) {
   return g;
 }
 
-// Particles in block b (x-fastest block index).
-uint32_t block_count(const Grid& g, uint32_t bx, uint32_t by, uint32_t bz) {
-  uint32_t total = 0;
+// The LOD value of grid point `id` and the jitter bits beside it.
+uint64_t point_hash(uint64_t id) { return splitmix(id); }
+uint16_t lod_value_of(uint64_t hash) { return uint16_t(hash >> 48); }
+
+// Particles in block b (x-fastest block index) per LOD tier (io/lod.h):
+// a block is written as a file writes a chunk, one record per tier.
+std::array<uint32_t, io::kLodTiers> block_tiers(const Grid& g, uint32_t bx, uint32_t by, uint32_t bz) {
+  std::array<uint32_t, io::kLodTiers> tiers{};
   const uint32_t k0 = bz * kBlock;
   for (uint32_t j = by * kBlock; j < std::min(g.n[1], (by + 1) * kBlock); ++j) {
     for (uint32_t i = bx * kBlock; i < std::min(g.n[0], (bx + 1) * kBlock); ++i) {
       const uint32_t top = std::min(column_points(surface((float(i) + 0.5f) * g.s, (float(j) + 0.5f) * g.s), g.s), g.n[2]);
-      total += top > k0 ? std::min(top - k0, kBlock) : 0u;
+      for (uint32_t k = k0; k < std::min(top, k0 + kBlock); ++k) {
+        const uint64_t id = (uint64_t(k) * g.n[1] + j) * g.n[0] + i;
+        ++tiers[io::lod_tier(lod_value_of(point_hash(id)))];
+      }
     }
   }
-  return total;
+  return tiers;
+}
+
+// The non-empty 32^3 blocks of the grid, with their first particle, their
+// particles per LOD tier and their first chunk row (one per non-empty tier).
+struct Block {
+  uint32_t b[3];
+  uint32_t count;
+  uint64_t first;
+  std::array<uint32_t, io::kLodTiers> tiers;
+  uint32_t first_row;
+};
+std::vector<Block> blocks_of(const Grid& g) {
+  const uint64_t total_blocks = uint64_t(g.nb[0]) * g.nb[1] * g.nb[2];
+  std::vector<std::array<uint32_t, io::kLodTiers>> tiers(total_blocks);
+  const auto coords = [&](uint64_t b) {
+    return std::array<uint32_t, 3>{uint32_t(b % g.nb[0]), uint32_t(b / g.nb[0] % g.nb[1]),
+                                   uint32_t(b / (uint64_t(g.nb[0]) * g.nb[1]))};
+  };
+  tbb::parallel_for(uint64_t(0), total_blocks, [&](uint64_t b) {
+    const auto c = coords(b);
+    tiers[b] = block_tiers(g, c[0], c[1], c[2]);
+  });
+  std::vector<Block> blocks;
+  uint64_t first = 0;
+  uint32_t rows = 0;
+  for (uint64_t b = 0; b < total_blocks; ++b) {
+    uint32_t count = 0, filled = 0;
+    for (uint32_t n : tiers[b]) count += n, filled += n > 0;
+    if (count == 0) continue;
+    const auto c = coords(b);
+    blocks.push_back({{c[0], c[1], c[2]}, count, first, tiers[b], rows});
+    first += count;
+    rows += filled;
+  }
+  return blocks;
+}
+
+uint32_t rows_of(const std::vector<Block>& blocks) {
+  if (blocks.empty()) return 0;
+  uint32_t filled = 0;
+  for (uint32_t n : blocks.back().tiers) filled += n > 0;
+  return blocks.back().first_row + filled;
+}
+
+// One block's particles: positions (jittered grid), attribute, LOD values,
+// in the order a file stores them: tier by tier (io/lod.h), grid order
+// within a tier.
+void generate_block(const Grid& g, const Block& b, std::vector<float>& pos, std::vector<float>& value,
+                    std::vector<uint16_t>& lods) {
+  const float s = g.s;
+  pos.assign(3 * size_t(b.count), 0.0f);
+  value.assign(b.count, 0.0f);
+  lods.assign(b.count, 0);
+  std::array<uint32_t, io::kLodTiers> at{};
+  for (uint32_t t = 1; t < io::kLodTiers; ++t) at[t] = at[t - 1] + b.tiers[t - 1];
+  const uint32_t k0 = b.b[2] * kBlock;
+  for (uint32_t j = b.b[1] * kBlock; j < std::min(g.n[1], (b.b[1] + 1) * kBlock); ++j) {
+    for (uint32_t i = b.b[0] * kBlock; i < std::min(g.n[0], (b.b[0] + 1) * kBlock); ++i) {
+      const float h = surface((float(i) + 0.5f) * s, (float(j) + 0.5f) * s);
+      const uint32_t top = std::min(column_points(h, s), g.n[2]);
+      for (uint32_t k = k0; k < std::min(top, k0 + kBlock); ++k) {
+        const uint64_t id = (uint64_t(k) * g.n[1] + j) * g.n[0] + i;
+        const uint64_t r = point_hash(id);
+        const auto jitter = [&](int shift) { return (float((r >> shift) & 0xffff) / 65535.0f - 0.5f) * 0.5f * s; };
+        const float z = (float(k) + 0.5f) * s + jitter(16);
+        const uint32_t p = at[io::lod_tier(lod_value_of(r))]++;
+        pos[3 * size_t(p)] = (float(i) + 0.5f) * s + jitter(0);
+        pos[3 * size_t(p) + 1] = (float(j) + 0.5f) * s + jitter(32);
+        pos[3 * size_t(p) + 2] = z;
+        value[p] = std::clamp((h - z) / 0.8f, 0.0f, 1.0f);
+        lods[p] = lod_value_of(r);
+      }
+    }
+  }
 }
 
 }  // namespace
@@ -165,10 +248,7 @@ SyntheticFluid synthetic_fluid(uint64_t target) {
   if (f.particles > UINT32_MAX) throw Error("synthetic_fluid: more than 2^32 particles");
   const Grid g = make_grid(s);
   f.spacing = s;
-  uint64_t chunks = 0;
-  for (uint32_t bz = 0; bz < g.nb[2]; ++bz)
-    for (uint32_t by = 0; by < g.nb[1]; ++by)
-      for (uint32_t bx = 0; bx < g.nb[0]; ++bx) chunks += block_count(g, bx, by, bz) > 0;
+  const uint64_t chunks = rows_of(blocks_of(g));
   f.chunks = uint32_t(chunks);
   f.scene.bounds = {{0, 0, 0}, {kTank[0], kTank[1], kTank[2]}};
   f.scene.particle_spacing = s;
@@ -180,63 +260,6 @@ SyntheticFluid synthetic_fluid(uint64_t target) {
   f.scene.max_chunks = chunks;
   return f;
 }
-
-namespace {
-
-// The non-empty 32^3 blocks of the grid, with their first particle.
-struct Block {
-  uint32_t b[3];
-  uint32_t count;
-  uint64_t first;
-};
-std::vector<Block> blocks_of(const Grid& g) {
-  const uint64_t total_blocks = uint64_t(g.nb[0]) * g.nb[1] * g.nb[2];
-  std::vector<uint32_t> counts(total_blocks);
-  const auto coords = [&](uint64_t b) {
-    return std::array<uint32_t, 3>{uint32_t(b % g.nb[0]), uint32_t(b / g.nb[0] % g.nb[1]),
-                                   uint32_t(b / (uint64_t(g.nb[0]) * g.nb[1]))};
-  };
-  tbb::parallel_for(uint64_t(0), total_blocks, [&](uint64_t b) {
-    const auto c = coords(b);
-    counts[b] = block_count(g, c[0], c[1], c[2]);
-  });
-  std::vector<Block> blocks;
-  uint64_t first = 0;
-  for (uint64_t b = 0; b < total_blocks; ++b) {
-    if (counts[b] == 0) continue;
-    const auto c = coords(b);
-    blocks.push_back({{c[0], c[1], c[2]}, counts[b], first});
-    first += counts[b];
-  }
-  return blocks;
-}
-
-// One block's particles: positions (jittered grid), attribute, LOD values.
-void generate_block(const Grid& g, const Block& b, std::vector<float>& pos, std::vector<float>& value,
-                    std::vector<uint16_t>& lods) {
-  const float s = g.s;
-  pos.clear();
-  value.clear();
-  lods.clear();
-  const uint32_t k0 = b.b[2] * kBlock;
-  for (uint32_t j = b.b[1] * kBlock; j < std::min(g.n[1], (b.b[1] + 1) * kBlock); ++j) {
-    for (uint32_t i = b.b[0] * kBlock; i < std::min(g.n[0], (b.b[0] + 1) * kBlock); ++i) {
-      const float h = surface((float(i) + 0.5f) * s, (float(j) + 0.5f) * s);
-      const uint32_t top = std::min(column_points(h, s), g.n[2]);
-      for (uint32_t k = k0; k < std::min(top, k0 + kBlock); ++k) {
-        const uint64_t id = (uint64_t(k) * g.n[1] + j) * g.n[0] + i;
-        const uint64_t r = splitmix(id);
-        const auto jitter = [&](int shift) { return (float((r >> shift) & 0xffff) / 65535.0f - 0.5f) * 0.5f * s; };
-        const float z = (float(k) + 0.5f) * s + jitter(16);
-        pos.insert(pos.end(), {(float(i) + 0.5f) * s + jitter(0), (float(j) + 0.5f) * s + jitter(32), z});
-        value.push_back(std::clamp((h - z) / 0.8f, 0.0f, 1.0f));
-        lods.push_back(uint16_t(r >> 48));
-      }
-    }
-  }
-}
-
-}  // namespace
 
 std::vector<float> synthetic_points(const SyntheticFluid& f) {
   const Grid g = make_grid(f.spacing);
@@ -256,34 +279,45 @@ void upload_synthetic(Renderer& renderer, const SyntheticFluid& f) {
   const std::vector<Block> blocks = blocks_of(g);
   const uint64_t total = blocks.empty() ? 0 : blocks.back().first + blocks.back().count;
   if (total != f.particles) throw Error("upload_synthetic: particle count changed");
-  FrameStaging st = renderer.stage_frame(total, uint32_t(blocks.size()));
+  FrameStaging st = renderer.stage_frame(total, rows_of(blocks));
   auto* out = reinterpret_cast<uint16_t*>(st.particles.data());
   tbb::parallel_for(size_t(0), blocks.size(), [&](size_t bi) {
     const Block& b = blocks[bi];
     thread_local std::vector<float> pos, value;
     thread_local std::vector<uint16_t> lods;
     generate_block(g, b, pos, value, lods);
-    GpuChunk& c = st.chunks[bi];
-    c = GpuChunk{};
+    // The block's box and attribute range, shared by its tiers' rows (as a
+    // file's cell is): a particle decodes the same whichever tiers are drawn.
+    GpuChunk block{};
     for (int a = 0; a < 3; ++a) {
-      c.lo[a] = 1e30f;
-      c.hi[a] = -1e30f;
+      block.lo[a] = 1e30f;
+      block.hi[a] = -1e30f;
     }
     for (size_t p = 0; p < lods.size(); ++p) {
       for (int a = 0; a < 3; ++a) {
-        c.lo[a] = std::min(c.lo[a], pos[3 * p + size_t(a)]);
-        c.hi[a] = std::max(c.hi[a], pos[3 * p + size_t(a)]);
+        block.lo[a] = std::min(block.lo[a], pos[3 * p + size_t(a)]);
+        block.hi[a] = std::max(block.hi[a], pos[3 * p + size_t(a)]);
       }
     }
-    c.first = uint32_t(b.first);
-    c.count = b.count;
-    c.attr_lo = *std::min_element(value.begin(), value.end());
-    c.attr_hi = *std::max_element(value.begin(), value.end());
+    block.attr_lo = *std::min_element(value.begin(), value.end());
+    block.attr_hi = *std::max_element(value.begin(), value.end());
+    uint32_t row = b.first_row, first = 0;
+    for (uint32_t t = 0; t < io::kLodTiers; ++t) {
+      if (b.tiers[t] == 0) continue;
+      GpuChunk& c = st.chunks[row++];
+      c = block;
+      c.first = uint32_t(b.first + first);
+      c.count = b.tiers[t];
+      const auto [lo, hi] = std::minmax_element(lods.begin() + first, lods.begin() + first + b.tiers[t]);
+      c.lod_lo = *lo;
+      c.lod_hi = *hi;
+      first += b.tiers[t];
+    }
     for (size_t p = 0; p < lods.size(); ++p) {
       const uint64_t i = b.first + p;
-      for (int a = 0; a < 3; ++a) out[4 * i + size_t(a)] = quantize(pos[3 * p + size_t(a)], c.lo[a], c.hi[a]);
+      for (int a = 0; a < 3; ++a) out[4 * i + size_t(a)] = quantize(pos[3 * p + size_t(a)], block.lo[a], block.hi[a]);
       out[4 * i + 3] = lods[p];
-      if (!st.color_attribute.empty()) st.color_attribute[i] = quantize(value[p], c.attr_lo, c.attr_hi);
+      if (!st.color_attribute.empty()) st.color_attribute[i] = quantize(value[p], block.attr_lo, block.attr_hi);
     }
   });
   renderer.wait_upload(renderer.commit_frame());

@@ -15,6 +15,7 @@
 #include "sluice/render/load.h"
 #include "sluice/runtime/pipeline.h"
 #include "sluice/io/codec.h"
+#include "sluice/io/lod.h"
 #include "sluice/io/reader.h"
 #include "staging_block.h"
 #include "sluice/render/error.h"
@@ -383,6 +384,14 @@ void mark_layers(FrameSet& set, const io::FrameHeader& header) {
   set.layering_known = true;
 }
 
+// What a record's LOD tier says of its values (GpuChunk::lod_lo, lod_hi).
+// Blobs are written by a bound of their random term: only the top holds.
+void lod_bounds(const std::vector<io::ChunkDesc>& chunks, size_t c, GpuChunk& g) {
+  const io::ValueBounds b = io::record_value_bounds(chunks, c);
+  g.lod_hi = b.hi;
+  g.lod_lo = chunks[c].layer == io::Layer::Blobs ? 0 : b.lo;
+}
+
 // The chunk table rows of a frame: AABBs, first particle, count and the
 // colour attribute's range (`color_attribute` < 0: none). `first`, when given
 // (the runtime's chunk_first), must agree with the running sum of the counts.
@@ -406,6 +415,7 @@ void fill_chunk_table(const io::FrameHeader& header, std::span<const uint64_t> f
       g.kind = 1;
       g.voxel = header.blob_voxel;
     }
+    lod_bounds(header.chunks, c, g);
     if (color_attribute >= 0 && size_t(color_attribute) < d.attribute_ranges.size()) {
       g.attr_lo = d.attribute_ranges[size_t(color_attribute)][0];
       g.attr_hi = d.attribute_ranges[size_t(color_attribute)][1];

@@ -157,15 +157,24 @@ TEST(Tiers, RecordsHoldTheirTiersInOrderAndEveryPrefixIsOneRange) {
         // Contiguous: the record begins where the one before ends.
         EXPECT_EQ(ch.offset, fh.chunks[c - 1].offset + fh.chunks[c - 1].compressed_size);
       }
-      // Its values lie in its tier or, where small tiers were joined, in the tiers after it.
+      // Its values lie in its tier or, where small tiers were joined, in the
+      // tiers after it: what record_value_bounds() tells the renderer's cull.
       const uint32_t next = c + 1 < end ? fh.chunks[c + 1].tier : io::kLodTiers;
       const uint32_t top = ch.tier == 0 ? 65536 : io::kTierFloor[ch.tier - 1];
+      const io::ValueBounds bounds = io::record_value_bounds(fh.chunks, c);
+      EXPECT_EQ(uint32_t(bounds.hi) + 1, top);
+      EXPECT_EQ(bounds.lo, next == io::kLodTiers ? 0u : io::kTierFloor[next - 1]);
+      uint16_t lowest = 65535, highest = 0;
       for (uint64_t i = starts[c]; i < starts[c] + ch.particle_count; ++i) {
         uint16_t lod;
         std::memcpy(&lod, particles.data() + i * 8 + 6, 2);
         ASSERT_LT(lod, top);
         ASSERT_GE(lod, io::kTierFloor[next - 1]);
+        lowest = std::min(lowest, lod);
+        highest = std::max(highest, lod);
       }
+      EXPECT_GE(lowest, bounds.lo);
+      EXPECT_LE(highest, bounds.hi);
     }
   }
   EXPECT_EQ(cells, 8u);  // 60000 particles in chunks of at most 8192

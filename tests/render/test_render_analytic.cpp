@@ -456,6 +456,104 @@ TEST(RenderAnalytic, LodKeepRatiosFollowTheThreshold) {
   EXPECT_LT(std::fabs(double(s.drawn) - e.mean), 0.06 * e.mean);
 }
 
+// A strip of chunks from near to far, each written as a file writes a cell:
+// its particles by LOD tier (io/lod.h), one row per tier, every row in the
+// cell's box. `claim`: the rows state their values' bounds (GpuChunk::lod_lo,
+// lod_hi); else the defaults, which claim nothing.
+void upload_tiered_strip(Renderer& renderer, const Cloud& cloud, uint32_t cell_particles, bool claim) {
+  struct Row {
+    uint32_t first, count;
+    uint16_t lo, hi;
+    size_t cell;
+  };
+  const size_t n = cloud.lod.size(), cells = (n + cell_particles - 1) / cell_particles;
+  std::vector<uint32_t> order;  // particle indices, cell by cell, tier by tier
+  std::vector<Row> rows;
+  for (size_t c = 0; c < cells; ++c) {
+    const uint32_t begin = uint32_t(c * cell_particles), end = uint32_t(std::min(n, (c + 1) * cell_particles));
+    for (uint32_t t = 0; t < io::kLodTiers; ++t) {
+      Row row{uint32_t(order.size()), 0, 65535, 0, c};
+      for (uint32_t i = begin; i < end; ++i) {
+        if (io::lod_tier(cloud.lod[i]) != t) continue;
+        order.push_back(i);
+        ++row.count;
+        row.lo = std::min(row.lo, cloud.lod[i]);
+        row.hi = std::max(row.hi, cloud.lod[i]);
+      }
+      if (row.count > 0) rows.push_back(row);
+    }
+  }
+  FrameStaging st = renderer.stage_frame(n, uint32_t(rows.size()));
+  auto* out = reinterpret_cast<uint16_t*>(st.particles.data());
+  for (size_t r = 0; r < rows.size(); ++r) {
+    GpuChunk& g = st.chunks[r];
+    g = GpuChunk{};
+    for (int a = 0; a < 3; ++a) g.lo[a] = 1e30f, g.hi[a] = -1e30f;
+    const size_t begin = rows[r].cell * cell_particles, end = std::min(n, begin + cell_particles);
+    for (size_t i = begin; i < end; ++i) {
+      for (int a = 0; a < 3; ++a) {
+        g.lo[a] = std::min(g.lo[a], cloud.xyz[3 * i + size_t(a)]);
+        g.hi[a] = std::max(g.hi[a], cloud.xyz[3 * i + size_t(a)]);
+      }
+    }
+    g.first = rows[r].first;
+    g.count = rows[r].count;
+    if (claim) g.lod_lo = rows[r].lo, g.lod_hi = rows[r].hi;
+    for (uint32_t k = g.first; k < g.first + g.count; ++k) {
+      const uint32_t i = order[k];
+      for (int a = 0; a < 3; ++a) {
+        const float v = (cloud.xyz[3 * i + size_t(a)] - g.lo[a]) / std::max(g.hi[a] - g.lo[a], 1e-30f) * 65535.0f + 0.5f;
+        out[4 * size_t(k) + size_t(a)] = uint16_t(std::clamp(v, 0.0f, 65535.0f));
+      }
+      out[4 * size_t(k) + 3] = cloud.lod[i];
+    }
+  }
+  renderer.wait_upload(renderer.commit_frame());
+}
+
+// The cull drops whole rows whose largest LOD value no view keeps, without
+// reading them: the same particles are drawn as when it reads every one,
+// the same picture, and far rows are never walked.
+TEST(RenderAnalytic, LodTierRowsDropWholeWithoutChangingWhatIsDrawn) {
+  ValidationGuard guard;
+  // A strip 2 wide and 60 long, away from the camera: importance falls 30-fold.
+  Cloud cloud = make_cloud(120000, 5);
+  std::vector<size_t> by_depth(cloud.lod.size());
+  for (size_t i = 0; i < by_depth.size(); ++i) by_depth[i] = i;
+  for (size_t i = 0; i < by_depth.size(); ++i) cloud.xyz[3 * i + 1] = (cloud.xyz[3 * i + 1] + 1.0f) * 30.0f;
+  std::sort(by_depth.begin(), by_depth.end(), [&](size_t a, size_t b) { return cloud.xyz[3 * a + 1] < cloud.xyz[3 * b + 1]; });
+  Cloud strip;
+  for (size_t i : by_depth) {
+    strip.xyz.insert(strip.xyz.end(), {cloud.xyz[3 * i], cloud.xyz[3 * i + 1], cloud.xyz[3 * i + 2]});
+    strip.lod.push_back(cloud.lod[i]);
+  }
+  const SceneInfo scene = scene_for_points(strip.xyz, 0.01f);
+  const Camera cam = camera_at({0.0f, -2.0f, 1.5f}, {0, 20.0f, 0});
+  std::array<FrameStats, 2> stats;
+  std::array<std::vector<uint8_t>, 2> images;
+  for (const LodMode mode : {LodMode::Clod, LodMode::DensityPreserving}) {
+    for (const float level : {0.1f, 0.3f}) {
+      for (const bool claim : {false, true}) {
+        testing::OffscreenRenderer r(context(), scene, kW, kH);
+        upload_tiered_strip(r, strip, 2000, claim);
+        LodOptions lod;
+        lod.mode = mode;
+        lod.level = level;
+        lod.reference_distance = 12.0f;
+        stats[claim] = r.render(cam, plain(DisplayMode::FilteredDepth, 0.01f), lod);
+        images[claim] = r.read_rgba8();
+      }
+      std::printf("%s %.1f: drawn %llu of %llu; rows walked %llu with bounds, %llu without\n", to_string(mode), double(level),
+                  (unsigned long long)stats[1].drawn, (unsigned long long)stats[1].particles,
+                  (unsigned long long)stats[1].visible_chunks, (unsigned long long)stats[0].visible_chunks);
+      EXPECT_EQ(stats[1].drawn, stats[0].drawn);
+      EXPECT_TRUE(images[1] == images[0]) << "the same particles must give the same picture";
+      EXPECT_LT(stats[1].visible_chunks * 2, stats[0].visible_chunks) << "most far rows should drop whole";
+      EXPECT_GT(stats[1].drawn, stats[1].particles / 50) << "too little kept for the comparison to mean much";
+    }
+  }
+}
+
 TEST(RenderAnalytic, LodOneKeepsEverythingInTheFrustum) {
   ValidationGuard guard;
   Cloud cloud = make_cloud(50000, 3);

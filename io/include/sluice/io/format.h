@@ -181,6 +181,16 @@ inline size_t cell_end(const std::vector<ChunkDesc>& chunks, size_t first) {
   while (end < chunks.size() && chunks[end].continues_cell) ++end;
   return end;
 }
+// The LOD values records[c] may hold (docs/format.md, "LOD tiers"): below
+// the floor of the tier above its own; at least the floor of the tier above
+// the next record of its cell when that follows it in `records` (the writer
+// puts the values of tiers it joins in the record before; a record whose
+// cell's tail was dropped, or older files' records, bound nothing below).
+struct ValueBounds {
+  uint16_t lo = 0, hi = 65535;
+};
+ValueBounds record_value_bounds(const std::vector<ChunkDesc>& records, size_t c);
+
 // Keeps, of each cell, the records of tiers below `tiers_of(first record of
 // the cell)` (uint32_t; 0 drops the cell) and recounts the particles. The
 // records kept stay in file order, so a cell's kept tiers are one

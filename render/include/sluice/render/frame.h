@@ -38,7 +38,7 @@ struct SceneInfo {
 };
 SceneInfo scene_info(const io::ContainerReader& reader);
 
-// One chunk as the GPU sees it (std430 layout, 48 bytes).
+// One chunk as the GPU sees it (std430 layout, 64 bytes).
 struct GpuChunk {
   float lo[3];
   uint32_t first;   // index of the chunk's first particle in the frame
@@ -47,8 +47,15 @@ struct GpuChunk {
   float attr_lo, attr_hi;  // range the colour attribute is quantized against
   uint32_t kind = 0;       // 0: particles; 1: voxel blobs (io::Layer::Blobs: the LOD value is the count)
   float voxel = 0;         // blobs: side of their voxels (FrameHeader::blob_voxel)
+  // Every particle's LOD value lies in [lod_lo, lod_hi] (blobs: their random
+  // term u, io::blob_lod_uniform(), below (lod_hi + 1) / 65536; lod_lo says
+  // nothing). A file's LOD tiers give them (io/lod.h); the defaults claim
+  // nothing. The cull drops a chunk whose largest value no view keeps
+  // without reading its particles: a claim that is wrong loses particles.
+  uint16_t lod_lo = 0, lod_hi = 65535;
+  uint32_t reserved[3] = {0, 0, 0};
 };
-static_assert(sizeof(GpuChunk) == 48);
+static_assert(sizeof(GpuChunk) == 64);
 
 // Mapped staging memory for one frame: the allocator interface. Whoever
 // decodes (the runtime's workers, or load_frame below) writes each chunk's

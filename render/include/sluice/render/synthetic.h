@@ -26,14 +26,15 @@ void upload_points(Renderer& renderer, std::span<const float> xyz, std::span<con
 
 // A synthetic liquid of about `target` particles in a 2 x 1 x 1 tank (z up):
 // a pool with waves and a collapsing column, particles on a jittered grid
-// with spacing chosen to hit the target. Chunks are 32^3 grid cells; LOD
-// values hash the grid index (stable); the attribute is the depth below the
-// surface, 0..1.
+// with spacing chosen to hit the target. Chunks are 32^3 grid cells, each
+// written as a file writes it: one row per LOD tier (io/lod.h), with its
+// values' bounds; LOD values hash the grid index (stable); the attribute is
+// the depth below the surface, 0..1.
 struct SyntheticFluid {
   SceneInfo scene;
   float spacing = 0;
   uint64_t particles = 0;  // exact count the grid gives
-  uint32_t chunks = 0;
+  uint32_t chunks = 0;  // chunk rows: a block's non-empty tiers
 };
 SyntheticFluid synthetic_fluid(uint64_t target);
 // Generates it straight into the renderer's staging (parallel) and commits.
