@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Runs on the GPU machine (see bench/device/README.md): every benchmark the
 # issues ask GPU-machine figures for, in one call. Results go to $OUT.
-#   bash bench/device/run.sh [mpi] [io] [import] [layers] [band] [render] [stream] [split] [codec] [huge] [embed] [compare] [live] [stereo] [aniso] [xrsize] [firsthour] [streamcmp] [gpudecode] [gpuquick] [gpupair] [gpuab] [gpu100] [egl] [vtkpeer] [readpath] [importprobe] [relayprobe] [storeab] [gpusplit] [gpuplay] [gpuflight] [gpu100ab] [damf2] [gpusweep] [gpuvar] [relay] [relaytests] [relay100] [gpuplayall] [view] [viewall] [viewio] [tiersize] [tiergpu] [viewfull]   (default: io render stream)
+#   bash bench/device/run.sh [mpi] [io] [import] [layers] [band] [render] [stream] [split] [codec] [huge] [embed] [compare] [live] [stereo] [aniso] [xrsize] [firsthour] [streamcmp] [gpudecode] [gpuquick] [gpupair] [gpuab] [gpu100] [egl] [vtkpeer] [readpath] [importprobe] [relayprobe] [storeab] [gpusplit] [gpuplay] [gpuflight] [covered] [gpu100ab] [damf2] [gpusweep] [gpuvar] [relay] [relaytests] [relay100] [gpuplayall] [view] [viewall] [viewio] [tiersize] [tiergpu] [viewfull]   (default: io render stream)
 set -uo pipefail
 # Folders on the GPU machine (it starts bare each session): SLUICE_SCRATCH holds
 # the unpacked libraries and the files stages write; OUT what comes back.
@@ -138,6 +138,28 @@ for stage in $stages; do
         run $S render $T/dam.sluice --frames 12 --out "$OUT/dam_$p.png" --size 1920x1080 --particles $p --stats -q \
           --camera "eye=2.6,-1.2,0.45;target=0.7,0,0.22;up=0,0,1;fov=45"
       done
+      ;;
+    covered)  # issue 33 (headset and 4K): pack.sh's BASE (the binary before) alternated with this one, stereo
+              # 2064x2208 with a host depth image, then 4K mono, the narrow band's rows, and the splat probes
+              # (a .gpu/sluice_probe built with SLUICE_SPLAT_PROBE: 1 skips the depth loops, 2 the thickness loops)
+      B=.gpu/sluice_base
+      sizes=${COVERED_SIZES:-10M,100M}
+      run $S bench render --sizes 1M --repeats 3 >/dev/null  # warm-up
+      for i in 1 2; do
+        [[ -x $B ]] && run $B bench render --stereo --with-depth --repeats 5 --sizes $sizes --size 2064x2208 --csv "$OUT/stereo_base_$i.csv"
+        run $S bench render --stereo --with-depth --repeats 5 --sizes $sizes --size 2064x2208 --csv "$OUT/stereo_$i.csv"
+      done
+      run $S bench render --stereo --with-depth --repeats 5 --sizes $sizes --size 2064x2208 --untiered --csv "$OUT/stereo_untiered.csv"
+      if [[ -x .gpu/sluice_probe ]]; then
+        for p in 0 1 2; do
+          SLUICE_SPLAT_PROBE=$p run .gpu/sluice_probe bench render --stereo --with-depth --repeats 5 --sizes 10M --size 2064x2208 --csv "$OUT/probe_$p.csv"
+        done
+      fi
+      [[ -n "${COVERED_QUICK:-}" ]] && continue
+      [[ -x $B ]] && run $B bench render --repeats 5 --sizes $sizes --size 3840x2160 --csv "$OUT/mono4k_base.csv"
+      run $S bench render --repeats 5 --sizes $sizes --size 3840x2160 --csv "$OUT/mono4k.csv"
+      [[ -x $B ]] && run $B bench render --stereo --with-depth --layers --repeats 5 --sizes 100M --size 2064x2208 --csv "$OUT/layers_base.csv"
+      run $S bench render --stereo --with-depth --layers --repeats 5 --sizes 100M --size 2064x2208 --csv "$OUT/layers.csv"
       ;;
     xrsize)  # one eye at 2064x2208: shading into the image against the present pass with a host depth image
       run $S bench render --sizes 1M --repeats 3 >/dev/null  # warm-up

@@ -351,7 +351,7 @@ void run_render_bench(const RenderBenchOptions& o) {
   }
   for (uint64_t n : o.sizes) {
     std::fprintf(stderr, "generating %s synthetic particles...\n", count_name(n).c_str());
-    const render::SyntheticFluid f = render::synthetic_fluid(n);
+    const render::SyntheticFluid f = render::synthetic_fluid(n, !o.untiered);
     {
       render::Renderer r(context, f.scene);
       render::upload_synthetic(r, f);

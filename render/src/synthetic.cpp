@@ -65,7 +65,8 @@ uint16_t lod_value_of(uint64_t hash) { return uint16_t(hash >> 48); }
 
 // Particles in block b (x-fastest block index) per LOD tier (io/lod.h):
 // a block is written as a file writes a chunk, one record per tier.
-std::array<uint32_t, io::kLodTiers> block_tiers(const Grid& g, uint32_t bx, uint32_t by, uint32_t bz) {
+// Untiered (`tiered` false): every particle in tier 0, in grid order.
+std::array<uint32_t, io::kLodTiers> block_tiers(const Grid& g, uint32_t bx, uint32_t by, uint32_t bz, bool tiered) {
   std::array<uint32_t, io::kLodTiers> tiers{};
   const uint32_t k0 = bz * kBlock;
   for (uint32_t j = by * kBlock; j < std::min(g.n[1], (by + 1) * kBlock); ++j) {
@@ -73,7 +74,7 @@ std::array<uint32_t, io::kLodTiers> block_tiers(const Grid& g, uint32_t bx, uint
       const uint32_t top = std::min(column_points(surface((float(i) + 0.5f) * g.s, (float(j) + 0.5f) * g.s), g.s), g.n[2]);
       for (uint32_t k = k0; k < std::min(top, k0 + kBlock); ++k) {
         const uint64_t id = (uint64_t(k) * g.n[1] + j) * g.n[0] + i;
-        ++tiers[io::lod_tier(lod_value_of(point_hash(id)))];
+        ++tiers[tiered ? io::lod_tier(lod_value_of(point_hash(id))) : 0];
       }
     }
   }
@@ -89,7 +90,7 @@ struct Block {
   std::array<uint32_t, io::kLodTiers> tiers;
   uint32_t first_row;
 };
-std::vector<Block> blocks_of(const Grid& g) {
+std::vector<Block> blocks_of(const Grid& g, bool tiered) {
   const uint64_t total_blocks = uint64_t(g.nb[0]) * g.nb[1] * g.nb[2];
   std::vector<std::array<uint32_t, io::kLodTiers>> tiers(total_blocks);
   const auto coords = [&](uint64_t b) {
@@ -98,7 +99,7 @@ std::vector<Block> blocks_of(const Grid& g) {
   };
   tbb::parallel_for(uint64_t(0), total_blocks, [&](uint64_t b) {
     const auto c = coords(b);
-    tiers[b] = block_tiers(g, c[0], c[1], c[2]);
+    tiers[b] = block_tiers(g, c[0], c[1], c[2], tiered);
   });
   std::vector<Block> blocks;
   uint64_t first = 0;
@@ -125,7 +126,7 @@ uint32_t rows_of(const std::vector<Block>& blocks) {
 // One block's particles: positions (jittered grid), attribute, LOD values,
 // in the order a file stores them: tier by tier (io/lod.h), grid order
 // within a tier.
-void generate_block(const Grid& g, const Block& b, std::vector<float>& pos, std::vector<float>& value,
+void generate_block(const Grid& g, const Block& b, bool tiered, std::vector<float>& pos, std::vector<float>& value,
                     std::vector<uint16_t>& lods) {
   const float s = g.s;
   pos.assign(3 * size_t(b.count), 0.0f);
@@ -143,7 +144,7 @@ void generate_block(const Grid& g, const Block& b, std::vector<float>& pos, std:
         const uint64_t r = point_hash(id);
         const auto jitter = [&](int shift) { return (float((r >> shift) & 0xffff) / 65535.0f - 0.5f) * 0.5f * s; };
         const float z = (float(k) + 0.5f) * s + jitter(16);
-        const uint32_t p = at[io::lod_tier(lod_value_of(r))]++;
+        const uint32_t p = at[tiered ? io::lod_tier(lod_value_of(r)) : 0]++;
         pos[3 * size_t(p)] = (float(i) + 0.5f) * s + jitter(0);
         pos[3 * size_t(p) + 1] = (float(j) + 0.5f) * s + jitter(32);
         pos[3 * size_t(p) + 2] = z;
@@ -220,7 +221,7 @@ void upload_points(Renderer& renderer, std::span<const float> xyz, std::span<con
   renderer.wait_upload(renderer.commit_frame());
 }
 
-SyntheticFluid synthetic_fluid(uint64_t target) {
+SyntheticFluid synthetic_fluid(uint64_t target, bool tiers) {
   if (target == 0) throw Error("synthetic_fluid: zero particles");
   // Liquid volume by midpoint sampling, then the spacing that gives `target`.
   double volume = 0;
@@ -233,6 +234,7 @@ SyntheticFluid synthetic_fluid(uint64_t target) {
   volume /= double(samples) * double(samples);
   float s = float(std::cbrt(volume / double(target)));
   SyntheticFluid f;
+  f.tiers = tiers;
   // Refine once on the exact count (the grid discretizes the surface).
   for (int pass = 0; pass < 2; ++pass) {
     const Grid g = make_grid(s);
@@ -248,7 +250,7 @@ SyntheticFluid synthetic_fluid(uint64_t target) {
   if (f.particles > UINT32_MAX) throw Error("synthetic_fluid: more than 2^32 particles");
   const Grid g = make_grid(s);
   f.spacing = s;
-  const uint64_t chunks = rows_of(blocks_of(g));
+  const uint64_t chunks = rows_of(blocks_of(g, tiers));
   f.chunks = uint32_t(chunks);
   f.scene.bounds = {{0, 0, 0}, {kTank[0], kTank[1], kTank[2]}};
   f.scene.particle_spacing = s;
@@ -263,12 +265,12 @@ SyntheticFluid synthetic_fluid(uint64_t target) {
 
 std::vector<float> synthetic_points(const SyntheticFluid& f) {
   const Grid g = make_grid(f.spacing);
-  const std::vector<Block> blocks = blocks_of(g);
+  const std::vector<Block> blocks = blocks_of(g, f.tiers);
   std::vector<float> out(3 * f.particles);
   tbb::parallel_for(size_t(0), blocks.size(), [&](size_t bi) {
     std::vector<float> pos, value;
     std::vector<uint16_t> lods;
-    generate_block(g, blocks[bi], pos, value, lods);
+    generate_block(g, blocks[bi], f.tiers, pos, value, lods);
     std::copy(pos.begin(), pos.end(), out.begin() + std::ptrdiff_t(3 * blocks[bi].first));
   });
   return out;
@@ -276,7 +278,7 @@ std::vector<float> synthetic_points(const SyntheticFluid& f) {
 
 void upload_synthetic(Renderer& renderer, const SyntheticFluid& f) {
   const Grid g = make_grid(f.spacing);
-  const std::vector<Block> blocks = blocks_of(g);
+  const std::vector<Block> blocks = blocks_of(g, f.tiers);
   const uint64_t total = blocks.empty() ? 0 : blocks.back().first + blocks.back().count;
   if (total != f.particles) throw Error("upload_synthetic: particle count changed");
   FrameStaging st = renderer.stage_frame(total, rows_of(blocks));
@@ -285,7 +287,7 @@ void upload_synthetic(Renderer& renderer, const SyntheticFluid& f) {
     const Block& b = blocks[bi];
     thread_local std::vector<float> pos, value;
     thread_local std::vector<uint16_t> lods;
-    generate_block(g, b, pos, value, lods);
+    generate_block(g, b, f.tiers, pos, value, lods);
     // The block's box and attribute range, shared by its tiers' rows (as a
     // file's cell is): a particle decodes the same whichever tiers are drawn.
     GpuChunk block{};

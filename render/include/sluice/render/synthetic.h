@@ -27,16 +27,18 @@ void upload_points(Renderer& renderer, std::span<const float> xyz, std::span<con
 // A synthetic liquid of about `target` particles in a 2 x 1 x 1 tank (z up):
 // a pool with waves and a collapsing column, particles on a jittered grid
 // with spacing chosen to hit the target. Chunks are 32^3 grid cells, each
-// written as a file writes it: one row per LOD tier (io/lod.h), with its
-// values' bounds; LOD values hash the grid index (stable); the attribute is
-// the depth below the surface, 0..1.
+// laid out as a file lays it out (`tiers`): its particles by LOD tier
+// (io/lod.h), a chunk row per tier with its values' bounds, grid order
+// within a tier; else one row in grid order. LOD values hash the grid index
+// (stable); the attribute is the depth below the surface, 0..1.
 struct SyntheticFluid {
   SceneInfo scene;
   float spacing = 0;
   uint64_t particles = 0;  // exact count the grid gives
   uint32_t chunks = 0;  // chunk rows: a block's non-empty tiers
+  bool tiers = true;
 };
-SyntheticFluid synthetic_fluid(uint64_t target);
+SyntheticFluid synthetic_fluid(uint64_t target, bool tiers = true);
 // Generates it straight into the renderer's staging (parallel) and commits.
 void upload_synthetic(Renderer& renderer, const SyntheticFluid& fluid);
 // The same particles as world x,y,z (unquantized), e.g. for another renderer.
