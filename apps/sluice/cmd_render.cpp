@@ -250,7 +250,7 @@ void add_bench_render(CLI::App& bench) {
                 "Render into a target with a depth image, as a host with its own geometry does: shading tests the fluid\n"
                 "against it and writes it, through a copy out and back (--present-pass: the raster pass instead)");
   cmd->add_flag("--untiered", o->untiered,
-                "Lay synthetic frames out as files without LOD tiers are: grid order, one chunk row per block\n"
+                "Lay synthetic frames out as files without LOD tiers are: Morton order, one chunk row per block\n"
                 "(default: a row per tier, as `sluice convert` writes them, so the cull drops far rows unread)");
   cmd->add_flag("--present-pass", o->present_pass,
                 "With --with-depth: a depth image that allows no copies, as some hosts give, so a full-viewport raster\n"

@@ -5,6 +5,7 @@
 #include "globals.h"
 
 #include <algorithm>
+#include <cstring>
 
 namespace sluice::render {
 namespace {
@@ -324,23 +325,33 @@ void PassRecorder::shade_with_host_depth(const RenderTarget& target, const View&
   const Viewport& v = view.viewport;
   // The far plane of the view's projection (reversed depth: 0), as the present pass clears to.
   const float far = view.projection.at(2, 3) > 0 ? 0.0f : 1.0f;
-  if (first && target.depth_layout_before == VK_IMAGE_LAYOUT_UNDEFINED) {
-    // What an UNDEFINED layout promises: the whole image at the far plane.
-    const vk::ImageSubresourceRange range(vk::ImageAspectFlagBits::eDepth, 0, 1, target.base_layer, layers_);
-    cmd_.clearDepthStencilImage(depth, general, vk::ClearDepthStencilValue(far, 0), range);
-    memory_barrier(cmd_, Stage::eClear, Access::eTransferWrite, Stage::eCopy, Access::eTransferRead);
-  }
+  const bool d24 = target.depth_format == VK_FORMAT_D24_UNORM_S8_UINT || target.depth_format == VK_FORMAT_X8_D24_UNORM_PACK32;
   const vk::BufferImageCopy region(0, 0, 0,
                                    vk::ImageSubresourceLayers(vk::ImageAspectFlagBits::eDepth, 0, target.base_layer, layers_),
                                    vk::Offset3D(int32_t(v.x), int32_t(v.y), 0), vk::Extent3D(v.width, v.height, 1));
-  cmd_.copyImageToBuffer(depth, general, *r_.host_depth.buffer, region);
-  memory_barrier(cmd_, Stage::eCopy, Access::eTransferWrite, Stage::eComputeShader,
-                 Access::eShaderStorageRead | Access::eShaderStorageWrite);
+  if (target.depth_layout_before == VK_IMAGE_LAYOUT_UNDEFINED) {
+    // What an UNDEFINED layout promises: the image at the far plane. The
+    // view's region needs no copy out (its copy is filled with the far
+    // plane); the rest of the image is cleared once, where there is any.
+    const bool whole = v.x == 0 && v.y == 0 && v.width == target.width && v.height == target.height;
+    if (first && !whole) {
+      const vk::ImageSubresourceRange range(vk::ImageAspectFlagBits::eDepth, 0, 1, target.base_layer, layers_);
+      cmd_.clearDepthStencilImage(depth, general, vk::ClearDepthStencilValue(far, 0), range);
+    }
+    uint32_t far_bits = far > 0 ? 0x00ffffffu : 0u;  // X8_D24
+    if (!d24) std::memcpy(&far_bits, &far, 4);
+    cmd_.fillBuffer(*r_.host_depth.buffer, 0, vk::DeviceSize(v.width) * v.height * layers_ * 4, far_bits);
+    memory_barrier(cmd_, Stage::eClear | Stage::eCopy, Access::eTransferWrite, Stage::eComputeShader | Stage::eCopy,
+                   Access::eShaderStorageRead | Access::eShaderStorageWrite | Access::eTransferWrite);
+  } else {
+    cmd_.copyImageToBuffer(depth, general, *r_.host_depth.buffer, region);
+    memory_barrier(cmd_, Stage::eCopy, Access::eTransferWrite, Stage::eComputeShader,
+                   Access::eShaderStorageRead | Access::eShaderStorageWrite);
+  }
   stamp("depth in");
   pc_.host_depth = r_.host_depth.address;
   // param2: bit 0 background off (pixels without fluid left alone), bit 1
   // the host's depth test, bit 2 its copy is X8_D24 (else float).
-  const bool d24 = target.depth_format == VK_FORMAT_D24_UNORM_S8_UINT || target.depth_format == VK_FORMAT_X8_D24_UNORM_PACK32;
   cmd_.bindPipeline(vk::PipelineBindPoint::eCompute, *r_.composite);
   push(v.x, v.y, (target.background ? 0u : 1u) | 2u | (d24 ? 4u : 0u));
   const auto g = groups(r_.targets.size, 8);

@@ -65,7 +65,7 @@ uint16_t lod_value_of(uint64_t hash) { return uint16_t(hash >> 48); }
 
 // Particles in block b (x-fastest block index) per LOD tier (io/lod.h):
 // a block is written as a file writes a chunk, one record per tier.
-// Untiered (`tiered` false): every particle in tier 0, in grid order.
+// Untiered (`tiered` false): every particle in tier 0, in Morton order.
 std::array<uint32_t, io::kLodTiers> block_tiers(const Grid& g, uint32_t bx, uint32_t by, uint32_t bz, bool tiered) {
   std::array<uint32_t, io::kLodTiers> tiers{};
   const uint32_t k0 = bz * kBlock;
@@ -124,7 +124,7 @@ uint32_t rows_of(const std::vector<Block>& blocks) {
 }
 
 // One block's particles: positions (jittered grid), attribute, LOD values,
-// in the order a file stores them: tier by tier (io/lod.h), grid order
+// in the order a file stores them: tier by tier (io/lod.h), Morton order
 // within a tier.
 void generate_block(const Grid& g, const Block& b, bool tiered, std::vector<float>& pos, std::vector<float>& value,
                     std::vector<uint16_t>& lods) {
@@ -134,24 +134,38 @@ void generate_block(const Grid& g, const Block& b, bool tiered, std::vector<floa
   lods.assign(b.count, 0);
   std::array<uint32_t, io::kLodTiers> at{};
   for (uint32_t t = 1; t < io::kLodTiers; ++t) at[t] = at[t - 1] + b.tiers[t - 1];
-  const uint32_t k0 = b.b[2] * kBlock;
-  for (uint32_t j = b.b[1] * kBlock; j < std::min(g.n[1], (b.b[1] + 1) * kBlock); ++j) {
-    for (uint32_t i = b.b[0] * kBlock; i < std::min(g.n[0], (b.b[0] + 1) * kBlock); ++i) {
-      const float h = surface((float(i) + 0.5f) * s, (float(j) + 0.5f) * s);
-      const uint32_t top = std::min(column_points(h, s), g.n[2]);
-      for (uint32_t k = k0; k < std::min(top, k0 + kBlock); ++k) {
-        const uint64_t id = (uint64_t(k) * g.n[1] + j) * g.n[0] + i;
-        const uint64_t r = point_hash(id);
-        const auto jitter = [&](int shift) { return (float((r >> shift) & 0xffff) / 65535.0f - 0.5f) * 0.5f * s; };
-        const float z = (float(k) + 0.5f) * s + jitter(16);
-        const uint32_t p = at[tiered ? io::lod_tier(lod_value_of(r)) : 0]++;
-        pos[3 * size_t(p)] = (float(i) + 0.5f) * s + jitter(0);
-        pos[3 * size_t(p) + 1] = (float(j) + 0.5f) * s + jitter(32);
-        pos[3 * size_t(p) + 2] = z;
-        value[p] = std::clamp((h - z) / 0.8f, 0.0f, 1.0f);
-        lods[p] = lod_value_of(r);
-      }
+  // Each column's surface height and top grid point, then the block's
+  // points in Morton order (as the encoder orders a chunk's particles).
+  std::array<float, kBlock * kBlock> height{};
+  std::array<uint32_t, kBlock * kBlock> top{};
+  for (uint32_t y = 0; y < kBlock; ++y) {
+    for (uint32_t x = 0; x < kBlock; ++x) {
+      const uint32_t i = b.b[0] * kBlock + x, j = b.b[1] * kBlock + y;
+      if (i >= g.n[0] || j >= g.n[1]) continue;
+      height[y * kBlock + x] = surface((float(i) + 0.5f) * s, (float(j) + 0.5f) * s);
+      top[y * kBlock + x] = std::min(column_points(height[y * kBlock + x], s), g.n[2]);
     }
+  }
+  const auto axis = [](uint32_t m) {  // every third bit of a Morton code
+    uint32_t v = 0;
+    for (uint32_t bit = 0; bit < 5; ++bit) v |= ((m >> (3 * bit)) & 1u) << bit;
+    return v;
+  };
+  for (uint32_t m = 0; m < kBlock * kBlock * kBlock; ++m) {
+    const uint32_t x = axis(m), y = axis(m >> 1), z = axis(m >> 2);
+    const uint32_t i = b.b[0] * kBlock + x, j = b.b[1] * kBlock + y, k = b.b[2] * kBlock + z;
+    if (i >= g.n[0] || j >= g.n[1] || k >= top[y * kBlock + x]) continue;
+    const float h = height[y * kBlock + x];
+    const uint64_t id = (uint64_t(k) * g.n[1] + j) * g.n[0] + i;
+    const uint64_t r = point_hash(id);
+    const auto jitter = [&](int shift) { return (float((r >> shift) & 0xffff) / 65535.0f - 0.5f) * 0.5f * s; };
+    const float zw = (float(k) + 0.5f) * s + jitter(16);
+    const uint32_t p = at[tiered ? io::lod_tier(lod_value_of(r)) : 0]++;
+    pos[3 * size_t(p)] = (float(i) + 0.5f) * s + jitter(0);
+    pos[3 * size_t(p) + 1] = (float(j) + 0.5f) * s + jitter(32);
+    pos[3 * size_t(p) + 2] = zw;
+    value[p] = std::clamp((h - zw) / 0.8f, 0.0f, 1.0f);
+    lods[p] = lod_value_of(r);
   }
 }
 

@@ -59,7 +59,7 @@ struct Drawn {
 // that allow storage and copies, so the shading pass tests and writes the
 // depth (RenderTarget::depth_transfer); else the present pass does.
 Drawn draw_into_host(testing::TestHost& host, Renderer& renderer, std::span<const View> views, const FluidOptions& fluid,
-                     const LodOptions& lod, bool in_shading = false) {
+                     const LodOptions& lod, bool in_shading = false, vk::Format depth_format = vk::Format::eD32Sfloat) {
   using U = vk::ImageUsageFlagBits;
   const uint32_t layers = uint32_t(views.size());
   const vk::ImageUsageFlags storage = in_shading ? U::eStorage : vk::ImageUsageFlags{};
@@ -67,7 +67,7 @@ Drawn draw_into_host(testing::TestHost& host, Renderer& renderer, std::span<cons
   testing::TestHost::Image color =
       host.image(kW, kH, vk::Format::eR8G8B8A8Unorm, U::eColorAttachment | U::eTransferSrc | storage, layers);
   testing::TestHost::Image depth =
-      host.image(kW, kH, vk::Format::eD32Sfloat, U::eDepthStencilAttachment | U::eTransferSrc | copy_in, layers);
+      host.image(kW, kH, depth_format, U::eDepthStencilAttachment | U::eTransferSrc | copy_in, layers);
   RenderTarget t;
   t.width = kW;
   t.height = kH;
@@ -77,7 +77,7 @@ Drawn draw_into_host(testing::TestHost& host, Renderer& renderer, std::span<cons
   t.color_layout_after = VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL;
   t.depth_image = *depth.image;
   t.depth_view = *depth.view;
-  t.depth_format = VK_FORMAT_D32_SFLOAT;
+  t.depth_format = VkFormat(depth_format);
   t.depth_layout_after = VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL;
   t.layer_count = layers;
   t.color_storage = in_shading;
@@ -217,24 +217,28 @@ TEST(Stereo, ShadingWritesTheHostsDepthAsThePresentPassDoes) {
     upload_synthetic(renderer, f);
     const Camera cam = Camera::framing(f.scene.bounds, Vec3{0, 0, 1}, float(kW) / kH);
     const std::array<View, 2> views = eyes(cam, 0.08f * f.scene.bounds.diagonal());
-    const Drawn present = draw_into_host(host, renderer, views, FluidOptions{}, {}, false);
-    const Drawn shading = draw_into_host(host, renderer, views, FluidOptions{}, {}, true);
+    for (const vk::Format format : {vk::Format::eD32Sfloat, vk::Format::eD24UnormS8Uint}) {
+    const Drawn present = draw_into_host(host, renderer, views, FluidOptions{}, {}, false, format);
+    const Drawn shading = draw_into_host(host, renderer, views, FluidOptions{}, {}, true, format);
     EXPECT_EQ(present.stats.passes.back().name, "present");
     EXPECT_EQ(shading.stats.passes.back().name, "depth out");
+    const bool d24 = format == vk::Format::eD24UnormS8Uint;
     for (size_t e = 0; e < 2; ++e) {
       size_t color_differs = 0, depth_differs = 0, fluid_pixels = 0;
       for (size_t i = 0; i < present.depth[e].size(); ++i) {
         color_differs += present.color[e][i] != shading.color[e][i];
-        depth_differs += present.depth[e][i] != shading.depth[e][i];
-        fluid_pixels += present.depth[e][i] != 0;  // reversed depth: 0 is the far plane
+        const uint32_t mask = d24 ? 0x00ffffffu : 0xffffffffu;  // (X8_D24: the top byte is undefined)
+        depth_differs += (present.depth[e][i] & mask) != (shading.depth[e][i] & mask);
+        fluid_pixels += (present.depth[e][i] & mask) != 0;  // reversed depth: 0 is the far plane
       }
-      std::printf("eye %zu: %zu fluid pixels; colour differs at %zu, depth at %zu\n", e, fluid_pixels, color_differs,
-                  depth_differs);
+      std::printf("%s, eye %zu: %zu fluid pixels; colour differs at %zu, depth at %zu\n", d24 ? "D24S8" : "D32", e,
+                  fluid_pixels, color_differs, depth_differs);
       ASSERT_GT(fluid_pixels, size_t(kW) * kH / 20);
       EXPECT_EQ(color_differs, 0u);
       // The same formula for the depth, compiled into two shaders: at most a
       // rounding step apart, and then only at a few pixels.
       EXPECT_LE(depth_differs, fluid_pixels / 1000);
+    }
     }
   }
   EXPECT_EQ(host.errors.load(), 0) << (host.messages.empty() ? "" : host.messages[0]);

@@ -32,7 +32,7 @@ struct RenderBenchOptions {
   bool layers = false;
   bool with_depth = false;      // render into a target with a depth image, as a host with its own geometry does
                                 // (shading tests and writes it, through two copies; without, shading writes the image)
-  // Synthetic frames in grid order, one chunk row per block, as files
+  // Synthetic frames in Morton order, one chunk row per block, as files
   // without LOD tiers are (default: tiered as `sluice convert` writes them).
   bool untiered = false;
   bool present_pass = false;    // with_depth: a depth image without transfer usage, so the present pass draws into it

@@ -28,8 +28,8 @@ void upload_points(Renderer& renderer, std::span<const float> xyz, std::span<con
 // a pool with waves and a collapsing column, particles on a jittered grid
 // with spacing chosen to hit the target. Chunks are 32^3 grid cells, each
 // laid out as a file lays it out (`tiers`): its particles by LOD tier
-// (io/lod.h), a chunk row per tier with its values' bounds, grid order
-// within a tier; else one row in grid order. LOD values hash the grid index
+// (io/lod.h), a chunk row per tier with its values' bounds, Morton order
+// within a tier; else one row in Morton order. LOD values hash the grid index
 // (stable); the attribute is the depth below the surface, 0..1.
 struct SyntheticFluid {
   SceneInfo scene;
