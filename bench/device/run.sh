@@ -151,7 +151,7 @@ for stage in $stages; do
       done
       run $S bench render --stereo --with-depth --repeats 5 --sizes $sizes --size 2064x2208 --untiered --csv "$OUT/stereo_untiered.csv"
       if [[ -x .gpu/sluice_probe ]]; then
-        for p in 0 1 2; do
+        for p in ${COVERED_PROBES:-0 1 2}; do
           SLUICE_SPLAT_PROBE=$p run .gpu/sluice_probe bench render --stereo --with-depth --repeats 5 --sizes 10M --size 2064x2208 --csv "$OUT/probe_$p.csv"
         done
       fi
@@ -160,6 +160,9 @@ for stage in $stages; do
       run $S bench render --repeats 5 --sizes $sizes --size 3840x2160 --csv "$OUT/mono4k.csv"
       [[ -x $B ]] && run $B bench render --stereo --with-depth --layers --repeats 5 --sizes 100M --size 2064x2208 --csv "$OUT/layers_base.csv"
       run $S bench render --stereo --with-depth --layers --repeats 5 --sizes 100M --size 2064x2208 --csv "$OUT/layers.csv"
+      ;;
+    pack_out)  # last: every CSV in one file (the device tool brings back a few files only)
+      (cd "$OUT" && tar -cJf csv.tar.xz *.csv && rm -f *.csv)
       ;;
     xrsize)  # one eye at 2064x2208: shading into the image against the present pass with a host depth image
       run $S bench render --sizes 1M --repeats 3 >/dev/null  # warm-up
