@@ -150,7 +150,11 @@ Globals make_globals(const SceneInfo& scene, const View& view_in, const FluidOpt
   // Thickness in fixed point: 1/1024 of a radius per unit keeps the chord of
   // a sphere grown 4x under 2^13 units, room for 2^19 of them on one pixel.
   const float fixed = 1024.0f / radius;
-  set4(g.splat, fixed, 1.0f / fixed, 64.0f, 0);
+  // Splats of up to 1024 pixels are one thread's loop; larger ones get a
+  // workgroup each. At 64 the workgroups' overhead made the splat pass 2x
+  // slower on the H100 (10M particles, both eyes of 2064x2208: 9.53 against
+  // 4.77 ms; 256: 4.83, 1024: 4.77, 16384: 4.84; docs/measurements.md).
+  set4(g.splat, fixed, 1.0f / fixed, 1024.0f, 0);
   return g;
 }
 

@@ -42,10 +42,11 @@ class PassRecorder {
   // `fluid_only`: pixels without fluid are left alone.
   void shade(const Viewport& origin, bool fluid_only);
   // Output::DepthInShading: the view's region of the host's depth copied
-  // out (or, `first` with an UNDEFINED depth image, the image cleared to
-  // the far plane), shading that tests the fluid against it as the present
-  // pass would and writes colour and depth, and the depth copied back.
-  void shade_with_host_depth(const RenderTarget& target, const View& view, bool first);
+  // out (an UNDEFINED depth image: the far plane; `first`, where the views
+  // do not tile the image, it is cleared), shading that tests the fluid
+  // against it as the present pass would and writes colour and depth, and
+  // the depth copied back.
+  void shade_with_host_depth(const RenderTarget& target, const View& view, bool first, bool views_tile);
   // The shaded view into the caller's images; `first` view of the frame
   // clears what the target's UNDEFINED layouts discard.
   void present(const RenderTarget& target, const View& view, bool first);

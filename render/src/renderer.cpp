@@ -411,6 +411,26 @@ FrameStats Renderer::last_stats() {
   return r.stats;
 }
 
+namespace {
+// Whether the views' viewports cover the target exactly, without overlap
+// (one view of the whole image, or side by side).
+bool views_tile_target(const RenderTarget& target, std::span<const View> views) {
+  if (target.layer_count == 2) views = views.first(1);  // both eyes share one viewport
+  uint64_t area = 0;
+  for (size_t a = 0; a < views.size(); ++a) {
+    const Viewport& va = views[a].viewport;
+    area += uint64_t(va.width) * va.height;
+    for (size_t b = 0; b < a; ++b) {
+      const Viewport& vb = views[b].viewport;
+      const bool apart = va.x + va.width <= vb.x || vb.x + vb.width <= va.x || va.y + va.height <= vb.y ||
+                         vb.y + vb.height <= va.y;
+      if (!apart) return false;
+    }
+  }
+  return area == uint64_t(target.width) * target.height;
+}
+}  // namespace
+
 FrameSync Renderer::record(VkCommandBuffer command_buffer, const RenderTarget& target, std::span<const View> views,
                            const FluidOptions& options, const LodOptions& lod) {
   Impl& r = *impl_;
@@ -504,7 +524,7 @@ FrameSync Renderer::record(VkCommandBuffer command_buffer, const RenderTarget& t
     if (output == Output::Direct) {
       pass.shade(views[v].viewport, !target.background);
     } else if (output == Output::DepthInShading) {
-      pass.shade_with_host_depth(target, views[v], v == 0);
+      pass.shade_with_host_depth(target, views[v], v == 0, views_tile_target(target, views));
     } else {
       pass.shade({}, false);
       pass.present(target, views[v], v == 0);

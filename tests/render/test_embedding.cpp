@@ -224,6 +224,55 @@ TEST(Embedding, AsymmetricFrustumMatchesTheCropOfAWiderView) {
   EXPECT_GT(db, 40.0);
 }
 
+// A host depth image in UNDEFINED layout, one view over its left part only:
+// the shading pass's depth test (images that allow storage and copies)
+// leaves what the present pass leaves, the view's fluid depth inside it and
+// the far plane everywhere else.
+TEST(Embedding, AnUndefinedHostDepthOutsideTheViewEndsAtTheFarPlane) {
+  TestHost host;
+  {
+    Context context(host.handles());
+    const SyntheticFluid f = synthetic_fluid(20000);
+    Renderer renderer(context, f.scene);
+    upload_synthetic(renderer, f);
+    const uint32_t w = kW * 3 / 4;
+    const Camera cam = Camera::framing(f.scene.bounds, Vec3{0, 0, 1}, float(w) / kH);
+    const View view = camera_view(cam, {0, 0, w, kH});
+    std::array<std::vector<uint32_t>, 2> depth_of, color_of;
+    for (const bool in_shading : {false, true}) {
+      using U = vk::ImageUsageFlagBits;
+      const vk::ImageUsageFlags storage = in_shading ? U::eStorage : vk::ImageUsageFlags{};
+      const vk::ImageUsageFlags copy_in = in_shading ? U::eTransferDst : vk::ImageUsageFlags{};
+      TestHost::Image color = host.image(kW, kH, vk::Format::eR8G8B8A8Unorm, U::eColorAttachment | U::eTransferSrc | storage);
+      TestHost::Image depth = host.image(kW, kH, vk::Format::eD32Sfloat, U::eDepthStencilAttachment | U::eTransferSrc | copy_in);
+      RenderTarget target = color_target(color);
+      target.depth_image = *depth.image;
+      target.depth_view = *depth.view;
+      target.depth_format = VK_FORMAT_D32_SFLOAT;
+      target.depth_layout_after = VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL;
+      target.color_storage = in_shading;
+      target.depth_transfer = in_shading;
+      host.submit([&](vk::CommandBuffer c) { renderer.record(static_cast<VkCommandBuffer>(c), target, {&view, 1}, FluidOptions{}, {}); });
+      EXPECT_EQ(renderer.last_stats().passes.back().name, in_shading ? "depth out" : "present");
+      depth_of[in_shading] = host.read(depth, kW, kH);
+      color_of[in_shading] = host.read(color, kW, kH);
+    }
+    size_t fluid = 0, outside_not_far = 0, differs = 0;
+    for (uint32_t y = 0; y < kH; ++y) {
+      for (uint32_t x = 0; x < kW; ++x) {
+        const size_t i = size_t(y) * kW + x;
+        differs += depth_of[0][i] != depth_of[1][i] || (x < w && color_of[0][i] != color_of[1][i]);
+        if (x >= w) outside_not_far += depth_of[1][i] != 0;  // reversed depth: 0 is the far plane
+        else fluid += depth_of[1][i] != 0;
+      }
+    }
+    EXPECT_GT(fluid, size_t(w) * kH / 20);
+    EXPECT_EQ(outside_not_far, 0u);
+    EXPECT_EQ(differs, 0u);
+  }
+  expect_clean(host);
+}
+
 TEST(Embedding, TwoViewsInOneTargetEachMatchASingleView) {
   testing::ValidationGuard guard;
   Context& context = testing::context();
