@@ -3,14 +3,15 @@
 // the exact ray-sphere depth (atomicMin on the float's bits) and the chord
 // through it (fixed-point atomicAdd, with the colour attribute weighted in)
 // at the thickness buffer's resolution. pc.param0 = 0: one thread per draw
-// item; items covering more than g.splat.z pixels are listed for param0 = 1:
-// one workgroup per listed item. Both eyes of a 2-layer target splat the
-// same draw list: one small-splat dispatch per eye (pc.param1), in turn, so
-// only one eye's targets are hit by atomics at a time (both eyes' at once
-// took twice as long on the H200 at 2064x2208, likely outgrowing its L2);
-// large items carry their eye in the top bit. GPUs with few raster units (H100) run this
-// far faster than point sprites, and integer atomics make the sums
-// independent of order (deterministic images).
+// item; items with more than g.splat.z pixels to visit (depth and thickness
+// together) are listed for param0 = 1: one workgroup per listed item. Both
+// eyes of a 2-layer target splat the same draw list: one small-splat
+// dispatch per eye (pc.param1), in turn, so only one eye's targets are hit
+// by atomics at a time (both eyes' at once took twice as long on the H200 at
+// 2064x2208, likely outgrowing its L2); large items carry their eye in the
+// top bit. GPUs with few raster units (H100) run this far faster than point
+// sprites, and integer atomics make the sums independent of order
+// (deterministic images).
 #include "common.glsl"
 #include "images.glsl"
 
@@ -105,8 +106,10 @@ void main() {
     ivec2 lo, hi, tlo, thi;
     pixel_box(s, g.viewport, lo, hi);
     pixel_box(s, g.thick_viewport, tlo, thi);
-    ivec2 size = max(hi - lo, ivec2(0));
-    if (float(size.x) * float(size.y) > g.splat.z) {
+    // The pixels this thread would visit: depth at full resolution (not
+    // for blobs, which add thickness only), thickness at its own.
+    vec2 size = vec2(max(hi - lo, ivec2(0))), tsize = vec2(max(thi - tlo, ivec2(0)));
+    if ((s.count == 0.0 ? size.x * size.y : 0.0) + tsize.x * tsize.y > g.splat.z) {
       Items(pc.big).i[atomicAdd(args.big_count, 1u)] = item | (eye << 31);  // large in this eye
       return;
     }
