@@ -131,7 +131,7 @@ double largest_importance(const DemandView& v, const Box& b, double d_ref) {
 // The reach of a blob's splat (render's common.glsl: kBlobReach sigmas).
 float blob_reach(float voxel, float radius) {
   const float sigma = std::sqrt(std::max(voxel * voxel / 12.0f + radius * radius / 5.0f, 0.25f * voxel * voxel));
-  return 3.0f * sigma;
+  return 2.5f * sigma;
 }
 
 uint32_t tiers_needed(const ViewDemand& demand, const Prepared& prepared, const io::Aabb& box, io::Layer layer,
