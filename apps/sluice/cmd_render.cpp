@@ -252,6 +252,9 @@ void add_bench_render(CLI::App& bench) {
   cmd->add_flag("--untiered", o->untiered,
                 "Lay synthetic frames out as files without LOD tiers are: Morton order, one chunk row per block\n"
                 "(default: a row per tier, as `sluice convert` writes them, so the cull drops far rows unread)");
+  cmd->add_flag("--keep-depth", o->keep_depth,
+                "With --with-depth: each frame starts from the depth the last one left, as a host's depth holding its\n"
+                "own geometry does (default: cleared each frame, which needs no copy out)");
   cmd->add_flag("--present-pass", o->present_pass,
                 "With --with-depth: a depth image that allows no copies, as some hosts give, so a full-viewport raster\n"
                 "pass draws the fluid into it (slow on GPUs with few raster units)");

@@ -150,6 +150,9 @@ for stage in $stages; do
         run $S bench render --stereo --with-depth --repeats 5 --sizes $sizes --size 2064x2208 --csv "$OUT/stereo_$i.csv"
       done
       run $S bench render --stereo --with-depth --repeats 5 --sizes $sizes --size 2064x2208 --untiered --csv "$OUT/stereo_untiered.csv"
+      # The host's depth holding the last frame's (copied out too), and the raster present pass, in this build.
+      run $S bench render --stereo --with-depth --keep-depth --repeats 5 --sizes 10M --size 2064x2208 --csv "$OUT/stereo_keep_depth.csv"
+      run $S bench render --stereo --with-depth --present-pass --repeats 5 --sizes 10M --size 2064x2208 --csv "$OUT/stereo_present_pass.csv"
       if [[ -x .gpu/sluice_probe ]]; then
         for p in ${COVERED_PROBES:-0 1 2}; do
           SLUICE_SPLAT_PROBE=$p run .gpu/sluice_probe bench render --stereo --with-depth --repeats 5 --sizes 10M --size 2064x2208 --csv "$OUT/probe_$p.csv"

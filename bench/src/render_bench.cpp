@@ -271,6 +271,7 @@ void run_render_bench(const RenderBenchOptions& o) {
   render::OffscreenOptions oo;
   oo.depth = o.with_depth;
   oo.depth_transfer = !o.present_pass;
+  oo.keep_depth = o.keep_depth;
   render::OffscreenTarget out(context, o.width, o.height, oo);
   // Stereo: both eyes in one 2-layer target, and the same eyes side by side.
   std::unique_ptr<render::OffscreenTarget> stereo_out, pair_out;
@@ -288,7 +289,8 @@ void run_render_bench(const RenderBenchOptions& o) {
   std::printf("host: %s, %d cores; splatting %s; target %s\n", cpu_model().c_str(), core_count(), o.splat.c_str(),
               !o.with_depth    ? "colour only (shading writes it)"
               : o.present_pass ? "colour + depth (present pass with the depth test)"
-                               : "colour + depth (shading tests and writes it, depth copied in and out)");
+              : o.keep_depth   ? "colour + depth holding the last frame's (shading tests and writes it, depth copied out and in)"
+                               : "colour + depth cleared each frame (shading tests and writes it, depth copied in)");
   if (!o.images.empty()) fs::create_directories(o.images);
 
   render::FluidOptions fluid;  // transparent fluid, narrow-range filter, defaults

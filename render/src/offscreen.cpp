@@ -28,6 +28,7 @@ struct detail::OffscreenTargetImpl {
   vk::raii::CommandPool pool{nullptr};
   std::vector<Slot> slots;
   uint64_t frames = 0;
+  bool depth_written = false;  // the depth image holds a frame (keep_depth)
   int last = -1;  // slot of the last frame submitted
 
   OffscreenTargetImpl(detail::ContextImpl& c, const OffscreenOptions& o) : ctx(c), options(o) {}
@@ -46,6 +47,7 @@ struct detail::OffscreenTargetImpl {
     if (options.layers < 1 || options.layers > 2) throw Error("offscreen target: 1 or 2 layers");
     color = create_texture(ctx, {width, height}, vk::Format::eR8G8B8A8Unorm, U::eColorAttachment | U::eStorage | U::eTransferSrc,
                            options.layers);
+    depth_written = false;
     if (options.depth) {
       const vk::ImageUsageFlags copies = options.depth_transfer ? U::eTransferSrc | U::eTransferDst : vk::ImageUsageFlags{};
       depth = create_texture(ctx, {width, height}, vk::Format::eD32Sfloat, U::eDepthStencilAttachment | copies, options.layers);
@@ -119,6 +121,8 @@ FrameStats OffscreenTarget::render(Renderer& renderer, std::span<const View> vie
     target.depth_view = static_cast<VkImageView>(*o.depth.view);
     target.depth_format = VK_FORMAT_D32_SFLOAT;
     target.depth_layout_before = VK_IMAGE_LAYOUT_UNDEFINED;
+    if (o.options.keep_depth && o.depth_written) target.depth_layout_before = target.depth_layout_after;
+    o.depth_written = true;
     target.depth_transfer = o.options.depth_transfer;
   }
   target.background = background;

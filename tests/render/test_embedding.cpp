@@ -273,6 +273,26 @@ TEST(Embedding, AnUndefinedHostDepthOutsideTheViewEndsAtTheFarPlane) {
   expect_clean(host);
 }
 
+// OffscreenTarget::keep_depth: the second frame starts from the first's
+// depth (copied out, tested against, written back) and draws the same.
+TEST(Embedding, AKeptDepthDrawsTheSameFluidAgain) {
+  testing::ValidationGuard guard;
+  Context& context = testing::context();
+  const SyntheticFluid f = synthetic_fluid(20000);
+  Renderer renderer(context, f.scene);
+  upload_synthetic(renderer, f);
+  const Camera cam = Camera::framing(f.scene.bounds, Vec3{0, 0, 1}, float(kW) / kH);
+  OffscreenOptions options;
+  options.depth = true;
+  options.keep_depth = true;
+  OffscreenTarget target(context, kW, kH, options);
+  target.render(renderer, cam, FluidOptions{}, {});
+  const std::vector<uint8_t> first = target.read_rgba8();
+  const FrameStats again = target.render(renderer, cam, FluidOptions{}, {});
+  EXPECT_EQ(again.passes.back().name, "depth out");
+  EXPECT_TRUE(target.read_rgba8() == first);
+}
+
 TEST(Embedding, TwoViewsInOneTargetEachMatchASingleView) {
   testing::ValidationGuard guard;
   Context& context = testing::context();

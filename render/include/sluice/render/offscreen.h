@@ -25,6 +25,10 @@ struct OffscreenOptions {
   // shading pass tests and writes it. Off: the present pass does (the path
   // of hosts whose depth images allow no copies).
   bool depth_transfer = true;
+  // Each frame starts from the depth the last one left (as a host's depth
+  // image holds its own geometry), instead of UNDEFINED: the shading pass
+  // then copies the host's depth out as well as back.
+  bool keep_depth = false;
   bool read_back = true;          // copy each frame out for read_rgba8() (layer 0)
   // 2: an image of two layers drawn as a stereo pair in one pass
   // (RenderTarget::layer_count); render() then takes two views.
