@@ -254,7 +254,7 @@ void add_bench_render(CLI::App& bench) {
                 "(default: a row per tier, as `sluice convert` writes them, so the cull drops far rows unread)");
   cmd->add_flag("--keep-depth", o->keep_depth,
                 "With --with-depth: each frame starts from the depth the last one left, as a host's depth holding its\n"
-                "own geometry does (default: cleared each frame, which needs no copy out)");
+                "own geometry does; the shading pass reads it in place (default: cleared each frame)");
   cmd->add_flag("--present-pass", o->present_pass,
                 "With --with-depth: a depth image that allows no copies, as some hosts give, so a full-viewport raster\n"
                 "pass draws the fluid into it (slow on GPUs with few raster units)");

@@ -289,8 +289,8 @@ void run_render_bench(const RenderBenchOptions& o) {
   std::printf("host: %s, %d cores; splatting %s; target %s\n", cpu_model().c_str(), core_count(), o.splat.c_str(),
               !o.with_depth    ? "colour only (shading writes it)"
               : o.present_pass ? "colour + depth (present pass with the depth test)"
-              : o.keep_depth   ? "colour + depth holding the last frame's (shading tests and writes it, depth copied out and in)"
-                               : "colour + depth cleared each frame (shading tests and writes it, depth copied in)");
+              : o.keep_depth   ? "colour + depth holding the last frame's (shading tests and writes it, the depth read in place, copied back)"
+                               : "colour + depth cleared each frame (shading tests and writes it, the depth copied back)");
   if (!o.images.empty()) fs::create_directories(o.images);
 
   render::FluidOptions fluid;  // transparent fluid, narrow-range filter, defaults

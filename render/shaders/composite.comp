@@ -54,6 +54,8 @@ vec3 scene_behind(vec3 pe, vec3 bent_world, float depth) {
 // The host's depth of this view (pc.host_depth, passes.cpp's
 // shade_with_host_depth): a word per pixel, eyes after each other.
 layout(buffer_reference, std430, buffer_reference_align = 4) buffer HostDepth { uint w[]; };
+// The host's depth image itself (depth aspect, one layer per eye), when read in place.
+layout(set = 0, binding = 17) uniform sampler2DArray host_depth_image;
 
 // The present pass's depth test, done here (pc.param2 bit 1): the fluid
 // (eye depth z > 0) is drawn where its depth under the host's projection
@@ -61,12 +63,22 @@ layout(buffer_reference, std430, buffer_reference_align = 4) buffer HostDepth { 
 // pixel without fluid gets the background where the host drew nothing, if
 // the background is on (bit 0 clear). Bit 2: the copy is X8_D24, compared
 // and stored in its 24 bits as the attachment would.
+// Bit 3: the host's depth is read from its image (binding 17) and every
+// pixel's depth is written to the copy, which goes back whole.
 bool host_depth_test(ivec2 p, float z) {
   HostDepth host_depth = HostDepth(pc.host_depth);
   uint at = (eye * uint(g.viewport.y) + uint(p.y)) * uint(g.viewport.x) + uint(p.x);
-  uint bits = host_depth.w[at];
-  bool d24 = (pc.param2 & 4u) != 0u;
-  float host = d24 ? float(bits & 0xffffffu) * (1.0 / 16777215.0) : uintBitsToFloat(bits);
+  bool d24 = (pc.param2 & 4u) != 0u, in_place = (pc.param2 & 8u) != 0u;
+  uint bits;
+  float host;
+  if (in_place) {
+    host = texelFetch(host_depth_image, ivec3(p + ivec2(pc.param0, pc.param1), eye), 0).r;
+    bits = d24 ? uint(host * 16777215.0 + 0.5) : floatBitsToUint(host);
+    host_depth.w[at] = bits;
+  } else {
+    bits = host_depth.w[at];
+    host = d24 ? float(bits & 0xffffffu) * (1.0 / 16777215.0) : uintBitsToFloat(bits);
+  }
   bool reversed = g.proj.w < 0.5;  // the far plane at depth 0
   if (z <= 0.0) return (pc.param2 & 1u) == 0u && (reversed ? host <= g.proj.w : host >= g.proj.w);
   float d = clamp(g.frustum.z + g.frustum.w / z, 0.0, 1.0);

@@ -49,7 +49,8 @@ struct detail::OffscreenTargetImpl {
                            options.layers);
     depth_written = false;
     if (options.depth) {
-      const vk::ImageUsageFlags copies = options.depth_transfer ? U::eTransferSrc | U::eTransferDst : vk::ImageUsageFlags{};
+      const vk::ImageUsageFlags copies =
+          options.depth_transfer ? U::eTransferSrc | U::eTransferDst | U::eSampled : vk::ImageUsageFlags{};
       depth = create_texture(ctx, {width, height}, vk::Format::eD32Sfloat, U::eDepthStencilAttachment | copies, options.layers);
     }
     for (Slot& s : slots) {
@@ -124,6 +125,7 @@ FrameStats OffscreenTarget::render(Renderer& renderer, std::span<const View> vie
     if (o.options.keep_depth && o.depth_written) target.depth_layout_before = target.depth_layout_after;
     o.depth_written = true;
     target.depth_transfer = o.options.depth_transfer;
+    target.depth_sampled = o.options.depth_transfer;
   }
   target.background = background;
   target.layer_count = o.options.layers;

@@ -62,6 +62,14 @@ Output output_path(const RenderTarget& target) {
   return target.depth_transfer && four_bytes ? Output::DepthInShading : Output::Present;
 }
 
+bool reads_host_depth_in_place(const RenderTarget& target, Output output) {
+  // Float depth only: a 24-bit value read as a normalized float need not
+  // come back to the same integer, and the copy back would move it.
+  const bool float_depth = target.depth_format == VK_FORMAT_D32_SFLOAT || target.depth_format == VK_FORMAT_D32_SFLOAT_S8_UINT;
+  return output == Output::DepthInShading && target.depth_sampled && float_depth &&
+         target.depth_layout_before != VK_IMAGE_LAYOUT_UNDEFINED;
+}
+
 PassRecorder::PassRecorder(detail::RendererImpl& r, vk::CommandBuffer cmd, FrameSlot& slot, uint32_t slot_index)
     : r_(r), cmd_(cmd), slot_(slot), first_stamp_(slot_index * kStampsPerSlot) {}
 
@@ -326,6 +334,7 @@ void PassRecorder::shade_with_host_depth(const RenderTarget& target, const View&
   // The far plane of the view's projection (reversed depth: 0), as the present pass clears to.
   const float far = view.projection.at(2, 3) > 0 ? 0.0f : 1.0f;
   const bool d24 = target.depth_format == VK_FORMAT_D24_UNORM_S8_UINT || target.depth_format == VK_FORMAT_X8_D24_UNORM_PACK32;
+  const bool in_place = reads_host_depth_in_place(target, Output::DepthInShading);
   const vk::BufferImageCopy region(0, 0, 0,
                                    vk::ImageSubresourceLayers(vk::ImageAspectFlagBits::eDepth, 0, target.base_layer, layers_),
                                    vk::Offset3D(int32_t(v.x), int32_t(v.y), 0), vk::Extent3D(v.width, v.height, 1));
@@ -343,6 +352,10 @@ void PassRecorder::shade_with_host_depth(const RenderTarget& target, const View&
     cmd_.fillBuffer(*r_.host_depth.buffer, 0, vk::DeviceSize(v.width) * v.height * layers_ * 4, far_bits);
     memory_barrier(cmd_, Stage::eClear | Stage::eCopy, Access::eTransferWrite, Stage::eComputeShader | Stage::eCopy,
                    Access::eShaderStorageRead | Access::eShaderStorageWrite | Access::eTransferWrite);
+  } else if (in_place) {
+    // The shading pass reads the image and writes every pixel's depth to
+    // the buffer; after the copy back of the view before, if any.
+    memory_barrier(cmd_, Stage::eCopy, Access::eTransferWrite, Stage::eComputeShader, Access::eShaderSampledRead);
   } else {
     cmd_.copyImageToBuffer(depth, general, *r_.host_depth.buffer, region);
     memory_barrier(cmd_, Stage::eCopy, Access::eTransferWrite, Stage::eComputeShader,
@@ -351,9 +364,10 @@ void PassRecorder::shade_with_host_depth(const RenderTarget& target, const View&
   stamp("depth in");
   pc_.host_depth = r_.host_depth.address;
   // param2: bit 0 background off (pixels without fluid left alone), bit 1
-  // the host's depth test, bit 2 its copy is X8_D24 (else float).
+  // the host's depth test, bit 2 its copy is X8_D24 (else float), bit 3 it
+  // is read from the image (binding 17) and every pixel's depth written.
   cmd_.bindPipeline(vk::PipelineBindPoint::eCompute, *r_.composite);
-  push(v.x, v.y, (target.background ? 0u : 1u) | 2u | (d24 ? 4u : 0u));
+  push(v.x, v.y, (target.background ? 0u : 1u) | 2u | (d24 ? 4u : 0u) | (in_place ? 8u : 0u));
   const auto g = groups(r_.targets.size, 8);
   cmd_.dispatch(g[0], g[1], layers_);
   pc_.host_depth = 0;

@@ -17,6 +17,9 @@ enum class Output {
 };
 // The cheapest of the three `target` allows.
 Output output_path(const RenderTarget& target);
+// Output::DepthInShading with a sampled depth image that holds the host's
+// depth: the shading pass reads it in place instead of a copy out.
+bool reads_host_depth_in_place(const RenderTarget& target, Output output);
 
 class PassRecorder {
  public:

@@ -73,13 +73,14 @@ void detail::RendererImpl::create_pipelines() {
   bindings.emplace_back(14, vk::DescriptorType::eCombinedImageSampler, 1, kAllStages);
   bindings.emplace_back(15, vk::DescriptorType::eStorageImage, 1, kAllStages);
   bindings.emplace_back(16, vk::DescriptorType::eCombinedImageSampler, 1, kAllStages);  // the host's scene colour
+  bindings.emplace_back(17, vk::DescriptorType::eCombinedImageSampler, 1, kAllStages);  // the host's depth, read in place
   set_layout = vk::raii::DescriptorSetLayout(device, vk::DescriptorSetLayoutCreateInfo({}, bindings));
   vk::PushConstantRange push(kAllStages, 0, sizeof(PushConstants));
   layout = vk::raii::PipelineLayout(device, vk::PipelineLayoutCreateInfo({}, *set_layout, push));
   const uint32_t n = options.frames_in_flight;
   const std::array sizes{vk::DescriptorPoolSize(vk::DescriptorType::eUniformBufferDynamic, n),
                          vk::DescriptorPoolSize(vk::DescriptorType::eStorageImage, 12 * n),
-                         vk::DescriptorPoolSize(vk::DescriptorType::eCombinedImageSampler, 4 * n)};
+                         vk::DescriptorPoolSize(vk::DescriptorType::eCombinedImageSampler, 5 * n)};
   pool = vk::raii::DescriptorPool(device, vk::DescriptorPoolCreateInfo(vk::DescriptorPoolCreateFlagBits::eFreeDescriptorSet, n, sizes));
   for (FrameSlot& slot : slots) {
     slot.set = std::move(vk::raii::DescriptorSets(device, vk::DescriptorSetAllocateInfo(*pool, *set_layout))[0]);
@@ -88,6 +89,10 @@ void detail::RendererImpl::create_pipelines() {
                                                             vk::SamplerMipmapMode::eNearest, vk::SamplerAddressMode::eClampToEdge,
                                                             vk::SamplerAddressMode::eClampToEdge,
                                                             vk::SamplerAddressMode::eClampToEdge));
+  nearest_sampler = vk::raii::Sampler(device, vk::SamplerCreateInfo({}, vk::Filter::eNearest, vk::Filter::eNearest,
+                                                                    vk::SamplerMipmapMode::eNearest, vk::SamplerAddressMode::eClampToEdge,
+                                                                    vk::SamplerAddressMode::eClampToEdge,
+                                                                    vk::SamplerAddressMode::eClampToEdge));
   // The environment wraps around in azimuth (u) and clamps at the poles (v).
   environment_sampler = vk::raii::Sampler(
       device, vk::SamplerCreateInfo({}, vk::Filter::eLinear, vk::Filter::eLinear, vk::SamplerMipmapMode::eNearest,
@@ -226,6 +231,23 @@ void detail::RendererImpl::bind_scene_color(FrameSlot& slot, const RenderTarget&
   }
   ctx.device.updateDescriptorSets(
       vk::WriteDescriptorSet(*slot.set, 16, 0, 1, vk::DescriptorType::eCombinedImageSampler, &image), {});
+}
+
+void detail::RendererImpl::bind_host_depth(FrameSlot& slot, const RenderTarget& target, bool read) {
+  vk::DescriptorImageInfo image(*sampler, *environment_array, vk::ImageLayout::eShaderReadOnlyOptimal);
+  if (read) {
+    vk::raii::ImageView view(ctx.device,
+                             vk::ImageViewCreateInfo({}, vk::Image(target.depth_image), vk::ImageViewType::e2DArray,
+                                                     vk::Format(target.depth_format), {},
+                                                     vk::ImageSubresourceRange(vk::ImageAspectFlagBits::eDepth, 0, 1,
+                                                                               target.base_layer, target.layer_count)));
+    image.sampler = *nearest_sampler;
+    image.imageView = *view;
+    image.imageLayout = vk::ImageLayout::eGeneral;
+    retire(std::move(view));  // lives as long as this frame's commands
+  }
+  ctx.device.updateDescriptorSets(
+      vk::WriteDescriptorSet(*slot.set, 17, 0, 1, vk::DescriptorType::eCombinedImageSampler, &image), {});
 }
 
 VkImageView detail::RendererImpl::layer_view(VkImage image, VkFormat format, vk::ImageAspectFlags aspect, uint32_t layer) {
@@ -475,6 +497,7 @@ FrameSync Renderer::record(VkCommandBuffer command_buffer, const RenderTarget& t
              MemoryKind::DeviceLocal);
   }
   r.bind_scene_color(slot, target);
+  r.bind_host_depth(slot, target, reads_host_depth_in_place(target, output));
   FrameSet* frame = r.shown >= 0 ? &r.sets[size_t(r.shown)] : nullptr;
   if (frame) frame->last_drawn = r.frames_recorded;
 

@@ -102,6 +102,7 @@ struct detail::RendererImpl {
   vk::raii::PipelineLayout layout{nullptr};
   vk::raii::DescriptorPool pool{nullptr};
   vk::raii::Sampler sampler{nullptr};
+  vk::raii::Sampler nearest_sampler{nullptr};  // texel reads of formats without linear filtering (the host's depth)
   vk::raii::Pipeline cull_chunks{nullptr}, cull_args{nullptr}, cull_particles{nullptr};
   std::array<vk::raii::Pipeline, 2> depth_pass{nullptr, nullptr}, thickness_pass{nullptr, nullptr};  // [eyes - 1]
   vk::raii::Pipeline splat{nullptr}, resolve{nullptr};
@@ -189,6 +190,9 @@ struct detail::RendererImpl {
   void collect_slot(FrameSlot& slot, bool finished);
   // Binding 16: the target's scene colour (a view made for this frame), or the environment.
   void bind_scene_color(FrameSlot& slot, const RenderTarget& target);
+  // Binding 17: the host's depth image (depth aspect, the target's layers)
+  // when the shading pass reads it in place (`read`), else a placeholder.
+  void bind_host_depth(FrameSlot& slot, const RenderTarget& target, bool read);
   std::vector<std::byte> read_texture(const Texture& t, size_t texel_bytes);
 };
 

@@ -79,9 +79,14 @@ FluidOptions opaque() {
   return o;
 }
 
-// Reversed depth?  The shading pass tests and writes the host's depth
-// (images that allow storage and copies), or the present pass does?
-class Occlusion : public ::testing::TestWithParam<std::tuple<bool, bool>> {};
+// How the fluid reaches a host's colour and depth image.
+enum class Into {
+  PresentPass,    // plain attachments: the raster present pass
+  ShadingCopies,  // storage colour, depth that allows copies: the shading pass, the depth copied out and back
+  ShadingReads,   // ... and a sampled depth: the shading pass reads it in place, the depth copied back
+};
+// Reversed depth?  Into which way?
+class Occlusion : public ::testing::TestWithParam<std::tuple<bool, Into>> {};
 
 TEST_P(Occlusion, HostDepthHidesTheFluidAndTheFluidHidesTheHost) {
   TestHost host;
@@ -92,15 +97,18 @@ TEST_P(Occlusion, HostDepthHidesTheFluidAndTheFluidHidesTheHost) {
     Renderer renderer(context, scene);
     upload_points(renderer, kTwoSpheres, std::vector<uint16_t>(2, 0), {}, 1);
 
-    const auto [reversed, in_shading] = GetParam();
+    const auto [reversed, into] = GetParam();
+    const bool in_shading = into != Into::PresentPass;
     const Camera cam = front_camera();
     View view = camera_view(cam, {0, 0, kW, kH});
     if (!reversed) view.projection = standard_projection(cam.fov_deg, float(kW) / kH, 0.5f, 20.0f);
     using U = vk::ImageUsageFlagBits;
     const vk::ImageUsageFlags storage = in_shading ? U::eStorage : vk::ImageUsageFlags{};
     const vk::ImageUsageFlags copy_in = in_shading ? U::eTransferDst : vk::ImageUsageFlags{};
+    const vk::ImageUsageFlags sampled = into == Into::ShadingReads ? U::eSampled : vk::ImageUsageFlags{};
     TestHost::Image color = host.image(kW, kH, vk::Format::eR8G8B8A8Unorm, U::eColorAttachment | U::eTransferSrc | storage);
-    TestHost::Image depth = host.image(kW, kH, vk::Format::eD32Sfloat, U::eDepthStencilAttachment | U::eTransferSrc | copy_in);
+    TestHost::Image depth =
+        host.image(kW, kH, vk::Format::eD32Sfloat, U::eDepthStencilAttachment | U::eTransferSrc | copy_in | sampled);
     // The host's geometry: a wall in front of the left sphere (red), one
     // behind the right sphere (blue); the spheres span 3.6 .. 4.4 in depth.
     const float near_wall = depth_at(view.projection, 3.2f), far_wall = depth_at(view.projection, 4.8f);
@@ -116,6 +124,7 @@ TEST_P(Occlusion, HostDepthHidesTheFluidAndTheFluidHidesTheHost) {
     target.background = false;
     target.color_storage = in_shading;
     target.depth_transfer = in_shading;
+    target.depth_sampled = into == Into::ShadingReads;
     FrameSync sync;
     host.submit([&](vk::CommandBuffer c) {
       using S = vk::PipelineStageFlagBits2;
@@ -174,16 +183,22 @@ TEST_P(Occlusion, HostDepthHidesTheFluidAndTheFluidHidesTheHost) {
     EXPECT_EQ(depth_px(2, 2), near_wall);
     EXPECT_EQ(depth_px(int(kW) - 3, 2), far_wall);
     std::printf("%s depth, %s: %zu fluid pixels over the far wall, depth at the sphere's centre %.5f (expected %.5f)\n",
-                reversed ? "reversed" : "standard", in_shading ? "shading writes it" : "present pass", right_fluid, written,
-                depth_at(view.projection, 3.6f));
+                reversed ? "reversed" : "standard",
+                into == Into::PresentPass ? "present pass" : into == Into::ShadingCopies ? "shading, copies" : "shading reads it",
+                right_fluid, written, depth_at(view.projection, 3.6f));
   }
   expect_clean(host);
 }
 
-INSTANTIATE_TEST_SUITE_P(Embedding, Occlusion, ::testing::Combine(::testing::Bool(), ::testing::Bool()),
-                         [](const ::testing::TestParamInfo<std::tuple<bool, bool>>& i) {
+INSTANTIATE_TEST_SUITE_P(Embedding, Occlusion,
+                         ::testing::Combine(::testing::Bool(),
+                                            ::testing::Values(Into::PresentPass, Into::ShadingCopies, Into::ShadingReads)),
+                         [](const ::testing::TestParamInfo<std::tuple<bool, Into>>& i) {
+                           const Into into = std::get<1>(i.param);
                            return std::string(std::get<0>(i.param) ? "reversed" : "standard") +
-                                  (std::get<1>(i.param) ? "_shading_writes_depth" : "_present_pass");
+                                  (into == Into::PresentPass     ? "_present_pass"
+                                   : into == Into::ShadingCopies ? "_shading_copies_depth"
+                                                                 : "_shading_reads_depth");
                          });
 
 double psnr_region(const std::vector<uint8_t>& a, uint32_t aw, uint32_t ax, const std::vector<uint8_t>& b, uint32_t bw,
@@ -274,7 +289,7 @@ TEST(Embedding, AnUndefinedHostDepthOutsideTheViewEndsAtTheFarPlane) {
 }
 
 // OffscreenTarget::keep_depth: the second frame starts from the first's
-// depth (copied out, tested against, written back) and draws the same.
+// depth (read in place, tested against, written back) and draws the same.
 TEST(Embedding, AKeptDepthDrawsTheSameFluidAgain) {
   testing::ValidationGuard guard;
   Context& context = testing::context();

@@ -21,13 +21,14 @@ namespace sluice::render {
 struct OffscreenOptions {
   uint32_t frames_in_flight = 1;  // at most the renderer's
   bool depth = false;             // also a D32 depth image, cleared to the far plane each frame
-  // The depth image allows transfers (RenderTarget::depth_transfer): the
-  // shading pass tests and writes it. Off: the present pass does (the path
-  // of hosts whose depth images allow no copies).
+  // The depth image allows transfers and sampling (RenderTarget::
+  // depth_transfer, depth_sampled): the shading pass tests and writes it.
+  // Off: the present pass does (the path of hosts whose depth images allow
+  // neither).
   bool depth_transfer = true;
   // Each frame starts from the depth the last one left (as a host's depth
   // image holds its own geometry), instead of UNDEFINED: the shading pass
-  // then copies the host's depth out as well as back.
+  // then reads the host's depth in place before writing it back.
   bool keep_depth = false;
   bool read_back = true;          // copy each frame out for read_rgba8() (layer 0)
   // 2: an image of two layers drawn as a stereo pair in one pass
