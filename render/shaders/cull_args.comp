@@ -1,7 +1,7 @@
 #version 460
 // Turns a count the previous pass produced into a dispatch size (2D: x at
 // most 65535, the minimum maxComputeWorkGroupCount). pc.param0 picks which:
-// 0 blocks -> particle cull, 1 draw list -> small splats (64 per group),
+// 0 blocks -> particle cull (4 blocks per group), 1 draw list -> small splats (64 per group),
 // 2 large splats -> one group each.
 #include "common.glsl"
 
@@ -15,7 +15,7 @@ uvec3 groups_for(uint n) {
 void main() {
   Args args = Args(pc.args);
   if (pc.param0 == 0u) {
-    uvec3 d = groups_for(args.block_count);
+    uvec3 d = groups_for((args.block_count + 3u) / 4u);  // cull_particles.comp: 4 blocks per workgroup
     args.groups_x = d.x;
     args.groups_y = d.y;
     args.groups_z = d.z;

@@ -6,6 +6,7 @@
 #include "common.glsl"
 
 layout(local_size_x = 256) in;
+const uint kBlocksPerGroup = 4u;  // cull_args.comp sizes the dispatch by it
 
 shared uint s_count;
 shared uint s_base;
@@ -29,13 +30,10 @@ float cell_hash(vec3 p, float voxel) {
   return (float(h >> 8) + 0.5) * (1.0 / 16777216.0);
 }
 
-void main() {
-  Args args = Args(pc.args);
-  uint block_index = gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x;
-  if (block_index >= args.block_count) return;  // whole workgroup: uniform
-  if (gl_LocalInvocationIndex == 0u) s_count = 0u;
-  barrier();
-
+// Whether this invocation's particle of block `block_index` is drawn, and
+// its draw entry's second word.
+bool consider(uint block_index, out uint packed) {
+  packed = 0u;
   uvec2 block = Blocks(pc.blocks).b[block_index];
   bool inside = (block.y & 0x80000000u) != 0u;  // the chunk pass proved the tests below pass
   Chunk c = Chunks(pc.chunks).c[block.x];
@@ -116,18 +114,38 @@ void main() {
     t = clamp((value - g.color.x) * g.color.y, 0.0, 1.0);
   }
 
-  // Compaction: a subgroup's kept particles take consecutive slots, one
-  // shared atomic per subgroup.
-  uvec4 ballot = subgroupBallot(keep);
-  uint subgroup_base = 0u;
-  if (subgroupElect()) subgroup_base = atomicAdd(s_count, subgroupBallotBitCount(ballot));
-  uint slot = subgroupBroadcastFirst(subgroup_base) + subgroupBallotExclusiveBitCount(ballot);
+  if (keep) {
+    uint growth = g.lod.w > 1.0 ? uint((scale - 1.0) / (g.lod.w - 1.0) * 4095.0 + 0.5) : 0u;
+    packed = gl_LocalInvocationIndex | (min(growth, 4095u) << 8) | (uint(t * 4095.0 + 0.5) << 20);
+  }
+  return keep;
+}
+
+// kBlocksPerGroup blocks per workgroup, one particle of each per
+// invocation: one atomic on the draw list's counter per workgroup (at one a
+// block, 100M particles made 390k of them on one address).
+void main() {
+  Args args = Args(pc.args);
+  uint first_block = (gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x) * kBlocksPerGroup;
+  if (first_block >= args.block_count) return;  // whole workgroup: uniform
+  if (gl_LocalInvocationIndex == 0u) s_count = 0u;
+  barrier();
+  bool keep[kBlocksPerGroup];
+  uint slot[kBlocksPerGroup], packed[kBlocksPerGroup];
+  for (uint k = 0u; k < kBlocksPerGroup; ++k) {
+    keep[k] = first_block + k < args.block_count && consider(first_block + k, packed[k]);
+    // Compaction: a subgroup's kept particles take consecutive slots, one
+    // shared atomic per subgroup.
+    uvec4 ballot = subgroupBallot(keep[k]);
+    uint subgroup_base = 0u;
+    if (subgroupElect()) subgroup_base = atomicAdd(s_count, subgroupBallotBitCount(ballot));
+    slot[k] = subgroupBroadcastFirst(subgroup_base) + subgroupBallotExclusiveBitCount(ballot);
+  }
   barrier();
   if (gl_LocalInvocationIndex == 0u) s_base = s_count == 0u ? 0u : atomicAdd(args.vertex_count, s_count);
   barrier();
-  if (keep) {
-    uint growth = g.lod.w > 1.0 ? uint((scale - 1.0) / (g.lod.w - 1.0) * 4095.0 + 0.5) : 0u;
-    uint packed = gl_LocalInvocationIndex | (min(growth, 4095u) << 8) | (uint(t * 4095.0 + 0.5) << 20);
-    Draws(pc.draws).d[s_base + slot] = uvec2(block_index, packed);
+  Draws draws = Draws(pc.draws);
+  for (uint k = 0u; k < kBlocksPerGroup; ++k) {
+    if (keep[k]) draws.d[s_base + slot[k]] = uvec2(first_block + k, packed[k]);
   }
 }
