@@ -125,7 +125,12 @@ mat3 shape_of(mat3 covariance) {
 void main() {
   Params g = Params(pc.params);
   if (g.fits == 0u || pc.shapes == uvec2(0u)) return;
-  for (uint i = first_item() + gl_LocalInvocationIndex; i < pc.n; i += round_stride()) {
+  // Particles in the order of the voxels' lists: neighbouring invocations
+  // read the same 27 voxels' particles, which stay in cache. In particle
+  // order a file's LOD tiers scatter a warp over whole cells, and this pass
+  // took 2.1x as long (35.7 against 16.7 ms for 10M on the H100).
+  for (uint k = first_item() + gl_LocalInvocationIndex; k < pc.n; k += round_stride()) {
+    uint i = LIST(k);
     if (marked(i)) {
       if (pc.step == 0u) store_shift(i, vec3(0.0));
       if (pc.step == 1u) store_shape(i, mat3(1.0));
