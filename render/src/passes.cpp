@@ -5,7 +5,7 @@
 #include "globals.h"
 
 #include <algorithm>
-#include <cstring>
+#include <bit>
 
 namespace sluice::render {
 namespace {
@@ -50,23 +50,26 @@ bool is_srgb(vk::Format f) {
   }
 }
 
+namespace {
+// The copy of the depth aspect holds 4-byte texels of these two kinds: a
+// float, or X8_D24 (the shading pass reads and writes both).
+bool float_depth(VkFormat f) { return f == VK_FORMAT_D32_SFLOAT || f == VK_FORMAT_D32_SFLOAT_S8_UINT; }
+bool d24_depth(VkFormat f) { return f == VK_FORMAT_D24_UNORM_S8_UINT || f == VK_FORMAT_X8_D24_UNORM_PACK32; }
+}  // namespace
+
 Output output_path(const RenderTarget& target) {
   const bool shading_writes = target.color_storage && !is_srgb(vk::Format(target.color_format)) &&
                               (target.background || target.color_layout_before != VK_IMAGE_LAYOUT_UNDEFINED);
   if (!shading_writes) return Output::Present;
   if (!target.depth_view) return Output::Direct;
-  // 4-byte texels in a copy of the depth aspect: float, or X8_D24 (the shading pass reads and writes both).
-  const VkFormat f = target.depth_format;
-  const bool four_bytes = f == VK_FORMAT_D32_SFLOAT || f == VK_FORMAT_D32_SFLOAT_S8_UINT || f == VK_FORMAT_D24_UNORM_S8_UINT ||
-                          f == VK_FORMAT_X8_D24_UNORM_PACK32;
+  const bool four_bytes = float_depth(target.depth_format) || d24_depth(target.depth_format);
   return target.depth_transfer && four_bytes ? Output::DepthInShading : Output::Present;
 }
 
 bool reads_host_depth_in_place(const RenderTarget& target, Output output) {
   // Float depth only: a 24-bit value read as a normalized float need not
   // come back to the same integer, and the copy back would move it.
-  const bool float_depth = target.depth_format == VK_FORMAT_D32_SFLOAT || target.depth_format == VK_FORMAT_D32_SFLOAT_S8_UINT;
-  return output == Output::DepthInShading && target.depth_sampled && float_depth &&
+  return output == Output::DepthInShading && target.depth_sampled && float_depth(target.depth_format) &&
          target.depth_layout_before != VK_IMAGE_LAYOUT_UNDEFINED;
 }
 
@@ -333,7 +336,7 @@ void PassRecorder::shade_with_host_depth(const RenderTarget& target, const View&
   const Viewport& v = view.viewport;
   // The far plane of the view's projection (reversed depth: 0), as the present pass clears to.
   const float far = view.projection.at(2, 3) > 0 ? 0.0f : 1.0f;
-  const bool d24 = target.depth_format == VK_FORMAT_D24_UNORM_S8_UINT || target.depth_format == VK_FORMAT_X8_D24_UNORM_PACK32;
+  const bool d24 = d24_depth(target.depth_format);
   const bool in_place = reads_host_depth_in_place(target, Output::DepthInShading);
   const vk::BufferImageCopy region(0, 0, 0,
                                    vk::ImageSubresourceLayers(vk::ImageAspectFlagBits::eDepth, 0, target.base_layer, layers_),
@@ -347,8 +350,7 @@ void PassRecorder::shade_with_host_depth(const RenderTarget& target, const View&
       const vk::ImageSubresourceRange range(vk::ImageAspectFlagBits::eDepth, 0, 1, target.base_layer, layers_);
       cmd_.clearDepthStencilImage(depth, general, vk::ClearDepthStencilValue(far, 0), range);
     }
-    uint32_t far_bits = far > 0 ? 0x00ffffffu : 0u;  // X8_D24
-    if (!d24) std::memcpy(&far_bits, &far, 4);
+    const uint32_t far_bits = d24 ? (far > 0 ? 0x00ffffffu : 0u) : std::bit_cast<uint32_t>(far);
     cmd_.fillBuffer(*r_.host_depth.buffer, 0, vk::DeviceSize(v.width) * v.height * layers_ * 4, far_bits);
     memory_barrier(cmd_, Stage::eClear | Stage::eCopy, Access::eTransferWrite, Stage::eComputeShader | Stage::eCopy,
                    Access::eShaderStorageRead | Access::eShaderStorageWrite | Access::eTransferWrite);

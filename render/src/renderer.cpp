@@ -216,18 +216,23 @@ void detail::RendererImpl::bind_output(FrameSlot& slot, VkImageView view) {
   ctx.device.updateDescriptorSets(vk::WriteDescriptorSet(*slot.set, 9, 0, 1, vk::DescriptorType::eStorageImage, &image), {});
 }
 
+VkImageView detail::RendererImpl::frame_array_view(VkImage image, VkFormat format, vk::ImageAspectFlags aspect,
+                                                   const RenderTarget& target) {
+  vk::raii::ImageView view(ctx.device, vk::ImageViewCreateInfo({}, vk::Image(image), vk::ImageViewType::e2DArray, vk::Format(format),
+                                                               {}, vk::ImageSubresourceRange(aspect, 0, 1, target.base_layer,
+                                                                                             target.layer_count)));
+  const VkImageView handle = *view;
+  retire(std::move(view));  // lives as long as this frame's commands
+  return handle;
+}
+
 void detail::RendererImpl::bind_scene_color(FrameSlot& slot, const RenderTarget& target) {
   // Without the host's scene the binding holds the environment (never read).
   vk::DescriptorImageInfo image(*sampler, *environment_array, vk::ImageLayout::eShaderReadOnlyOptimal);
   if (target.scene_color_image) {
-    vk::raii::ImageView view(ctx.device,
-                             vk::ImageViewCreateInfo({}, vk::Image(target.scene_color_image), vk::ImageViewType::e2DArray,
-                                                     vk::Format(target.scene_color_format), {},
-                                                     vk::ImageSubresourceRange(vk::ImageAspectFlagBits::eColor, 0, 1,
-                                                                               target.base_layer, target.layer_count)));
-    image.imageView = *view;
+    image.imageView =
+        frame_array_view(target.scene_color_image, target.scene_color_format, vk::ImageAspectFlagBits::eColor, target);
     image.imageLayout = vk::ImageLayout(target.scene_color_layout);
-    retire(std::move(view));  // lives as long as this frame's commands
   }
   ctx.device.updateDescriptorSets(
       vk::WriteDescriptorSet(*slot.set, 16, 0, 1, vk::DescriptorType::eCombinedImageSampler, &image), {});
@@ -236,15 +241,9 @@ void detail::RendererImpl::bind_scene_color(FrameSlot& slot, const RenderTarget&
 void detail::RendererImpl::bind_host_depth(FrameSlot& slot, const RenderTarget& target, bool read) {
   vk::DescriptorImageInfo image(*sampler, *environment_array, vk::ImageLayout::eShaderReadOnlyOptimal);
   if (read) {
-    vk::raii::ImageView view(ctx.device,
-                             vk::ImageViewCreateInfo({}, vk::Image(target.depth_image), vk::ImageViewType::e2DArray,
-                                                     vk::Format(target.depth_format), {},
-                                                     vk::ImageSubresourceRange(vk::ImageAspectFlagBits::eDepth, 0, 1,
-                                                                               target.base_layer, target.layer_count)));
     image.sampler = *nearest_sampler;
-    image.imageView = *view;
+    image.imageView = frame_array_view(target.depth_image, target.depth_format, vk::ImageAspectFlagBits::eDepth, target);
     image.imageLayout = vk::ImageLayout::eGeneral;
-    retire(std::move(view));  // lives as long as this frame's commands
   }
   ctx.device.updateDescriptorSets(
       vk::WriteDescriptorSet(*slot.set, 17, 0, 1, vk::DescriptorType::eCombinedImageSampler, &image), {});
@@ -259,16 +258,8 @@ VkImageView detail::RendererImpl::layer_view(VkImage image, VkFormat format, vk:
 }
 
 VkImageView detail::RendererImpl::array_view_of(const RenderTarget& target) {
-  // A view of the caller's layers as the shading pass's storage image
-  // (an array, one layer per eye); it lives as long as this frame's commands.
-  vk::raii::ImageView view(ctx.device,
-                           vk::ImageViewCreateInfo({}, vk::Image(target.color_image), vk::ImageViewType::e2DArray,
-                                                   vk::Format(target.color_format), {},
-                                                   vk::ImageSubresourceRange(vk::ImageAspectFlagBits::eColor, 0, 1,
-                                                                             target.base_layer, target.layer_count)));
-  const VkImageView handle = *view;
-  retire(std::move(view));
-  return handle;
+  // A view of the caller's layers as the shading pass's storage image (an array, one layer per eye).
+  return frame_array_view(target.color_image, target.color_format, vk::ImageAspectFlagBits::eColor, target);
 }
 
 std::vector<std::byte> detail::RendererImpl::read_texture(const Texture& t, size_t texel_bytes) {
@@ -517,6 +508,7 @@ FrameSync Renderer::record(VkCommandBuffer command_buffer, const RenderTarget& t
   // Mono: each view its own pass over the targets. A 2-layer target: both
   // eyes in one pass (one cull, every screen-space pass over both layers).
   const uint32_t passes = layers == 2 ? 1 : uint32_t(views.size());
+  const bool views_tile = output == Output::DepthInShading && views_tile_target(target, views);
   for (uint32_t v = 0; v < passes; ++v) {
     ViewSetup setup;
     setup.width = size.width;
@@ -547,7 +539,7 @@ FrameSync Renderer::record(VkCommandBuffer command_buffer, const RenderTarget& t
     if (output == Output::Direct) {
       pass.shade(views[v].viewport, !target.background);
     } else if (output == Output::DepthInShading) {
-      pass.shade_with_host_depth(target, views[v], v == 0, views_tile_target(target, views));
+      pass.shade_with_host_depth(target, views[v], v == 0, views_tile);
     } else {
       pass.shade({}, false);
       pass.present(target, views[v], v == 0);

@@ -189,6 +189,9 @@ struct detail::RendererImpl {
   // caller knows the slot's frame is done.
   void collect_slot(FrameSlot& slot, bool finished);
   // Binding 16: the target's scene colour (a view made for this frame), or the environment.
+  // A 2D_ARRAY view of `image`'s layers of the target (base_layer,
+  // layer_count) that lives as long as this frame's commands.
+  VkImageView frame_array_view(VkImage image, VkFormat format, vk::ImageAspectFlags aspect, const RenderTarget& target);
   void bind_scene_color(FrameSlot& slot, const RenderTarget& target);
   // Binding 17: the host's depth image (depth aspect, the target's layers)
   // when the shading pass reads it in place (`read`), else a placeholder.

@@ -67,6 +67,40 @@ RenderTarget color_target(const TestHost::Image& color) {
   return t;
 }
 
+// How the fluid reaches a host's colour and depth image.
+enum class Into {
+  PresentPass,    // plain attachments: the raster present pass
+  ShadingCopies,  // storage colour, depth that allows copies: the shading pass, the depth copied out and back
+  ShadingReads,   // ... and a sampled depth: the shading pass reads it in place, the depth copied back
+};
+
+// A host's kW x kH colour and D32 depth images, with the usage `into` needs.
+struct HostImages {
+  TestHost::Image color, depth;
+};
+HostImages host_images(TestHost& host, Into into) {
+  using U = vk::ImageUsageFlagBits;
+  const bool in_shading = into != Into::PresentPass;
+  const vk::ImageUsageFlags storage = in_shading ? U::eStorage : vk::ImageUsageFlags{};
+  const vk::ImageUsageFlags copy_in = in_shading ? U::eTransferDst : vk::ImageUsageFlags{};
+  const vk::ImageUsageFlags sampled = into == Into::ShadingReads ? U::eSampled : vk::ImageUsageFlags{};
+  return {host.image(kW, kH, vk::Format::eR8G8B8A8Unorm, U::eColorAttachment | U::eTransferSrc | storage),
+          host.image(kW, kH, vk::Format::eD32Sfloat, U::eDepthStencilAttachment | U::eTransferSrc | copy_in | sampled)};
+}
+// The target over them (as color_target(), the depth discarded before and
+// ready for read-back after), with the flags `into` allows.
+RenderTarget host_target(const HostImages& images, Into into) {
+  RenderTarget t = color_target(images.color);
+  t.depth_image = *images.depth.image;
+  t.depth_view = *images.depth.view;
+  t.depth_format = VK_FORMAT_D32_SFLOAT;
+  t.depth_layout_after = VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL;
+  t.color_storage = into != Into::PresentPass;
+  t.depth_transfer = into != Into::PresentPass;
+  t.depth_sampled = into == Into::ShadingReads;
+  return t;
+}
+
 // Two spheres of radius 0.4 at x = -1 and x = +1, 4 units in front of the camera.
 const std::vector<float> kTwoSpheres{-1, 0, 0, 1, 0, 0};
 constexpr float kRadius = 0.4f;
@@ -79,12 +113,6 @@ FluidOptions opaque() {
   return o;
 }
 
-// How the fluid reaches a host's colour and depth image.
-enum class Into {
-  PresentPass,    // plain attachments: the raster present pass
-  ShadingCopies,  // storage colour, depth that allows copies: the shading pass, the depth copied out and back
-  ShadingReads,   // ... and a sampled depth: the shading pass reads it in place, the depth copied back
-};
 // Reversed depth?  Into which way?
 class Occlusion : public ::testing::TestWithParam<std::tuple<bool, Into>> {};
 
@@ -102,29 +130,17 @@ TEST_P(Occlusion, HostDepthHidesTheFluidAndTheFluidHidesTheHost) {
     const Camera cam = front_camera();
     View view = camera_view(cam, {0, 0, kW, kH});
     if (!reversed) view.projection = standard_projection(cam.fov_deg, float(kW) / kH, 0.5f, 20.0f);
-    using U = vk::ImageUsageFlagBits;
-    const vk::ImageUsageFlags storage = in_shading ? U::eStorage : vk::ImageUsageFlags{};
-    const vk::ImageUsageFlags copy_in = in_shading ? U::eTransferDst : vk::ImageUsageFlags{};
-    const vk::ImageUsageFlags sampled = into == Into::ShadingReads ? U::eSampled : vk::ImageUsageFlags{};
-    TestHost::Image color = host.image(kW, kH, vk::Format::eR8G8B8A8Unorm, U::eColorAttachment | U::eTransferSrc | storage);
-    TestHost::Image depth =
-        host.image(kW, kH, vk::Format::eD32Sfloat, U::eDepthStencilAttachment | U::eTransferSrc | copy_in | sampled);
+    const HostImages images = host_images(host, into);
+    const TestHost::Image &color = images.color, &depth = images.depth;
     // The host's geometry: a wall in front of the left sphere (red), one
     // behind the right sphere (blue); the spheres span 3.6 .. 4.4 in depth.
     const float near_wall = depth_at(view.projection, 3.2f), far_wall = depth_at(view.projection, 4.8f);
     const vk::ClearColorValue red(std::array<float, 4>{1, 0, 0, 1}), blue(std::array<float, 4>{0, 0, 1, 1});
 
-    RenderTarget target = color_target(color);
+    RenderTarget target = host_target(images, into);
     target.color_layout_before = VK_IMAGE_LAYOUT_ATTACHMENT_OPTIMAL;
-    target.depth_image = *depth.image;
-    target.depth_view = *depth.view;
-    target.depth_format = VK_FORMAT_D32_SFLOAT;
     target.depth_layout_before = VK_IMAGE_LAYOUT_ATTACHMENT_OPTIMAL;
-    target.depth_layout_after = VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL;
     target.background = false;
-    target.color_storage = in_shading;
-    target.depth_transfer = in_shading;
-    target.depth_sampled = into == Into::ShadingReads;
     FrameSync sync;
     host.submit([&](vk::CommandBuffer c) {
       using S = vk::PipelineStageFlagBits2;
@@ -255,22 +271,13 @@ TEST(Embedding, AnUndefinedHostDepthOutsideTheViewEndsAtTheFarPlane) {
     const View view = camera_view(cam, {0, 0, w, kH});
     std::array<std::vector<uint32_t>, 2> depth_of, color_of;
     for (const bool in_shading : {false, true}) {
-      using U = vk::ImageUsageFlagBits;
-      const vk::ImageUsageFlags storage = in_shading ? U::eStorage : vk::ImageUsageFlags{};
-      const vk::ImageUsageFlags copy_in = in_shading ? U::eTransferDst : vk::ImageUsageFlags{};
-      TestHost::Image color = host.image(kW, kH, vk::Format::eR8G8B8A8Unorm, U::eColorAttachment | U::eTransferSrc | storage);
-      TestHost::Image depth = host.image(kW, kH, vk::Format::eD32Sfloat, U::eDepthStencilAttachment | U::eTransferSrc | copy_in);
-      RenderTarget target = color_target(color);
-      target.depth_image = *depth.image;
-      target.depth_view = *depth.view;
-      target.depth_format = VK_FORMAT_D32_SFLOAT;
-      target.depth_layout_after = VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL;
-      target.color_storage = in_shading;
-      target.depth_transfer = in_shading;
+      const Into into = in_shading ? Into::ShadingCopies : Into::PresentPass;
+      const HostImages images = host_images(host, into);
+      const RenderTarget target = host_target(images, into);
       host.submit([&](vk::CommandBuffer c) { renderer.record(static_cast<VkCommandBuffer>(c), target, {&view, 1}, FluidOptions{}, {}); });
       EXPECT_EQ(renderer.last_stats().passes.back().name, in_shading ? "depth out" : "present");
-      depth_of[in_shading] = host.read(depth, kW, kH);
-      color_of[in_shading] = host.read(color, kW, kH);
+      depth_of[in_shading] = host.read(images.depth, kW, kH);
+      color_of[in_shading] = host.read(images.color, kW, kH);
     }
     size_t fluid = 0, outside_not_far = 0, differs = 0;
     for (uint32_t y = 0; y < kH; ++y) {

@@ -35,8 +35,8 @@ struct RenderBenchOptions {
   // Synthetic frames in Morton order, one chunk row per block, as files
   // without LOD tiers are (default: tiered as `sluice convert` writes them).
   bool untiered = false;
-  bool present_pass = false;
-  bool keep_depth = false;      // with_depth: each frame starts from the last one's depth, as a host's drawn depth    // with_depth: a depth image without transfer usage, so the present pass draws into it
+  bool present_pass = false;    // with_depth: a depth image without transfer usage, so the present pass draws into it
+  bool keep_depth = false;      // with_depth: each frame starts from the last one's depth, as a host's drawn depth
   // Stereo rows instead of mono ones: two eyes of width x height each (64 mm
   // apart for data shown 1.5 m across), both in one pass into a 2-layer
   // target, against the same two views as two mono passes side by side.

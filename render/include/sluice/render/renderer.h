@@ -141,16 +141,17 @@ struct RenderTarget {
   // The depth image was created with VK_IMAGE_USAGE_TRANSFER_SRC_BIT and
   // TRANSFER_DST_BIT, and its format is D32, D32S8 or D24S8. Then, with
   // color_storage, the shading pass tests the fluid against the host's depth
-  // and writes colour and depth itself (the depth through a copy out of the
-  // image and one back: two copies of the viewport), and the present pass
-  // is skipped: on the H100 the two eyes of 2064x2208 cost 2.6 ms through
+  // and writes colour and depth itself, the depth going back by one copy of
+  // the viewport (and out by one first, unless depth_layout_before is
+  // UNDEFINED or depth_sampled), and the present pass is skipped: both eyes
+  // of 2064x2208 took 0.48 ms this way on the H100 against 2.61 ms through
   // the present pass (docs/measurements.md). The depth image is in GENERAL
   // layout while the recorded commands run; the stencil is left alone.
   bool depth_transfer = false;
   // With depth_transfer, the depth image was also created with
   // VK_IMAGE_USAGE_SAMPLED_BIT: the shading pass reads a D32 or D32S8 depth
-  // in place, and only the copy back remains (0.40 of 0.83 ms for both eyes of 2064x2208 on the
-  // H100 went to the copy out).
+  // in place instead of copying it out (0.40 ms of 0.83 for both eyes of
+  // 2064x2208 on the H100).
   bool depth_sampled = false;
   VkImageLayout depth_layout_before = VK_IMAGE_LAYOUT_UNDEFINED;
   VkImageLayout depth_layout_after = VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL;
