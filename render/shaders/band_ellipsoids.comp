@@ -13,7 +13,14 @@
 //    thickness (measured in docs/render.md, "Flat water"):
 //    A = R S^2 R^T (R: the ellipsoid's axes, S: its
 //    radii in units of the particle's radius), so that the ellipsoid of a
-//    particle of radius r at c is (x - c)^T A^-1 (x - c) <= r^2.
+//    particle of radius r at c is (x - c)^T A^-1 (x - c) <= r^2;
+// 2. its drawn centre, anew: along the ellipsoid's shortest axis n, the
+//    weighted mean height of the neighbours in its own layer (those whose
+//    offset along n is under kLayer side; the particle included), so the
+//    top layer of a resting surface draws at its layer's mean height and
+//    the two layers of a thin sheet stay apart; across n, step 0's shift.
+//    Step 0's whole-neighbourhood mean left each top particle half its own
+//    jitter in height (measured in docs/render.md, "Flat water").
 // Per particle 5 words (common.glsl's load_item reads them): A as 6 halves
 // in 3 words (xx xy, xz yy, yz zz), then the shift as 3 halves in units of
 // h = side / 2 (x y, z 0). The radii keep the sphere's volume (their
@@ -27,6 +34,10 @@ const uint kMinNeighbours = 6u;
 const float kMaxRatio = 4.0;
 const float kSmoothing = 0.5;       // lambda of the drawn centres (common.glsl's largest_shift)
 const float kShapeSmoothing = 0.9;  // lambda of the centres the shapes are taken from
+// Step 2's layer: neighbours whose offset along n is under kLayer.x sides
+// count fully, fading out by kLayer.y (0.4 and 0.7 particle spacings where
+// the side is 2 spacings: a lattice's next layer is 1 spacing away).
+const vec2 kLayer = vec2(0.15, 0.3);
 
 struct Moments {
   float w0;  // sum of weights
@@ -67,6 +78,23 @@ void gather_slot(uint s, vec3 p, vec3 centre, inout Moments m) {
   }
 }
 
+// Step 2: the neighbours in slot s of the particle at p, in its layer
+// across n: their weights (x) and weighted heights along n (y).
+void gather_layer(uint s, vec3 p, vec3 n, inout vec2 layer) {
+  if (s == kEmpty) return;
+  uint end = START(s);
+  for (uint k = end - COUNT(s); k < end; ++k) {
+    uint j = LIST(k);
+    if (marked(j)) continue;
+    vec3 d = particle(j) - p;
+    float q = length(d) / pc.side;
+    if (q >= 1.0) continue;
+    float height = dot(d, n);
+    float w = (1.0 - q * q * q) * (1.0 - smoothstep(kLayer.x, kLayer.y, abs(height) / pc.side));
+    layer += vec2(w, w * height);
+  }
+}
+
 // Eigenvalues and eigenvectors (columns) of symmetric `a`: cyclic Jacobi
 // rotations, each zeroing one off-diagonal pair.
 void eigen(mat3 a, out vec3 values, out mat3 vectors) {
@@ -92,6 +120,14 @@ void eigen(mat3 a, out vec3 values, out mat3 vectors) {
   }
   values = vec3(a[0][0], a[1][1], a[2][2]);
   vectors = v;
+}
+
+mat3 load_shape(uint i) {
+  Uints shapes = Uints(pc.shapes);
+  vec2 a = unpackHalf2x16(shapes.v[5u * i]);
+  vec2 b = unpackHalf2x16(shapes.v[5u * i + 1u]);
+  vec2 c = unpackHalf2x16(shapes.v[5u * i + 2u]);
+  return mat3(a.x, a.y, b.x, a.y, b.y, c.x, b.x, c.x, c.y);
 }
 
 void store_shape(uint i, mat3 a) {
@@ -137,9 +173,31 @@ void main() {
       continue;
     }
     vec3 p = particle(i);
-    vec3 centre = pc.step == 0u ? p : p + (kShapeSmoothing / kSmoothing) * shift_of(i);
     uint s = SLOT(i);
     uvec3 c = cell_of_key(key_of_slot(s, g), g);
+    if (pc.step == 2u) {
+      mat3 a = load_shape(i);
+      if (a == mat3(1.0)) continue;  // a sphere: no layer to keep to
+      vec3 values;
+      mat3 vectors;
+      eigen(a, values, vectors);
+      vec3 n = values.x <= min(values.y, values.z) ? vectors[0] : values.y <= values.z ? vectors[1] : vectors[2];
+      vec2 layer = vec2(0.0);
+      for (int dx = -1; dx <= 1; ++dx)
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dz = -1; dz <= 1; ++dz) {
+            ivec3 d = ivec3(dx, dy, dz);
+            gather_layer(d == ivec3(0) ? s : neighbour_slot(c, d, g), p, n, layer);
+          }
+      vec3 across = shift_of(i);
+      across -= dot(across, n) * n;
+      vec3 shift = across + (layer.y / layer.x) * n;
+      // At most common.glsl's largest_shift, h, which the cull allows for.
+      float most = 0.5 * pc.side;
+      store_shift(i, length(shift) > most ? shift * (most / length(shift)) : shift);
+      continue;
+    }
+    vec3 centre = pc.step == 0u ? p : p + (kShapeSmoothing / kSmoothing) * shift_of(i);
     Moments m = Moments(0.0, vec3(0.0), mat3(0.0), 0u);
     for (int dx = -1; dx <= 1; ++dx)
       for (int dy = -1; dy <= 1; ++dy)

@@ -115,9 +115,9 @@ void BandPasses::record(vk::CommandBuffer cmd, const BandRun& run, const std::fu
       cmd.bindPipeline(vk::PipelineBindPoint::eCompute, *pipelines_[p]);
       // Passes loop over their items in rounds, so any group count covers
       // them; over the slots for BandVoxels, one for BandGrid. The
-      // ellipsoids take two steps (band_ellipsoids.comp).
+      // ellipsoids take three steps (band_ellipsoids.comp).
       const uint32_t groups = s == Shader::BandGrid ? 1 : groups_for(s == Shader::BandVoxels ? capacity : n);
-      for (uint32_t step = 0; step < (s == Shader::BandEllipsoids ? 2u : 1u); ++step) {
+      for (uint32_t step = 0; step < (s == Shader::BandEllipsoids ? 3u : 1u); ++step) {
         if (step > 0) {
           push.step = step;
           cmd.pushConstants<BandPush>(*layout_, vk::ShaderStageFlagBits::eCompute, 0, push);

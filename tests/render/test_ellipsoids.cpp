@@ -3,9 +3,8 @@
 // with few neighbours is a sphere; inside a cubic lattice it is a sphere;
 // in a plane it is flattened along the plane's normal by the largest ratio
 // (radii 4^(1/3), 4^(1/3), 4^(1/3) / 4) and stays in it; on a lattice's
-// flat top it moves inward (Yu & Turk's smoothing of the centres); on a
-// dense line it is stretched
-// along it (16^(1/3), then 16^(1/3) / 4 twice). The GPU gives each shape
+// flat top it is drawn at its layer's height; on a dense line it is
+// stretched along it (16^(1/3), then 16^(1/3) / 4 twice). The GPU gives each shape
 // matrix in half precision; the test finds its axes in double. Tolerance
 // 2e-3 on radii (halves: 1e-3 relative on the squared radii), 1e-3 on the
 // cosine of axis directions; no validation message.
@@ -122,34 +121,41 @@ TEST(Ellipsoids, InsideACubicLatticeAParticleIsItsSphere) {
   for (float s : e[centre].shift) EXPECT_NEAR(s, 0.0f, 2e-3f * h) << "inside, the neighbours balance";
 }
 
-// Yu & Turk's smoothing: a particle on a lattice's top face is drawn moved
-// inward by 0.5 times its neighbours' weighted mean offset (computed here
-// in double).
-TEST(Ellipsoids, OnAFlatTopAParticleMovesInwardBySmoothing) {
+// The drawn centre keeps to the particle's layer: on a lattice's flat top
+// a particle stays where it is (the free surface is not pulled in), and one
+// raised out of its layer is drawn at its layer's weighted mean height
+// along the normal (computed here in double: the weights 1 - q^3 of the
+// distance in reaches 2h, times the layer's, full within 0.15 reaches of
+// the particle's height along the normal; the next layer, 1.2 h below, is
+// out of it); across the normal, by symmetry, it does not move.
+TEST(Ellipsoids, OnAFlatTopAParticleIsDrawnAtItsLayersHeight) {
   ValidationGuard guard;
-  const float h = 0.1f;
+  const float h = 0.1f, raised = 0.2f * h;
   std::vector<float> xyz;
   for (int x = 0; x < 9; ++x)
     for (int y = 0; y < 9; ++y)
       for (int z = 0; z < 5; ++z) xyz.insert(xyz.end(), {float(x) * h, float(y) * h, float(z) * h});
-  const auto e = band_classifier().ellipsoids(xyz, h);
   const size_t top = (4 * 9 + 4) * 5 + 4;
-  double sum_w = 0, mean[3] = {0, 0, 0};
+  const auto flat = band_classifier().ellipsoids(xyz, h);
+  for (float s : flat[top].shift) EXPECT_NEAR(s, 0.0f, 2e-3f * h) << "on an exact lattice its layer is its height";
+  EXPECT_LT(axes_of(flat[top].shape)[0].radius, 0.9) << "and flattened";
+
+  xyz[3 * top + 2] += raised;
+  const auto e = band_classifier().ellipsoids(xyz, h);
+  double sum_w = 0, sum_height = 0;
   for (size_t j = 0; j < xyz.size() / 3; ++j) {
     double d[3], r2 = 0;
     for (int a = 0; a < 3; ++a) d[a] = double(xyz[3 * j + size_t(a)]) - xyz[3 * top + size_t(a)], r2 += d[a] * d[a];
     const double q = std::sqrt(r2) / (2 * double(h));
-    if (q >= 1) continue;
-    const double w = 1 - q * q * q;
-    sum_w += w;
-    for (int a = 0; a < 3; ++a) mean[a] += w * d[a];
+    if (q >= 1 || std::abs(d[2]) > 0.15 * 2 * double(h)) continue;  // (no neighbour here is in the fade)
+    sum_w += 1 - q * q * q;
+    sum_height += (1 - q * q * q) * d[2];
   }
-  const double down = 0.5 * mean[2] / sum_w;
-  EXPECT_LT(down, -0.15 * h) << "the expectation itself: inward, by a good fraction of h";
+  const double down = sum_height / sum_w;
+  EXPECT_LT(down, -0.15 * h) << "the expectation itself: most of the way back to its layer";
   EXPECT_NEAR(e[top].shift[0], 0.0f, 2e-3f * h);
   EXPECT_NEAR(e[top].shift[1], 0.0f, 2e-3f * h);
   EXPECT_NEAR(e[top].shift[2], down, 2e-3 * h);
-  EXPECT_LT(axes_of(e[top].shape)[0].radius, 0.9) << "and flattened";
 }
 
 TEST(Ellipsoids, InAPlaneAParticleIsFlattenedAlongItsNormal) {

@@ -160,9 +160,9 @@ TEST(FlatWater, ARestingPoolOnAJitteredLattice) {
 }
 
 // The same pool drawn with anisotropic particles (RendererOptions::
-// anisotropic). The target is at most 2 degrees at 0.25 jitter;
-// today's ellipsoids give 2.29 against the spheres' 2.56 (docs/render.md
-// says what was tried), so the thresholds guard that.
+// anisotropic). The target is at most 2 degrees at 0.25 jitter; today's
+// ellipsoids give 1.71 against the spheres' 2.56 (docs/render.md says what
+// was tried on the way).
 TEST(FlatWater, ARestingPoolOfEllipsoidsIsFlatterThanOfSpheres) {
   ValidationGuard guard;
   const float window = 0.6f;
@@ -176,7 +176,7 @@ TEST(FlatWater, ARestingPoolOfEllipsoidsIsFlatterThanOfSpheres) {
               "0.25 spacing %.2f (%.2f; spheres %.2f), by 0.5 spacing %.2f (%.2f)\n",
               flat.size(), regular.mean, regular.p95, ellipsoids.mean, ellipsoids.p95, spheres.mean, rough.mean, rough.p95);
   EXPECT_LT(ellipsoids.mean, spheres.mean);
-  EXPECT_LT(ellipsoids.mean, 2.45);  // today 2.29
+  EXPECT_LE(ellipsoids.mean, 2.0);  // today 1.71
 }
 
 TEST(FlatWater, AThinSheetsThicknessAtTheLatticePeriod) {
@@ -202,7 +202,7 @@ TEST(FlatWater, AThinSheetOfEllipsoidsHasWeakerRibs) {
   std::printf("ribs, sheet of 2 layers: ellipsoids %.2f%%, spheres %.2f%% of the mean thickness\n", 100 * ellipsoids,
               100 * spheres);
   EXPECT_LT(ellipsoids, spheres);
-  EXPECT_LT(ellipsoids, 0.022);  // today 1.83%
+  EXPECT_LT(ellipsoids, 0.022);  // today 1.93%
 }
 
 }  // namespace
