@@ -1,5 +1,5 @@
 #version 460
-// Anisotropic particles (Yu & Turk 2013), after band_scatter, in two steps
+// Anisotropic particles (Yu & Turk 2013), after band_scatter, in three steps
 // (pc.step) over the particles within one voxel side of each (its voxel's
 // list and the 26 around it), weighted 1 - (r / side)^3 by their distance:
 // 0. its centre's shift: Yu & Turk's smoothing of the centres,
@@ -28,6 +28,10 @@
 // most kMaxRatio^(2/3) = common.glsl's kLongestAxis), and a particle with
 // fewer than kMinNeighbours near it stays a sphere (A = I, no shift).
 // Entries marked in pc.marks (blobs) are neither shaped nor neighbours.
+// The sums over the neighbours are kept in 64-bit fixed point: the order
+// of a voxel's list follows the scatter's atomics, and float sums in that
+// order made two draws of one frame differ in the last bits.
+#extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 #include "band.glsl"
 
 const uint kMinNeighbours = 6u;
@@ -39,11 +43,19 @@ const float kShapeSmoothing = 0.9;  // lambda of the centres the shapes are take
 // the side is 2 spacings: a lattice's next layer is 1 spacing away).
 const vec2 kLayer = vec2(0.15, 0.3);
 
+// Fixed point: 2^24 units per voxel side (offsets) or side^2 (their
+// products); a neighbour's terms are at most 9 side^2, so 6e10 of them fit.
+const float kFixed = 16777216.0;
+int64_t to_fixed(float v) { return int64_t(round(v * kFixed)); }
+i64vec3 to_fixed(vec3 v) { return i64vec3(round(v * kFixed)); }
+vec3 from_fixed(i64vec3 v) { return vec3(v) / kFixed; }
+
 struct Moments {
-  float w0;  // sum of weights
-  vec3 w1;   // weighted sum of offsets from the particle
-  mat3 w2;   // weighted sum of their outer products
-  uint near; // particles within reach, the particle itself included
+  int64_t w0;   // sum of weights
+  i64vec3 w1;   // weighted sum of offsets from the particle, in sides
+  i64vec3 w2d;  // weighted sum of their outer products: the diagonal (xx, yy, zz)
+  i64vec3 w2o;  // and the rest (xy, xz, yz)
+  uint near;    // particles within reach, the particle itself included
 };
 
 bool marked(uint i) {
@@ -70,17 +82,18 @@ void gather_slot(uint s, vec3 p, vec3 centre, inout Moments m) {
     float q = length(x - p) / pc.side;
     if (q >= 1.0) continue;
     float w = 1.0 - q * q * q;
-    vec3 d = (pc.step == 0u ? x : x + (kShapeSmoothing / kSmoothing) * shift_of(j)) - centre;
-    m.w0 += w;
-    m.w1 += w * d;
-    m.w2 += w * outerProduct(d, d);
+    vec3 d = ((pc.step == 0u ? x : x + (kShapeSmoothing / kSmoothing) * shift_of(j)) - centre) / pc.side;
+    m.w0 += to_fixed(w);
+    m.w1 += to_fixed(w * d);
+    m.w2d += to_fixed(w * d * d);
+    m.w2o += to_fixed(w * d.xxy * d.yzz);
     m.near += 1u;
   }
 }
 
 // Step 2: the neighbours in slot s of the particle at p, in its layer
-// across n: their weights (x) and weighted heights along n (y).
-void gather_layer(uint s, vec3 p, vec3 n, inout vec2 layer) {
+// across n: their weights (x) and weighted heights along n in sides (y).
+void gather_layer(uint s, vec3 p, vec3 n, inout i64vec2 layer) {
   if (s == kEmpty) return;
   uint end = START(s);
   for (uint k = end - COUNT(s); k < end; ++k) {
@@ -89,9 +102,9 @@ void gather_layer(uint s, vec3 p, vec3 n, inout vec2 layer) {
     vec3 d = particle(j) - p;
     float q = length(d) / pc.side;
     if (q >= 1.0) continue;
-    float height = dot(d, n);
-    float w = (1.0 - q * q * q) * (1.0 - smoothstep(kLayer.x, kLayer.y, abs(height) / pc.side));
-    layer += vec2(w, w * height);
+    float height = dot(d, n) / pc.side;
+    float w = (1.0 - q * q * q) * (1.0 - smoothstep(kLayer.x, kLayer.y, abs(height)));
+    layer += i64vec2(to_fixed(w), to_fixed(w * height));
   }
 }
 
@@ -182,7 +195,7 @@ void main() {
       mat3 vectors;
       eigen(a, values, vectors);
       vec3 n = values.x <= min(values.y, values.z) ? vectors[0] : values.y <= values.z ? vectors[1] : vectors[2];
-      vec2 layer = vec2(0.0);
+      i64vec2 layer = i64vec2(0);
       for (int dx = -1; dx <= 1; ++dx)
         for (int dy = -1; dy <= 1; ++dy)
           for (int dz = -1; dz <= 1; ++dz) {
@@ -191,14 +204,14 @@ void main() {
           }
       vec3 across = shift_of(i);
       across -= dot(across, n) * n;
-      vec3 shift = across + (layer.y / layer.x) * n;
+      vec3 shift = across + (float(layer.y) / float(layer.x) * pc.side) * n;
       // At most common.glsl's largest_shift, h, which the cull allows for.
       float most = 0.5 * pc.side;
       store_shift(i, length(shift) > most ? shift * (most / length(shift)) : shift);
       continue;
     }
     vec3 centre = pc.step == 0u ? p : p + (kShapeSmoothing / kSmoothing) * shift_of(i);
-    Moments m = Moments(0.0, vec3(0.0), mat3(0.0), 0u);
+    Moments m = Moments(0l, i64vec3(0), i64vec3(0), i64vec3(0), 0u);
     for (int dx = -1; dx <= 1; ++dx)
       for (int dy = -1; dy <= 1; ++dy)
         for (int dz = -1; dz <= 1; ++dz) {
@@ -206,11 +219,14 @@ void main() {
           gather_slot(d == ivec3(0) ? s : neighbour_slot(c, d, g), p, centre, m);
         }
     bool shaped = m.near - 1u >= kMinNeighbours;
-    vec3 mean = m.w1 / m.w0;
+    float w0 = float(m.w0) / kFixed;
+    vec3 mean = from_fixed(m.w1) / w0;
     if (pc.step == 0u) {
-      store_shift(i, shaped ? kSmoothing * mean : vec3(0.0));
+      store_shift(i, shaped ? kSmoothing * pc.side * mean : vec3(0.0));
     } else {
-      store_shape(i, shaped ? shape_of(m.w2 / m.w0 - outerProduct(mean, mean)) : mat3(1.0));
+      vec3 diagonal = from_fixed(m.w2d) / w0, rest = from_fixed(m.w2o) / w0;
+      mat3 second = mat3(diagonal.x, rest.x, rest.y, rest.x, diagonal.y, rest.z, rest.y, rest.z, diagonal.z);
+      store_shape(i, shaped ? shape_of(second - outerProduct(mean, mean)) : mat3(1.0));
     }
   }
 }
