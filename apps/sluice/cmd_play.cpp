@@ -229,7 +229,7 @@ render::StreamOptions stream_options(const PlayOptions& o, const ViewSettings& v
   so.layers = layer_set(o.layers);
   so.decode = decode_site(o.decode);
   so.up = v.up_override();
-  so.renderer.anisotropic = v.anisotropic();
+  v.apply_particles(so.renderer);
   return so;
 }
 #endif

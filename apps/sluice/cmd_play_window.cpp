@@ -58,7 +58,7 @@ namespace {
 struct Player {
   const io::ContainerReader* reader = nullptr;
   io::LayerSet layers = io::LayerSet::surface();  // --layers
-  bool ellipsoids = false;                         // --particles ellipsoids
+  render::RendererOptions particles;               // --particles: its anisotropic and limit
   runtime::Player* playback = nullptr;
   render::Camera camera, home;
   render::FluidOptions fluid;
@@ -199,8 +199,8 @@ void draw_hud(Player& p, const std::string& file) {
                 (unsigned long long)p.frames - 1, runtime::state_name(p.playback->state()));
   }
   ImGui::TextUnformatted(("layers: " + layers_text(*p.reader, p.frame, p.layers)).c_str());
-  ImGui::TextUnformatted(p.ellipsoids ? "particles: ellipsoids (anisotropic, from their neighbours)"
-                                      : "particles: spheres (--particles ellipsoids: anisotropic)");
+  ImGui::TextUnformatted(
+      ("particles: " + particles_text(p.particles, p.reader->index().frames[p.frame].particle_count)).c_str());
   if (!p.classification.empty()) ImGui::TextUnformatted(("  newest frame " + p.classification).c_str());
   if (ImGui::Button(p.playing() ? "Pause" : "Play")) p.toggle_play();
   ImGui::SameLine();
@@ -312,7 +312,7 @@ void run_play_window(const PlayOptions& o, const WindowPlayOptions& wo) {
   Player p;
   p.reader = &reader;
   p.layers = so.layers;
-  p.ellipsoids = so.renderer.anisotropic;
+  p.particles = so.renderer;
   p.frames = reader.frame_count();
   p.frame = std::min<uint64_t>(o.start, p.frames - 1);
   p.hud = !wo.no_hud;

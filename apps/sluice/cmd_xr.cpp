@@ -90,7 +90,12 @@ void run_xr(const XrOptions& o) {
   sopts.clock = &clock;
   render::Stream stream(session.context(), p.file, sopts);
   const render::SceneInfo& scene = stream.scene();
-  if (!p.quiet && sopts.renderer.anisotropic) std::fprintf(stderr, "xr: particles as ellipsoids (anisotropic)\n");
+  if (!p.quiet) {
+    std::fprintf(stderr, "xr: particles as %s\n",
+                 particles_text(sopts.renderer, stream.reader().index().frames.empty()
+                                                    ? 0
+                                                    : stream.reader().index().frames[0].particle_count).c_str());
+  }
   o.view.apply_environment(stream.renderer());
   render::LodOptions lod = o.view.lod_options();
   stream.set_look(o.view.fluid_options(scene), lod);

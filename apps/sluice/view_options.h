@@ -28,16 +28,18 @@ struct ViewSettings {
   bool no_ground = false, full_res_thickness = false;
   std::string lod_mode = "off";
   std::string environment;  // equirectangular PNG; empty: the procedural sky
-  std::string particles = "spheres";  // --particles: spheres or ellipsoids (anisotropic)
+  std::string particles = "auto";  // --particles: auto, spheres or ellipsoids (anisotropic)
   render::LodOptions lod;
 
   render::ContextOptions context_options() const;
   // Throws std::runtime_error on a bad name (display, filter, attribute, ...).
   render::FluidOptions fluid_options(const render::SceneInfo& scene) const;
   render::LodOptions lod_options() const;
-  // --particles ellipsoids (render::RendererOptions::anisotropic); throws
-  // std::runtime_error on another word than spheres or ellipsoids.
-  bool anisotropic() const;
+  // --particles into the renderer's anisotropic and anisotropic_limit
+  // (auto: ellipsoids for frames of up to render::kAutoAnisotropicLimit
+  // particles); throws std::runtime_error on another word than auto,
+  // spheres or ellipsoids.
+  void apply_particles(render::RendererOptions& options) const;
   // The default framing (in `free`, the part of the image left uncovered)
   // or --camera.
   render::Camera camera(const render::SceneInfo& scene, float aspect, render::ScreenRect free = {}) const;
@@ -50,6 +52,10 @@ struct ViewSettings {
 };
 
 void add_view_options(CLI::App& cmd, ViewSettings& v);
+
+// How a frame of `frame_particles` particles is drawn under `options`:
+// "ellipsoids", "spheres", or either with auto's reason.
+std::string particles_text(const render::RendererOptions& options, uint64_t frame_particles);
 
 // "1920x1080" -> {1920, 1080}; throws std::runtime_error naming --size otherwise.
 std::pair<uint32_t, uint32_t> parse_size(const std::string& text);

@@ -25,12 +25,12 @@ __all__ = ["open", "convert", "export", "render", "Sequence", "Frame", "FrameStr
 _last_renderer = None  # (key, Renderer): consecutive renders of one file reuse it
 
 
-def render(seq, frame, size=(960, 540), *, camera=None, layers="surface", color=None, particles="spheres", **look):
+def render(seq, frame, size=(960, 540), *, camera=None, layers="surface", color=None, particles="auto", **look):
     """Draws frame `frame` of `seq` (a Sequence or a path) as liquid.
 
     Returns a uint8 RGBA array (height, width, 4). `camera` is None (frame
     the data) or a string in `sluice render --camera` form; `color` names an
-    attribute to colour by; `particles` is 'spheres' or 'ellipsoids'
+    attribute to colour by; `particles` is 'auto', 'spheres' or 'ellipsoids'
     (anisotropic); `look` takes Renderer.render's keywords: lod_level,
     display, ground. Consecutive calls for one file, size, layers, colour
     and particles reuse one sluice.Renderer; make Renderers yourself to keep

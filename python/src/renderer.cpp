@@ -40,10 +40,15 @@ io::LayerSet layer_set(const std::string& layers) {
   throw py::value_error("layers must be 'surface' (the narrow band and blobs, drawn by default) or 'all', not '" + layers + "'");
 }
 
-bool anisotropic(const std::string& particles) {
-  if (particles == "spheres") return false;
-  if (particles == "ellipsoids") return true;
-  throw py::value_error("particles must be 'spheres' (the default) or 'ellipsoids' (anisotropic), not '" + particles + "'");
+// As the apps' --particles: auto draws ellipsoids for frames of up to
+// render::kAutoAnisotropicLimit particles, spheres above.
+void apply_particles(const std::string& particles, render::RendererOptions& options) {
+  if (particles != "auto" && particles != "spheres" && particles != "ellipsoids") {
+    throw py::value_error("particles must be 'auto' (the default), 'spheres' or 'ellipsoids' (anisotropic), not '" +
+                          particles + "'");
+  }
+  options.anisotropic = particles != "spheres";
+  options.anisotropic_limit = particles == "auto" ? render::kAutoAnisotropicLimit : 0;
 }
 
 class Renderer {
@@ -65,7 +70,7 @@ class Renderer {
     so.player.on_error = runtime::ErrorPolicy::Stop;
     so.layers = layer_set(layers);
     so.motion = render::ViewMotion::Fixed;
-    so.renderer.anisotropic = anisotropic(particles);
+    apply_particles(particles, so.renderer);
     stream_ = std::make_unique<render::Stream>(*context_, path, so);
     target_ = std::make_unique<render::OffscreenTarget>(*context_, size.first, size.second);
     if (color_) {
@@ -205,15 +210,16 @@ void bind_renderer(py::module_& m) {
 
 color: an attribute to colour by (viridis over the file's range); fixed
 for the Renderer's life, since frames decode only that attribute.
-particles: 'spheres', or 'ellipsoids': each particle flattened and
-stretched along its neighbours (anisotropic, `sluice render --particles`).
+particles: 'auto' (ellipsoids for frames of up to 2M particles, spheres
+above), 'spheres', or 'ellipsoids': each particle flattened and stretched
+along its neighbours (anisotropic, `sluice render --particles`).
 Uses the first discrete GPU, else an integrated one, else lavapipe (CPU).
 One Vulkan context is shared by every Renderer of the process.
 )")
       .def(py::init<const std::filesystem::path&, std::pair<uint32_t, uint32_t>, const std::string&, std::optional<std::string>,
                     const std::string&>(),
            py::arg("path"), py::kw_only(), py::arg("size") = std::pair<uint32_t, uint32_t>{960, 540},
-           py::arg("layers") = "surface", py::arg("color") = py::none(), py::arg("particles") = "spheres")
+           py::arg("layers") = "surface", py::arg("color") = py::none(), py::arg("particles") = "auto")
       .def("render", &Renderer::draw, kRenderDoc, py::arg("i"), py::kw_only(), py::arg("camera") = py::none(),
            py::arg("lod_level") = py::none(), py::arg("display") = "transparent", py::arg("ground") = true)
       .def_property_readonly("color", &Renderer::color, "The attribute coloured by, or None.")

@@ -45,16 +45,18 @@ def test_frames_colour_and_lod_change_the_picture(renderer, converted):
     np.testing.assert_array_equal(again, last)  # nothing left over from the other looks
 
 
-def test_ellipsoids_are_the_cli_picture_and_differ_from_spheres(renderer, converted, sluice_exe, tmp_path):
-    spheres = renderer.render(12)
+def test_auto_draws_the_samples_frames_as_ellipsoids_and_spheres_differ(renderer, converted, sluice_exe, tmp_path):
+    # particles='auto', the default: the sample's frames hold far fewer than 2M particles.
+    auto = renderer.render(12)
     ellipsoids = sluice.Renderer(converted, size=(320, 180), particles="ellipsoids")
-    img = ellipsoids.render(12, camera=renderer.camera)
-    assert np.abs(img.astype(int) - spheres.astype(int)).max() > 30
+    np.testing.assert_array_equal(ellipsoids.render(12, camera=renderer.camera), auto)
+    spheres = sluice.Renderer(converted, size=(320, 180), particles="spheres").render(12, camera=renderer.camera)
+    assert np.abs(auto.astype(int) - spheres.astype(int)).max() > 30
     out = tmp_path / "cli.png"
     subprocess.run([str(sluice_exe), "render", str(converted), "--frames", "12", "--size", "320x180", "-o", str(out),
-                    "--camera", renderer.camera, "--particles", "ellipsoids", "-q"], check=True)
+                    "--camera", renderer.camera, "--particles", "spheres", "-q"], check=True)
     cli = np.rint(matplotlib.image.imread(out) * 255).astype(np.uint8)
-    assert np.abs(cli.astype(int) - img.astype(int)).max() <= 2
+    assert np.abs(cli.astype(int) - spheres.astype(int)).max() <= 2
     with pytest.raises(ValueError, match="particles"):
         sluice.Renderer(converted, size=(64, 64), particles="cubes")
 

@@ -205,6 +205,12 @@ struct FrameSync {
   VkPipelineStageFlags2 wait_stages = VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT;
 };
 
+// The largest frame the apps' `--particles auto` (their default) draws as
+// ellipsoids (RendererOptions::anisotropic_limit): their once-a-frame pass
+// takes about 3 ms per million particles on an H100 (docs/render.md), so a
+// new frame of this size costs one stereo frame's time at 90 Hz at most.
+inline constexpr uint64_t kAutoAnisotropicLimit = 2'000'000;
+
 struct RendererOptions {
   uint32_t frames_in_flight = 2;  // see the contract above; 1..8
   // Keep each view's eye normals and depth for read_surface() (inspection.h; costs
@@ -231,6 +237,10 @@ struct RendererOptions {
   // a sphere, as do blobs. Needs a known particle size; otherwise, and for
   // a frame of more than 2^28 particles, particles stay spheres.
   bool anisotropic = false;
+  // With `anisotropic`: a frame of more particles than this is drawn as
+  // spheres, so the once-a-frame pass stays short (0: no limit but 2^28).
+  // The apps' `--particles auto` sets kAutoAnisotropicLimit.
+  uint64_t anisotropic_limit = 0;
 };
 
 namespace detail {
