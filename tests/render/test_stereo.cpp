@@ -161,6 +161,34 @@ INSTANTIATE_TEST_SUITE_P(Render, Stereo,
 // One picture through both splat paths (compute: per-pixel atomics; raster:
 // point sprites and the depth test), mono, spheres and ellipsoids: the same
 // fluid pixels and depth (to 1e-5 relative) and nearly the same colour.
+// RendererOptions::anisotropic_limit (the apps' --particles auto): a frame
+// of more particles than the limit is drawn as spheres, bit for bit; one at
+// the limit as ellipsoids.
+TEST(Anisotropic, AFrameOverTheLimitIsDrawnAsSpheres) {
+  testing::TestHost host;
+  {
+    Context context(host.handles());
+    const SyntheticFluid f = synthetic_fluid(30000);
+    const Camera cam = Camera::framing(f.scene.bounds, Vec3{0, 0, 1}, float(kW) / kH);
+    const std::array<View, 1> view{camera_view(cam, {0, 0, kW, kH})};
+    auto draw = [&](bool anisotropic, uint64_t limit) {
+      RendererOptions options;
+      options.anisotropic = anisotropic;
+      options.anisotropic_limit = limit;
+      Renderer renderer(context, f.scene, options);
+      upload_synthetic(renderer, f);
+      return draw_into_host(host, renderer, view, {}, {}).color[0];
+    };
+    const uint64_t n = f.particles;
+    const auto spheres = draw(false, 0), over = draw(true, n - 1);
+    const auto ellipsoids = draw(true, n), unlimited = draw(true, 0);
+    EXPECT_EQ(over, spheres) << "over the limit";
+    EXPECT_EQ(ellipsoids, unlimited) << "at the limit, as without one";
+    EXPECT_LT(psnr(ellipsoids, spheres), 60.0) << "the expectation itself: ellipsoids look different";
+  }
+  EXPECT_EQ(host.errors.load(), 0) << (host.messages.empty() ? "" : host.messages[0]);
+}
+
 TEST(Anisotropic, ComputeAndRasterSplattingDrawTheSameEllipsoids) {
   testing::TestHost host;
   {
