@@ -141,7 +141,7 @@ void add_view_options(CLI::App& cmd, ViewSettings& v) {
                  "ellipsoids: each particle flattened and stretched along its neighbours (anisotropic, Yu & Turk\n"
                  "2013), so resting water shades flat; costs a pass once per frame (about 3 ms per million particles\n"
                  "on an H100) and 20 bytes a particle. spheres: every particle round. auto: ellipsoids for frames of\n"
-                 "up to 2M particles, spheres above")
+                 "up to " + std::to_string(render::kAutoAnisotropicLimit / 1'000'000) + "M particles, spheres above")
       ->capture_default_str()
       ->group(look);
   cmd.add_option("--splat", v.splat, "Sphere splatting: compute (atomics), raster (point sprites) or auto (raster on CPU devices)")
