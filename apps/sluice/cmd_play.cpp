@@ -229,7 +229,7 @@ render::StreamOptions stream_options(const PlayOptions& o, const ViewSettings& v
   so.layers = layer_set(o.layers);
   so.decode = decode_site(o.decode);
   so.up = v.up_override();
-  v.apply_particles(so.renderer);
+  render::apply_particles(v.particles, so.renderer);
   return so;
 }
 #endif

@@ -58,7 +58,7 @@ void run_play_gpu(const PlayOptions& o, const WindowPlayOptions& w) {
                  o.file.c_str(), context.device().name.c_str(), context.device().type.c_str(), width, height,
                  (unsigned long long)reader.frame_count(), player.frame_rate(), display_hz,
                  runtime::end_mode_name(so.player.end), gpu_decode ? "GPU" : "CPU",
-                 particles_text(so.renderer, reader.index().frames.empty() ? 0 : reader.index().frames[0].particle_count).c_str());
+                 particles_text(so.renderer, reader, 0).c_str());
   }
 
   using Steady = std::chrono::steady_clock;

@@ -200,7 +200,7 @@ void draw_hud(Player& p, const std::string& file) {
   }
   ImGui::TextUnformatted(("layers: " + layers_text(*p.reader, p.frame, p.layers)).c_str());
   ImGui::TextUnformatted(
-      ("particles: " + particles_text(p.particles, p.reader->index().frames[p.frame].particle_count)).c_str());
+      ("particles: " + particles_text(p.particles, *p.reader, p.frame)).c_str());
   if (!p.classification.empty()) ImGui::TextUnformatted(("  newest frame " + p.classification).c_str());
   if (ImGui::Button(p.playing() ? "Pause" : "Play")) p.toggle_play();
   ImGui::SameLine();

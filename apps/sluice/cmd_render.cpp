@@ -70,7 +70,7 @@ void run_render(const RenderCommand& o, const ViewSettings& v) {
   so.decode = decode_site(o.decode);
   so.motion = render::ViewMotion::Fixed;
   so.up = v.up_override();
-  v.apply_particles(so.renderer);
+  render::apply_particles(v.particles, so.renderer);
   render::Stream stream(context, input.path(), so);
   const io::ContainerReader& reader = stream.reader();
   // A list (0,25,50) plays every frame between its first and last and draws those listed.
@@ -104,7 +104,7 @@ void run_render(const RenderCommand& o, const ViewSettings& v) {
                  o.input.c_str(), (unsigned long long)first, (unsigned long long)last, width, height,
                  context.device().name.c_str(), context.device().type.c_str(), camera.to_string().c_str(),
                  layers_text(reader, first, so.layers).c_str(),
-                 particles_text(so.renderer, reader.index().frames[first].particle_count).c_str());
+                 particles_text(so.renderer, reader, first).c_str());
   }
 
   std::unique_ptr<render::VideoWriter> writer;

@@ -91,10 +91,7 @@ void run_xr(const XrOptions& o) {
   render::Stream stream(session.context(), p.file, sopts);
   const render::SceneInfo& scene = stream.scene();
   if (!p.quiet) {
-    std::fprintf(stderr, "xr: particles as %s\n",
-                 particles_text(sopts.renderer, stream.reader().index().frames.empty()
-                                                    ? 0
-                                                    : stream.reader().index().frames[0].particle_count).c_str());
+    std::fprintf(stderr, "xr: particles as %s\n", particles_text(sopts.renderer, stream.reader(), 0).c_str());
   }
   o.view.apply_environment(stream.renderer());
   render::LodOptions lod = o.view.lod_options();

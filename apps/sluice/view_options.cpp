@@ -65,18 +65,12 @@ render::LodOptions ViewSettings::lod_options() const {
   return l;
 }
 
-void ViewSettings::apply_particles(render::RendererOptions& options) const {
-  if (particles != "auto" && particles != "spheres" && particles != "ellipsoids") {
-    throw std::runtime_error("--particles " + particles + ": say auto, spheres or ellipsoids");
-  }
-  options.anisotropic = particles != "spheres";
-  options.anisotropic_limit = particles == "auto" ? render::kAutoAnisotropicLimit : 0;
-}
-
-std::string particles_text(const render::RendererOptions& options, uint64_t frame_particles) {
+std::string particles_text(const render::RendererOptions& options, const io::ContainerReader& reader, uint64_t frame) {
   if (!options.anisotropic) return "spheres";
   if (options.anisotropic_limit == 0) return "ellipsoids";
   const std::string limit = std::to_string(options.anisotropic_limit / 1'000'000) + "M";
+  const auto& frames = reader.index().frames;
+  const uint64_t frame_particles = frame < frames.size() ? frames[frame].particle_count : 0;
   return frame_particles <= options.anisotropic_limit
              ? "ellipsoids (auto: up to " + limit + " particles a frame)"
              : "spheres (auto: more than " + limit + " particles a frame; --particles ellipsoids draws them)";

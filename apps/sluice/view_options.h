@@ -10,6 +10,7 @@
 #include <utility>
 #include <vector>
 
+#include "sluice/io/reader.h"
 #include "sluice/render/camera.h"
 #include "sluice/render/context.h"
 #include "sluice/render/frame.h"
@@ -35,11 +36,6 @@ struct ViewSettings {
   // Throws std::runtime_error on a bad name (display, filter, attribute, ...).
   render::FluidOptions fluid_options(const render::SceneInfo& scene) const;
   render::LodOptions lod_options() const;
-  // --particles into the renderer's anisotropic and anisotropic_limit
-  // (auto: ellipsoids for frames of up to render::kAutoAnisotropicLimit
-  // particles); throws std::runtime_error on another word than auto,
-  // spheres or ellipsoids.
-  void apply_particles(render::RendererOptions& options) const;
   // The default framing (in `free`, the part of the image left uncovered)
   // or --camera.
   render::Camera camera(const render::SceneInfo& scene, float aspect, render::ScreenRect free = {}) const;
@@ -53,9 +49,9 @@ struct ViewSettings {
 
 void add_view_options(CLI::App& cmd, ViewSettings& v);
 
-// How a frame of `frame_particles` particles is drawn under `options`:
-// "ellipsoids", "spheres", or either with auto's reason.
-std::string particles_text(const render::RendererOptions& options, uint64_t frame_particles);
+// How `reader`'s frame `frame` is drawn under `options` (render::
+// apply_particles): "ellipsoids", "spheres", or either with auto's reason.
+std::string particles_text(const render::RendererOptions& options, const io::ContainerReader& reader, uint64_t frame);
 
 // "1920x1080" -> {1920, 1080}; throws std::runtime_error naming --size otherwise.
 std::pair<uint32_t, uint32_t> parse_size(const std::string& text);

@@ -40,16 +40,6 @@ io::LayerSet layer_set(const std::string& layers) {
   throw py::value_error("layers must be 'surface' (the narrow band and blobs, drawn by default) or 'all', not '" + layers + "'");
 }
 
-// As the apps' --particles: auto draws ellipsoids for frames of up to
-// render::kAutoAnisotropicLimit particles, spheres above.
-void apply_particles(const std::string& particles, render::RendererOptions& options) {
-  if (particles != "auto" && particles != "spheres" && particles != "ellipsoids") {
-    throw py::value_error("particles must be 'auto' (the default), 'spheres' or 'ellipsoids' (anisotropic), not '" +
-                          particles + "'");
-  }
-  options.anisotropic = particles != "spheres";
-  options.anisotropic_limit = particles == "auto" ? render::kAutoAnisotropicLimit : 0;
-}
 
 class Renderer {
  public:
@@ -70,7 +60,11 @@ class Renderer {
     so.player.on_error = runtime::ErrorPolicy::Stop;
     so.layers = layer_set(layers);
     so.motion = render::ViewMotion::Fixed;
-    apply_particles(particles, so.renderer);
+    try {
+      render::apply_particles(particles, so.renderer);
+    } catch (const sluice::Error& e) {
+      throw py::value_error(std::string("particles: ") + e.what());
+    }
     stream_ = std::make_unique<render::Stream>(*context_, path, so);
     target_ = std::make_unique<render::OffscreenTarget>(*context_, size.first, size.second);
     if (color_) {

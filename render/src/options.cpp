@@ -1,6 +1,8 @@
 // Option names (see options.h).
 #include "sluice/render/options.h"
 
+#include "sluice/render/renderer.h"
+
 #include "sluice/io/up_axis.h"
 #include "sluice/render/error.h"
 
@@ -70,6 +72,14 @@ SurfaceFilterMethod parse_filter_method(const std::string& s) {
   if (l == "narrow-range" || l == "narrowrange" || l == "nrf") return SurfaceFilterMethod::NarrowRange;
   if (l == "bilateral" || l == "bilateralgaussian" || l == "bilateral-gaussian") return SurfaceFilterMethod::BilateralGaussian;
   throw Error("unknown filter '" + s + "' (narrow-range, bilateral)");
+}
+
+void apply_particles(const std::string& name, RendererOptions& options) {
+  if (name != "auto" && name != "spheres" && name != "ellipsoids") {
+    throw Error("unknown particle look '" + name + "' (auto, spheres, ellipsoids)");
+  }
+  options.anisotropic = name != "spheres";
+  options.anisotropic_limit = name == "auto" ? kAutoAnisotropicLimit : 0;
 }
 
 LodMode parse_lod_mode(const std::string& s) {

@@ -303,9 +303,9 @@ uint64_t upload_frame(detail::RendererImpl& r, FrameSet& set, UploadSource parti
   // Anisotropic particles: their shapes, once the first draw computes them
   // (the same 4 GB limit: band_ellipsoids indexes them from the start).
   set.shaped = false;
-  const uint64_t limit = r.options.anisotropic_limit > 0 ? r.options.anisotropic_limit : BandPasses::kMaxParticles;
-  set.shape_eligible = r.band && r.options.anisotropic && n > 0 && n <= std::min(limit, BandPasses::kMaxParticles) &&
-                       shapes_bytes(n) < k4G;
+  const uint64_t limit = r.options.anisotropic_limit > 0 ? std::min(r.options.anisotropic_limit, BandPasses::kMaxParticles)
+                                                         : BandPasses::kMaxParticles;
+  set.shape_eligible = r.band && r.options.anisotropic && n > 0 && n <= limit && shapes_bytes(n) < k4G;
   if (set.shape_eligible) r.ensure(set.shapes, shapes_bytes(n), kDeviceUsage, MemoryKind::DeviceLocal);
   r.ensure(r.blocks, std::max<uint64_t>(blocks * 8, 16), kDeviceUsage, MemoryKind::DeviceLocal);
   r.ensure(r.draws, std::max<uint64_t>((n + room) * 8, 16), kDeviceUsage, MemoryKind::DeviceLocal);

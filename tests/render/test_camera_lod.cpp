@@ -7,6 +7,7 @@
 #include "sluice/render/camera.h"
 #include "sluice/render/lod.h"
 #include "sluice/render/options.h"
+#include "sluice/render/renderer.h"
 
 using namespace sluice::render;
 
@@ -141,4 +142,19 @@ TEST(Options, Names) {
   EXPECT_EQ(parse_filter_method("bilateral"), SurfaceFilterMethod::BilateralGaussian);
   EXPECT_EQ(parse_lod_mode("density"), LodMode::DensityPreserving);
   EXPECT_THROW(parse_display_mode("shiny"), sluice::render::Error);
+}
+
+// --particles and the Python module's particles=: the renderer's two fields.
+TEST(Options, ParticleLooks) {
+  RendererOptions o;
+  apply_particles("auto", o);
+  EXPECT_TRUE(o.anisotropic);
+  EXPECT_EQ(o.anisotropic_limit, kAutoAnisotropicLimit);
+  apply_particles("ellipsoids", o);
+  EXPECT_TRUE(o.anisotropic);
+  EXPECT_EQ(o.anisotropic_limit, 0u);
+  apply_particles("spheres", o);
+  EXPECT_FALSE(o.anisotropic);
+  EXPECT_THROW(apply_particles("cubes", o), sluice::render::Error);
+  EXPECT_THROW(apply_particles("", o), sluice::render::Error);
 }

@@ -33,6 +33,9 @@ double psnr(const std::vector<uint32_t>& a, const std::vector<uint32_t>& b) {
   return mse == 0 ? 99.0 : 10 * std::log10(255.0 * 255.0 / mse);
 }
 
+// A camera framing the synthetic frame, +z up, at the tests' aspect.
+Camera framing(const SyntheticFluid& f) { return Camera::framing(f.scene.bounds, Vec3{0, 0, 1}, float(kW) / kH); }
+
 // The left and right eye: a camera framing the data, moved sideways by
 // -/+ half the separation along its right axis.
 std::array<View, 2> eyes(const Camera& cam, float separation) {
@@ -104,7 +107,7 @@ TEST_P(Stereo, BothEyesInOnePassMatchEachEyeDrawnAlone) {
     options.anisotropic = anisotropic;
     Renderer renderer(context, f.scene, options);
     upload_synthetic(renderer, f);
-    const Camera cam = Camera::framing(f.scene.bounds, Vec3{0, 0, 1}, float(kW) / kH);
+    const Camera cam = framing(f);
     const std::array<View, 2> views = eyes(cam, 0.08f * f.scene.bounds.diagonal());
     FluidOptions fluid;
     fluid.splatting = splatting;
@@ -161,40 +164,12 @@ INSTANTIATE_TEST_SUITE_P(Render, Stereo,
 // One picture through both splat paths (compute: per-pixel atomics; raster:
 // point sprites and the depth test), mono, spheres and ellipsoids: the same
 // fluid pixels and depth (to 1e-5 relative) and nearly the same colour.
-// RendererOptions::anisotropic_limit (the apps' --particles auto): a frame
-// of more particles than the limit is drawn as spheres, bit for bit; one at
-// the limit as ellipsoids.
-TEST(Anisotropic, AFrameOverTheLimitIsDrawnAsSpheres) {
-  testing::TestHost host;
-  {
-    Context context(host.handles());
-    const SyntheticFluid f = synthetic_fluid(30000);
-    const Camera cam = Camera::framing(f.scene.bounds, Vec3{0, 0, 1}, float(kW) / kH);
-    const std::array<View, 1> view{camera_view(cam, {0, 0, kW, kH})};
-    auto draw = [&](bool anisotropic, uint64_t limit) {
-      RendererOptions options;
-      options.anisotropic = anisotropic;
-      options.anisotropic_limit = limit;
-      Renderer renderer(context, f.scene, options);
-      upload_synthetic(renderer, f);
-      return draw_into_host(host, renderer, view, {}, {}).color[0];
-    };
-    const uint64_t n = f.particles;
-    const auto spheres = draw(false, 0), over = draw(true, n - 1);
-    const auto ellipsoids = draw(true, n), unlimited = draw(true, 0);
-    EXPECT_EQ(over, spheres) << "over the limit";
-    EXPECT_EQ(ellipsoids, unlimited) << "at the limit, as without one";
-    EXPECT_LT(psnr(ellipsoids, spheres), 60.0) << "the expectation itself: ellipsoids look different";
-  }
-  EXPECT_EQ(host.errors.load(), 0) << (host.messages.empty() ? "" : host.messages[0]);
-}
-
 TEST(Anisotropic, ComputeAndRasterSplattingDrawTheSameEllipsoids) {
   testing::TestHost host;
   {
     Context context(host.handles());
     const SyntheticFluid f = synthetic_fluid(30000);
-    const Camera cam = Camera::framing(f.scene.bounds, Vec3{0, 0, 1}, float(kW) / kH);
+    const Camera cam = framing(f);
     const std::array<View, 1> view{camera_view(cam, {0, 0, kW, kH})};
     for (const bool anisotropic : {false, true}) {
       RendererOptions options;
@@ -233,6 +208,33 @@ TEST(Anisotropic, ComputeAndRasterSplattingDrawTheSameEllipsoids) {
   EXPECT_EQ(host.errors.load(), 0) << (host.messages.empty() ? "" : host.messages[0]);
 }
 
+// RendererOptions::anisotropic_limit (the apps' --particles auto): a frame
+// of more particles than the limit is drawn as spheres, bit for bit; one at
+// the limit as ellipsoids.
+TEST(Anisotropic, AFrameOverTheLimitIsDrawnAsSpheres) {
+  testing::TestHost host;
+  {
+    Context context(host.handles());
+    const SyntheticFluid f = synthetic_fluid(30000);
+    const std::array<View, 1> view{camera_view(framing(f), {0, 0, kW, kH})};
+    auto draw = [&](bool anisotropic, uint64_t limit) {
+      RendererOptions options;
+      options.anisotropic = anisotropic;
+      options.anisotropic_limit = limit;
+      Renderer renderer(context, f.scene, options);
+      upload_synthetic(renderer, f);
+      return draw_into_host(host, renderer, view, {}, {}).color[0];
+    };
+    const uint64_t n = f.particles;
+    const auto spheres = draw(false, 0), over = draw(true, n - 1);
+    const auto ellipsoids = draw(true, n), unlimited = draw(true, 0);
+    EXPECT_EQ(over, spheres) << "over the limit";
+    EXPECT_EQ(ellipsoids, unlimited) << "at the limit, as without one";
+    EXPECT_LT(psnr(ellipsoids, spheres), 60.0) << "the expectation itself: ellipsoids look different";
+  }
+  EXPECT_EQ(host.errors.load(), 0) << (host.messages.empty() ? "" : host.messages[0]);
+}
+
 // Both eyes in one pass into a host's colour and depth: the shading pass's
 // own depth test and write (images that allow storage and copies) give the
 // present pass's pixels and depth, in each layer.
@@ -243,7 +245,7 @@ TEST(Stereo, ShadingWritesTheHostsDepthAsThePresentPassDoes) {
     const SyntheticFluid f = synthetic_fluid(30000);
     Renderer renderer(context, f.scene);
     upload_synthetic(renderer, f);
-    const Camera cam = Camera::framing(f.scene.bounds, Vec3{0, 0, 1}, float(kW) / kH);
+    const Camera cam = framing(f);
     const std::array<View, 2> views = eyes(cam, 0.08f * f.scene.bounds.diagonal());
     for (const vk::Format format : {vk::Format::eD32Sfloat, vk::Format::eD24UnormS8Uint}) {
     const Drawn present = draw_into_host(host, renderer, views, FluidOptions{}, {}, false, format);

@@ -243,6 +243,12 @@ struct RendererOptions {
   uint64_t anisotropic_limit = 0;
 };
 
+// The particle look by name, as `--particles` and the Python module take
+// it, into `options`' anisotropic and anisotropic_limit: "spheres",
+// "ellipsoids", or "auto" (ellipsoids up to kAutoAnisotropicLimit particles
+// a frame). Throws render::Error listing the choices.
+void apply_particles(const std::string& name, RendererOptions& options);
+
 namespace detail {
 struct RendererImpl;  // defined in render/src, seen by no caller
 }  // namespace detail
