@@ -117,6 +117,8 @@ void add_bench(CLI::App& app) {
   vw->add_option("--read-threads", view->read_threads, "Threads reading a frame's pieces at once (default: the pipeline's)")
       ->check(CLI::Range(1, 64));
   vw->add_flag("!--pread", view->mapped_reads, "Read with pread instead of copying out of the file's mapping");
+  vw->add_flag("--direct", view->direct_io, "Read with O_DIRECT (the page cache bypassed; reads by the view are always\n"
+                                            "pread or O_DIRECT, never the mapping)");
   vw->callback([view, view_size, view_memory] {
 #if SLUICE_WITH_RENDER
     const auto x = view_size->find('x');

@@ -105,8 +105,9 @@ void print_json(const io::ContainerReader& r) {
   const auto& frames = r.index().frames;
   uint64_t particles = 0;
   for (const auto& f : frames) particles += f.count_in(io::LayerSet::particles());
-  std::printf("{\n  \"file\": %s,\n  \"format_version\": \"%u.%u\",\n  \"file_bytes\": %llu,\n", json_string(r.path()).c_str(),
-              h.version_major, h.version_minor, (unsigned long long)r.file_size());
+  std::printf("{\n  \"file\": %s,\n  \"format_version\": \"%u.%u\",\n  \"layout\": \"%s\",\n  \"file_bytes\": %llu,\n",
+              json_string(r.path()).c_str(), h.version_major, h.version_minor,
+              h.version_major >= 2 ? "coarse_to_fine" : "cells", (unsigned long long)r.file_size());
   std::printf("  \"position_coding\": \"%s\",\n  \"lod_source\": \"%s\",\n  \"lod_id_array\": %s,\n", coding_name(h.position_coding),
               h.lod_source == io::LodSource::IdHash ? "id_hash" : "particle_order", json_string(h.lod_id_array).c_str());
   std::printf("  \"particle_spacing\": %s,\n  \"particle_radius\": %s,\n  \"frame_rate\": %s,\n  \"source\": %s,\n",
@@ -166,7 +167,8 @@ void print_text(const io::ContainerReader& r, bool all_frames) {
   const double per = particles ? double(frame_bytes) / double(particles) : 0;
   const size_t decoded = io::decoded_particle_bytes(h.position_coding) + 2 * h.attributes.size();
   std::printf("%s\n", r.path().c_str());
-  std::printf("  format        %u.%u, %s positions, %s\n", h.version_major, h.version_minor,
+  std::printf("  format        %u.%u (%s), %s positions, %s\n", h.version_major, h.version_minor,
+              h.version_major >= 2 ? "frames ordered coarse to fine" : "each cell's tiers together",
               h.position_coding == io::PositionCoding::Quantized16 ? "16-bit quantized" : "float32 (lossless)",
               human_bytes(double(r.file_size())).c_str());
   std::printf("  source        %s\n", h.source.c_str());

@@ -1,3 +1,4 @@
+#include <fstream>
 #include "bounds.h"
 
 #include <fcntl.h>
@@ -163,6 +164,16 @@ double window_read_gbps(const std::string& path, uint64_t offset, uint64_t bytes
     ++rounds;
   } while (seconds_since(start) < min_seconds);
   return double(total.load()) / seconds_since(start) / 1e9;
+}
+
+uint64_t process_read_bytes() {
+  std::ifstream io("/proc/self/io");
+  std::string key;
+  uint64_t value = 0;
+  while (io >> key >> value) {
+    if (key == "read_bytes:") return value;
+  }
+  return 0;
 }
 
 }  // namespace sluice::bench

@@ -18,6 +18,11 @@ void drop_from_page_cache(const std::string& path, uint64_t offset, uint64_t byt
 // Share of those bytes the page cache holds now, 0..1 (mincore).
 double page_cache_share(const std::string& path, uint64_t offset, uint64_t bytes);
 
+// Bytes this process has had storage deliver so far (read_bytes of
+// /proc/self/io: page-cache misses it caused, readahead included, and
+// O_DIRECT reads); 0 where the kernel does not say.
+uint64_t process_read_bytes();
+
 enum class ReadMode { PageCache, BufferedCold, Direct };
 
 // pread of the range in 8 MiB pieces, in order, on `threads` threads taking

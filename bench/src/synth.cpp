@@ -130,6 +130,7 @@ SynthResult write_synthetic(const SynthOptions& o, const std::function<void(uint
   header.particle_spacing = o.spacing;
   header.particle_radius = o.spacing / 2;
   header.precision_bits = o.lossless ? 0 : o.precision_bits;
+  io::set_format_version(header, o.format_major);
   header.frame_rate = o.frame_rate;
   header.time_source = io::TimeSource::Step;
   header.up = io::UpAxis::PosY;  // the block's height runs along y

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <optional>
 #include <filesystem>
 #include <stdexcept>
 #include <thread>
@@ -127,6 +128,8 @@ render::DecodeSite decode_site(const std::string& s) {
 
 struct Run {
   uint64_t frames_shown = 0, frames_read = 0, bytes_read = 0, record_bytes = 0, refinements = 0;
+  uint64_t device_bytes = 0;  // what storage delivered meanwhile (process_read_bytes)
+  uint64_t runs = 0;          // the runs reads by demand took (PipelineStats::runs_read)
   double seconds = 0;
   double worst_psnr = std::numeric_limits<double>::infinity();
   double median_psnr = std::numeric_limits<double>::infinity();
@@ -173,6 +176,7 @@ class Bench {
     if (quality) ref = std::make_unique<Reference>(context_, scene_, reader_, o_);
     render::OffscreenTarget& target = quality ? checked_ : timed_;
     std::vector<double> db;
+    const uint64_t device_before = process_read_bytes();
     const auto t0 = Clock::now();
     Player p(*this, first, demand(steps.front().views, lod, by_view));
     p.player.play();
@@ -187,7 +191,9 @@ class Bench {
     }
     target.finish();
     const double seconds = std::chrono::duration<double>(Clock::now() - t0).count();
-    return finish(p, {}, seconds, uint64_t(steps.size()), db);
+    Run r = finish(p, {}, seconds, uint64_t(steps.size()), db);
+    r.device_bytes = process_read_bytes() - device_before;
+    return r;
   }
 
   // Paused on the overview at the bench's level, then the level raised to
@@ -198,6 +204,7 @@ class Bench {
     p.next_frame();  // paused: the start frame is shown once read
     const render::LodOptions full = lod_options(o_, 1.0f);
     const runtime::PlaybackStats before = p.player.stats();
+    const uint64_t device_before = process_read_bytes();
     const auto t0 = Clock::now();
     p.player.set_demand(demand(views, full, by_view));
     // Until the frame on screen holds what the view needs (its new read is
@@ -221,7 +228,9 @@ class Bench {
     }
     checked_.finish();
     const double seconds = std::chrono::duration<double>(Clock::now() - t0).count();
-    return finish(p, before, seconds, 1, db);
+    Run r = finish(p, before, seconds, 1, db);
+    r.device_bytes = process_read_bytes() - device_before;
+    return r;
   }
 
   const Path& path() const { return path_; }
@@ -272,6 +281,7 @@ class Bench {
     po.pipeline.demand = demand;
     if (o_.read_threads > 0) po.pipeline.read.threads = o_.read_threads;
     po.pipeline.read.mapped = o_.mapped_reads;
+    po.pipeline.read.direct_io = o_.direct_io;
     return po;
   }
 
@@ -295,6 +305,7 @@ class Bench {
     r.bytes_read = after.pipeline.bytes_read - before.pipeline.bytes_read;
     r.record_bytes = after.pipeline.record_bytes - before.pipeline.record_bytes;
     r.refinements = after.refinements - before.refinements;
+    r.runs = after.pipeline.runs_read - before.pipeline.runs_read;
     if (!db.empty()) {
       r.worst_psnr = *std::min_element(db.begin(), db.end());
       r.median_psnr = median(db);
@@ -337,14 +348,37 @@ void run_view_bench(const ViewBenchOptions& o) {
   const uint64_t frames = reader.frame_count();
   const uint64_t fly_first = o.steps % frames;
   const uint64_t pause_frame = (2 * uint64_t(o.steps)) % frames;
-  Table table({"segment", "read", "from", "frames/s", "read per frame", "of the records", "refinements"});
+  // The disk's bound, measured on this file in this run: large sequential
+  // O_DIRECT reads (8 MiB, 4 threads) of its first 2 GB, cache dropped.
+  std::optional<double> disk_gbps;
+  if (o.storage) {
+    const uint64_t probe = std::min<uint64_t>(std::filesystem::file_size(o.file), uint64_t(2) << 30);
+    disk_gbps = sequential_read_gbps(o.file, 0, probe, ReadMode::Direct, 0, 4);
+    if (disk_gbps) {
+      std::printf("disk: %s MB/s for sequential O_DIRECT reads of 8 MiB (4 threads, the first %s of this file)\n",
+                  num(*disk_gbps * 1e3, 0).c_str(), mb(double(probe)).c_str());
+    } else {
+      std::printf("disk: O_DIRECT refused here; no sequential bound measured\n");
+    }
+  }
+  Table table({"segment", "read", "from", "frames/s", "read per frame", "device per frame", "runs per frame",
+               "of the records", "of the disk's bound", "refinements"});
   const auto add = [&](Segment s, bool by_view, const char* from, const Run& r) {
-    const double per = r.frames_read ? double(r.bytes_read) / double(r.frames_read) : double(r.bytes_read);
+    const double read = r.frames_read ? double(r.frames_read) : 1.0;
+    const double per = double(r.bytes_read) / read;
+    const double device = double(r.device_bytes) / read;
     const double fps = s == Segment::Pause ? 0 : double(r.frames_shown) / r.seconds;
+    // The share of the disk's sequential rate the segment drew from it.
+    const bool cold = std::string(from).find("storage") != std::string::npos;
+    const std::string bound = cold && disk_gbps && r.seconds > 0
+                                  ? num(100.0 * double(r.device_bytes) / r.seconds / (*disk_gbps * 1e9), 0) + "%"
+                                  : "-";
     table.row({segment_name(s), by_view ? "by view" : "full", from,
                s == Segment::Pause ? num(r.seconds * 1e3, 1) + " ms to converge" : num(fps, 1),
                s == Segment::Pause ? mb(double(r.bytes_read)) + " (refinement)" : mb(per),
-               r.record_bytes ? num(100.0 * double(r.bytes_read) / double(r.record_bytes), 1) + "%" : "-",
+               s == Segment::Pause ? mb(double(r.device_bytes)) : mb(device) + (per > 0 && cold ? " (" + num(device / per, 2) + "x)" : ""),
+               by_view ? num(double(r.runs) / read, 1) : "-",
+               r.record_bytes ? num(100.0 * double(r.bytes_read) / double(r.record_bytes), 1) + "%" : "-", bound,
                std::to_string(r.refinements)});
   };
   const auto drop = [&] { drop_from_page_cache(o.file, 0, std::filesystem::file_size(o.file)); };

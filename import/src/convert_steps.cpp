@@ -143,6 +143,7 @@ FileHeader header_for(const ConvertOptions& o, const FrameSource& source, const 
   header.particle_spacing = o.spacing > 0 ? o.spacing : found_spacing;
   header.particle_radius = radius_for(o, header.particle_spacing, populated);
   header.precision_bits = o.lossless ? 0 : precision_bits_for(o.precision);
+  set_format_version(header, o.format_major);
   if (o.drop_outliers > 0 && !(header.particle_spacing > 0)) {
     throw Error({o.input}, "dropping outliers counts in particle spacings, and the spacing is unknown: give the spacing");
   }

@@ -57,7 +57,7 @@ fs::path user_cache_folder() {
 std::string cache_key(const std::string& input) {
   const auto source = open_source(input, {});
   std::ostringstream key;
-  key << "sluice cache 1, format 1." << io::kFormatMinor << "\nspec " << fs::absolute(input).lexically_normal().string() << "\nsettings attributes=all\n";
+  key << "sluice cache 1, format " << io::kFormatMajor << "." << io::kFormatMinor << "\nspec " << fs::absolute(input).lexically_normal().string() << "\nsettings attributes=all\n";
   const auto stat_line = [&](const std::string& path) {
     std::error_code ec;
     const auto size = fs::file_size(path, ec);

@@ -434,34 +434,175 @@ std::vector<EncodedChunk> keep_tiers_that_pay(std::vector<EncodedChunk> records,
   return out;
 }
 
-}  // namespace
 
-EncodedFrame encode_frame(const FrameInput& in, const FileHeader& header, const EncodeOptions& options) {
-  check_input(in, header);
-  EncodedFrame frame;
-  FrameHeader& fh = frame.header;
-  fh.time = in.time;
-  // Far particles (outliers.h) are chunked, and kept out of the frame's
-  // display bounds and of the narrow band's grid, on their own: among the
-  // rest they would widen a chunk's box, and so its quantization step.
-  const FarParticles far = find_far_particles(in.positions, header.particle_spacing);
-  fh.bounds = far.bulk;
-  frame.far = report_far(far, in.positions, false);
-  std::optional<FrameCopy> bulk;
-  if (!far.far.empty()) bulk.emplace(in, far.far);
-  const FrameInput& body = bulk ? bulk->input : in;
-  const size_t body_count = body.positions.size() / 3;
+// ---- Format 2.0: a frame ordered coarse to fine (docs/format.md, "Layout of a frame").
 
-  const uint32_t limit = std::clamp<uint32_t>(options.chunk_particles, 1, kMaxChunkParticles);
-  const float extent = chunk_extent_limit(header);
+// One set of a layer's particles chunked on its own (the bulk; far particles).
+struct MemberSet {
+  const FrameInput* in;
+  std::vector<uint32_t> ids;
+  std::vector<uint8_t> tiers;  // of each id
+};
+
+// Tiers first ... last written as one record (tiers under kLeastTierRecord
+// particles in the layer join the next).
+struct TierSpan {
+  uint8_t first, last;
+};
+
+// A blob's tier is written from its source centroid with twice the reader's
+// margin; its records' boxes are kept narrow enough that the decoded
+// centroid lies within 0.9e-3 of a side of the source: any cell the GPU may
+// find for it is then among those the bound looked at (lod.h).
+constexpr double kBlobTierMargin = 2e-3;
+constexpr float kBlobBoxVoxels = 100.f;  // 100 / 131070 < 0.9e-3
+
+std::vector<uint8_t> tiers_of(const FrameInput& in, std::span<const uint32_t> ids, Layer layer, float voxel) {
+  std::vector<uint8_t> tiers(ids.size());
+  tbb::parallel_for(size_t(0), ids.size(), [&](size_t k) {
+    const size_t i = ids[k];
+    if (layer == Layer::Blobs) {
+      const float* p = &in.positions[3 * i];
+      tiers[k] = static_cast<uint8_t>(lod_tier_of_uniform(blob_lod_uniform_bound(p[0], p[1], p[2], voxel, kBlobTierMargin)));
+    } else {
+      tiers[k] = static_cast<uint8_t>(lod_tier(in.lod[i]));
+    }
+  });
+  return tiers;
+}
+
+std::vector<TierSpan> tier_spans(const std::vector<MemberSet>& sets) {
+  std::array<uint64_t, kLodTiers> count{};
+  for (const MemberSet& m : sets) {
+    for (uint8_t t : m.tiers) ++count[t];
+  }
+  std::vector<TierSpan> spans;
+  uint32_t t = 0;
+  while (t < kLodTiers) {
+    uint64_t sum = count[t];
+    uint32_t last = t;
+    while (last + 1 < kLodTiers && sum < kLeastTierRecord) sum += count[++last];
+    if (sum > 0) {
+      if (!spans.empty() && sum < kLeastTierRecord) {
+        spans.back().last = static_cast<uint8_t>(last);  // a small tail joins the span before
+      } else {
+        spans.push_back({static_cast<uint8_t>(t), static_cast<uint8_t>(last)});
+      }
+    }
+    t = last + 1;
+  }
+  return spans;
+}
+
+// A layer's records for the given spans: span by span, set by set, each
+// span's particles of a set chunked on their own along the Morton curve.
+std::vector<EncodedChunk> encode_spans(const std::vector<MemberSet>& sets, const std::vector<TierSpan>& spans, Layer layer,
+                                       const FileHeader& header, const EncodeOptions& options, uint32_t limit,
+                                       float extent) {
   std::vector<Group> groups;
-  LayeredFrame layered;
-  FrameInput blobs;
-  if (options.layers && header.particle_spacing > 0 && header.position_coding == PositionCoding::Quantized16 &&
-      body_count > 0) {
-    layered = split_layers(body, header.particle_spacing, options.band_voxel, options.band_f2);
-    blobs = layered.blobs.input();
-    fh.blob_voxel = layered.blobs.counts.empty() ? 0.f : layered.voxel;
+  std::vector<TierSpan> group_span;
+  groups.reserve(spans.size() * sets.size());
+  for (const TierSpan& span : spans) {
+    for (const MemberSet& m : sets) {
+      std::vector<uint32_t> members;
+      for (size_t k = 0; k < m.ids.size(); ++k) {
+        if (m.tiers[k] >= span.first && m.tiers[k] <= span.last) members.push_back(m.ids[k]);
+      }
+      if (members.empty()) continue;
+      groups.push_back(plan_group(*m.in, members, layer, limit, extent));
+      group_span.push_back(span);
+    }
+  }
+  struct Piece {
+    size_t group;
+    ChunkPlan::Range range;
+  };
+  std::vector<Piece> pieces;
+  for (size_t g = 0; g < groups.size(); ++g) {
+    for (const ChunkPlan::Range& r : groups[g].chunks) pieces.push_back({g, r});
+  }
+  std::vector<EncodedChunk> records(pieces.size());
+  tbb::parallel_for(size_t(0), pieces.size(), [&](size_t c) {
+    const Group& g = groups[pieces[c].group];
+    const std::span<const uint32_t> members =
+        std::span(g.order).subspan(pieces[c].range.begin, pieces[c].range.end - pieces[c].range.begin);
+    records[c] = encode_chunk(*g.in, members, box_of(*g.in, members), header.position_coding, options);
+    records[c].desc.layer = layer;
+    records[c].desc.tier = group_span[pieces[c].group].first;
+    records[c].desc.last_tier = group_span[pieces[c].group].last;
+  });
+  return records;
+}
+
+uint64_t bytes_of(const std::vector<EncodedChunk>& records, size_t desc) {
+  uint64_t bytes = 0;
+  for (const EncodedChunk& r : records) bytes += r.payload.size() + desc;
+  return bytes;
+}
+
+// One layer, tiered where tiers pay: on lattice-like data (the bundled dam
+// break's first frames) a tier's sparser particles cost far more bytes than
+// the layer written whole, and the layer is then one tier (0 ... 11).
+// Judged on the default coding's sizes whatever the options, so that
+// `--smallest` and `--gpu-decodable` files of the same frames hold the same
+// records.
+std::vector<EncodedChunk> encode_layer(std::vector<MemberSet>& sets, Layer layer, const FileHeader& header,
+                                       const EncodeOptions& options, uint32_t limit, float extent, float voxel) {
+  const std::vector<TierSpan> whole{{0, uint8_t(kLodTiers - 1)}};
+  const bool tiered = options.lod_tiers && options.planes != PlaneCoding::Stored;
+  if (!tiered) {
+    for (MemberSet& m : sets) m.tiers.assign(m.ids.size(), 0);
+    return encode_spans(sets, whole, layer, header, options, limit, extent);
+  }
+  for (MemberSet& m : sets) m.tiers = tiers_of(*m.in, m.ids, layer, voxel);
+  const std::vector<TierSpan> spans = tier_spans(sets);
+  if (spans.size() <= 1) return encode_spans(sets, whole, layer, header, options, limit, extent);
+  EncodeOptions reference = options;
+  reference.planes = PlaneCoding::Packed;
+  std::vector<EncodedChunk> by_tiers = encode_spans(sets, spans, layer, header, reference, limit, extent);
+  std::vector<EncodedChunk> at_once = encode_spans(sets, whole, layer, header, reference, limit, extent);
+  const size_t desc = chunk_desc_bytes(header.attributes.size());
+  const double most = layer == Layer::Blobs ? kMostBlobTierCost : kMostTierCost;
+  const bool pays = double(bytes_of(by_tiers, desc)) <= double(bytes_of(at_once, desc)) * (1.0 + most);
+  if (default_coding(options)) return pays ? std::move(by_tiers) : std::move(at_once);
+  return encode_spans(sets, pays ? spans : whole, layer, header, options, limit, extent);
+}
+
+// The records of a coarse-to-fine frame, in file order.
+std::vector<EncodedChunk> encode_coarse_to_fine(const FrameInput& body, const FrameInput& in, const FarParticles& far,
+                                                const LayeredFrame* layered, const FrameInput& blobs, float voxel,
+                                                const FileHeader& header, const EncodeOptions& options, uint32_t limit,
+                                                float extent) {
+  std::vector<EncodedChunk> out;
+  auto add = [&](std::vector<MemberSet> sets, Layer layer, float layer_extent) {
+    std::erase_if(sets, [](const MemberSet& m) { return m.ids.empty(); });
+    if (sets.empty()) return;
+    std::vector<EncodedChunk> records = encode_layer(sets, layer, header, options, limit, layer_extent, voxel);
+    for (EncodedChunk& r : records) out.push_back(std::move(r));
+  };
+  auto every = [](size_t n) {
+    std::vector<uint32_t> ids(n);
+    for (uint32_t i = 0; i < n; ++i) ids[i] = i;
+    return ids;
+  };
+  if (layered) {
+    add({{&body, layered->surface, {}}, {&in, far.far, {}}}, Layer::Surface, extent);
+    add({{&blobs, every(layered->blobs.counts.size()), {}}}, Layer::Blobs, std::min(extent, kBlobBoxVoxels * voxel));
+    add({{&body, layered->interior, {}}}, Layer::Interior, extent);
+  } else {
+    add({{&body, every(body.positions.size() / 3), {}}, {&in, far.far, {}}}, Layer::All, extent);
+  }
+  return out;
+}
+
+// Format 1.x: each cell's tiers together (docs/format.md, "LOD tiers").
+std::vector<EncodedChunk> encode_cells(const FrameInput& in, const FrameInput& body, const FarParticles& far,
+                                       const LayeredFrame* layered_frame, const FrameInput& blobs, float voxel,
+                                       const FileHeader& header, const EncodeOptions& options, uint32_t limit,
+                                       float extent) {
+  std::vector<Group> groups;
+  if (layered_frame) {
+    const LayeredFrame& layered = *layered_frame;
     // Payload order: surface, far particles (alone: surface too), blobs,
     // interior (what is read by default first).
     groups.push_back(plan_group(body, layered.surface, Layer::Surface, limit, extent));
@@ -477,7 +618,6 @@ EncodedFrame encode_frame(const FrameInput& in, const FileHeader& header, const 
 
   // One job per record: a chunk, or one LOD tier of it. Tiers reorder the
   // chunk's members by tier (counting sort, stable) so each is a range.
-  const float voxel = fh.blob_voxel;
   std::vector<Cell> cells;
   for (Group& g : groups) {
     for (const auto& r : g.chunks) cells.push_back({&g, r, {}, {}});
@@ -552,9 +692,12 @@ EncodedFrame encode_frame(const FrameInput& in, const FileHeader& header, const 
     records[c].desc.tier = j.tier;
     records[c].desc.continues_cell = j.continues_cell;
   });
-  const size_t attributes = header.attributes.size();
-  std::vector<EncodedChunk> chunks = keep_tiers_that_pay(std::move(records), jobs, cells, header, options);
+  return keep_tiers_that_pay(std::move(records), jobs, cells, header, options);
+}
 
+// Places the records after the table and serializes the frame.
+EncodedFrame finish_frame(EncodedFrame frame, std::vector<EncodedChunk> chunks, size_t attributes) {
+  FrameHeader& fh = frame.header;
   uint64_t offset = frame_table_bytes(chunks.size(), attributes);
   for (EncodedChunk& c : chunks) {
     c.desc.index = static_cast<uint32_t>(fh.chunks.size());
@@ -565,11 +708,53 @@ EncodedFrame encode_frame(const FrameInput& in, const FileHeader& header, const 
     fh.chunks.push_back(c.desc);
   }
   fh.frame_bytes = offset;
+  if (!fh.coarse_to_fine) set_last_tiers(fh.chunks);
   frame.record = serialize_frame_table(fh, attributes);
   frame.record.reserve(offset);
   for (const EncodedChunk& c : chunks) frame.record.insert(frame.record.end(), c.payload.begin(), c.payload.end());
   return frame;
 }
+
+}  // namespace
+
+EncodedFrame encode_frame(const FrameInput& in, const FileHeader& header, const EncodeOptions& options) {
+  check_input(in, header);
+  EncodedFrame frame;
+  FrameHeader& fh = frame.header;
+  fh.time = in.time;
+  // Far particles (outliers.h) are chunked, and kept out of the frame's
+  // display bounds and of the narrow band's grid, on their own: among the
+  // rest they would widen a chunk's box, and so its quantization step.
+  const FarParticles far = find_far_particles(in.positions, header.particle_spacing);
+  fh.bounds = far.bulk;
+  frame.far = report_far(far, in.positions, false);
+  std::optional<FrameCopy> bulk;
+  if (!far.far.empty()) bulk.emplace(in, far.far);
+  const FrameInput& body = bulk ? bulk->input : in;
+  const size_t body_count = body.positions.size() / 3;
+
+  const uint32_t limit = std::clamp<uint32_t>(options.chunk_particles, 1, kMaxChunkParticles);
+  const float extent = chunk_extent_limit(header);
+  LayeredFrame layered;
+  FrameInput blobs;
+  const bool layers = options.layers && header.particle_spacing > 0 &&
+                      header.position_coding == PositionCoding::Quantized16 && body_count > 0;
+  if (layers) {
+    layered = split_layers(body, header.particle_spacing, options.band_voxel, options.band_f2);
+    blobs = layered.blobs.input();
+    fh.blob_voxel = layered.blobs.counts.empty() ? 0.f : layered.voxel;
+  }
+  std::vector<EncodedChunk> chunks;
+  if (header.version_major >= 2) {
+    fh.coarse_to_fine = true;
+    chunks = encode_coarse_to_fine(body, in, far, layers ? &layered : nullptr, blobs, fh.blob_voxel, header, options,
+                                   limit, extent);
+  } else {
+    chunks = encode_cells(in, body, far, layers ? &layered : nullptr, blobs, fh.blob_voxel, header, options, limit, extent);
+  }
+  return finish_frame(std::move(frame), std::move(chunks), header.attributes.size());
+}
+
 
 void set_frame_number(EncodedFrame& frame, uint32_t frame_number, size_t attribute_count) {
   frame.header.frame_number = frame_number;

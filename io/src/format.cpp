@@ -1,6 +1,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <stdexcept>
 
 #include "bytes.h"
 #include "records.h"
@@ -136,9 +137,10 @@ uint32_t peek_file_header_bytes(std::span<const std::byte> fixed, const ErrorLoc
   if (magic != kFileMagic) r.fail("not a .sluice file (bad magic)");
   const uint16_t major = r.u16();
   const uint16_t minor = r.u16();
-  if (major != kFormatMajor) {
+  if (major < kOldestMajor || major > kFormatMajor) {
     r.fail("format version " + std::to_string(major) + "." + std::to_string(minor) +
-           " is not supported by this build (reads " + std::to_string(kFormatMajor) + ".x)");
+           " is not supported by this build (reads " + std::to_string(kOldestMajor) + ".x to " +
+           std::to_string(kFormatMajor) + ".x)");
   }
   const uint32_t bytes = r.u32();
   if (bytes < kFileHeaderFixedBytes + 12 || bytes > kMaxHeaderBytes) {
@@ -194,7 +196,7 @@ std::vector<std::byte> serialize_frame_table(const FrameHeader& f, size_t attrib
   w.f64(f.time);
   w.u64(f.particle_count);
   w.u32(static_cast<uint32_t>(f.chunks.size()));
-  w.u32(0);  // flags
+  w.u32(f.coarse_to_fine ? kFrameCoarseToFine : 0);  // flags
   write_aabb(w, f.bounds);
   w.u32(static_cast<uint32_t>(attribute_count));
   w.f32(f.blob_voxel);  // format 1.3; reserved (0) before
@@ -205,7 +207,7 @@ std::vector<std::byte> serialize_frame_table(const FrameHeader& f, size_t attrib
     w.u8(static_cast<uint8_t>(c.layer));
     w.u8(static_cast<uint8_t>(c.codec));
     w.u8(c.tier);                           // format 1.4; reserved (0) before
-    w.u8(c.continues_cell ? 1 : 0);
+    w.u8(f.coarse_to_fine ? c.last_tier : c.continues_cell ? 1 : 0);  // 2.0: last tier; 1.4: continues the cell
     write_aabb(w, c.bounds);
     w.u64(c.checksum);
     for (const auto& range : c.attribute_ranges) {
@@ -216,6 +218,43 @@ std::vector<std::byte> serialize_frame_table(const FrameHeader& f, size_t attrib
   w.u64(checksum(out));
   return out;
 }
+
+namespace {
+
+// Where a layer's records begin in a coarse-to-fine frame: surface (and
+// unlayered) first, then blobs, then interior (the order views read them).
+int layer_rank(Layer l) {
+  switch (l) {
+    case Layer::All: return 0;
+    case Layer::Surface: return 0;
+    case Layer::Blobs: return 1;
+    default: return 2;
+  }
+}
+
+// The rules of a coarse-to-fine table (docs/format.md, "Layout of a frame"):
+// layers in their order, tiers rising within a layer, one tier's records
+// holding the same tiers, a tier's records never overlapping the next's.
+void check_coarse_to_fine(ByteReader& r, const ChunkDesc* before, const ChunkDesc& c) {
+  if (c.last_tier < c.tier || c.last_tier >= kLodTiers) {
+    r.fail("record holds tiers " + std::to_string(c.tier) + " to " + std::to_string(c.last_tier) +
+           " (the last must lie in " + std::to_string(c.tier) + " to " + std::to_string(kLodTiers - 1) + ")");
+  }
+  if (!before) return;
+  if (layer_rank(before->layer) > layer_rank(c.layer) || ((before->layer == Layer::All) != (c.layer == Layer::All))) {
+    r.fail(std::string("a ") + layer_name(c.layer) + " record follows a " + layer_name(before->layer) +
+           " record (a coarse-to-fine frame holds surface, blobs, interior, in that order)");
+  }
+  if (before->layer != c.layer) return;
+  if (c.tier == before->tier) {
+    if (c.last_tier != before->last_tier) r.fail("records of one tier hold different tiers (their last tiers differ)");
+  } else if (c.tier <= before->last_tier) {
+    r.fail("tier " + std::to_string(c.tier) + " follows a record of tiers " + std::to_string(before->tier) + " to " +
+           std::to_string(before->last_tier) + " (tiers must rise within a layer)");
+  }
+}
+
+}  // namespace
 
 FramePrefix parse_frame_prefix(std::span<const std::byte> fixed, const ErrorLocation& where) {
   ByteReader r(fixed, where, "frame header");
@@ -254,7 +293,9 @@ void parse_frame_table(std::span<const std::byte> record, size_t attribute_count
   f.time = r.f64();
   f.particle_count = r.u64();
   r.u32();
-  r.u32();
+  const uint32_t flags = r.u32();
+  if ((flags & ~kFrameCoarseToFine) != 0) r.fail("unknown frame flags " + std::to_string(flags));
+  f.coarse_to_fine = (flags & kFrameCoarseToFine) != 0;
   f.bounds = read_aabb(r);
   check_aabb(r, f.bounds, true, "frame");
   if (r.u32() != attribute_count) r.fail("attribute count differs from the file header");
@@ -293,18 +334,24 @@ void parse_frame_table(std::span<const std::byte> record, size_t attribute_count
     }
     if (c.layer == Layer::Blobs && !(f.blob_voxel > 0)) r.fail("blob chunk in a frame without a blob voxel side");
     if (tier >= kLodTiers) r.fail("LOD tier " + std::to_string(tier) + " is out of range (0 to " + std::to_string(kLodTiers - 1) + ")");
-    if (cell > 1) r.fail("unknown cell flags " + std::to_string(cell));
     c.tier = tier;
-    c.continues_cell = cell == 1;
-    if (c.continues_cell) {
-      const ChunkDesc* before = &c == f.chunks.data() ? nullptr : &c - 1;
-      if (!before || before->layer != c.layer || before->tier >= c.tier || !(before->bounds == c.bounds)) {
+    const ChunkDesc* before = &c == f.chunks.data() ? nullptr : &c - 1;
+    if (f.coarse_to_fine) {
+      c.continues_cell = false;
+      c.last_tier = cell;
+      check_coarse_to_fine(r, before, c);
+    } else {
+      if (cell > 1) r.fail("unknown cell flags " + std::to_string(cell));
+      c.continues_cell = cell == 1;
+      if (c.continues_cell &&
+          (!before || before->layer != c.layer || before->tier >= c.tier || !(before->bounds == c.bounds))) {
         r.fail("a record continues a cell it does not follow (tiers must rise within one layer and box)");
       }
     }
     particles += c.particle_count;
   }
   if (particles != f.particle_count) r.fail("chunk particle counts do not add up to the frame's");
+  if (!f.coarse_to_fine) set_last_tiers(f.chunks);
 }
 
 std::vector<std::byte> serialize_index(const FrameIndex& index, size_t attribute_count) {
@@ -481,12 +528,31 @@ void IndexBuilder::add(const FrameSummary& frame, uint64_t offset) {
   index_.frames.push_back(entry);
 }
 
+void set_format_version(FileHeader& h, uint16_t major) {
+  if (major == kFormatMajor) {
+    h.version_major = kFormatMajor;
+    h.version_minor = kFormatMinor;
+  } else if (major == 1) {
+    h.version_major = 1;
+    h.version_minor = kLegacyMinor;
+  } else {
+    throw std::invalid_argument("format " + std::to_string(major) + ".x cannot be written (2.0, or 1.5)");
+  }
+}
+
 ValueBounds record_value_bounds(const std::vector<ChunkDesc>& records, size_t c) {
   ValueBounds b;
-  const uint8_t tier = records[c].tier;
-  if (tier > 0) b.hi = uint16_t(kTierFloor[tier - 1] - 1);
-  if (c + 1 < records.size() && records[c + 1].continues_cell) b.lo = uint16_t(kTierFloor[records[c + 1].tier - 1]);
+  const ChunkDesc& r = records[c];
+  if (r.tier > 0) b.hi = uint16_t(kTierFloor[r.tier - 1] - 1);
+  b.lo = uint16_t(kTierFloor[std::min<uint32_t>(std::max(r.last_tier, r.tier), kLodTiers - 1)]);
   return b;
+}
+
+void set_last_tiers(std::vector<ChunkDesc>& records) {
+  for (size_t c = 0; c < records.size(); ++c) {
+    const bool next_in_cell = c + 1 < records.size() && records[c + 1].continues_cell;
+    records[c].last_tier = next_in_cell ? uint8_t(records[c + 1].tier - 1) : uint8_t(kLodTiers - 1);
+  }
 }
 
 }  // namespace sluice::io

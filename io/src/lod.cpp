@@ -27,15 +27,15 @@ double blob_lod_uniform(int32_t cx, int32_t cy, int32_t cz) {
   return (double(h >> 8) + 0.5) * (1.0 / 16777216.0);
 }
 
-double blob_lod_uniform_bound(float x, float y, float z, float voxel) {
+double blob_lod_uniform_bound(float x, float y, float z, float voxel, double margin) {
   const float p[3] = {x, y, z};
   int32_t lo[3], hi[3];
   for (int a = 0; a < 3; ++a) {
     const double c = double(p[a]) / double(voxel);
     const double f = std::floor(c);
     lo[a] = hi[a] = static_cast<int32_t>(f);
-    if (c - f < 1e-3) lo[a] -= 1;
-    if (f + 1 - c < 1e-3) hi[a] += 1;
+    if (c - f < margin) lo[a] -= 1;
+    if (f + 1 - c < margin) hi[a] += 1;
   }
   double best = 0;
   for (int32_t i = lo[0]; i <= hi[0]; ++i) {

@@ -26,6 +26,8 @@ io::Error read_failed(const std::string& path, size_t bytes, uint64_t offset, in
 FileRecordSource::FileRecordSource(std::string path, int buffered_fd, bool direct, bool mapped)
     : path_(std::move(path)), buffered_fd_(buffered_fd) {
   if (mapped) map_file();
+  span_fd_ = ::open(path_.c_str(), O_RDONLY | O_CLOEXEC);
+  if (span_fd_ >= 0) ::posix_fadvise(span_fd_, 0, 0, POSIX_FADV_RANDOM);  // exactly the bytes asked for
   if (!direct) return;
   owned_fd_ = ::open(path_.c_str(), O_RDONLY | O_DIRECT | O_CLOEXEC);
   if (owned_fd_ < 0) {
@@ -37,6 +39,7 @@ FileRecordSource::FileRecordSource(std::string path, int buffered_fd, bool direc
 
 FileRecordSource::~FileRecordSource() {
   if (owned_fd_ >= 0) ::close(owned_fd_);
+  if (span_fd_ >= 0) ::close(span_fd_);
   if (map_) ::munmap(const_cast<std::byte*>(map_), map_bytes_);
 }
 
@@ -97,6 +100,17 @@ size_t FileRecordSource::read_at(std::span<std::byte> dst, uint64_t offset) {
       fall_back(std::string(std::strerror(EINVAL)) + " on read");
       continue;
     }
+    throw read_failed(path_, dst.size(), offset, errno);
+  }
+}
+
+size_t FileRecordSource::read_span(std::span<std::byte> dst, uint64_t offset) {
+  if (direct_fd_.load(std::memory_order_relaxed) >= 0) return read_at(dst, offset);
+  const int fd = span_fd_ >= 0 ? span_fd_ : buffered_fd_;
+  while (true) {
+    const ssize_t n = ::pread(fd, dst.data(), dst.size(), static_cast<off_t>(offset));
+    if (n >= 0) return static_cast<size_t>(n);
+    if (errno == EINTR) continue;
     throw read_failed(path_, dst.size(), offset, errno);
   }
 }

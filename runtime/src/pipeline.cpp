@@ -310,6 +310,8 @@ PipelineStats PipelineCore::stats() const {
   s.frames_read = c.frames_read.load(kRelaxed);
   s.record_bytes = c.record_bytes.load(kRelaxed);
   s.frames_by_demand = c.frames_by_demand.load(kRelaxed);
+  s.runs_read = c.runs_read.load(kRelaxed);
+  s.run_bytes = c.run_bytes_asked.load(kRelaxed);
   s.frames_in_place = c.frames_in_place.load(kRelaxed);
   s.frames_relayed = c.frames_relayed.load(kRelaxed);
   s.cache_hits = c.cache_hits.load(kRelaxed);

@@ -40,7 +40,7 @@ struct alignas(64) WorkerCounters {
 };
 
 struct Counters {
-  std::atomic<uint64_t> record_bytes{0}, frames_by_demand{0};
+  std::atomic<uint64_t> record_bytes{0}, frames_by_demand{0}, runs_read{0}, run_bytes_asked{0};
   std::atomic<uint64_t> bytes_read{0}, read_ns{0}, frames_read{0}, frames_in_place{0}, frames_relayed{0}, cache_hits{0};
   std::atomic<uint64_t> frames_decoded{0}, decoded_bytes{0}, frames_cancelled{0};
   std::atomic<uint64_t> frames_delivered{0}, frames_failed{0};
@@ -67,6 +67,10 @@ struct PieceRound {
   std::span<const io::ChunkDesc> chunks;
   std::span<const uint32_t> cuts;  // empty: byte pieces
   bool by_chunks() const { return !cuts.empty(); }
+  // Reads by demand (read_runs.h): piece p reads runs[p] of dst, with no
+  // check (the workers check the chunks; relayed frames are read by chunks).
+  std::span<const ByteRun> runs;
+  bool by_runs() const { return !runs.empty(); }
   Slot* relayed = nullptr;  // a relayed read (relay.h): the chunks go through the relay into this slot's area, not dst
   bool check = true;        // a checked read hashes each chunk as read; false: the decode workers check them
   mutable std::atomic<bool> gave_up{false};  // a newer schedule (or stop) came first: the pieces left are skipped
@@ -178,6 +182,7 @@ class PipelineCore {
     uint64_t need = 0;            // bytes of dst that come from the file (the rest is alignment padding)
     std::span<std::byte> record;  // the frame's record (or its wanted prefix) once read, in dst's buffer
     bool by_chunks = false;       // chunks_to_read(): the slot's wanted chunks are read and checked, not dst
+    bool by_runs = false;         // runs_to_read(): the runs of the slot's wanted chunks (slot.runs), not dst
   };
   ReadTarget record_target(ReaderState& rs, Slot& slot, uint32_t record);
   AlignedBuffer& record_buffer(ReaderState& rs, uint32_t record, uint64_t bytes);
@@ -196,6 +201,10 @@ class PipelineCore {
   // payloads lie in `record` past the `table`, and cuts them into pieces
   // (slot.piece_cuts). `record` starts at the frame's offset in the file.
   ReadTarget chunks_to_read(Slot& slot, std::span<std::byte> record, uint64_t record_bytes, uint64_t table);
+  // A read by demand, not relayed: the wanted chunks (chunks_to_read) read
+  // in runs of `whole`'s buffer past its first `skip` bytes (read_runs.h),
+  // checked by the workers.
+  ReadTarget runs_to_read(Slot& slot, const ReadTarget& whole, uint64_t record_bytes, uint64_t table, uint64_t skip);
   // relay.h: whether the next frame is relayed into device memory, its
   // target (the table into the record buffer, the area resident), and the
   // read of a piece's chunks through the relay (on a read thread).
@@ -235,15 +244,23 @@ class PipelineCore {
   // The same for a checked read (chunks_to_read()): piece p reads and checks
   // the slot's chunks [piece_cuts[p], piece_cuts[p + 1]).
   void begin_chunk_pieces(PieceRound& round, Slot& slot, const ReadTarget& target, uint64_t generation);
+  // The same for the runs of a read by demand (runs_to_read()).
+  void begin_run_pieces(PieceRound& round, Slot& slot, const ReadTarget& target, uint64_t generation);
   void begin_round(PieceRound& round);  // the common end of both: hands the round to the crew
   bool join_pieces(PieceRound& round);
   uint64_t read_ns_now() const;  // time with a read in flight, the open stretch included
   friend struct PieceRound;
-  void read_piece(std::span<std::byte> piece, uint64_t offset, uint64_t required, uint64_t frame, uint64_t frame_end);
+  // `span`: through RecordSource::read_span (a run of a demand: no mapping,
+  // whose faults make the kernel read around them).
+  void read_piece(std::span<std::byte> piece, uint64_t offset, uint64_t required, uint64_t frame, uint64_t frame_end,
+                  bool span = false);
   // Reads chunk `c` of the frame into `dst` from `offset` and checks it
   // against its checksum; throws io::Error naming the chunk.
   void read_chunk(std::span<std::byte> dst, uint64_t offset, uint64_t frame, size_t c, uint64_t checksum,
                   Stores stores = Stores::Streaming);
+  // Checks chunk `c`'s bytes, already read, against its checksum; throws
+  // io::Error naming the chunk.
+  void check_chunk(std::span<const std::byte> bytes, uint64_t frame, size_t c, uint64_t checksum);
   void prepare_decode(ReaderState& rs, Slot& slot);
   // Keeps the tiers the latest demand needs of the frame's cells (once per
   // read) and records what was kept (slot.cells).

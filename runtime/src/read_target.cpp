@@ -63,11 +63,9 @@ void PipelineCore::hint_chunks(const Slot& slot) {
   if (to > from) source_->will_need(base + from, to - from);
 }
 
-// A demand that leaves tiers out is read chunk by chunk (table first), the
-// CPU decode path too; O_DIRECT reads whole records (its offsets are aligned).
-bool PipelineCore::reads_by_demand() {
-  return !demand_.latest().everything() && source_->alignment() <= 1;
-}
+// A demand that leaves tiers out is read in runs of its chunks (table
+// first), the CPU decode path too, O_DIRECT too (the runs are aligned).
+bool PipelineCore::reads_by_demand() { return !demand_.latest().everything(); }
 
 bool PipelineCore::relays() const { return relay_ != nullptr && !relay_off_ && reads_in_place(); }
 
@@ -128,6 +126,7 @@ PipelineCore::ReadTarget PipelineCore::read_table(Slot& slot, const ReadTarget& 
   const uint64_t end = io::layers_end(slot.header, options_.layers, reader_.header().attributes.size());
   const uint64_t wanted = into + end;
   if (slot.relayed) return chunks_to_read(slot, {}, end, table);
+  if (slot.by_demand) return runs_to_read(slot, whole, end, table, first);
   if (slot.checked_on_read || slot.by_demand) return chunks_to_read(slot, whole.record.first(end), end, table);
   source_->will_need(whole.offset + first, wanted - std::min(wanted, first));
   ReadTarget rest;
@@ -184,6 +183,26 @@ PipelineCore::ReadTarget PipelineCore::chunks_to_read(Slot& slot, std::span<std:
   target.record = record;
   target.offset = reader_.index().frames[slot.frame].offset;
   target.by_chunks = true;
+  return target;
+}
+
+PipelineCore::ReadTarget PipelineCore::runs_to_read(Slot& slot, const ReadTarget& whole, uint64_t record_bytes,
+                                                    uint64_t table, uint64_t skip) {
+  chunks_to_read(slot, whole.record.first(record_bytes), record_bytes, table);
+  const auto into = static_cast<uint64_t>(whole.record.data() - whole.dst.data());  // where the record starts in dst
+  const RunLimits limits{.align = std::max<uint64_t>(1, source_->alignment()),
+                         .gap = kRunGap,
+                         .piece = std::max<uint64_t>(options_.read.piece_bytes, 1)};
+  slot.run_count = static_cast<uint32_t>(plan_runs(slot.header.chunks, into, whole.dst.size(), whole.need, skip, limits, slot.runs));
+  slot.checked_on_read = false;  // the workers check the chunks (read once, checked once)
+  uint64_t asked = 0;
+  for (const ByteRun& r : slot.runs) asked += r.length;
+  counters_.runs_read.fetch_add(slot.run_count, kRelaxed);
+  counters_.run_bytes_asked.fetch_add(asked, kRelaxed);
+  ReadTarget target = whole;
+  target.record = whole.record.first(record_bytes);
+  target.by_chunks = false;
+  target.by_runs = true;
   return target;
 }
 

@@ -304,6 +304,7 @@ PipelineCore::Start PipelineCore::start_entry(ReaderState& rs, uint64_t k, uint6
       slot.header.chunks.reserve(most_chunks_);
       slot.chunk_first.reserve(most_chunks_);
       slot.piece_cuts.reserve(size_t(most_chunks_) + 1);
+      slot.runs.reserve(2 * size_t(most_chunks_) + 8);
       slot.attribute_targets.reserve(reader_.header().attributes.size());
       slot.where.file = reader_.path();
     }
@@ -348,7 +349,9 @@ void PipelineCore::begin_background_read(ReaderState& rs, uint32_t s, uint64_t k
   read.slot = s;
   read.k = k;
   read.record = target.record;
-  if (target.by_chunks) {
+  if (target.by_runs) {
+    begin_run_pieces(read.round, slots_[s], target, rs.generation);
+  } else if (target.by_chunks) {
     begin_chunk_pieces(read.round, slots_[s], target, rs.generation);
   } else {
     begin_pieces(read.round, target.dst, target.offset, target.need, slots_[s].frame, rs.generation);

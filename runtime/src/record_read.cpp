@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "pipeline_core.h"
+#include "sluice/io/checksum.h"
 
 namespace sluice::runtime::detail {
 namespace {
@@ -24,10 +25,10 @@ uint64_t steady_ns() {
 }  // namespace
 
 void PipelineCore::read_piece(std::span<std::byte> piece, uint64_t offset, uint64_t required, uint64_t frame,
-                              uint64_t frame_end) {
+                              uint64_t frame_end, bool span) {
   uint64_t got = 0;
   while (got < required) {  // the source may return less than asked: carry on from there
-    const size_t n = source_->read_at(piece.subspan(got), offset + got);
+    const size_t n = span ? source_->read_span(piece.subspan(got), offset + got) : source_->read_at(piece.subspan(got), offset + got);
     if (n == 0) {
       throw io::Error(reader_.location(frame), "the file ends at byte " + std::to_string(offset + got) +
                                                    " but the frame runs to byte " + std::to_string(frame_end) +
@@ -60,7 +61,24 @@ void PipelineCore::begin_pieces(PieceRound& round, std::span<std::byte> dst, uin
   round.count = (dst.size() + round.piece - 1) / round.piece;
   round.chunks = {};
   round.cuts = {};  // byte pieces (the round may have held a checked read before)
+  round.runs = {};
   round.relayed = nullptr;
+  begin_round(round);
+}
+
+void PipelineCore::begin_run_pieces(PieceRound& round, Slot& slot, const ReadTarget& target, uint64_t generation) {
+  round.core = this;
+  round.dst = target.dst;
+  round.offset = target.offset;
+  round.need = target.need;
+  round.frame = slot.frame;
+  round.generation = generation;
+  round.chunks = {};
+  round.cuts = {};
+  round.runs = slot.runs;
+  round.count = slot.runs.size();
+  round.relayed = nullptr;
+  round.check = false;
   begin_round(round);
 }
 
@@ -79,6 +97,7 @@ void PipelineCore::begin_chunk_pieces(PieceRound& round, Slot& slot, const ReadT
   round.generation = generation;
   round.chunks = slot.header.chunks;
   round.cuts = slot.piece_cuts;
+  round.runs = {};
   round.count = slot.piece_cuts.size() - 1;
   round.relayed = slot.relayed ? &slot : nullptr;
   round.check = slot.checked_on_read;
@@ -100,12 +119,25 @@ void PipelineCore::read_chunk(std::span<std::byte> dst, uint64_t offset, uint64_
   throw io::Error(at, "chunk checksum mismatch (the chunk's bytes are corrupt)");
 }
 
+void PipelineCore::check_chunk(std::span<const std::byte> bytes, uint64_t frame, size_t c, uint64_t checksum) {
+  if (io::chunk_checksum(bytes) == checksum) return;
+  io::ErrorLocation at = reader_.location(frame);  // only now: it allocates
+  at.chunk = c;
+  throw io::Error(at, "chunk checksum mismatch (the chunk's bytes are corrupt)");
+}
+
 // Piece p covers [p * piece, +piece) of dst; bytes past `need` are only
 // alignment padding and may lie beyond the end of the file. With no helpers
 // the crew runs the pieces in order on the joining thread.
 void PieceRound::operator()(uint64_t p) const {
   if (gave_up.load(kRelaxed) || core->stopping_.load(kRelaxed) || core->generation_.load(kRelaxed) != generation) {
     gave_up.store(true, kRelaxed);
+    return;
+  }
+  if (by_runs()) {
+    const ByteRun& run = runs[p];
+    core->read_piece(dst.subspan(run.at, run.length), offset + run.at, run.required, frame, offset + run.at + run.required,
+                     true);
     return;
   }
   if (by_chunks() && relayed) {
@@ -148,17 +180,41 @@ void PipelineCore::relay_chunks(const PieceRound& round, uint64_t p) {
       ++c;
       continue;
     }
+    // By demand: the chunks that lie close together are read at once,
+    // with the bytes between them (one read, not one a chunk; read_runs.h).
+    const bool together = slot.by_demand;
     uint64_t bytes = 0;
     uint32_t last = c;
-    while (last < end && bytes + round.chunks[last].compressed_size <= most) bytes += round.chunks[last++].compressed_size;
+    if (together) {
+      const uint64_t from = round.chunks[c].offset;
+      while (last < end && round.chunks[last].offset >= from &&
+             round.chunks[last].offset + round.chunks[last].compressed_size - from <= most &&
+             (last == c || round.chunks[last].offset <= round.chunks[last - 1].offset + round.chunks[last - 1].compressed_size + kRunGap)) {
+        bytes = round.chunks[last].offset + round.chunks[last].compressed_size - from;
+        ++last;
+      }
+    } else {
+      while (last < end && bytes + round.chunks[last].compressed_size <= most) bytes += round.chunks[last++].compressed_size;
+    }
     const std::span<std::byte> piece = relay_->claim(bytes);
     try {
       ranges.clear();
+      if (together) {
+        const uint64_t from = round.offset + round.chunks[c].offset;
+        read_piece(piece.first(bytes), from, bytes, round.frame, from + bytes, true);
+        counters_.runs_read.fetch_add(1, kRelaxed);
+        counters_.run_bytes_asked.fetch_add(bytes, kRelaxed);
+      }
       uint64_t at = 0;
       for (uint32_t k = c; k < last; ++k) {
         const io::ChunkDesc& chunk = round.chunks[k];
+        if (together) at = chunk.offset - round.chunks[c].offset;
         const std::span<std::byte> dst = piece.subspan(at, chunk.compressed_size);
-        read_chunk(dst, round.offset + chunk.offset, round.frame, k, chunk.checksum, Stores::Cached);
+        if (together) {
+          check_chunk(dst, round.frame, k, chunk.checksum);
+        } else {
+          read_chunk(dst, round.offset + chunk.offset, round.frame, k, chunk.checksum, Stores::Cached);
+        }
         if (!io::plan_gpu_chunk(dst, slot.header, reader_.header(), plan_options, k, slot.plan, slot.where)) {
           slot.relay_refused.store(true, kRelaxed);  // zstd planes: the frame is read again on the host
           relay_->give_back(piece);
@@ -187,7 +243,14 @@ void PipelineCore::relay_large_chunk(Slot& slot, size_t c, uint64_t offset) {
   const io::ChunkDesc& chunk = slot.header.chunks[c];
   thread_local std::vector<std::byte> whole;
   whole.resize(chunk.compressed_size);
-  read_chunk(whole, offset + chunk.offset, slot.frame, c, chunk.checksum);
+  if (slot.by_demand) {  // no mapping (read_runs.h)
+    read_piece(whole, offset + chunk.offset, whole.size(), slot.frame, offset + chunk.offset + whole.size(), true);
+    check_chunk(whole, slot.frame, c, chunk.checksum);
+    counters_.runs_read.fetch_add(1, kRelaxed);
+    counters_.run_bytes_asked.fetch_add(whole.size(), kRelaxed);
+  } else {
+    read_chunk(whole, offset + chunk.offset, slot.frame, c, chunk.checksum);
+  }
   if (!io::plan_gpu_chunk(whole, slot.header, reader_.header(), {.color_attribute = options_.decode.color_attribute}, c,
                           slot.plan, slot.where)) {
     slot.relay_refused.store(true, kRelaxed);

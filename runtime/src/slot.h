@@ -22,6 +22,7 @@
 #include <span>
 #include <vector>
 
+#include "read_runs.h"
 #include "sluice/io/format.h"
 #include "sluice/io/gpu_decode_plan.h"
 #include "sluice/io/particles.h"
@@ -75,10 +76,12 @@ struct Slot {
   bool checked_on_read = false;                  // the wanted chunks were checked as they were read (checksums)
   bool relayed = false;                          // ... and sent to a resident area through the relay (relay.h)
   std::vector<uint32_t> piece_cuts;              // checked reads: piece p reads chunks [cuts[p], cuts[p + 1])
+  std::vector<detail::ByteRun> runs;             // reads by demand: the pieces of the runs (read_runs.h)
+  uint32_t run_count = 0;                        // ... and how many runs they are
   io::GpuDecodePlan plan;                        // DecodeMode::KeepEncoded: what the workers stage
   std::vector<CellRead> cells;                   // every cell of the frame and the tiers read of it (demand.h)
   bool demand_applied = false;                   // `header` holds the demanded tiers only, `cells` is filled
-  bool by_demand = false;                        // read chunk by chunk for a demand that leaves tiers out
+  bool by_demand = false;                        // read in runs of the wanted records, for a demand that leaves tiers out
 
   // Written by the reader (read errors) or the chunk that won error_claimed.
   FrameError error;

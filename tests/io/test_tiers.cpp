@@ -1,4 +1,5 @@
-// LOD tiers (format 1.4): each chunk written as records by tier, any prefix
+// LOD tiers as format 1.4 writes them (each cell's tiers together; a 2.0
+// writer orders frames coarse to fine: test_coarse_to_fine.cpp): each chunk written as records by tier, any prefix
 // of tiers one byte range, what cLOD can keep always a prefix, decoding the
 // same particles as the untiered file, older layouts read as one tier.
 #include <gtest/gtest.h>
@@ -21,6 +22,12 @@
 using namespace sluice;
 
 namespace {
+
+// Format 1.5 headers: the layout these tests are about.
+io::FileHeader legacy(io::FileHeader h) {
+  io::set_format_version(h, 1);
+  return h;
+}
 
 // Scattered particles (not a lattice: tiers pay there) with random ids.
 io::ParticleFrame scattered_frame(uint64_t n, uint32_t seed) {
@@ -109,7 +116,7 @@ TEST(Tiers, EveryCodecDecodesTheSameParticlesAsUntiered) {
   const io::ParticleFrame f = scattered_frame(60000, 5);
   for (const Variant& v : kVariants) {
     SCOPED_TRACE(v.name);
-    const io::FileHeader h = test::test_header(v.coding);
+    const io::FileHeader h = legacy(test::test_header(v.coding));
     const io::EncodedFrame tiered = encode(f, h, v, true), flat = encode(f, h, v, false);
     // Stored frames (decoded at once, never read from a file) stay untiered.
     if (v.planes != io::PlaneCoding::Stored) EXPECT_GT(tiered.header.chunks.size(), flat.header.chunks.size());
@@ -137,7 +144,7 @@ TEST(Tiers, EveryCodecDecodesTheSameParticlesAsUntiered) {
 }
 
 TEST(Tiers, RecordsHoldTheirTiersInOrderAndEveryPrefixIsOneRange) {
-  const io::FileHeader h = test::test_header(io::PositionCoding::Quantized16);
+  const io::FileHeader h = legacy(test::test_header(io::PositionCoding::Quantized16));
   const io::EncodedFrame e = encode(scattered_frame(60000, 9), h, kVariants[0], true);
   const io::FrameHeader& fh = e.header;
   std::vector<uint64_t> starts(fh.chunks.size());
@@ -201,7 +208,7 @@ TEST(Tiers, TiersForKeepHoldEveryValueCLodCanKeep) {
 }
 
 TEST(Tiers, KeepTiersKeepsAPrefixOfEachCell) {
-  const io::FileHeader h = test::test_header(io::PositionCoding::Quantized16);
+  const io::FileHeader h = legacy(test::test_header(io::PositionCoding::Quantized16));
   const io::EncodedFrame e = encode(scattered_frame(60000, 11), h, kVariants[0], true);
   for (uint32_t t = 0; t <= io::kLodTiers; ++t) {
     io::FrameHeader fh = e.header;
@@ -221,7 +228,7 @@ TEST(Tiers, KeepTiersKeepsAPrefixOfEachCell) {
 }
 
 TEST(Tiers, UntieredFilesReadAsOneTierPerChunk) {
-  const io::FileHeader h = test::test_header(io::PositionCoding::Quantized16);
+  const io::FileHeader h = legacy(test::test_header(io::PositionCoding::Quantized16));
   const io::EncodedFrame e = encode(scattered_frame(30000, 3), h, kVariants[0], false);
   const io::FrameHeader parsed = io::parse_frame_table(e.record, h.attributes.size(), {});
   for (const io::ChunkDesc& c : parsed.chunks) {
@@ -236,7 +243,7 @@ TEST(Tiers, UntieredFilesReadAsOneTierPerChunk) {
 TEST(Tiers, TheLayoutDependsOnTheDataNotTheCoding) {
   // Whether a cell stays whole is decided on the default coding's sizes, so
   // --smallest and --gpu-decodable files hold the same records.
-  const io::FileHeader h = test::test_header(io::PositionCoding::Quantized16);
+  const io::FileHeader h = legacy(test::test_header(io::PositionCoding::Quantized16));
   const io::ParticleFrame f = test::lattice_frame(40000, 0.25);
   const io::EncodedFrame a = encode(f, h, kVariants[0], true), b = encode(f, h, kVariants[1], true),
                          c = encode(f, h, kVariants[2], true);
@@ -252,7 +259,7 @@ TEST(Tiers, TheLayoutDependsOnTheDataNotTheCoding) {
 TEST(Tiers, LatticeCellsThatTiersWouldBloatStayWhole) {
   // A regular lattice: tiers cost far more than 8% there (sparse deltas of
   // a structure zstd codes in a few bits), so cells stay one record each.
-  const io::FileHeader h = test::test_header(io::PositionCoding::Quantized16, false);
+  const io::FileHeader h = legacy(test::test_header(io::PositionCoding::Quantized16, false));
   io::ParticleFrame f;
   for (uint32_t i = 0; i < 32768; ++i) {
     f.positions.insert(f.positions.end(), {float(i % 32) * 0.01f, float(i / 32 % 32) * 0.01f, float(i / 1024) * 0.01f});
@@ -272,7 +279,7 @@ TEST(Tiers, LatticeCellsThatTiersWouldBloatStayWhole) {
 }
 
 TEST(Tiers, TablesThatBreakTheTierRulesAreRejected) {
-  const io::FileHeader h = test::test_header(io::PositionCoding::Quantized16);
+  const io::FileHeader h = legacy(test::test_header(io::PositionCoding::Quantized16));
   const io::EncodedFrame e = encode(scattered_frame(20000, 2), h, kVariants[0], true);
   const size_t desc = io::chunk_desc_bytes(h.attributes.size());
   const size_t table = io::frame_table_bytes(e.header.chunks.size(), h.attributes.size());

@@ -36,6 +36,7 @@ struct ViewBenchOptions {
   std::string device;                    // Vulkan device ("": the first GPU)
   int read_threads = 0;                  // the pipeline's (ReadSettings::threads); 0: its default
   bool mapped_reads = true;              // false: pread (ReadSettings::mapped)
+  bool direct_io = false;                // O_DIRECT reads (ReadSettings::direct_io)
 };
 
 // Throws io::Error on a bad file.

@@ -57,6 +57,9 @@ struct ConvertOptions {
   int level = 3;                 // zstd level
   io::PlaneCoding planes = io::PlaneCoding::Packed;
   bool lod_tiers = true;  // chunks as LOD tiers (io::EncodeOptions::lod_tiers)
+  // The container's major version: 2 (frames ordered coarse to fine) or 1
+  // (format 1.5: each cell's tiers together, for readers older than 2.0).
+  uint16_t format_major = io::kFormatMajor;
   // Classify the narrow band: surface, interior and blob layers (format
   // 1.3). Quantized positions only: lossless files stay one layer.
   bool layers = true;

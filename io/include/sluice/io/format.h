@@ -16,8 +16,13 @@
 
 namespace sluice::io {
 
-inline constexpr uint16_t kFormatMajor = 1;  // readers reject other majors
-inline constexpr uint16_t kFormatMinor = 5;  // readers accept any minor of their major
+// Format 2.0 orders each frame coarse to fine (docs/format.md, "Layout of a
+// frame"); readers of this build read 1.x files too.
+inline constexpr uint16_t kFormatMajor = 2;  // what writers write; readers reject majors above it
+inline constexpr uint16_t kFormatMinor = 0;  // readers accept any minor of a major they read
+inline constexpr uint16_t kOldestMajor = 1;  // the oldest major readers still read
+// The last 1.x minor (what `--format 1.5` writes: each cell's tiers together).
+inline constexpr uint16_t kLegacyMinor = 5;
 
 // Hard limits. A header that claims more is rejected before any allocation.
 inline constexpr uint32_t kMaxHeaderBytes = 1u << 20;
@@ -106,6 +111,12 @@ struct FileHeader {
   std::string source;            // free text: what the file was converted from
 };
 
+// Sets the header's version for writing with major `major`: 2 (kFormatMajor:
+// frames ordered coarse to fine) or 1 (1.5, kLegacyMinor: each cell's
+// tiers together, for readers older than 2.0). Throws std::invalid_argument
+// for other majors. encode_frame() lays frames out by the header's major.
+void set_format_version(FileHeader& h, uint16_t major);
+
 // 1/1024 of the spacing: boxes of at most 128 spacings, about what the
 // default 65,536-particle chunks had before the bound (docs/format.md).
 inline constexpr uint8_t kDefaultPrecisionBits = 10;
@@ -138,6 +149,10 @@ struct ChunkDesc {
   // same layer and box. Older files: every record its own cell, tier 0.
   uint8_t tier = 0;
   bool continues_cell = false;
+  // The last tier whose values the record holds (tier ... last_tier): byte
+  // 19 in a coarse-to-fine frame (format 2.0); for 1.x records the tier
+  // before the next record of the cell, or 11 (parse_frame_table sets it).
+  uint8_t last_tier = 11;
   // Not stored: the record's place in the frame's chunk table as written
   // (parse_frame_table sets it), kept when keep_layers or keep_tiers drop
   // records, so errors name the chunk the file holds.
@@ -161,6 +176,10 @@ struct FrameHeader {
   // Format 1.3: side of the voxels whose blobs the Blobs chunks hold (world
   // units; 0 when the frame has none). A blob's LOD value is its count.
   float blob_voxel = 0;
+  // Format 2.0 (frame flags bit 0): records ordered coarse to fine: by
+  // layer (as written), then by tier, then along the Morton curve; every
+  // record its own cell. 1.x frames: each cell's tiers together.
+  bool coarse_to_fine = false;
   std::vector<ChunkDesc> chunks;
 };
 
@@ -182,14 +201,15 @@ inline size_t cell_end(const std::vector<ChunkDesc>& chunks, size_t first) {
   return end;
 }
 // The LOD values records[c] may hold (docs/format.md, "LOD tiers"): below
-// the floor of the tier above its own; at least the floor of the tier above
-// the next record of its cell when that follows it in `records` (the writer
-// puts the values of tiers it joins in the record before; a record whose
-// cell's tail was dropped, or older files' records, bound nothing below).
+// the floor of the tier above its own, at least the floor of its last tier
+// (ChunkDesc::last_tier).
 struct ValueBounds {
   uint16_t lo = 0, hi = 65535;
 };
 ValueBounds record_value_bounds(const std::vector<ChunkDesc>& records, size_t c);
+// 1.x tables: sets each record's last_tier from the next record of its cell
+// (the tier before it), or 11 for a cell's last record.
+void set_last_tiers(std::vector<ChunkDesc>& records);
 
 // Keeps, of each cell, the records of tiers below `tiers_of(first record of
 // the cell)` (uint32_t; 0 drops the cell) and recounts the particles. The

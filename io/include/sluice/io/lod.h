@@ -61,7 +61,10 @@ double blob_lod_uniform(int32_t cx, int32_t cy, int32_t cz);
 // cell's side from a face, the neighbour's too (the GPU's division need not
 // round as the host's does). A blob is written in the tier of this value,
 // so a reader that reads that tier has it whichever cell the GPU finds.
-double blob_lod_uniform_bound(float x, float y, float z, float voxel);
+// `margin` (a fraction of the side): a format 2.0 writer, which knows the
+// source centroid and not yet the decoded one, passes 2e-3 and keeps the
+// quantization error under 0.9e-3 of the side (docs/format.md).
+double blob_lod_uniform_bound(float x, float y, float z, float voxel, double margin = 1e-3);
 
 // How many tiers hold every value v with (v + 0.5) / 65536 >= 1 - keep:
 // what a reader must read of a chunk whose particles are kept with

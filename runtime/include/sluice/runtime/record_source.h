@@ -44,6 +44,12 @@ class RecordSource {
   // read_at().
   virtual size_t read_checked(std::span<std::byte> dst, uint64_t offset, uint64_t& checksum,
                               Stores stores = Stores::Streaming);
+  // As read_at(), for a run of a view's demand (a part of a frame): the
+  // device should move these bytes and no others. FileRecordSource reads
+  // them with pread on a descriptor whose readahead is off (or O_DIRECT),
+  // never through its mapping, whose page faults make the kernel read
+  // around them. This default calls read_at().
+  virtual size_t read_span(std::span<std::byte> dst, uint64_t offset) { return read_at(dst, offset); }
   // Offsets, sizes and buffer addresses of reads must be multiples of this
   // (O_DIRECT); 1 when there is no constraint. May change after a read (a
   // refused O_DIRECT falls back to buffered reads).
@@ -72,6 +78,7 @@ class FileRecordSource final : public RecordSource {
   size_t read_at(std::span<std::byte> dst, uint64_t offset) override;
   size_t read_checked(std::span<std::byte> dst, uint64_t offset, uint64_t& checksum,
                       Stores stores = Stores::Streaming) override;
+  size_t read_span(std::span<std::byte> dst, uint64_t offset) override;
   size_t alignment() const override;
   void will_need(uint64_t offset, uint64_t bytes) override;
   void set_access(AccessPattern pattern) override;
@@ -92,6 +99,7 @@ class FileRecordSource final : public RecordSource {
   std::atomic<int> direct_fd_{-1};
   std::atomic<bool> falling_back_{false};  // the first thread to see a refusal records why
   int owned_fd_ = -1;
+  int span_fd_ = -1;  // buffered, POSIX_FADV_RANDOM: read_span()'s (-1: buffered_fd_)
   std::string refused_;  // why O_DIRECT is not in use, once it was asked for
   const std::byte* map_ = nullptr;  // the whole file as it was at construction, read-only
   uint64_t map_bytes_ = 0;

@@ -35,6 +35,11 @@ struct PipelineStats {
   // record_bytes is the share of the file a view's demand (demand.h) reads.
   uint64_t record_bytes = 0;
   uint64_t frames_by_demand = 0;  // frames read with some tier or cell left out
+  // Reads by demand: the runs their wanted records were read in (records
+  // close together share one, read_runs.h) and the bytes those runs cover
+  // (the wanted records and the gaps read through).
+  uint64_t runs_read = 0;
+  uint64_t run_bytes = 0;
   // Kept-encoded frames read straight into their staged area and staged
   // there (no copy on the CPU; DecodeMode::KeepEncoded).
   uint64_t frames_in_place = 0;
