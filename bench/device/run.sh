@@ -454,6 +454,27 @@ for stage in $stages; do
       run $S bench view $T/v100m.sluice --steps ${VIEW_STEPS:-12} --memory 24G --stereo --size 2064x2208 --no-psnr
       rm -f $T/v100m.sluice
       ;;
+    layout)  # issue 45: the 100M pool in format 2.0 (coarse to fine) by view, from storage and the page cache, mono
+      run $S bench render --sizes 10M --repeats 3 >/dev/null  # warm-up
+      [[ -f $T/v20.sluice ]] || run $S synth -n 100M --frames ${VIEW_FRAMES:-16} -o $T/v20.sluice --force -q --gpu-decodable
+      run $S info $T/v20.sluice | head -14
+      run $S bench view $T/v20.sluice --steps ${VIEW_STEPS:-12} --memory 24G --no-psnr
+      ;;
+    layout2)  # after layout: stereo and full detail on the same file
+      run $S bench render --sizes 10M --repeats 3 >/dev/null  # warm-up
+      run $S bench view $T/v20.sluice --steps ${VIEW_STEPS:-12} --memory 24G --stereo --size 2064x2208 --no-psnr
+      run $S bench view $T/v20.sluice --steps ${VIEW_STEPS:-12} --memory 24G --lod-level 1 --no-psnr
+      ;;
+    layout15)  # the same pool written as format 1.5 (each cell's tiers together), read by this build
+      rm -f $T/v20.sluice
+      run $S bench render --sizes 10M --repeats 3 >/dev/null  # warm-up
+      [[ -f $T/v15.sluice ]] || run $S synth -n 100M --frames ${VIEW_FRAMES:-16} -o $T/v15.sluice --force -q --gpu-decodable --format 1.5
+      run $S info $T/v15.sluice | head -14
+      run $S bench view $T/v15.sluice --steps ${VIEW_STEPS:-12} --memory 24G --no-psnr
+      ;;
+    layoutq)  # pictures: the orbit by view against the full read (PSNR), format 2.0
+      run $S bench view $T/v20.sluice --steps ${VIEW_STEPS:-12} --memory 24G --no-storage
+      ;;
     viewfull)  # the same path at full detail (level 1): what the view leaves out when LOD keeps everything
       run $S synth -n 100M --frames ${VIEW_FRAMES:-24} -o $T/v100m.sluice --force -q --gpu-decodable
       run $S bench view $T/v100m.sluice --steps ${VIEW_STEPS:-12} --memory 24G --lod-level 1 --no-psnr

@@ -120,7 +120,9 @@ PipelineCore::ReadTarget PipelineCore::read_table(Slot& slot, const ReadTarget& 
   const uint64_t table = std::min<uint64_t>(e.bytes, io::frame_table_bytes(e.chunk_count, reader_.header().attributes.size()));
   const auto into = static_cast<uint64_t>(whole.record.data() - whole.dst.data());  // where the record starts in dst
   const uint64_t first = round_up(into + table, align);
-  read_piece(whole.dst.first(first), whole.offset, into + table, slot.frame, whole.offset + whole.need);
+  // By demand not through the mapping: a fault there makes the kernel read
+  // around it (read_ahead_kb, doubled for sequential play) what the view leaves out.
+  read_piece(whole.dst.first(first), whole.offset, into + table, slot.frame, whole.offset + whole.need, slot.by_demand);
   record_where_.frame = slot.frame;
   reader_.parse_table(slot.frame, whole.record.first(table), slot.header, record_where_);
   const uint64_t end = io::layers_end(slot.header, options_.layers, reader_.header().attributes.size());

@@ -516,9 +516,22 @@ void PipelineCore::read_again_on_host(ReaderState& rs, Slot& slot) {
   release_buffers(rs, slot);
   slot.relayed = false;
   slot.checked_on_read = false;  // the workers check the chunks
-  const ReadTarget whole = staged_target(rs, slot);  // the whole record, on this thread (a rare path)
-  read_piece(whole.dst, whole.offset, whole.need, slot.frame, whole.offset + whole.need);
+  const ReadTarget whole = staged_target(rs, slot);  // on this thread (a rare path)
   slot.record_bytes = whole.record;
+  if (!slot.by_demand) {
+    read_piece(whole.dst, whole.offset, whole.need, slot.frame, whole.offset + whole.need);
+    return;
+  }
+  // The table and the runs of the records the demand kept (slot.header), no more.
+  const uint64_t table = std::min<uint64_t>(whole.need, io::frame_table_bytes(reader_.index().frames[slot.frame].chunk_count,
+                                                                             reader_.header().attributes.size()));
+  read_piece(whole.dst.first(table), whole.offset, table, slot.frame, whole.offset + whole.need, true);
+  plan_runs(slot.header.chunks, 0, whole.dst.size(), whole.need, table,
+            {.align = 1, .gap = kRunGap, .piece = std::max<uint64_t>(options_.read.piece_bytes, 1)}, slot.runs);
+  for (const ByteRun& run : slot.runs) {
+    read_piece(whole.dst.subspan(run.at, run.length), whole.offset + run.at, run.required, slot.frame,
+               whole.offset + run.at + run.required, true);
+  }
 }
 
 void PipelineCore::prepare_decode(ReaderState& rs, Slot& slot) {
