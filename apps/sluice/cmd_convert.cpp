@@ -6,6 +6,7 @@
 
 #include "commands.h"
 #include "conversion.h"
+#include "format_option.h"
 #include "human.h"
 #if SLUICE_WITH_MPI
 #include "conversion_mpi.h"
@@ -145,12 +146,7 @@ void add_convert(CLI::App& app) {
   cmd->add_flag("--gpu-decodable", c->gpu_decodable,
                 "No zstd planes (each stored or bit-packed): every chunk decodes on the GPU with no CPU work but\n"
                 "its checksum (`sluice play` decodes on the GPU by default); files some percent larger");
-  cmd->add_option_function<std::string>(
-         "--format",
-         [o](const std::string& v) { o->format_major = v == "1.5" ? uint16_t(1) : uint16_t(2); },
-         "Container layout: 2.0 (default: each frame ordered coarse to fine, so a view reads a few large\n"
-         "runs) or 1.5 (each cell's tiers together, for sluice builds older than 2.0)")
-      ->check(CLI::IsMember({"2.0", "1.5"}));
+  add_format_option(*cmd, o->format_major);
   cmd->add_flag("--no-tiers", [o](int64_t) { o->lod_tiers = false; },
                 "One record per chunk instead of one per LOD tier: a few percent smaller, but a player then reads\n"
                 "every particle of a chunk it draws, however far away (docs/format.md, \"LOD tiers\")");

@@ -5,6 +5,7 @@
 #include <filesystem>
 
 #include "commands.h"
+#include "format_option.h"
 #include "human.h"
 #include "progress.h"
 #include "sluice/bench/synth.h"
@@ -67,12 +68,7 @@ void add_synth(CLI::App& app) {
          "--precision", [o](double p) { o->precision_bits = io::precision_bits_for(p); },
          "Largest position error as a fraction of the spacing, rounded down to a power of two (default 1/1024)")
       ->check(CLI::Range(1e-12, 0.5));
-  cmd->add_option_function<std::string>(
-         "--format",
-         [o](const std::string& v) { o->format_major = v == "1.5" ? uint16_t(1) : uint16_t(2); },
-         "Container layout: 2.0 (default: each frame ordered coarse to fine, so a view reads a few large\n"
-         "runs) or 1.5 (each cell's tiers together, for sluice builds older than 2.0)")
-      ->check(CLI::IsMember({"2.0", "1.5"}));
+  add_format_option(*cmd, o->format_major);
   cmd->add_flag("--no-tiers", [o](int64_t) { o->lod_tiers = false; },
                 "One record per chunk, not one per LOD tier (format 1.3's layout): smaller, always read whole");
   cmd->add_flag("--smallest", [o](int64_t) { o->planes = io::PlaneCoding::Zstd; },

@@ -7,7 +7,6 @@
 #include <algorithm>
 #include <cstring>
 #include <map>
-#include <random>
 
 #include "records.h"
 #include "sluice/io/checksum.h"
@@ -18,21 +17,6 @@
 using namespace sluice;
 
 namespace {
-
-// Scattered particles in a slab (not a lattice: tiers pay there), random ids.
-io::ParticleFrame scattered(uint64_t n, uint32_t seed) {
-  io::ParticleFrame f;
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<float> u(0.f, 1.f);
-  f.attributes.resize(1);
-  for (uint64_t i = 0; i < n; ++i) {
-    const float x = u(rng), y = u(rng), z = 0.3f * u(rng);
-    f.positions.insert(f.positions.end(), {x, y, z});
-    f.ids.push_back(rng());
-    f.attributes[0].push_back(1000.f + y);
-  }
-  return f;
-}
 
 io::EncodedFrame encode(const io::ParticleFrame& f, const io::FileHeader& h, bool tiers, bool layers = false) {
   const std::vector<uint16_t> lod = io::lod_values(f.ids, f.count());
@@ -49,20 +33,32 @@ io::EncodedFrame encode(const io::ParticleFrame& f, const io::FileHeader& h, boo
 
 int rank(io::Layer l) { return l == io::Layer::Blobs ? 1 : l == io::Layer::Interior ? 2 : 0; }
 
+// A frame decoded: each record's first particle and the 8-byte particles.
+struct Decoded {
+  std::vector<uint64_t> starts;
+  std::vector<std::byte> particles;
+};
+Decoded decode(const io::EncodedFrame& e, const io::FileHeader& h) {
+  const io::FrameHeader& fh = e.header;
+  Decoded d;
+  d.starts.resize(fh.chunks.size());
+  const uint64_t n = io::chunk_starts(fh, d.starts);
+  d.particles.resize(n * 8);
+  std::vector<uint16_t> attr(n);
+  std::vector<uint16_t*> attrs(h.attributes.size(), attr.data());
+  io::decode_record(e.record, fh, h, d.starts, d.particles, attrs, {});
+  return d;
+}
+
 // Every particle's LOD value, per record, decoded.
 std::vector<std::vector<uint16_t>> values_by_record(const io::EncodedFrame& e, const io::FileHeader& h) {
   const io::FrameHeader& fh = e.header;
-  std::vector<uint64_t> starts(fh.chunks.size());
-  const uint64_t n = io::chunk_starts(fh, starts);
-  std::vector<std::byte> particles(n * 8);
-  std::vector<uint16_t> attr(n);
-  std::vector<uint16_t*> attrs(h.attributes.size(), attr.data());
-  io::decode_record(e.record, fh, h, starts, particles, attrs, {});
+  const Decoded d = decode(e, h);
   std::vector<std::vector<uint16_t>> out(fh.chunks.size());
   for (size_t c = 0; c < fh.chunks.size(); ++c) {
-    for (uint64_t i = starts[c]; i < starts[c] + fh.chunks[c].particle_count; ++i) {
+    for (uint64_t i = d.starts[c]; i < d.starts[c] + fh.chunks[c].particle_count; ++i) {
       uint16_t v;
-      std::memcpy(&v, particles.data() + i * 8 + 6, 2);
+      std::memcpy(&v, d.particles.data() + i * 8 + 6, 2);
       out[c].push_back(v);
     }
   }
@@ -74,7 +70,7 @@ std::vector<std::vector<uint16_t>> values_by_record(const io::EncodedFrame& e, c
 TEST(CoarseToFine, WritersWrite2_0AndOrderEveryFrameLayerTierCurve) {
   const io::FileHeader h = test::test_header(io::PositionCoding::Quantized16);
   EXPECT_EQ(h.version_major, 2);
-  const io::EncodedFrame e = encode(scattered(200000, 4), h, true);
+  const io::EncodedFrame e = encode(test::scattered_frame(200000, 4), h, true);
   const io::FrameHeader& fh = e.header;
   EXPECT_TRUE(fh.coarse_to_fine);
   const std::vector<std::vector<uint16_t>> values = values_by_record(e, h);
@@ -102,7 +98,7 @@ TEST(CoarseToFine, WritersWrite2_0AndOrderEveryFrameLayerTierCurve) {
   EXPECT_EQ(tier0, 1);
   io::FileHeader old = h;
   io::set_format_version(old, 1);
-  const io::EncodedFrame cells = encode(scattered(200000, 4), old, true);
+  const io::EncodedFrame cells = encode(test::scattered_frame(200000, 4), old, true);
   EXPECT_FALSE(cells.header.coarse_to_fine);
   EXPECT_LT(fh.chunks.size(), cells.header.chunks.size() / 2) << "records: " << fh.chunks.size() << " against "
                                                                << cells.header.chunks.size();
@@ -129,7 +125,7 @@ TEST(CoarseToFine, AnyPrefixOfTiersIsOneByteRangePerLayer) {
 
 TEST(CoarseToFine, DecodesTheParticlesOfTheUntieredFrameWithinTheBound) {
   const io::FileHeader h = test::test_header(io::PositionCoding::Quantized16);
-  const io::ParticleFrame f = scattered(60000, 7);
+  const io::ParticleFrame f = test::scattered_frame(60000, 7);
   const io::EncodedFrame tiered = encode(f, h, true), flat = encode(f, h, false);
   for (const io::ChunkDesc& c : flat.header.chunks) {
     EXPECT_EQ(c.tier, 0);
@@ -152,19 +148,14 @@ TEST(CoarseToFine, ABlobIsReadNoLaterThanTheRendererKeepsIt) {
   const io::FileHeader h = test::test_header(io::PositionCoding::Quantized16);
   const io::EncodedFrame e = encode(test::lattice_frame(150000, 0.41f), h, true, true);
   const io::FrameHeader& fh = e.header;
-  std::vector<uint64_t> starts(fh.chunks.size());
-  const uint64_t n = io::chunk_starts(fh, starts);
-  std::vector<std::byte> particles(n * 8);
-  std::vector<uint16_t> attr(n);
-  std::vector<uint16_t*> attrs(h.attributes.size(), attr.data());
-  io::decode_record(e.record, fh, h, starts, particles, attrs, {});
+  const Decoded d = decode(e, h);
   size_t blobs = 0;
   for (size_t c = 0; c < fh.chunks.size(); ++c) {
     const io::ChunkDesc& r = fh.chunks[c];
     if (r.layer != io::Layer::Blobs) continue;
-    for (uint64_t i = starts[c]; i < starts[c] + r.particle_count; ++i) {
+    for (uint64_t i = d.starts[c]; i < d.starts[c] + r.particle_count; ++i) {
       uint16_t q[4];
-      std::memcpy(q, particles.data() + i * 8, 8);
+      std::memcpy(q, d.particles.data() + i * 8, 8);
       float p[3];
       for (int a = 0; a < 3; ++a) p[a] = io::dequantize(q[a], r.bounds.min[size_t(a)], r.bounds.max[size_t(a)]);
       const uint32_t tier = io::lod_tier_of_uniform(io::blob_lod_uniform_bound(p[0], p[1], p[2], fh.blob_voxel));
@@ -177,7 +168,7 @@ TEST(CoarseToFine, ABlobIsReadNoLaterThanTheRendererKeepsIt) {
 
 TEST(CoarseToFine, TablesThatBreakTheOrderAreRejected) {
   const io::FileHeader h = test::test_header(io::PositionCoding::Quantized16);
-  const io::EncodedFrame e = encode(scattered(200000, 2), h, true);
+  const io::EncodedFrame e = encode(test::scattered_frame(200000, 2), h, true);
   const size_t desc = io::chunk_desc_bytes(h.attributes.size());
   const size_t table = io::frame_table_bytes(e.header.chunks.size(), h.attributes.size());
   ASSERT_GE(e.header.chunks.size(), 3u);

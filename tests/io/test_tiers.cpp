@@ -29,21 +29,6 @@ io::FileHeader legacy(io::FileHeader h) {
   return h;
 }
 
-// Scattered particles (not a lattice: tiers pay there) with random ids.
-io::ParticleFrame scattered_frame(uint64_t n, uint32_t seed) {
-  io::ParticleFrame f;
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<float> u(0.f, 1.f);
-  f.attributes.resize(1);
-  for (uint64_t i = 0; i < n; ++i) {
-    const float x = u(rng), y = u(rng), z = 0.5f * u(rng);
-    f.positions.insert(f.positions.end(), {x, y, z});
-    f.ids.push_back(rng());
-    f.attributes[0].push_back(1000.f + 10.f * std::sin(x * 7.f) + y);
-  }
-  return f;
-}
-
 struct Variant {
   const char* name;
   io::PositionCoding coding;
@@ -113,7 +98,7 @@ const Variant kVariants[] = {
 }  // namespace
 
 TEST(Tiers, EveryCodecDecodesTheSameParticlesAsUntiered) {
-  const io::ParticleFrame f = scattered_frame(60000, 5);
+  const io::ParticleFrame f = test::scattered_frame(60000, 5);
   for (const Variant& v : kVariants) {
     SCOPED_TRACE(v.name);
     const io::FileHeader h = legacy(test::test_header(v.coding));
@@ -145,7 +130,7 @@ TEST(Tiers, EveryCodecDecodesTheSameParticlesAsUntiered) {
 
 TEST(Tiers, RecordsHoldTheirTiersInOrderAndEveryPrefixIsOneRange) {
   const io::FileHeader h = legacy(test::test_header(io::PositionCoding::Quantized16));
-  const io::EncodedFrame e = encode(scattered_frame(60000, 9), h, kVariants[0], true);
+  const io::EncodedFrame e = encode(test::scattered_frame(60000, 9), h, kVariants[0], true);
   const io::FrameHeader& fh = e.header;
   std::vector<uint64_t> starts(fh.chunks.size());
   const uint64_t n = io::chunk_starts(fh, starts);
@@ -209,7 +194,7 @@ TEST(Tiers, TiersForKeepHoldEveryValueCLodCanKeep) {
 
 TEST(Tiers, KeepTiersKeepsAPrefixOfEachCell) {
   const io::FileHeader h = legacy(test::test_header(io::PositionCoding::Quantized16));
-  const io::EncodedFrame e = encode(scattered_frame(60000, 11), h, kVariants[0], true);
+  const io::EncodedFrame e = encode(test::scattered_frame(60000, 11), h, kVariants[0], true);
   for (uint32_t t = 0; t <= io::kLodTiers; ++t) {
     io::FrameHeader fh = e.header;
     io::keep_tiers(fh, [&](const io::ChunkDesc&) { return t; });
@@ -221,7 +206,7 @@ TEST(Tiers, KeepTiersKeepsAPrefixOfEachCell) {
     EXPECT_EQ(count, fh.particle_count);
     // Every particle whose value lies in the first t tiers is kept.
     uint64_t want = 0;
-    for (uint64_t id : scattered_frame(60000, 11).ids) want += t > 0 && io::lod_tier(io::lod_value_from_id(id)) < t;
+    for (uint64_t id : test::scattered_frame(60000, 11).ids) want += t > 0 && io::lod_tier(io::lod_value_from_id(id)) < t;
     EXPECT_GE(count, want);
     if (t == io::kLodTiers) EXPECT_EQ(count, 60000u);
   }
@@ -229,7 +214,7 @@ TEST(Tiers, KeepTiersKeepsAPrefixOfEachCell) {
 
 TEST(Tiers, UntieredFilesReadAsOneTierPerChunk) {
   const io::FileHeader h = legacy(test::test_header(io::PositionCoding::Quantized16));
-  const io::EncodedFrame e = encode(scattered_frame(30000, 3), h, kVariants[0], false);
+  const io::EncodedFrame e = encode(test::scattered_frame(30000, 3), h, kVariants[0], false);
   const io::FrameHeader parsed = io::parse_frame_table(e.record, h.attributes.size(), {});
   for (const io::ChunkDesc& c : parsed.chunks) {
     EXPECT_EQ(c.tier, 0);
@@ -280,7 +265,7 @@ TEST(Tiers, LatticeCellsThatTiersWouldBloatStayWhole) {
 
 TEST(Tiers, TablesThatBreakTheTierRulesAreRejected) {
   const io::FileHeader h = legacy(test::test_header(io::PositionCoding::Quantized16));
-  const io::EncodedFrame e = encode(scattered_frame(20000, 2), h, kVariants[0], true);
+  const io::EncodedFrame e = encode(test::scattered_frame(20000, 2), h, kVariants[0], true);
   const size_t desc = io::chunk_desc_bytes(h.attributes.size());
   const size_t table = io::frame_table_bytes(e.header.chunks.size(), h.attributes.size());
   auto reject = [&](size_t chunk, size_t byte, uint8_t value, const char* what) {

@@ -17,6 +17,22 @@
 
 namespace sluice::test {
 
+// Scattered particles in a slab (not a lattice: LOD tiers pay there) with
+// random ids and one attribute.
+inline io::ParticleFrame scattered_frame(uint64_t n, uint32_t seed) {
+  io::ParticleFrame f;
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> u(0.f, 1.f);
+  f.attributes.resize(1);
+  for (uint64_t i = 0; i < n; ++i) {
+    const float x = u(rng), y = u(rng), z = 0.5f * u(rng);
+    f.positions.insert(f.positions.end(), {x, y, z});
+    f.ids.push_back(rng());
+    f.attributes[0].push_back(1000.f + 10.f * std::sin(x * 7.f) + y);
+  }
+  return f;
+}
+
 // A jittered lattice of `n` particles, spacing 0.01, moved by `t`, with a
 // stable id per particle and one attribute (a smooth field).
 inline io::ParticleFrame lattice_frame(uint64_t n, double t, uint32_t seed = 1) {
