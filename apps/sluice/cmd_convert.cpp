@@ -1,5 +1,7 @@
 // `sluice convert`: simulation output -> .sluice, parallel over frames with
 // a bounded number of frames in memory.
+#include <tbb/global_control.h>
+
 #include <algorithm>
 #include <filesystem>
 #include <string>
@@ -11,6 +13,8 @@
 #if SLUICE_WITH_MPI
 #include "conversion_mpi.h"
 #endif
+#include "progress.h"
+#include "sluice/io/relayout.h"
 #include "sluice/io/up_axis.h"
 
 namespace sluice::app {
@@ -48,6 +52,49 @@ std::string default_output(const std::string& input) {
   const auto dir = p.has_filename() ? p.parent_path() : p.parent_path().parent_path();
   const std::string name = dir.filename().string();
   return (name.empty() || name == "." ? "out" : name) + ".sluice";
+}
+
+// Flags about reading simulation output: a .sluice input has settled them.
+constexpr const char* kSolverOnly[] = {"--attribute", "--id-array", "--no-ids", "--lossless", "--spacing",
+                                       "--radius", "--precision", "--drop-outliers", "--fps", "--dt", "--up",
+                                       "--no-tiers", "--no-layers", "--band-voxel", "--band-f2", "--skip-bad",
+                                       "--read-timeout", "--in-process", "--mpi"};
+
+// A .sluice input rewritten in the layout --format names (io/relayout.h).
+void run_relayout(const ConvertCommand& c, const CLI::App& cmd) {
+  for (const char* flag : kSolverOnly) {
+    if (cmd.count(flag) > 0) {
+      throw std::runtime_error(std::string(flag) + " applies to simulation output; " + c.conversion.input +
+                               " is a .sluice file, rewritten as it is (its spacing, precision, layers and "
+                               "attributes kept): leave " + flag + " out, or convert the solver's files again");
+    }
+  }
+  const uint16_t major = c.conversion.format_major;
+  const std::string version = major == 1 ? "1.5" : "2.0";
+  const std::string output = !c.output.empty() ? c.output
+                             : std::filesystem::path(c.conversion.input).stem().string() + "-" + version + ".sluice";
+  if (std::filesystem::exists(output) && !c.force) {
+    throw std::runtime_error(output + " exists; pass --force to overwrite it, or -o to choose another name");
+  }
+  io::RelayoutOptions r;
+  r.format_major = major;
+  if (c.gpu_decodable) r.planes = io::PlaneCoding::GpuDecodable;
+  if (c.smallest) r.planes = io::PlaneCoding::Zstd;
+  r.chunk_particles = c.conversion.chunk;
+  r.zstd_level = c.conversion.level;
+  std::optional<tbb::global_control> limit;
+  if (c.conversion.jobs > 0) limit.emplace(tbb::global_control::max_allowed_parallelism, size_t(c.conversion.jobs));
+  const uint64_t frames = io::ContainerReader(c.conversion.input).frame_count();
+  ProgressBar bar("frames", frames, c.report.quiet);
+  const io::RelayoutReport s = io::relayout_container(c.conversion.input, output, r,
+                                                      [&bar](uint64_t done, uint64_t) { bar.update(done); });
+  bar.finish();
+  std::printf("wrote %s: %llu frame%s, %s particle%s in the format %s layout, %s in -> %s out (%sx) in %s\n",
+              output.c_str(), (unsigned long long)s.frames, s.frames == 1 ? "" : "s",
+              human_count(double(s.particles)).c_str(), s.particles == 1 ? "" : "s", version.c_str(),
+              human_bytes(double(s.input_bytes)).c_str(), human_bytes(double(s.output_bytes)).c_str(),
+              fixed(double(s.output_bytes) / std::max(double(s.input_bytes), 1.0), 3).c_str(),
+              human_duration(bar.elapsed()).c_str());
 }
 
 void run_convert(const ConvertCommand& c) {
@@ -110,7 +157,10 @@ void add_convert(CLI::App& app) {
       "  sluice convert run.pvd --lossless --jobs 8\n\n"
       "Damaged input: every count in a file is checked against its bytes before anything is read. VTK's XML\n"
       "readers run in worker processes, so a crash or hang on a damaged file is an error naming that file.\n"
-      "A bad frame stops the conversion (the output keeps the frames before it) unless --skip-bad.\n");
+      "A bad frame stops the conversion (the output keeps the frames before it) unless --skip-bad.\n\n"
+      "A .sluice INPUT is rewritten in the layout --format names (default 2.0, frames ordered coarse to\n"
+      "fine): `sluice convert old.sluice -o new.sluice`. Its header, layers and attributes are kept; positions\n"
+      "are quantized again in the new cells, each within the file's stated bound of the input's.\n");
   cmd->add_option("input", o->input, "File, quoted glob, .pvd or directory")->required();
   cmd->add_option("-o,--output", c->output, "Output file (default: named after the input)");
   cmd->add_option("-a,--attribute", o->attributes, "Point-data array to keep for colouring (repeat, or a,b)")
@@ -180,7 +230,13 @@ void add_convert(CLI::App& app) {
                 "(srun the same way). --jobs is threads per rank (default: the node's cores shared among its\n"
                 "ranks). The input must be the same path on every node. docs/convert_mpi.md");
   cmd->add_flag("-q,--quiet", c->report.quiet, "No progress bar or notes");
-  cmd->callback([c] { run_convert(*c); });
+  cmd->callback([c, cmd] {
+    if (io::is_container(c->conversion.input)) {
+      run_relayout(*c, *cmd);
+    } else {
+      run_convert(*c);
+    }
+  });
 }
 
 }  // namespace sluice::app

@@ -4,6 +4,7 @@
 #include <tbb/parallel_for.h>
 #include <unistd.h>
 
+#include <array>
 #include <cstring>
 
 #include "file.h"
@@ -145,6 +146,15 @@ std::vector<uint16_t> lod_values_of(const DecodedFrame& frame, PositionCoding co
   std::vector<uint16_t> lod(n);
   for (size_t i = 0; i < n; ++i) std::memcpy(&lod[i], frame.particles.data() + stride * i + offset, 2);
   return lod;
+}
+
+bool is_container(const std::filesystem::path& path) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) return false;
+  std::array<uint8_t, kFileMagic.size()> magic{};
+  const bool whole = ::pread(fd, magic.data(), magic.size(), 0) == ssize_t(magic.size());
+  ::close(fd);
+  return whole && magic == kFileMagic;
 }
 
 }  // namespace sluice::io
