@@ -472,6 +472,18 @@ for stage in $stages; do
       run $S info $T/v15.sluice | head -14
       run $S bench view $T/v15.sluice --steps ${VIEW_STEPS:-12} --memory 24G --no-psnr
       ;;
+    layoutab)  # issue 45, one call: pack.sh's BASE (a 1.5 reader) and this build on the pool written as 1.5, then the same pool rewritten as 2.0 by `sluice convert`, mono and stereo
+      run $S bench render --sizes 10M --repeats 3 >/dev/null  # warm-up
+      run $S synth -n 100M --frames ${VIEW_FRAMES:-12} -o $T/v15.sluice --force -q --gpu-decodable --format 1.5
+      [[ -x .gpu/sluice_base ]] && run .gpu/sluice_base bench view $T/v15.sluice --steps ${VIEW_STEPS:-12} --memory 24G --no-psnr
+      run $S bench view $T/v15.sluice --steps ${VIEW_STEPS:-12} --memory 24G --no-psnr
+      log "convert (1.5 -> 2.0)"
+      { TIMEFORMAT="convert: %R s wall"; time $S convert $T/v15.sluice -o $T/v20.sluice --force -q; } 2>&1 | tee -a "$OUT/summary.txt"
+      rm -f $T/v15.sluice
+      run $S info $T/v20.sluice | head -3
+      run $S bench view $T/v20.sluice --steps ${VIEW_STEPS:-12} --memory 24G --no-psnr
+      run $S bench view $T/v20.sluice --steps ${VIEW_STEPS:-12} --memory 24G --stereo --size 2064x2208 --no-psnr
+      ;;
     layoutq)  # pictures: the orbit by view against the full read (PSNR), format 2.0
       run $S bench view $T/v20.sluice --steps ${VIEW_STEPS:-12} --memory 24G --no-storage
       ;;

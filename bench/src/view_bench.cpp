@@ -131,6 +131,9 @@ struct Run {
   uint64_t device_bytes = 0;  // what storage delivered meanwhile (process_read_bytes)
   uint64_t runs = 0;          // the runs reads by demand took (PipelineStats::runs_read)
   double seconds = 0;
+  // From the start to the first frame fed (the player's start, its window,
+  // the first read): paid once a playback, not once a frame.
+  double first_seconds = 0;
   double worst_psnr = std::numeric_limits<double>::infinity();
   double median_psnr = std::numeric_limits<double>::infinity();
 };
@@ -180,9 +183,11 @@ class Bench {
     const auto t0 = Clock::now();
     Player p(*this, first, demand(steps.front().views, lod, by_view));
     p.player.play();
+    double first_seconds = 0;
     for (const Step& step : steps) {
       p.player.set_demand(demand(step.views, lod, by_view));
       const render::FeedUpdate fed = p.next_frame();
+      if (&step == &steps.front()) first_seconds = std::chrono::duration<double>(Clock::now() - t0).count();
       target.render(renderer_, step.views, fluid_, lod);
       if (ref) {
         const render::Image shown{target.width(), target.height(), target.read_rgba8()};
@@ -192,6 +197,7 @@ class Bench {
     target.finish();
     const double seconds = std::chrono::duration<double>(Clock::now() - t0).count();
     Run r = finish(p, {}, seconds, uint64_t(steps.size()), db);
+    r.first_seconds = first_seconds;
     r.device_bytes = process_read_bytes() - device_before;
     return r;
   }
@@ -361,13 +367,18 @@ void run_view_bench(const ViewBenchOptions& o) {
       std::printf("disk: O_DIRECT refused here; no sequential bound measured\n");
     }
   }
-  Table table({"segment", "read", "from", "frames/s", "read per frame", "device per frame", "runs per frame",
+  Table table({"segment", "read", "from", "frames/s", "first frame", "frames/s after it", "read per frame", "device per frame", "runs per frame",
                "of the records", "of the disk's bound", "refinements"});
   const auto add = [&](Segment s, bool by_view, const char* from, const Run& r) {
     const double read = r.frames_read ? double(r.frames_read) : 1.0;
     const double per = double(r.bytes_read) / read;
     const double device = double(r.device_bytes) / read;
     const double fps = s == Segment::Pause ? 0 : double(r.frames_shown) / r.seconds;
+    // The rate once playing: the frames after the first over their time.
+    const double after = r.seconds - r.first_seconds;
+    const std::string steady = s == Segment::Pause || r.frames_shown < 2 || after <= 0
+                                   ? "-"
+                                   : num(double(r.frames_shown - 1) / after, 1);
     // The share of the disk's sequential rate the segment drew from it.
     const bool cold = std::string(from).find("storage") != std::string::npos;
     const std::string bound = cold && disk_gbps && r.seconds > 0
@@ -375,6 +386,7 @@ void run_view_bench(const ViewBenchOptions& o) {
                                   : "-";
     table.row({segment_name(s), by_view ? "by view" : "full", from,
                s == Segment::Pause ? num(r.seconds * 1e3, 1) + " ms to converge" : num(fps, 1),
+               s == Segment::Pause ? "-" : num(r.first_seconds * 1e3, 1) + " ms", steady,
                s == Segment::Pause ? mb(double(r.bytes_read)) + " (refinement)" : mb(per),
                s == Segment::Pause ? mb(double(r.device_bytes)) : mb(device) + (per > 0 && cold ? " (" + num(device / per, 2) + "x)" : ""),
                by_view ? num(double(r.runs) / read, 1) : "-",

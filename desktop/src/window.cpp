@@ -4,6 +4,8 @@
 // Vulkan objects are Vulkan-Hpp RAII wrappers around the Context's public
 // handles (borrowed: released, never destroyed, at the end).
 #include <vulkan/vulkan_raii.hpp>  // first: GLFW declares its Vulkan entry points only after vulkan.h
+// Vulkan-Hpp compiled in sluice's own namespace (cmake/vulkan_hpp.cmake).
+namespace vk = ::sluice_vk;
 
 #define GLFW_INCLUDE_NONE
 #include <GLFW/glfw3.h>

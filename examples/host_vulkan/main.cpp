@@ -28,6 +28,7 @@
 #include <cstdio>
 #include <cstring>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -48,11 +49,11 @@ const uint32_t kBoxFrag[] =
 
 constexpr uint32_t kWidth = 480, kHeight = 320, kFramesInFlight = 2;
 constexpr vk::Format kColor = vk::Format::eR8G8B8A8Unorm, kDepth = vk::Format::eD32Sfloat;
-int validation_errors = 0;
+int validation_messages = 0;  // warnings and errors of every kind, performance ones too
 
 VKAPI_ATTR VkBool32 VKAPI_CALL on_validation(VkDebugUtilsMessageSeverityFlagBitsEXT, VkDebugUtilsMessageTypeFlagsEXT,
                                              const VkDebugUtilsMessengerCallbackDataEXT* data, void*) {
-  ++validation_errors;
+  ++validation_messages;
   std::fprintf(stderr, "validation: %s\n", data->pMessage);
   return VK_FALSE;
 }
@@ -187,7 +188,8 @@ Instance make_instance(const vk::raii::Context& loader) {
     using S = vk::DebugUtilsMessageSeverityFlagBitsEXT;
     using T = vk::DebugUtilsMessageTypeFlagBitsEXT;
     i.messenger = vk::raii::DebugUtilsMessengerEXT(
-        i.instance, vk::DebugUtilsMessengerCreateInfoEXT({}, S::eError, T::eValidation | T::eGeneral, &on_validation));
+        i.instance, vk::DebugUtilsMessengerCreateInfoEXT({}, S::eWarning | S::eError,
+                                                         T::eValidation | T::eGeneral | T::ePerformance, &on_validation));
   }
   return i;
 }
@@ -243,7 +245,9 @@ std::vector<float> simulate(int step, float h) {
 // boxes, a camera, and one command buffer + fence per frame in flight.
 class HostScene {
  public:
-  HostScene(const Device& d, const Box& b) : d_(d) {
+  // `queue_lock`: the context's (Context::queue_lock()), held around every
+  // submission to the queue it shares with sluice's relay (stream.h, "Queues").
+  HostScene(const Device& d, const Box& b, std::mutex& queue_lock) : d_(d), queue_lock_(queue_lock) {
     using U = vk::ImageUsageFlagBits;
     color_ = make_image(d.device, d.physical, kColor, U::eColorAttachment | U::eTransferSrc, vk::ImageAspectFlagBits::eColor);
     depth_ = make_image(d.device, d.physical, kDepth, U::eDepthStencilAttachment | U::eTransferSrc, vk::ImageAspectFlagBits::eDepth);
@@ -277,7 +281,7 @@ class HostScene {
     const vk::CommandBufferSubmitInfo cb(cmd);
     const vk::SemaphoreSubmitInfo wait(vk::Semaphore(sync.upload_semaphore), sync.upload_value,
                                        vk::PipelineStageFlags2(sync.wait_stages));
-    d_.queue.submit2(vk::SubmitInfo2({}, fluid ? 1u : 0u, &wait, 1, &cb), *slot.fence);
+    submit(vk::SubmitInfo2({}, fluid ? 1u : 0u, &wait, 1, &cb), *slot.fence);
     slot.busy = true;
   }
 
@@ -301,7 +305,7 @@ class HostScene {
                           vk::BufferImageCopy(bytes, 0, 0, {vk::ImageAspectFlagBits::eDepth, 0, 0, 1}, {}, {kWidth, kHeight, 1}));
     cmd.end();
     const vk::CommandBufferSubmitInfo cb(cmd);
-    d_.queue.submit2(vk::SubmitInfo2({}, {}, cb), *slot.fence);
+    submit(vk::SubmitInfo2({}, {}, cb), *slot.fence);
     slot.busy = true;
     wait_for(slot);
     const auto* mapped = static_cast<const std::byte*>(memory.mapMemory(0, 2 * bytes));
@@ -425,7 +429,16 @@ class HostScene {
     cmd.pipelineBarrier2(vk::DependencyInfo({}, {}, {}, to_read));
   }
 
+  // The queue is the one sluice was handed, which its relay may share:
+  // StreamOptions::queue_lock is HostTakesIt, so every submission holds
+  // the context's lock.
+  void submit(const vk::SubmitInfo2& info, vk::Fence fence) {
+    const std::lock_guard lock(queue_lock_);
+    d_.queue.submit2(info, fence);
+  }
+
   const Device& d_;
+  std::mutex& queue_lock_;
   Image color_, depth_;
   vk::raii::PipelineLayout layout_{nullptr};
   vk::raii::Pipeline pipeline_{nullptr};
@@ -482,7 +495,11 @@ int main(int argc, char** argv) try {
   // frames the host computes (pushed from its memory, recorded when asked).
   sluice::render::Context context(sluice::render::HostVulkan{
       {*instance.instance, *device.physical, *device.device, device.family, *device.queue}, device.memory_budget});
+  // The host submits under context.queue_lock() (HostScene::submit), so
+  // frames the GPU decodes may be relayed to device memory as they are read
+  // even where the relay shares the host's one queue (relay_queue_shared()).
   const sluice::render::StreamOptions options{.renderer = {.frames_in_flight = kFramesInFlight},
+                                               .queue_lock = sluice::render::QueueLock::HostTakesIt,
                                                .motion = sluice::render::ViewMotion::Fixed};  // the host's camera stays put
   sluice::render::LiveOptions live;
   live.particle_spacing = 0.02f;
@@ -498,7 +515,7 @@ int main(int argc, char** argv) try {
 
   // 4. The host's images, pipeline, camera (framing the data) and frames in flight.
   const sluice::render::Bounds data = stream->scene().bounds;
-  HostScene scene(device, {{data.min.x, data.min.y, data.min.z}, {data.max.x, data.max.y, data.max.z}});
+  HostScene scene(device, {{data.min.x, data.min.y, data.min.z}, {data.max.x, data.max.y, data.max.z}}, context.queue_lock());
 
   // 5. The frame loop: the views, the frame due, the host's drawing and sluice's.
   if (!args->live) stream->player().play();
@@ -527,10 +544,10 @@ int main(int argc, char** argv) try {
   sluice::render::Image png{kWidth, kHeight, std::vector<uint8_t>(both.size() * 4)};
   std::memcpy(png.rgba.data(), both.data(), png.rgba.size());
   sluice::render::write_png(args->out, png);
-  std::printf("wrote %s (%ux%u, %d frames, %d validation errors)\n", args->out.c_str(), kWidth, kHeight, args->frames,
-              validation_errors);
+  std::printf("wrote %s (%ux%u, %d frames, %d validation messages)\n", args->out.c_str(), kWidth, kHeight, args->frames,
+              validation_messages);
   const bool checked = !args->check || check_occlusion(scene, *stream, both, both_z);
-  return checked && validation_errors == 0 ? 0 : 1;
+  return checked && validation_messages == 0 ? 0 : 1;
 } catch (const std::exception& e) {
   std::fprintf(stderr, "host_vulkan: %s\n", e.what());
   return 1;

@@ -35,6 +35,19 @@ vk::ImageAspectFlags depth_aspect(VkFormat f) {
   return a;
 }
 
+// The host's depth image from GENERAL (where it lives while sluice's
+// commands run) into a copy's own layout around that copy, and back: copies
+// in GENERAL are slower on some drivers (the validation layer warns).
+void relayout_depth(vk::CommandBuffer cmd, const RenderTarget& target, vk::ImageLayout from, vk::ImageLayout to,
+                    vk::PipelineStageFlags2 src_stage, vk::AccessFlags2 src_access, vk::PipelineStageFlags2 dst_stage,
+                    vk::AccessFlags2 dst_access) {
+  const vk::ImageMemoryBarrier2 b(src_stage, src_access, dst_stage, dst_access, from, to, VK_QUEUE_FAMILY_IGNORED,
+                                  VK_QUEUE_FAMILY_IGNORED, vk::Image(target.depth_image),
+                                  vk::ImageSubresourceRange(depth_aspect(target.depth_format), 0, 1, target.base_layer,
+                                                            target.layer_count));
+  cmd.pipelineBarrier2(vk::DependencyInfo({}, {}, {}, b));
+}
+
 }  // namespace
 
 bool is_srgb(vk::Format f) {
@@ -359,7 +372,11 @@ void PassRecorder::shade_with_host_depth(const RenderTarget& target, const View&
     // the buffer; after the copy back of the view before, if any.
     memory_barrier(cmd_, Stage::eCopy, Access::eTransferWrite, Stage::eComputeShader, Access::eShaderSampledRead);
   } else {
-    cmd_.copyImageToBuffer(depth, general, *r_.host_depth.buffer, region);
+    const vk::ImageLayout source = vk::ImageLayout::eTransferSrcOptimal;
+    relayout_depth(cmd_, target, general, source, Stage::eAllCommands, Access::eMemoryWrite, Stage::eCopy,
+                   Access::eTransferRead);
+    cmd_.copyImageToBuffer(depth, source, *r_.host_depth.buffer, region);
+    relayout_depth(cmd_, target, source, general, Stage::eCopy, {}, Stage::eAllCommands, {});
     memory_barrier(cmd_, Stage::eCopy, Access::eTransferWrite, Stage::eComputeShader,
                    Access::eShaderStorageRead | Access::eShaderStorageWrite);
   }
@@ -375,7 +392,12 @@ void PassRecorder::shade_with_host_depth(const RenderTarget& target, const View&
   pc_.host_depth = 0;
   stamp("shade");
   memory_barrier(cmd_, Stage::eComputeShader, Access::eShaderStorageWrite, Stage::eCopy, Access::eTransferRead);
-  cmd_.copyBufferToImage(*r_.host_depth.buffer, depth, general, region);
+  const vk::ImageLayout destination = vk::ImageLayout::eTransferDstOptimal;
+  relayout_depth(cmd_, target, general, destination, Stage::eAllCommands, Access::eMemoryWrite, Stage::eCopy,
+                 Access::eTransferWrite);
+  cmd_.copyBufferToImage(*r_.host_depth.buffer, depth, destination, region);
+  relayout_depth(cmd_, target, destination, general, Stage::eCopy, Access::eTransferWrite, Stage::eAllCommands,
+                 Access::eMemoryRead | Access::eMemoryWrite);
   stamp("depth out");
 }
 

@@ -18,6 +18,10 @@
 
 #include "sluice/render/context.h"
 
+// Vulkan-Hpp compiled in sluice's own namespace (cmake/vulkan_hpp.cmake: a
+// host's vk:: of another build type must not share its inline code).
+namespace vk = ::sluice_vk;
+
 namespace sluice::render {
 
 struct detail::ContextImpl {

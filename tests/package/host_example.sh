@@ -14,9 +14,24 @@ if [[ -n "$sanitize" ]]; then
 fi
 # GLFW and OpenXR hidden: a host that asks for the render component only
 # must configure without them.
-cmake -S "$src/examples/host_vulkan" -B "$scratch/build" -DCMAKE_PREFIX_PATH="$scratch/prefix" \
-  -DCMAKE_DISABLE_FIND_PACKAGE_glfw3=ON -DCMAKE_DISABLE_FIND_PACKAGE_OpenXR=ON \
+hidden=(-DCMAKE_DISABLE_FIND_PACKAGE_glfw3=ON -DCMAKE_DISABLE_FIND_PACKAGE_OpenXR=ON)
+cmake -S "$src/examples/host_vulkan" -B "$scratch/build" -DCMAKE_PREFIX_PATH="$scratch/prefix" "${hidden[@]}" \
   -DCMAKE_BUILD_TYPE=Release "${flags[@]}" >/dev/null
+# The host as host authors build it, each against the same (Release)
+# package: as the README says (no build type: no NDEBUG), Debug with the
+# standard library's assertions, and Debug under ASan + UBSan. Vulkan-Hpp's
+# debug layout must not meet sluice's (cmake/vulkan_hpp.cmake).
+declare -A variants=(
+  [readme]=""
+  [debug]="-DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS=-D_GLIBCXX_ASSERTIONS"
+  [asan]="-DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS=-fsanitize=address,undefined -DCMAKE_EXE_LINKER_FLAGS=-fsanitize=address,undefined"
+)
+for v in readme debug asan; do
+  # shellcheck disable=SC2086 # the variant's flags are words
+  cmake -S "$src/examples/host_vulkan" -B "$scratch/build-$v" -DCMAKE_PREFIX_PATH="$scratch/prefix" "${hidden[@]}" \
+    ${variants[$v]} >/dev/null
+  cmake --build "$scratch/build-$v" -j 2 >/dev/null
+done
 # Asked for, the optional components load (their dependencies are there).
 mkdir -p "$scratch/components"
 cat > "$scratch/components/CMakeLists.txt" <<'CMAKE'
@@ -72,6 +87,18 @@ cd "$scratch"
 # The bundled sample, converted by that program and streamed from its file.
 "$scratch/convert/build/convert" "$src/data/dam_break_3d/dam_break_3d.pvd" "$scratch/dam.sluice"
 "$scratch/build/host_vulkan" --check --frames 8 --out "$scratch/host_vulkan.png" "$scratch/dam.sluice"
+for v in readme debug asan; do
+  echo "--- host built: $v"
+  if [[ $v == asan ]]; then
+    # Lavapipe preloaded so its own leaks can be named and suppressed (tests/lsan.supp).
+    lvp=$(ls /usr/lib/*/libvulkan_lvp.so 2>/dev/null | head -1 || true)
+    LD_PRELOAD=$lvp ASAN_OPTIONS=detect_leaks=1:verify_asan_link_order=0 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+      LSAN_OPTIONS=suppressions=$src/tests/lsan.supp \
+      "$scratch/build-$v/host_vulkan" --check --frames 8 --out "$scratch/host_$v.png" "$scratch/dam.sluice"
+  else
+    "$scratch/build-$v/host_vulkan" --check --frames 8 --out "$scratch/host_$v.png" "$scratch/dam.sluice"
+  fi
+done
 # The same host pushing frames of its own simulation (render::LiveSource), recorded as it goes.
 "$scratch/build/host_vulkan" --live --check --frames 6 --record "$scratch/live.sluice" --out "$scratch/host_live.png"
 test -s "$scratch/live.sluice"

@@ -50,7 +50,7 @@ void expect_clean(const TestHost& host) {
   if (!host.validation) return;
   std::string all;
   for (const std::string& m : host.messages) all += m + "\n";
-  EXPECT_EQ(host.errors.load(), 0) << all;
+  EXPECT_EQ(host.reports.load(), 0) << all;
 }
 
 // A host's kW x kH colour image as a target: contents discarded before,

@@ -1,5 +1,5 @@
 // A host application's Vulkan setup, for the embedding tests: its own
-// instance (validation layer and a messenger counting errors, when present),
+// instance (validation layer and a messenger counting its warnings and errors, when present),
 // device made with what sluice asks for, a graphics queue, and images of its
 // own. sluice only ever sees the handles (Context(HostVulkan)).
 #pragma once
@@ -33,7 +33,7 @@ class TestHost {
       using S = vk::DebugUtilsMessageSeverityFlagBitsEXT;
       using T = vk::DebugUtilsMessageTypeFlagBitsEXT;
       messenger_ = vk::raii::DebugUtilsMessengerEXT(
-          instance_, vk::DebugUtilsMessengerCreateInfoEXT({}, S::eError, T::eValidation | T::eGeneral, &on_message, this));
+          instance_, vk::DebugUtilsMessengerCreateInfoEXT({}, S::eWarning | S::eError, T::eValidation | T::eGeneral | T::ePerformance, &on_message, this));
       validation = true;
     }
     for (auto& pd : vk::raii::PhysicalDevices(instance_)) {
@@ -144,14 +144,14 @@ class TestHost {
   uint32_t family = 0;
   bool validation = false;
   bool memory_budget = false;
-  std::atomic<int> errors{0};
+  std::atomic<int> reports{0};  // validation warnings and errors, performance ones too
   std::vector<std::string> messages;
 
  private:
   static VKAPI_ATTR VkBool32 VKAPI_CALL on_message(VkDebugUtilsMessageSeverityFlagBitsEXT, VkDebugUtilsMessageTypeFlagsEXT,
                                                    const VkDebugUtilsMessengerCallbackDataEXT* data, void* user) {
     auto* self = static_cast<TestHost*>(user);
-    if (self->errors.fetch_add(1) < 8) self->messages.emplace_back(data && data->pMessage ? data->pMessage : "");
+    if (self->reports.fetch_add(1) < 8) self->messages.emplace_back(data && data->pMessage ? data->pMessage : "");
     return VK_FALSE;
   }
   uint32_t memory_type(uint32_t bits, vk::MemoryPropertyFlags want) const {

@@ -152,7 +152,7 @@ TEST_P(Stereo, BothEyesInOnePassMatchEachEyeDrawnAlone) {
       EXPECT_LE(both.stats.drawn, alone[0].stats.drawn + alone[1].stats.drawn);
     }
   }
-  EXPECT_EQ(host.errors.load(), 0) << (host.messages.empty() ? "" : host.messages[0]);
+  EXPECT_EQ(host.reports.load(), 0) << (host.messages.empty() ? "" : host.messages[0]);
 }
 
 INSTANTIATE_TEST_SUITE_P(Render, Stereo,
@@ -205,7 +205,7 @@ TEST(Anisotropic, ComputeAndRasterSplattingDrawTheSameEllipsoids) {
       EXPECT_GT(db, 60.0);
     }
   }
-  EXPECT_EQ(host.errors.load(), 0) << (host.messages.empty() ? "" : host.messages[0]);
+  EXPECT_EQ(host.reports.load(), 0) << (host.messages.empty() ? "" : host.messages[0]);
 }
 
 // RendererOptions::anisotropic_limit (the apps' --particles auto): a frame
@@ -232,7 +232,7 @@ TEST(Anisotropic, AFrameOverTheLimitIsDrawnAsSpheres) {
     EXPECT_EQ(ellipsoids, unlimited) << "at the limit, as without one";
     EXPECT_LT(psnr(ellipsoids, spheres), 60.0) << "the expectation itself: ellipsoids look different";
   }
-  EXPECT_EQ(host.errors.load(), 0) << (host.messages.empty() ? "" : host.messages[0]);
+  EXPECT_EQ(host.reports.load(), 0) << (host.messages.empty() ? "" : host.messages[0]);
 }
 
 // Both eyes in one pass into a host's colour and depth: the shading pass's
@@ -271,7 +271,7 @@ TEST(Stereo, ShadingWritesTheHostsDepthAsThePresentPassDoes) {
     }
     }
   }
-  EXPECT_EQ(host.errors.load(), 0) << (host.messages.empty() ? "" : host.messages[0]);
+  EXPECT_EQ(host.reports.load(), 0) << (host.messages.empty() ? "" : host.messages[0]);
 }
 
 }  // namespace
