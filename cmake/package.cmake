@@ -20,11 +20,6 @@ set_target_properties(sluice_runtime PROPERTIES EXPORT_NAME runtime)
 install(DIRECTORY io/include/sluice/io DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/sluice)
 install(FILES io/include/sluice/error.h DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/sluice)
 install(DIRECTORY runtime/include/sluice/runtime DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/sluice)
-if(TARGET sluice_render)
-  list(APPEND sluice_targets sluice_render)
-  set_target_properties(sluice_render PROPERTIES EXPORT_NAME render)
-  install(DIRECTORY render/include/sluice/render DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/sluice)
-endif()
 foreach(t ${sluice_targets})
   target_include_directories(${t} INTERFACE $<INSTALL_INTERFACE:${CMAKE_INSTALL_INCLUDEDIR}>)
 endforeach()
@@ -33,9 +28,10 @@ install(TARGETS ${sluice_targets} EXPORT sluiceTargets
         LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR})
 install(EXPORT sluiceTargets NAMESPACE sluice:: DESTINATION ${CMAKE_INSTALL_LIBDIR}/cmake/sluice)
 
-# desktop (GLFW) and xr (OpenXR) are components with export sets of their
-# own: a host that asks only for render needs neither dependency.
-foreach(component desktop xr import)
+# render (Vulkan), desktop (GLFW), xr (OpenXR) and import are components
+# with export sets of their own: a host that asks only for io needs no
+# Vulkan, one that asks only for render neither GLFW nor OpenXR.
+foreach(component render desktop xr import)
   string(TOUPPER ${component} upper)
   set(SLUICE_PACKAGE_${upper} OFF)
   if(TARGET sluice_${component})
@@ -53,10 +49,6 @@ foreach(component desktop xr import)
   endif()
 endforeach()
 set(SLUICE_PACKAGE_IMPORT_VTK ${SLUICE_WITH_VTK})
-set(SLUICE_PACKAGE_RENDER OFF)
-if(TARGET sluice_render)
-  set(SLUICE_PACKAGE_RENDER ON)
-endif()
 configure_package_config_file(cmake/sluiceConfig.cmake.in ${CMAKE_CURRENT_BINARY_DIR}/sluiceConfig.cmake
                               INSTALL_DESTINATION ${CMAKE_INSTALL_LIBDIR}/cmake/sluice)
 write_basic_package_version_file(${CMAKE_CURRENT_BINARY_DIR}/sluiceConfigVersion.cmake COMPATIBILITY SameMinorVersion)
@@ -66,3 +58,6 @@ install(FILES ${CMAKE_CURRENT_BINARY_DIR}/sluiceConfig.cmake ${CMAKE_CURRENT_BIN
 # The build tree as a package too (sluice_DIR=<build>): the ParaView plugin
 # is built against it.
 export(EXPORT sluiceTargets NAMESPACE sluice:: FILE ${PROJECT_BINARY_DIR}/sluiceTargets.cmake)
+if(TARGET sluice_render)
+  export(EXPORT sluice_renderTargets NAMESPACE sluice:: FILE ${PROJECT_BINARY_DIR}/sluice_renderTargets.cmake)
+endif()

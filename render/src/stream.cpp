@@ -4,6 +4,8 @@
 #include <chrono>
 #include <cmath>
 #include <stdexcept>
+#include <string>
+#include <thread>
 
 #include "sluice/render/demand.h"
 #include "sluice/render/error.h"
@@ -133,6 +135,32 @@ void Stream::start_player() {
   }
   player_ = std::make_unique<runtime::Player>(*reader_, *staging_, *clock, po);
   feed_ = std::make_unique<FrameFeed>(*renderer_, *player_, staging_.get(), color);
+}
+
+FeedUpdate Stream::show(uint64_t frame, std::chrono::milliseconds timeout) {
+  require_file("show");
+  if (frame >= reader_->frame_count()) {
+    throw Error("Stream::show: no frame " + std::to_string(frame) + " (the file has " +
+                std::to_string(reader_->frame_count()) + ")");
+  }
+  runtime::Player& p = player();
+  p.pause();
+  p.seek(frame);
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  while (true) {
+    p.wait_for_due();
+    const FeedUpdate u = update();
+    if (const auto error = p.pop_error()) throw io::Error(error->where, error->message);
+    if (u.has_frame && u.frame == frame) {
+      renderer_->wait_upload(u.ticket);
+      return u;
+    }
+    if (std::chrono::steady_clock::now() > deadline) {
+      throw Error("Stream::show: frame " + std::to_string(frame) + " was not ready within " +
+                  std::to_string(timeout.count()) + " ms");
+    }
+    std::this_thread::yield();
+  }
 }
 
 FeedUpdate Stream::update() {

@@ -7,14 +7,12 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <unistd.h>
 
 #include <filesystem>
 
 #include "render_test_util.h"
-#include "sluice/import/frames.h"
+#include "sample_file.h"
 #include "sluice/io/reader.h"
-#include "sluice/io/spacing.h"
 #include "sluice/render/image_io.h"
 #include "sluice/render/renderer.h"
 #include "sluice/render/load.h"
@@ -29,31 +27,6 @@ using testing::ValidationGuard;
 // Same lavapipe build: identical but for the order of additive thickness
 // (atomic compaction); other CPUs or Mesa versions differ a little more.
 constexpr double kMinPsnr = 38.0;
-
-bool g_converted = false;
-
-const fs::path& sample() {
-  static const fs::path path = [] {
-    const fs::path out = fs::temp_directory_path() / ("sluice_render_golden_" + std::to_string(::getpid()) + ".sluice");
-    import::SourceOptions import;
-    import.attributes = {"rho"};
-    const auto source = import::open_source(std::string(SLUICE_SAMPLE_DIR) + "/*.vtu", import);
-    std::optional<io::ParticleFrame> first = source->read(0);
-    io::FileHeader header;
-    header.particle_spacing = io::estimate_spacing(first->positions);
-    header.particle_radius = header.particle_spacing * 0.5f;
-    header.frame_rate = 30;
-    header.attributes.push_back({"rho"});
-    header.lod_id_array = source->info().id_array;
-    header.lod_source = header.lod_id_array.empty() ? io::LodSource::ParticleOrder : io::LodSource::IdHash;
-    io::ContainerWriter writer(out, header);
-    import::convert_frames(*source, std::move(first), writer, import::FramesSettings{.encode = io::EncodeOptions{}, .max_in_flight = 2});
-    writer.finish();
-    g_converted = true;
-    return out;
-  }();
-  return path;
-}
 
 struct Golden {
   const char* name;
@@ -79,7 +52,7 @@ TEST_P(GoldenImage, MatchesReference) {
 #endif
   ValidationGuard guard;
   const Golden& g = GetParam();
-  const io::ContainerReader reader(sample());
+  const io::ContainerReader reader(testing::sample_file());
   const SceneInfo scene = scene_info(reader);
   testing::OffscreenRenderer r(context(), scene, 320, 240);
   FluidOptions o;
@@ -110,15 +83,6 @@ TEST_P(GoldenImage, MatchesReference) {
 
 INSTANTIATE_TEST_SUITE_P(PySPH, GoldenImage, ::testing::ValuesIn(kGoldens),
                          [](const ::testing::TestParamInfo<Golden>& p) { return std::string(p.param.name); });
-
-// A converted sample on disk is not needed after the tests.
-struct Cleanup : ::testing::Environment {
-  void TearDown() override {
-    std::error_code ec;
-    if (g_converted) fs::remove(sample(), ec);
-  }
-};
-const auto* const kCleanup = ::testing::AddGlobalTestEnvironment(new Cleanup);
 
 }  // namespace
 }  // namespace sluice::render

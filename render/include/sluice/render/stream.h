@@ -9,6 +9,9 @@
 //   FrameSync s = stream.record(cmd, target, views);
 //   submit cmd, waiting on s          // as Renderer::record says
 //
+// A batch client (a frame at a time, each drawn once) calls show(frame)
+// instead of update(): it returns once that frame is the one record() draws.
+//
 // Reading by the view: a file with layers is read with only the LOD tiers
 // of the cells the views can keep (render/demand.h); set the look and the
 // first views before the first update() (or player()) so that even the
@@ -29,6 +32,7 @@
 // their own). Units: world units, seconds.
 #pragma once
 
+#include <chrono>
 #include <filesystem>
 #include <memory>
 #include <optional>
@@ -103,6 +107,14 @@ class Stream {
   // Once per displayed frame, before record(): commits the frame due when
   // it changed (a file), or reports the last push (live).
   FeedUpdate update();
+  // Batch rendering (screenshots, a movie, tests), a file's frames one by
+  // one: pauses on `frame` and blocks until it is read (for the views set),
+  // committed and its upload done, so that the next record() draws exactly
+  // it. Returns the update that committed it (.frame == frame). The last
+  // frame is reader().frame_count() - 1. Throws io::Error when the frame
+  // cannot be read (naming file, frame and chunk), render::Error on a live
+  // stream, for a frame past the end, or when `timeout` passes first.
+  FeedUpdate show(uint64_t frame, std::chrono::milliseconds timeout = std::chrono::seconds(60));
   // Records the newest committed frame for `views` with the look
   // (Renderer::record: the caller submits `cmd`, waiting on the result).
   FrameSync record(VkCommandBuffer cmd, const RenderTarget& target, std::span<const View> views);
