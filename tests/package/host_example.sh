@@ -122,6 +122,27 @@ for v in readme debug asan; do
     "$scratch/build-$v/host_vulkan" --check --frames 8 --out "$scratch/host_$v.png" "$scratch/dam.sluice"
   fi
 done
+# docs/embedding.md's host program (cut out of the page by tests/docs at
+# configure time) built against the installed package alone, drawing each
+# frame of the sample once under the validation layer (enabled from the
+# environment: the program has no messenger, the layer prints what it finds).
+mkdir -p "$scratch/docs_host"
+cp "$build/tests/docs/docs_host.cpp" "$scratch/docs_host/"
+cat > "$scratch/docs_host/CMakeLists.txt" <<'CMAKE'
+cmake_minimum_required(VERSION 3.25)
+project(docs_host LANGUAGES CXX)
+set(CMAKE_CXX_STANDARD 20)
+find_package(sluice REQUIRED COMPONENTS render)
+add_executable(docs_host docs_host.cpp)
+target_link_libraries(docs_host PRIVATE sluice::render)
+CMAKE
+cmake -S "$scratch/docs_host" -B "$scratch/docs_host/build" -DCMAKE_PREFIX_PATH="$scratch/prefix" "${hidden[@]}" >/dev/null
+cmake --build "$scratch/docs_host/build" -j 2 >/dev/null
+VK_INSTANCE_LAYERS=VK_LAYER_KHRONOS_validation "$scratch/docs_host/build/docs_host" "$scratch/dam.sluice" \
+  "$scratch/docs_host/frame_" 2>&1 | tee "$scratch/docs_host/run.log"
+if grep -q -i "validation\|VUID" "$scratch/docs_host/run.log"; then echo "docs_host: validation messages"; exit 1; fi
+test "$(ls "$scratch"/docs_host/frame_*.png | wc -l)" -eq "$("$build/apps/sluice/sluice" info --json "$scratch/dam.sluice" |
+  /usr/bin/python3 -c 'import json, sys; print(len(json.load(sys.stdin)["frames"]))')"
 # The same host pushing frames of its own simulation (render::LiveSource), recorded as it goes.
 "$scratch/build/host_vulkan" --live --check --frames 6 --record "$scratch/live.sluice" --out "$scratch/host_live.png"
 test -s "$scratch/live.sluice"
