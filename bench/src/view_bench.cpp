@@ -15,6 +15,7 @@
 
 #include "bounds.h"
 #include "machine.h"
+#include "sluice/io/particles.h"
 #include "sluice/io/reader.h"
 #include "sluice/render/demand.h"
 #include "sluice/render/frame_feed.h"
@@ -329,6 +330,29 @@ class Bench {
   render::FluidOptions fluid_;
 };
 
+// The share of frame `frame`'s surface particles and blobs whose centre
+// lies inside any of `views`' frusta: what any layout must read of it at
+// full detail, against which reading by the view is judged.
+double share_in_view(const io::ContainerReader& reader, uint64_t frame, const std::vector<render::View>& views) {
+  io::ParticleQuery q;
+  q.layers = io::LayerSet::surface();
+  const io::ParticleArrays p = io::read_particles(reader, frame, q);
+  std::vector<render::Mat4> clip;
+  for (const render::View& v : views) clip.push_back(v.projection * v.view);
+  uint64_t inside = 0;
+  for (uint64_t i = 0; i < p.count(); ++i) {
+    const render::Vec4 x{p.positions[3 * i], p.positions[3 * i + 1], p.positions[3 * i + 2], 1};
+    for (const render::Mat4& m : clip) {
+      const render::Vec4 c = m * x;
+      if (c.w > 0 && std::abs(c.x) <= c.w && std::abs(c.y) <= c.w && c.z >= 0 && c.z <= c.w) {
+        ++inside;
+        break;
+      }
+    }
+  }
+  return p.count() ? double(inside) / double(p.count()) : 0;
+}
+
 std::string mb(double bytes) { return num(bytes / 1e6, 1) + " MB"; }
 std::string db_text(double v) { return std::isinf(v) ? "identical" : num(v, 1) + " dB"; }
 
@@ -413,6 +437,23 @@ void run_view_bench(const ViewBenchOptions& o) {
   segments("page cache", false);
   table.print("Frames through the players' path, full read against reading by the view (the time of a pause is its "
               "refinement's)");
+
+  // The fly-in's last frame alone, from the page cache, read by its view
+  // and whole: the share of the full read's bytes the view read, beside the
+  // share of the particles that lie in the view (any layout's floor at
+  // level 1; at a lower level the view needs less of the far ones).
+  {
+    const std::vector<Step> close{bench.path().fly_in.back()};
+    const uint64_t frame = (fly_first + o.steps - 1) % frames;
+    const Run view = bench.play(close, frame, true, false), whole = bench.play(close, frame, false, false);
+    const double in_view = share_in_view(reader, frame, close.front().views);
+    std::printf("\nThe close-up (the fly-in's last view), frame %llu: reading by the view read %s of the full read "
+                "(%s of %s); %s of the frame's surface particles and blobs lie in the view\n",
+                (unsigned long long)frame,
+                whole.bytes_read ? (num(100.0 * double(view.bytes_read) / double(whole.bytes_read), 1) + "%").c_str() : "-",
+                mb(double(view.bytes_read)).c_str(), mb(double(whole.bytes_read)).c_str(),
+                (num(100.0 * in_view, 1) + "%").c_str());
+  }
 
   if (o.psnr) {
     Table quality({"segment", "read", "frames", "PSNR worst", "PSNR median", "read per frame"});
