@@ -4,5 +4,8 @@ set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 build=${BUILD_DIR:-$root/build}
 jobs=${JOBS:-$(nproc)}
-cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=Release "$@" >/dev/null
-cmake --build "$build" -j "$jobs"
+# What is built and what is left out (and why) is said by the configure's
+# "sluice:" lines, printed; the rest of its output is not.
+cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=Release "$@" | { grep '^-- sluice:' || true; }
+# CONFIGURE_ONLY=1: the caller builds the targets it needs.
+[[ "${CONFIGURE_ONLY:-0}" == 1 ]] || cmake --build "$build" -j "$jobs"

@@ -6,7 +6,13 @@
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 "$root/scripts/deps.sh"
-"$root/scripts/build.sh"
+# What this script runs, not the tests and benchmarks (scripts/test.sh builds
+# those): the sluice command, its import worker, and the Python module where
+# it is built.
+targets=(sluice sluice_import_worker)
+CONFIGURE_ONLY=1 "$root/scripts/build.sh"
+if grep -q '^SLUICE_PYTHON:BOOL=ON' "${BUILD_DIR:-$root/build}/CMakeCache.txt"; then targets+=(sluice_python); fi
+cmake --build "${BUILD_DIR:-$root/build}" -j "${JOBS:-$(nproc)}" --target "${targets[@]}"
 sluice="$root/build/apps/sluice/sluice"
 out=${OUT_DIR:-$root/build/sample}
 mkdir -p "$out"
