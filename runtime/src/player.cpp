@@ -3,7 +3,12 @@
 #include <algorithm>
 #include <cmath>
 
+#include "wrap.h"
+
 namespace sluice::runtime {
+
+using detail::wrap;
+
 namespace {
 
 constexpr auto kRelaxed = std::memory_order_relaxed;
@@ -11,11 +16,6 @@ constexpr auto kRelaxed = std::memory_order_relaxed;
 double media_rate(const io::ContainerReader& reader, double wanted) {
   if (wanted > 0) return wanted;
   return reader.header().frame_rate > 0 ? reader.header().frame_rate : 30.0;
-}
-
-int64_t wrap(int64_t value, int64_t period) {
-  const int64_t r = value % period;
-  return r < 0 ? r + period : r;
 }
 
 }  // namespace

@@ -1,15 +1,10 @@
 #include "sluice/runtime/schedule.h"
 
+#include "wrap.h"
+
 namespace sluice::runtime {
-namespace {
 
-// Non-negative remainder.
-int64_t wrap(int64_t value, int64_t period) {
-  const int64_t r = value % period;
-  return r < 0 ? r + period : r;
-}
-
-}  // namespace
+using detail::wrap;
 
 const char* end_mode_name(EndMode mode) {
   switch (mode) {

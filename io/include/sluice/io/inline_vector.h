@@ -16,7 +16,7 @@ class InlineVector {
   size_t size() const { return count_; }
   bool empty() const { return count_ == 0; }
   static constexpr size_t capacity() { return N; }
-  // Throws std::length_error beyond N.
+  // Throws io::Error beyond N.
   void resize(size_t n, const T& value = T{}) {
     if (n > N) throw io::Error({}, "InlineVector: more than its capacity");
     for (size_t i = count_; i < n; ++i) items_[i] = value;

@@ -6,7 +6,7 @@
 // values from the ids (from the particle index without them), chunks in
 // Morton order, positions quantized per chunk (io::encode_frame, as `sluice
 // convert` does, parallel over chunks on TBB workers), decoded into the
-// renderer's staging (Renderer::commit_record, the same decode as file
+// renderer's staging (render::commit_record in load.h, the same decode as file
 // frames) and committed. The renderer draws it with the same cLOD. With a
 // recording path, every pushed frame is also appended to a .sluice file, so
 // what was shown can be replayed, converted back or shared.

@@ -181,9 +181,6 @@ namespace detail {
 class PipelineCore;  // runtime/src/pipeline_core.h
 }
 
-// A frame handed to the consumer. Move-only; destroying or reset()ing it
-// gives the frame back. Consumer thread only; must not outlive its Pipeline.
-// Buffers are read-only for the consumer and stay valid until the release.
 // What a delivered frame's buffers hold (FrameHandle::content()).
 enum class FrameContent : uint8_t {
   Decoded,  // buffers().particles: decoded particles (io::decoded_particle_bytes each); attributes: decoded streams
@@ -192,6 +189,9 @@ enum class FrameContent : uint8_t {
   Relayed,  // already in device memory (layout().resident); buffers().particles is empty, gpu_plan() has the tables
 };
 
+// A frame handed to the consumer. Move-only; destroying or reset()ing it
+// gives the frame back. Consumer thread only; must not outlive its Pipeline.
+// Buffers are read-only for the consumer and stay valid until the release.
 class FrameHandle {
  public:
   FrameHandle() = default;
