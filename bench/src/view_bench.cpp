@@ -131,6 +131,10 @@ struct Run {
   uint64_t frames_shown = 0, frames_read = 0, bytes_read = 0, record_bytes = 0, refinements = 0;
   uint64_t device_bytes = 0;  // what storage delivered meanwhile (process_read_bytes)
   uint64_t runs = 0;          // the runs reads by demand took (PipelineStats::runs_read)
+  // Records the workers checked and decoded (or staged for the GPU), and
+  // their time on them: the per-record cost a layout of fewer records saves.
+  uint64_t records = 0;
+  double worker_seconds = 0;
   double seconds = 0;
   // From the start to the first frame fed (the player's start, its window,
   // the first read): paid once a playback, not once a frame.
@@ -313,6 +317,18 @@ class Bench {
     r.record_bytes = after.pipeline.record_bytes - before.pipeline.record_bytes;
     r.refinements = after.refinements - before.refinements;
     r.runs = after.pipeline.runs_read - before.pipeline.runs_read;
+    const auto records = [](const runtime::PlaybackStats& s) {
+      uint64_t n = 0;
+      for (const runtime::WorkerStats& w : s.pipeline.workers) n += w.chunks;
+      return n;
+    };
+    const auto busy = [](const runtime::PlaybackStats& s) {
+      double t = 0;
+      for (const runtime::WorkerStats& w : s.pipeline.workers) t += w.busy_seconds;
+      return t;
+    };
+    r.records = records(after) - records(before);
+    r.worker_seconds = busy(after) - busy(before);
     if (!db.empty()) {
       r.worst_psnr = *std::min_element(db.begin(), db.end());
       r.median_psnr = median(db);
@@ -392,7 +408,7 @@ void run_view_bench(const ViewBenchOptions& o) {
     }
   }
   Table table({"segment", "read", "from", "frames/s", "first frame", "frames/s after it", "read per frame", "device per frame", "runs per frame",
-               "of the records", "of the disk's bound", "refinements"});
+               "records per frame", "worker us per record", "of the records", "of the disk's bound", "refinements"});
   const auto add = [&](Segment s, bool by_view, const char* from, const Run& r) {
     const double read = r.frames_read ? double(r.frames_read) : 1.0;
     const double per = double(r.bytes_read) / read;
@@ -413,7 +429,8 @@ void run_view_bench(const ViewBenchOptions& o) {
                s == Segment::Pause ? "-" : num(r.first_seconds * 1e3, 1) + " ms", steady,
                s == Segment::Pause ? mb(double(r.bytes_read)) + " (refinement)" : mb(per),
                s == Segment::Pause ? mb(double(r.device_bytes)) : mb(device) + (per > 0 && cold ? " (" + num(device / per, 2) + "x)" : ""),
-               by_view ? num(double(r.runs) / read, 1) : "-",
+               by_view ? num(double(r.runs) / read, 1) : "-", num(double(r.records) / read, 0),
+               r.records ? num(1e6 * r.worker_seconds / double(r.records), 1) : "-",
                r.record_bytes ? num(100.0 * double(r.bytes_read) / double(r.record_bytes), 1) + "%" : "-", bound,
                std::to_string(r.refinements)});
   };
