@@ -7,6 +7,7 @@
 #include <thread>
 
 #include "commands.h"
+#include "frame_errors.h"
 #include "play.h"
 #include "playable.h"
 #include "human.h"
@@ -76,13 +77,11 @@ void run_play_headless(const PlayOptions& o) {
   auto next_tick = start;
   double next_stats = o.stats_every;
   runtime::PlaybackStats last = player.stats();
-  uint64_t errors_printed = 0;
+  FrameErrors errors;
   player.play();
   while (true) {
     player.update();  // the null sink: a new frame would be drawn here
-    while (const auto error = player.pop_error()) {
-      if (errors_printed++ < 20) std::fprintf(stderr, "sluice: frame error: %s\n", error->text().c_str());
-    }
+    errors.drain(player);
     const double elapsed = std::chrono::duration<double>(Steady::now() - start).count();
     if (o.stats && elapsed >= next_stats) {
       const runtime::PlaybackStats now = player.stats();
@@ -99,6 +98,7 @@ void run_play_headless(const PlayOptions& o) {
     std::this_thread::sleep_until(next_tick);       // pacing, like a display's vsync
   }
 
+  errors.print_unshown();
   const double elapsed = std::chrono::duration<double>(Steady::now() - start).count();
   const runtime::PlaybackStats s = player.stats();
   runtime::PipelineStats zero;

@@ -11,6 +11,7 @@
 #include <thread>
 
 #include "commands.h"
+#include "frame_errors.h"
 #include "human.h"
 #include "play.h"
 #include "reads_text.h"
@@ -67,14 +68,13 @@ void run_play_gpu(const PlayOptions& o, const WindowPlayOptions& w) {
   auto next_tick = start;
   std::optional<Steady::time_point> last_new;
   std::vector<double> intervals, render_ms, upload_ms, decode_ms;
-  uint64_t last_stats_frame = UINT64_MAX, ticks = 0, new_frames = 0, errors_printed = 0;
+  uint64_t last_stats_frame = UINT64_MAX, ticks = 0, new_frames = 0;
+  FrameErrors errors;
   double next_stats = o.stats_every;
   player.play();
   while (true) {
     const render::FeedUpdate fed = stream.update();
-    while (const auto error = player.pop_error()) {
-      if (errors_printed++ < 20) std::fprintf(stderr, "sluice: frame error: %s\n", error->text().c_str());
-    }
+    errors.drain(player);
     const render::FrameStats stats = target.render(stream.renderer(), camera, stream.fluid(), stream.lod());
     ++ticks;
     const auto now = Steady::now();
@@ -108,6 +108,7 @@ void run_play_gpu(const PlayOptions& o, const WindowPlayOptions& w) {
     std::this_thread::sleep_until(next_tick);
   }
   target.finish();
+  errors.print_unshown();
   if (context.validation_active() && context.validation_errors() > 0) {
     std::fprintf(stderr, "sluice: %llu Vulkan validation errors\n", (unsigned long long)context.validation_errors());
     throw ExitCode{1};

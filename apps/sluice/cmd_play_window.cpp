@@ -13,6 +13,7 @@
 #include <filesystem>
 
 #include "commands.h"
+#include "frame_errors.h"
 #include "human.h"
 #include "layers_option.h"
 #include "play.h"
@@ -345,7 +346,7 @@ void run_play_window(const PlayOptions& o, const WindowPlayOptions& wo) {
   auto last = Clock::now(), fps_since = last;
   runtime::PlaybackStats stats_before = playback.stats();
   int presented = 0, fps_frames = 0;
-  uint64_t errors_printed = 0;
+  FrameErrors errors;
   while (!window.should_close()) {
     desktop::poll_window_events();
     if (window.width() == 0 || window.height() == 0) {
@@ -378,10 +379,7 @@ void run_play_window(const PlayOptions& o, const WindowPlayOptions& wo) {
       p.frame = fed.frame;
       p.has_frame = true;
     }
-    while (const auto error = playback.pop_error()) {
-      p.message = error->text();
-      if (errors_printed++ < 20) std::fprintf(stderr, "sluice: frame error: %s\n", p.message.c_str());
-    }
+    if (std::string newest = errors.drain(playback); !newest.empty()) p.message = std::move(newest);
     if (!p.has_frame && playback.state() == runtime::PlayerState::Stopped) {
       throw std::runtime_error(o.file + ": playback stopped before any frame could be shown");
     }
@@ -416,6 +414,7 @@ void run_play_window(const PlayOptions& o, const WindowPlayOptions& wo) {
     }
     if (wo.exit_after > 0 && presented >= wo.exit_after) break;
   }
+  errors.print_unshown();
   const runtime::PlaybackStats s = playback.stats();
   if (!o.quiet) {
     std::printf("played %s: %llu frames shown, stalls %llu, drops %llu, errors %llu; staging held %s at most%s\n",

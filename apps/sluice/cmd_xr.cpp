@@ -9,6 +9,7 @@
 #include <thread>
 
 #include "commands.h"
+#include "frame_errors.h"
 #include "human.h"
 #include "decode_option.h"
 #include "layers_option.h"
@@ -102,7 +103,8 @@ void run_xr(const XrOptions& o) {
   xr::Controls controls(xr::initial_placement(scene, sys.floor, placement));
   if (!p.paused) player.play();
 
-  uint64_t drawn = 0, ended = 0, errors_printed = 0;
+  uint64_t drawn = 0, ended = 0;
+  FrameErrors errors;
   bool exit_asked = false;
   double last_display = -1;
   std::vector<double> gpu_ms;
@@ -136,9 +138,7 @@ void run_xr(const XrOptions& o) {
     }
     stream.set_look(stream.fluid(), lod);
     stream.update();
-    while (const auto error = player.pop_error()) {
-      if (errors_printed++ < 20) std::fprintf(stderr, "sluice: frame error: %s\n", error->text().c_str());
-    }
+    errors.drain(player);
     render::FrameSync sync;
     if (frame.render) {
       if (frame.stereo) {
@@ -165,6 +165,7 @@ void run_xr(const XrOptions& o) {
       exit_asked = true;
     }
   }
+  errors.print_unshown();
   const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   const xr::SessionCounters n = session.counters();
   const runtime::PlaybackStats s = player.stats();
