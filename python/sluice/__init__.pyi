@@ -11,7 +11,7 @@ class Error(RuntimeError): ...
 
 class Frame:
     index: int
-    time: float
+    time: Optional[float]
     bytes_read: int
     positions: npt.NDArray[np.float32]  # (N, 3)
     lod: npt.NDArray[np.uint16]
@@ -28,7 +28,7 @@ class FrameStream(Iterator[Frame]):
 
 class Sequence:
     path: str
-    times: npt.NDArray[np.float64]
+    times: Optional[npt.NDArray[np.float64]]
     counts: npt.NDArray[np.uint64]
     bounds: Tuple[Tuple[float, float, float], Tuple[float, float, float]]
     up: str
@@ -50,7 +50,7 @@ class Sequence:
 def open(path: Union[str, PathLike[str]], *, cache: bool = True,
          progress: Optional[Callable[[dict[str, int]], None]] = None) -> Sequence: ...
 
-def convert(input: str, output: Union[str, PathLike[str]], *,
+def convert(input: Union[str, PathLike[str]], output: Union[str, PathLike[str]], *,
             progress: Optional[Callable[[dict[str, int]], None]] = None,
             attributes: Optional[_Seq[str]] = None, all_attributes: bool = False,
             spacing: float = 0.0, radius: float = 0.0, fps: float = 0.0, dt: float = 0.0,
@@ -58,7 +58,8 @@ def convert(input: str, output: Union[str, PathLike[str]], *,
             lossless: bool = False, layers: bool = True, skip_bad: bool = False,
             jobs: int = 0, isolate: bool = True, precision: float = 0.0, drop_outliers: float = 0.0,
             chunk: int = 65536, level: int = 3, planes: str = "packed", tiers: bool = True,
-            band_voxel: float = 0.0, band_f2: str = "all", read_timeout: float = 120.0) -> dict[str, Any]: ...
+            band_voxel: float = 0.0, band_f2: str = "all", read_timeout: float = 120.0,
+            force: bool = False) -> dict[str, Any]: ...
 
 class Renderer:
     camera: str
@@ -77,3 +78,20 @@ def export(seq: Union[Sequence, str, PathLike[str]], output: Union[str, PathLike
            frames: Optional[Iterable[int]] = None, lod_level: Optional[float] = None,
            attributes: Optional[_Seq[str]] = None, force: bool = False,
            progress: Optional[Callable[[dict[str, int]], None]] = None) -> dict[str, Any]: ...
+
+class LiveView:
+    open: bool
+    pushed: int
+    shown: int
+    dropped: int
+    def __init__(self, bounds: Tuple[Tuple[float, float, float], Tuple[float, float, float]], *, window: bool = True,
+                 size: Tuple[int, int] = (960, 540), spacing: float = 0.0, radius: float = 0.0, up: str = "+z",
+                 attributes: _Seq[str] = (), color: Optional[str] = None, ids: bool = False,
+                 record: Optional[Union[str, PathLike[str]]] = None, fps: float = 30.0, keep_all: bool = False,
+                 title: str = "sluice live", force: bool = False) -> None: ...
+    def push(self, positions: npt.ArrayLike, ids: Optional[npt.ArrayLike] = None, time: Optional[float] = None,
+             **attributes: npt.ArrayLike) -> bool: ...
+    def close(self) -> None: ...
+    def image(self) -> Optional[npt.NDArray[np.uint8]]: ...
+    def __enter__(self) -> "LiveView": ...
+    def __exit__(self, *exc: Any) -> None: ...

@@ -70,7 +70,8 @@ Args:
     input: a file, a glob ('out/part_*.vtk'), a .pvd collection or a
         directory (VTK legacy/XML, CSV, XYZ: see docs/import.md).
     output: the .sluice file to write (written as output + '.partial' and
-        renamed when complete).
+        renamed when complete); one that exists is kept (sluice.Error)
+        unless force=True.
     progress: called once per frame with a dict (frames_done, frames,
         input_bytes, output_bytes); raising from it stops the conversion.
     attributes: point arrays to carry for colouring; None carries none
@@ -96,6 +97,7 @@ Args:
         'gpu-decodable'; tiers: write LOD tiers; band_voxel, band_f2: the
         narrow band's voxel (0: twice the spacing) and F2 test ('all' or
         'asymmetry'). As `sluice convert --help` explains them.
+    force: replace an output that exists.
 
 Returns:
     a dict: frames, particles, input_bytes, seconds, up, up_evidence,
@@ -121,11 +123,16 @@ py::dict progress_dict(const import::ConvertProgress& p) {
 
 void bind_convert(py::module_& m) {
   m.def("convert",
-        [](const std::string& input, const std::filesystem::path& output, py::object progress,
+        [](const std::filesystem::path& input, const std::filesystem::path& output, py::object progress,
            std::optional<std::vector<std::string>> attributes, bool all_attributes, float spacing, float radius, double fps,
            double dt, std::optional<std::string> up, std::optional<std::string> ids, bool no_ids, bool lossless, bool layers,
            bool skip_bad, int jobs, bool isolate, double precision, float drop_outliers, uint32_t chunk, int level,
-           const std::string& planes, bool tiers, float band_voxel, const std::string& band_f2, double read_timeout) {
+           const std::string& planes, bool tiers, float band_voxel, const std::string& band_f2, double read_timeout,
+           bool force) {
+          // As the CLI: an existing output is kept unless asked.
+          if (!force && std::filesystem::exists(output)) {
+            throw io::Error({output.string()}, "exists; pass force=True to overwrite, or another output");
+          }
           import::ConvertOptions o;
           o.precision = precision;
           o.drop_outliers = drop_outliers;
@@ -143,7 +150,7 @@ void bind_convert(py::module_& m) {
           o.band_f2 = band_f2 == "asymmetry" ? io::F2Test::Asymmetry : io::F2Test::All;
           if (!(read_timeout > 0)) throw py::value_error("read_timeout must be positive (seconds)");
           o.isolation.read_limit = std::chrono::seconds(int64_t(std::ceil(read_timeout)));
-          o.input = input;
+          o.input = input.string();
           if (attributes) o.attributes = *attributes;
           o.all_attributes = all_attributes;
           o.spacing = spacing;
@@ -174,7 +181,8 @@ void bind_convert(py::module_& m) {
         py::arg("ids") = py::none(), py::arg("no_ids") = false, py::arg("lossless") = false, py::arg("layers") = true,
         py::arg("skip_bad") = false, py::arg("jobs") = 0, py::arg("isolate") = true, py::arg("precision") = 0.0,
         py::arg("drop_outliers") = 0.0f, py::arg("chunk") = 65536u, py::arg("level") = 3, py::arg("planes") = "packed",
-        py::arg("tiers") = true, py::arg("band_voxel") = 0.0f, py::arg("band_f2") = "all", py::arg("read_timeout") = 120.0);
+        py::arg("tiers") = true, py::arg("band_voxel") = 0.0f, py::arg("band_f2") = "all", py::arg("read_timeout") = 120.0,
+        py::arg("force") = false);
 }
 
 }  // namespace sluice::python

@@ -1,5 +1,7 @@
 #include "frame.h"
 
+#include <pybind11/stl.h>
+
 #include "arrays.h"
 
 namespace py = pybind11;
@@ -15,10 +17,13 @@ py::array_t<T> give(std::vector<T>&& values, std::vector<py::ssize_t> shape, Arr
 
 }  // namespace
 
-Frame make_frame(uint64_t index, io::ParticleArrays&& arrays, const std::vector<std::string>& names, ArrayPool* pool) {
+bool states_times(const io::FileHeader& header) { return header.time_source != io::TimeSource::FrameNumber; }
+
+Frame make_frame(uint64_t index, io::ParticleArrays&& arrays, const std::vector<std::string>& names, bool timed,
+                 ArrayPool* pool) {
   Frame f;
   f.index = index;
-  f.time = arrays.time;
+  if (timed) f.time = arrays.time;
   f.bytes_read = arrays.bytes_read;
   const auto n = py::ssize_t(arrays.count());
   f.positions = give(std::move(arrays.positions), {n, 3}, pool);
@@ -46,7 +51,8 @@ same order in every array.
 
 Attributes:
     index: frame number in the file (0-based).
-    time: simulation time in seconds.
+    time: simulation time in seconds, or None when the input stated no
+        times (nor was a step given at conversion).
     positions: float32 array (N, 3), world units.
     lod: uint16 array (N,), each particle's stable LOD value (for blobs,
         the number of particles the blob stands for).
@@ -72,8 +78,8 @@ Attributes:
              return f.attributes[py::str(name)];
            }, "An attribute's array by name, as frame['rho'].")
       .def("__repr__", [](const Frame& f) {
-        return "<sluice.Frame " + std::to_string(f.index) + ": " + std::to_string(f.lod.size()) + " particles, t=" +
-               py::str(py::float_(f.time)).cast<std::string>() + " s>";
+        const std::string when = f.time ? "t=" + py::str(py::float_(*f.time)).cast<std::string>() + " s" : "no time";
+        return "<sluice.Frame " + std::to_string(f.index) + ": " + std::to_string(f.lod.size()) + " particles, " + when + ">";
       });
 }
 

@@ -7,6 +7,7 @@
 #include <pybind11/pybind11.h>
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -16,7 +17,7 @@ namespace sluice::python {
 
 struct Frame {
   uint64_t index = 0;
-  double time = 0;
+  std::optional<double> time;  // seconds; none when the input stated no times
   uint64_t bytes_read = 0;
   pybind11::array_t<float> positions;
   pybind11::array_t<uint16_t> lod;
@@ -27,9 +28,13 @@ struct Frame {
 class ArrayPool;
 
 // Moves `arrays` into numpy (no copy). `names[i]` names arrays.attributes[i].
-// With a pool, the arrays' memory goes back to it when they die.
-Frame make_frame(uint64_t index, io::ParticleArrays&& arrays, const std::vector<std::string>& names,
+// With a pool, the arrays' memory goes back to it when they die. `timed`:
+// the file states times (states_times()); otherwise the frame has none.
+Frame make_frame(uint64_t index, io::ParticleArrays&& arrays, const std::vector<std::string>& names, bool timed,
                  ArrayPool* pool = nullptr);
+// Whether a file's frame times are the input's or a step given, not frame
+// numbers standing in for times the input did not state.
+bool states_times(const io::FileHeader& header);
 // Spare arrays from `pool` for the next frame of a stream.
 io::ParticleArrays spare_arrays(ArrayPool& pool, size_t attributes);
 

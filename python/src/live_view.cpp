@@ -281,9 +281,11 @@ Args:
     color: one of them to colour by.
     ids: push() takes stable particle ids (LOD follows them); otherwise LOD
         values follow the particle index.
-    record: a .sluice file to record the frames drawn into.
+    record: a .sluice file to record the frames drawn into; one that
+        exists is kept (sluice.Error) unless force=True.
     fps: the recording's nominal frame rate.
     keep_all: push() waits for the view rather than dropping frames.
+    force: record over a file that exists.
 )";
 
 }  // namespace
@@ -293,7 +295,11 @@ void bind_live_view(py::module_& m) {
       .def(py::init([](std::pair<Vec3Tuple, Vec3Tuple> bounds, bool window, std::pair<uint32_t, uint32_t> size,
                        float spacing, float radius, const std::string& up, std::vector<std::string> attributes,
                        std::optional<std::string> color, bool ids, std::optional<std::filesystem::path> record, float fps,
-                       bool keep_all, std::string title) {
+                       bool keep_all, std::string title, bool force) {
+             // As the CLI: an existing recording is kept unless asked.
+             if (record && !force && std::filesystem::exists(*record)) {
+               throw io::Error({record->string()}, "exists; pass force=True to record over it, or another record=");
+             }
              LiveViewOptions o;
              const auto [lo, hi] = bounds;
              o.bounds = {{std::get<0>(lo), std::get<1>(lo), std::get<2>(lo)}, {std::get<0>(hi), std::get<1>(hi), std::get<2>(hi)}};
@@ -331,7 +337,7 @@ void bind_live_view(py::module_& m) {
            py::arg("size") = std::pair<uint32_t, uint32_t>{960, 540}, py::arg("spacing") = 0.0f, py::arg("radius") = 0.0f,
            py::arg("up") = "+z", py::arg("attributes") = std::vector<std::string>{}, py::arg("color") = py::none(),
            py::arg("ids") = false, py::arg("record") = py::none(), py::arg("fps") = 30.0f, py::arg("keep_all") = false,
-           py::arg("title") = "sluice live")
+           py::arg("title") = "sluice live", py::arg("force") = false)
       .def("push",
            [](LiveView& v, py::array_t<float, py::array::c_style | py::array::forcecast> positions, py::object ids,
               std::optional<double> time, py::kwargs attributes) {

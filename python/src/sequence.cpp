@@ -121,7 +121,7 @@ class Sequence {
       io::ParticleScratch own;
       io::read_particles(*reader_, number, r.query, arrays, lock.owns_lock() ? scratch_ : own);
     }
-    return make_frame(number, std::move(arrays), r.names, pool_.get());
+    return make_frame(number, std::move(arrays), r.names, states_times(reader_->header()), pool_.get());
   }
 
   py::dict info() const {
@@ -141,9 +141,13 @@ class Sequence {
     d["lod_id_array"] = h.lod_id_array;
     d["source"] = h.source;
     d["file_bytes"] = reader_->file_size();
-    uint64_t particles = 0;
-    for (const io::FrameIndexEntry& e : index.frames) particles += e.particle_count;
+    uint64_t particles = 0;  // as `sluice info`: surface and interior, not blobs
+    for (const io::FrameIndexEntry& e : index.frames) particles += e.count_in(io::LayerSet::particles());
     d["particles"] = particles;
+    d["times"] = h.time_source == io::TimeSource::Input  ? "input"
+                 : h.time_source == io::TimeSource::Step ? "step"
+                 : h.time_source == io::TimeSource::FrameNumber ? "none"
+                                                                : "unstated";
     d["bounds"] = py::make_tuple(py::make_tuple(index.bounds.min[0], index.bounds.min[1], index.bounds.min[2]),
                                  py::make_tuple(index.bounds.max[0], index.bounds.max[1], index.bounds.max[2]));
     return d;
@@ -169,6 +173,7 @@ class Stream {
          uint32_t window = 0)
       : names_(std::move(r.names)),
         loop_(range.loop),
+        timed_(states_times(reader->header())),
         lender_(std::make_shared<Lender>(std::move(reader), range, std::move(r.query), memory, window)) {}
 
   Frame next() {
@@ -183,7 +188,7 @@ class Stream {
         copied = lender_->frames.next(spare_arrays(*pool_, names_.size()));
       }
     }
-    if (copied) return make_frame(copied->index, std::move(copied->arrays), names_, pool_.get());
+    if (copied) return make_frame(copied->index, std::move(copied->arrays), names_, timed_, pool_.get());
     if (!lent) throw py::stop_iteration();
     return lend_frame(std::move(*lent));
   }
@@ -245,7 +250,7 @@ class Stream {
     auto loan = std::make_shared<Loan>(lender_, std::move(f.handle));
     Frame out;
     out.index = f.index;
-    out.time = f.time;
+    if (timed_) out.time = f.time;
     const auto n = py::ssize_t(f.arrays.count);
     out.positions = lend(loan, f.arrays.positions, {n, 3});
     out.lod = lend(loan, f.arrays.lod, {n});
@@ -256,6 +261,7 @@ class Stream {
 
   std::vector<std::string> names_;
   bool loop_ = false;
+  bool timed_ = true;  // the file states times (states_times())
   std::shared_ptr<ArrayPool> pool_ = std::make_shared<ArrayPool>();  // the arrays of copied frames Python let go of
   std::shared_ptr<Lender> lender_;
 };
@@ -326,16 +332,18 @@ void bind_sequence(py::module_& m) {
              return std::make_unique<Stream>(s.shared(), runtime::StreamRange{0, s.size(), 1}, s.request("all", std::nullopt, std::nullopt), 0);
            }, "Streams every frame (see frames()).")
       .def_property_readonly("path", [](const Sequence& s) { return s.reader().path(); })
-      .def_property_readonly("times", [](const Sequence& s) {
+      .def_property_readonly("times", [](const Sequence& s) -> py::object {
+             if (!states_times(s.reader().header())) return py::none();
              std::vector<double> t;
              for (const io::FrameIndexEntry& e : s.reader().index().frames) t.push_back(e.time);
              return py::array_t<double>(py::ssize_t(t.size()), t.data());
-           }, "Each frame's time in seconds (float64 array).")
+           }, "Each frame's time in seconds (float64 array), or None when the input stated no times.")
       .def_property_readonly("counts", [](const Sequence& s) {
              std::vector<uint64_t> c;
-             for (const io::FrameIndexEntry& e : s.reader().index().frames) c.push_back(e.particle_count);
+             for (const io::FrameIndexEntry& e : s.reader().index().frames) c.push_back(e.count_in(io::LayerSet::particles()));
              return py::array_t<uint64_t>(py::ssize_t(c.size()), c.data());
-           }, "Each frame's number of particles, every layer (uint64 array).")
+           }, "Each frame's number of particles, surface and interior (uint64 array): len(seq[i]). Voxel blobs\n"
+              "(layers='surface') stand in for interior particles and are not counted.")
       .def_property_readonly("bounds", [](const Sequence& s) {
              const io::Aabb& b = s.reader().index().bounds;
              return py::make_tuple(py::make_tuple(b.min[0], b.min[1], b.min[2]), py::make_tuple(b.max[0], b.max[1], b.max[2]));

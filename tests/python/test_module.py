@@ -3,6 +3,7 @@ particle, arrays that outlive their sequence, streaming equal to random
 access, LOD levels that read less, and the errors a script sees."""
 import csv
 import gc
+import json
 import os
 import shutil
 import subprocess
@@ -280,3 +281,44 @@ def test_a_looping_stream_goes_round(converted):
     assert [next(stream).index for _ in range(7)] == [0, 1, 2, 0, 1, 2, 0]
     with pytest.raises(TypeError, match="no length"):
         len(stream)
+
+
+def test_counts_and_particles_agree_in_every_interface(converted, sluice_exe):
+    seq = sluice.open(converted)
+    info = seq.info()
+    cli = json.loads(subprocess.run([str(sluice_exe), "info", "--json", str(converted)], check=True,
+                                    capture_output=True, text=True).stdout)
+    lengths = [len(seq[i]) for i in range(len(seq))]
+    assert list(seq.counts) == lengths  # surface and interior; blobs are not particles
+    assert [f["particles"] for f in cli["frames"]] == lengths
+    assert info["particles"] == sum(lengths) == cli["particles_total"]
+    # The surface read adds blobs, which stand in for interior particles.
+    f = seq.frame(3, layers="surface")
+    assert (f.layer == 3).sum() > 0 and (f.layer == 2).sum() == 0
+
+
+def test_an_input_without_times_has_none(tmp_path):
+    for i in range(3):
+        (tmp_path / f"part_{i}.csv").write_text("x,y,z\n" + "".join(f"{0.01 * k},{0.02 * i},0\n" for k in range(50)))
+    out = tmp_path / "untimed.sluice"
+    sluice.convert(tmp_path / "part_*.csv", out)  # a pathlib.Path input (a glob) is taken too
+    seq = sluice.open(out)
+    assert seq.times is None and seq.info()["times"] == "none"
+    assert seq[1].time is None and "no time" in repr(seq[1])
+    assert all(f.time is None for f in seq)
+    timed = tmp_path / "timed.sluice"
+    sluice.convert(str(tmp_path / "part_*.csv"), timed, dt=0.5)
+    assert list(sluice.open(timed).times) == [0.0, 0.5, 1.0] and sluice.open(timed)[2].time == 1.0
+
+
+def test_writers_keep_an_existing_output_unless_forced(sample_dir, tmp_path):
+    out = tmp_path / "kept.sluice"
+    out.write_bytes(b"the user's own file")
+    with pytest.raises(sluice.Error, match="force=True"):
+        sluice.convert(str(sample_dir / "dam_break_3d.pvd"), out)
+    assert out.read_bytes() == b"the user's own file"
+    with pytest.raises(sluice.Error, match="force=True"):
+        sluice.LiveView(((0, 0, 0), (1, 1, 1)), window=False, record=out)
+    assert out.read_bytes() == b"the user's own file"
+    summary = sluice.convert(str(sample_dir / "dam_break_3d.pvd"), out, force=True)
+    assert summary["frames"] == 13 and len(sluice.open(out)) == 13
