@@ -4,6 +4,7 @@
 #include <pybind11/stl.h>
 #include <pybind11/stl/filesystem.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
@@ -109,6 +110,9 @@ class LiveView {
     std::lock_guard lock(mutex_);
     return image_size_;
   }
+  // What push() takes: fixed at construction.
+  bool takes_ids() const { return o_.live.ids; }
+  const std::vector<std::string>& attribute_names() const { return o_.live.attributes; }
 
  private:
   uint64_t counter(const uint64_t& c) {
@@ -128,6 +132,14 @@ class LiveView {
     try {
       if (o_.window) run_window();
       else run_offscreen();
+    } catch (const sluice::Error& e) {
+      // A window that cannot open (no display, a headless machine): say
+      // how to do without one.
+      std::lock_guard lock(mutex_);
+      failure_ = o_.window ? std::make_exception_ptr(sluice::Error(std::string(e.what()) +
+                                                                   "; without a display, use LiveView(window=False) and "
+                                                                   "image() or record="))
+                           : std::current_exception();
     } catch (...) {
       std::lock_guard lock(mutex_);
       failure_ = std::current_exception();
@@ -240,6 +252,38 @@ class LiveView {
 
 using Vec3Tuple = std::tuple<float, float, float>;
 
+// push()'s attributes by the names given at construction, each one value
+// per particle, finite. A missing or unknown name is a TypeError (as
+// Python's own for keywords), a bad array a ValueError naming the particle.
+std::vector<std::vector<float>> attributes_of(const py::kwargs& given, const std::vector<std::string>& names, size_t n) {
+  for (auto item : given) {
+    const std::string name = py::str(item.first).cast<std::string>();
+    if (std::find(names.begin(), names.end(), name) == names.end()) {
+      std::string known;
+      for (const std::string& k : names) known += (known.empty() ? "" : ", ") + k;
+      throw py::type_error("push() got an unexpected keyword '" + name + "': the view's attributes are " +
+                           (known.empty() ? "none (LiveView(attributes=[...]) names them)" : known));
+    }
+  }
+  std::vector<std::vector<float>> out;
+  for (const std::string& name : names) {
+    if (!given.contains(name)) throw py::type_error("push() missing attribute '" + name + "' (one value per particle)");
+    auto a = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(given[py::str(name)]);
+    if (!a || a.ndim() != 1 || size_t(a.size()) != n) {
+      throw py::value_error("attribute '" + name + "' must be one value per particle (" + std::to_string(n) + ")");
+    }
+    const float* v = a.data();
+    for (size_t i = 0; i < n; ++i) {
+      if (!std::isfinite(v[i])) {
+        throw py::value_error("attribute '" + name + "': particle " + std::to_string(i) + " is not finite (" +
+                              std::to_string(v[i]) + ")");
+      }
+    }
+    out.emplace_back(v, v + n);
+  }
+  return out;
+}
+
 // Copies `a` (N x 3 float32, C order) checking every value is finite.
 std::vector<float> positions_of(const py::array_t<float, py::array::c_style | py::array::forcecast>& a) {
   if (a.ndim() != 2 || a.shape(1) != 3) throw py::value_error("positions must be an (N, 3) array");
@@ -344,19 +388,21 @@ void bind_live_view(py::module_& m) {
              OwnedFrame f;
              f.positions = positions_of(positions);
              const size_t n = f.positions.size() / 3;
+             if (ids.is_none() == v.takes_ids()) {
+               throw py::value_error(v.takes_ids() ? "ids: the view was made with ids=True: pass one id per particle"
+                                                   : "ids: the view was made without ids=True: LOD follows the particle "
+                                                     "index, ids would be ignored");
+             }
              if (!ids.is_none()) {
                auto a = py::array_t<uint64_t, py::array::c_style | py::array::forcecast>::ensure(ids);
-               if (!a || a.ndim() != 1 || size_t(a.size()) != n) throw py::value_error("ids must be one integer per particle");
+               if (!a || a.ndim() != 1 || size_t(a.size()) != n) {
+                 throw py::value_error("ids must be one integer per particle (" + std::to_string(n) + ")");
+               }
                f.ids.assign(a.data(), a.data() + n);
              }
+             if (time && !std::isfinite(*time)) throw py::value_error("time must be finite (seconds)");
              f.time = time.value_or(double(v.pushed()));
-             for (auto item : attributes) {
-               auto a = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(item.second);
-               if (!a || a.ndim() != 1 || size_t(a.size()) != n) {
-                 throw py::value_error("attribute '" + py::str(item.first).cast<std::string>() + "' must be one value per particle");
-               }
-               f.attributes.emplace_back(a.data(), a.data() + n);
-             }
+             f.attributes = attributes_of(attributes, v.attribute_names(), n);
              py::gil_scoped_release unlocked;
              return v.push(std::move(f));
            },

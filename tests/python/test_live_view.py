@@ -68,8 +68,39 @@ def test_bad_frames_raise_at_the_push_that_brought_them():
             view.push(bad, speed=s)
         with pytest.raises(ValueError, match="speed"):
             view.push(x, speed=s[:-1])
+        bad_speed = s.copy()
+        bad_speed[11] = np.inf
+        with pytest.raises(ValueError, match="'speed': particle 11"):
+            view.push(x, speed=bad_speed)
+        with pytest.raises(TypeError, match="missing attribute 'speed'"):
+            view.push(x)
+        with pytest.raises(TypeError, match="unexpected keyword 'sped'.*speed"):
+            view.push(x, sped=s)
+        with pytest.raises(ValueError, match="without ids=True"):
+            view.push(x, ids=np.arange(len(x)), speed=s)
         assert view.push(x, speed=s)
+        assert view.push(x, speed=s)  # the frames before were refused whole: nothing bad reached the view
+    with sluice.LiveView(BOUNDS, window=False, size=(64, 64), ids=True) as view:
+        x, _ = block(0)
+        with pytest.raises(ValueError, match="ids=True"):
+            view.push(x)
+        assert view.push(x, ids=np.arange(len(x)))
     with pytest.raises(ValueError, match="bounds"):
         sluice.LiveView(((0, 0, 0), (0, 1, 1)), window=False)
     with pytest.raises(KeyError, match="rho"):
         sluice.LiveView(BOUNDS, window=False, attributes=["speed"], color="rho")
+
+
+def test_without_a_display_the_error_says_window_false():
+    import os
+    import subprocess
+    import sys
+
+    env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
+    code = ("import sluice\n"
+            "try:\n"
+            "    sluice.LiveView(((0, 0, 0), (1, 1, 1)))\n"
+            "except sluice.Error as e:\n"
+            "    print(e)\n")
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=120)
+    assert "window=False" in out.stdout, out.stdout + out.stderr
