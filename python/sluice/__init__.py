@@ -26,7 +26,7 @@ _last_renderer = None  # (key, Renderer): consecutive renders of one file reuse 
 
 
 def render(seq, frame, size=(960, 540), *, camera=None, layers="surface", color=None, particles="auto", **look):
-    """Draws frame `frame` of `seq` (a Sequence or a path) as liquid.
+    """Draws frame `frame` of `seq` (a Sequence, or anything sluice.open() takes) as liquid.
 
     Returns a uint8 RGBA array (height, width, 4). `camera` is None (frame
     the data) or a string in `sluice render --camera` form; `color` names an
@@ -39,7 +39,9 @@ def render(seq, frame, size=(960, 540), *, camera=None, layers="surface", color=
     global _last_renderer
     if Renderer is None:
         raise Error("this sluice module was built without the Vulkan renderer")
-    path = seq.path if isinstance(seq, Sequence) else str(seq)
+    if not isinstance(seq, Sequence):
+        seq = open(seq)  # anything open() takes: a .sluice file, or solver output converted once into its cache
+    path = seq.path
     key = (path, tuple(size), layers, color, particles)
     if _last_renderer is None or _last_renderer[0] != key:
         _last_renderer = None  # release the old one before making the next

@@ -1,6 +1,6 @@
 # Type stubs for the sluice module (the `_core` extension re-exported).
 from os import PathLike
-from typing import Any, Callable, Iterable, Iterator, Optional, Sequence as _Seq, Tuple, Union
+from typing import Any, Callable, Iterable, Iterator, Optional, Sequence as _Seq, Tuple, Union, overload
 
 import numpy as np
 import numpy.typing as npt
@@ -38,7 +38,10 @@ class Sequence:
     attributes: list[str]
     layers: list[str]
     def __len__(self) -> int: ...
+    @overload
     def __getitem__(self, i: int) -> Frame: ...
+    @overload
+    def __getitem__(self, i: slice) -> list[Frame]: ...
     def __iter__(self) -> FrameStream: ...
     def frame(self, i: int, *, layers: str = "all", lod_level: Optional[float] = None,
               attributes: Optional[_Seq[str]] = None) -> Frame: ...

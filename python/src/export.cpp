@@ -23,7 +23,11 @@ std::string path_of(const py::object& seq) {
     const py::object p = seq.attr("path");
     if (py::isinstance<py::str>(p)) return p.cast<std::string>();
   }
-  return py::str(py::module_::import("os").attr("fspath")(seq)).cast<std::string>();
+  const std::string path = py::str(py::module_::import("os").attr("fspath")(seq)).cast<std::string>();
+  if (io::is_container(path)) return path;
+  // Anything else sluice.open() takes (solver output, a glob): converted
+  // once into its cache, as open() does, and that file exported.
+  return py::module_::import("sluice").attr("open")(path).attr("path").cast<std::string>();
 }
 
 const char* kExportDoc = R"(Writes frames of a .sluice file as .vtp (ParaView), .csv or .ply.
@@ -55,10 +59,24 @@ Returns:
 
 void bind_export(py::module_& m) {
   m.def("export",
-        [](const py::object& seq, const std::filesystem::path& output, std::optional<std::vector<int64_t>> frames,
+        [](const py::object& seq, const std::filesystem::path& output, const py::object& frames_given,
            std::optional<float> lod_level, std::optional<std::vector<std::string>> attributes, bool force,
            py::object progress) {
           const std::string path = path_of(seq);
+          // Any iterable of frame numbers (a list, a range, a generator).
+          std::optional<std::vector<int64_t>> frames;
+          if (!frames_given.is_none()) {
+            frames.emplace();
+            for (const py::handle f : py::iter(frames_given)) {
+              if (!py::isinstance<py::int_>(f)) throw py::type_error("frames: expected frame numbers (int), got " +
+                                                                      py::str(f.get_type()).cast<std::string>());
+              frames->push_back(f.cast<int64_t>());
+            }
+          }
+          // As Sequence.frame(): a level outside (0, 1] is a ValueError.
+          if (lod_level && !(*lod_level > 0 && *lod_level <= 1)) {
+            throw py::value_error("lod_level must lie in (0, 1]: the fraction of particles kept");
+          }
           io::SeriesOptions o;
           o.out = output.string();
           o.force = force;

@@ -81,10 +81,13 @@ class Sequence {
   }
 
   // The frame number `i` names (negative from the end), or IndexError.
-  uint64_t frame_number(int64_t i) const {
+  uint64_t frame_number(int64_t given) const {
     const auto n = int64_t(size());
-    if (i < 0) i += n;
-    if (i < 0 || i >= n) throw py::index_error("frame " + std::to_string(i) + " is out of range: the file has " + std::to_string(n));
+    const int64_t i = given < 0 ? given + n : given;
+    if (i < 0 || i >= n) {
+      throw py::index_error("frame " + std::to_string(given) + " is out of range: the file has " + std::to_string(n) +
+                            " (0 to " + std::to_string(n - 1) + ", or -" + std::to_string(n) + " to -1 from the end)");
+    }
     return uint64_t(i);
   }
 
@@ -312,6 +315,14 @@ void bind_sequence(py::module_& m) {
       .def("__len__", &Sequence::size, "Number of frames.")
       .def("__getitem__", [](const Sequence& s, int64_t i) { return s.frame(i, s.request("all", std::nullopt, std::nullopt)); },
            "seq[i]: frame i with every particle and attribute (see frame()).")
+      .def("__getitem__", [](const Sequence& s, const py::slice& range) {
+             size_t start = 0, stop = 0, step = 0, count = 0;
+             if (!range.compute(s.size(), &start, &stop, &step, &count)) throw py::error_already_set();
+             py::list frames;
+             const Request r = s.request("all", std::nullopt, std::nullopt);
+             for (size_t k = 0; k < count; ++k) frames.append(s.frame(int64_t(start + k * step), r));
+             return frames;
+           }, "seq[a:b:c]: a list of those frames, each read whole (frames() streams them instead).")
       .def("frame", [](const Sequence& s, int64_t i, const std::string& layers, std::optional<float> lod_level,
                        std::optional<std::vector<std::string>> attributes) { return s.frame(i, s.request(layers, lod_level, attributes)); },
            kFrameDoc, py::arg("i"), py::kw_only(), py::arg("layers") = "all", py::arg("lod_level") = py::none(),
@@ -323,7 +334,11 @@ void bind_sequence(py::module_& m) {
              const auto n = int64_t(s.size());
              const int64_t begin = start < 0 ? std::max<int64_t>(0, start + n) : std::min(start, n);
              const int64_t end = !stop ? n : *stop < 0 ? std::max<int64_t>(0, *stop + n) : std::min(*stop, n);
-             const runtime::StreamRange range{uint64_t(begin), uint64_t(std::max(begin, end)), uint32_t(step), loop};
+             if (end <= begin) {
+               throw py::value_error("frames(" + std::to_string(start) + ", " + (stop ? std::to_string(*stop) : "None") +
+                                     "): no frames in that range (the file has " + std::to_string(n) + ")");
+             }
+             const runtime::StreamRange range{uint64_t(begin), uint64_t(end), uint32_t(step), loop};
              return std::make_unique<Stream>(s.shared(), range, s.request(layers, lod_level, attributes), memory, window);
            }, kFramesDoc, py::arg("start") = 0, py::arg("stop") = py::none(), py::arg("step") = 1, py::kw_only(),
            py::arg("layers") = "all", py::arg("lod_level") = py::none(), py::arg("attributes") = py::none(), py::arg("memory") = 0,

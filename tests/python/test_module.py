@@ -260,6 +260,9 @@ def test_open_converts_what_a_solver_wrote_once(sample_dir, tmp_path):
     assert again == []  # reused, not converted again
     temporary = sluice.open(tmp_path / "dam_break_3d_fluid_00000.vtu", cache=False)
     assert len(temporary) == 1 and len(temporary[0]) == 9360
+    # export() takes what open() takes: the cached conversion is exported.
+    summary = sluice.export(str(tmp_path / "*.vtu"), tmp_path / "out" / "f.csv", frames=[12])
+    assert list(summary["files"]) == [12]
 
 
 def test_convert_takes_the_command_lines_options(sample_dir, tmp_path):
@@ -322,3 +325,29 @@ def test_writers_keep_an_existing_output_unless_forced(sample_dir, tmp_path):
     assert out.read_bytes() == b"the user's own file"
     summary = sluice.convert(str(sample_dir / "dam_break_3d.pvd"), out, force=True)
     assert summary["frames"] == 13 and len(sluice.open(out)) == 13
+
+
+def test_indices_slices_and_ranges_behave_as_python_does(converted):
+    seq = sluice.open(converted)
+    n = len(seq)
+    with pytest.raises(IndexError, match=f"frame -{n + 1} is out of range"):
+        seq[-(n + 1)]
+    assert seq[-1].index == n - 1
+    frames = seq[2:9:3]
+    assert isinstance(frames, list) and [f.index for f in frames] == [2, 5, 8]
+    assert [f.index for f in seq[-2:]] == [n - 2, n - 1]
+    assert seq[5:2] == []
+    with pytest.raises(ValueError, match="no frames in that range"):
+        seq.frames(n + 5, 2)
+
+
+def test_export_takes_any_iterable_of_frames_and_checks_levels_as_frame_does(converted, tmp_path):
+    seq = sluice.open(converted)
+    summary = sluice.export(seq, tmp_path / "g" / "f.csv", frames=(i for i in (1, 3)))
+    assert sorted(summary["files"]) == [1, 3]
+    with pytest.raises(ValueError, match="lod_level"):
+        sluice.export(seq, tmp_path / "z.csv", frames=[0], lod_level=0)
+    with pytest.raises(ValueError, match="lod_level"):
+        seq.frame(0, lod_level=0)
+    with pytest.raises(TypeError, match="frame numbers"):
+        sluice.export(seq, tmp_path / "s.csv", frames=["0"])

@@ -79,3 +79,12 @@ def test_bad_requests(renderer, converted, tmp_path):
         sluice.Renderer(tmp_path / "x.sluice", size=(2, 2))
     with pytest.raises(FileNotFoundError):
         sluice.Renderer(tmp_path / "missing.sluice")
+
+
+def test_render_takes_what_open_takes(sample_dir, tmp_path):
+    import shutil
+
+    for f in sample_dir.glob("*.vtu"):
+        shutil.copy(f, tmp_path / f.name)
+    img = sluice.render(str(tmp_path / "*.vtu"), 12, size=(64, 48))
+    assert img.shape == (48, 64, 4) and len(np.unique(img.reshape(-1, 4), axis=0)) > 10
