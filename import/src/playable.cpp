@@ -157,10 +157,12 @@ PlayableFile open_playable(const std::string& input, const PlayableOptions& o) {
   const std::string name = cache_name(input);
   fs::path dir = folder / ".sluice-cache";
   std::error_code ec;
-  if (!(fs::is_directory(dir, ec) ? writable_folder(dir) : writable_folder(folder))) {
-    // The user cache: the name carries a hash of the input's path, so two
-    // inputs with the same name do not share a file.
-    dir = user_cache_folder();
+  const bool chosen = !o.cache_folder.empty();
+  if (chosen || !(fs::is_directory(dir, ec) ? writable_folder(dir) : writable_folder(folder))) {
+    // A folder shared by inputs (the caller's, or the user cache): the
+    // name carries a hash of the input's path, so two inputs with the same
+    // name do not share a file.
+    dir = chosen ? o.cache_folder : user_cache_folder();
     char hash[20];
     std::snprintf(hash, sizeof hash, "%016zx", std::hash<std::string>{}(fs::absolute(input).lexically_normal().string()));
     return open_playable_in(dir, name + "-" + hash, key, input, o);

@@ -46,7 +46,7 @@ class Sequence {
   // A .sluice file as it is; anything `sluice convert` reads (a file, glob,
   // .pvd or folder) converted once into the players' cache (or a temporary
   // file, kept while the sequence lives) with `progress` per frame.
-  Sequence(const std::string& input, bool cache, py::object progress) {
+  Sequence(const std::string& input, bool cache, std::optional<std::filesystem::path> cache_dir, py::object progress) {
     const bool glob = input.find_first_of("*?[") != std::string::npos;
     if (!glob && !std::filesystem::exists(input)) {
       PyErr_SetString(PyExc_FileNotFoundError, (input + ": no such file").c_str());
@@ -59,6 +59,7 @@ class Sequence {
     }
     import::PlayableOptions o;
     o.use = cache ? import::CacheUse::Cache : import::CacheUse::Temporary;
+    if (cache_dir) o.cache_folder = *cache_dir;
     PythonCallback callback(std::move(progress));
     o.observer.progressed = [&](const import::ConvertProgress& p) { callback.call_with([&] { return progress_dict(p); }); };
     try {
@@ -339,7 +340,18 @@ void bind_sequence(py::module_& m) {
                                      "): no frames in that range (the file has " + std::to_string(n) + ")");
              }
              const runtime::StreamRange range{uint64_t(begin), uint64_t(end), uint32_t(step), loop};
-             return std::make_unique<Stream>(s.shared(), range, s.request(layers, lod_level, attributes), memory, window);
+             Request r = s.request(layers, lod_level, attributes);
+             // A cap that holds no frame would be raised silently (the
+             // window keeps two frames at least): say so instead.
+             uint64_t largest = 0;
+             for (const io::FrameIndexEntry& e : s.reader().index().frames) largest = std::max(largest, e.count_in(r.query.layers));
+             const uint64_t frame_bytes = largest * io::world_particle_bytes(r.query.attributes.size());
+             if (memory > 0 && memory < 2 * frame_bytes) {
+               throw py::value_error("memory=" + std::to_string(memory) + " bytes holds less than two frames of this file (" +
+                                     std::to_string(frame_bytes) + " bytes each, converted): give at least " +
+                                     std::to_string(2 * frame_bytes) + ", or 0 for half the available memory");
+             }
+             return std::make_unique<Stream>(s.shared(), range, std::move(r), memory, window);
            }, kFramesDoc, py::arg("start") = 0, py::arg("stop") = py::none(), py::arg("step") = 1, py::kw_only(),
            py::arg("layers") = "all", py::arg("lod_level") = py::none(), py::arg("attributes") = py::none(), py::arg("memory") = 0,
            py::arg("window") = 0, py::arg("loop") = false)
@@ -388,9 +400,9 @@ void bind_sequence(py::module_& m) {
         return "<sluice.Sequence '" + s.reader().path() + "': " + std::to_string(s.size()) + " frames>";
       });
 
-  m.def("open", [](const py::object& path, bool cache, py::object progress) {
+  m.def("open", [](const py::object& path, bool cache, std::optional<std::filesystem::path> cache_dir, py::object progress) {
           return std::make_unique<Sequence>(py::str(py::module_::import("os").attr("fspath")(path)).cast<std::string>(),
-                                            cache, std::move(progress));
+                                            cache, std::move(cache_dir), std::move(progress));
         },
         R"(Opens a .sluice file, or a solver's output.
 
@@ -398,8 +410,10 @@ A .sluice file is opened as it is: the header and the frame index only
 (one seek per frame later). Anything `sluice convert` reads (a VTK, CSV or
 XYZ file, a quoted glob such as 'out/fluid_*.vtu', a .pvd series, a folder)
 is converted once, as `sluice play` does, into .sluice-cache/ beside it (or
-~/.cache/sluice), and reused while the input files are unchanged;
-cache=False converts into a temporary file kept while the sequence lives.
+~/.cache/sluice where that folder is not writable), or into cache_dir when
+given, and reused while the input files are unchanged; cache=False converts
+into a temporary file kept while the sequence lives. seq.path names the
+converted file.
 progress, if given, is called once per converted frame with a dict
 (frames_done, frames, input_bytes, output_bytes).
 
@@ -415,7 +429,8 @@ Raises:
     FileNotFoundError: no file at path.
     sluice.Error: a damaged .sluice file (run `sluice recover`), or input
         that cannot be converted (the message names the file and frame).
-)", py::arg("path"), py::kw_only(), py::arg("cache") = true, py::arg("progress") = py::none());
+)", py::arg("path"), py::kw_only(), py::arg("cache") = true, py::arg("cache_dir") = py::none(),
+        py::arg("progress") = py::none());
 }
 
 }  // namespace sluice::python

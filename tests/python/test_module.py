@@ -260,6 +260,14 @@ def test_open_converts_what_a_solver_wrote_once(sample_dir, tmp_path):
     assert again == []  # reused, not converted again
     temporary = sluice.open(tmp_path / "dam_break_3d_fluid_00000.vtu", cache=False)
     assert len(temporary) == 1 and len(temporary[0]) == 9360
+    # A cache folder of the user's choosing: nothing written beside the input.
+    solver = tmp_path / "solver"
+    solver.mkdir()
+    for f in sample_dir.glob("*.vtu"):
+        shutil.copy(f, solver / f.name)
+    chosen = sluice.open(str(solver / "*.vtu"), cache_dir=tmp_path / "mine")
+    assert len(chosen) == 13 and chosen.path.startswith(str(tmp_path / "mine"))
+    assert not (solver / ".sluice-cache").exists()
     # export() takes what open() takes: the cached conversion is exported.
     summary = sluice.export(str(tmp_path / "*.vtu"), tmp_path / "out" / "f.csv", frames=[12])
     assert list(summary["files"]) == [12]
@@ -351,3 +359,10 @@ def test_export_takes_any_iterable_of_frames_and_checks_levels_as_frame_does(con
         seq.frame(0, lod_level=0)
     with pytest.raises(TypeError, match="frame numbers"):
         sluice.export(seq, tmp_path / "s.csv", frames=["0"])
+
+
+def test_a_memory_cap_that_holds_no_frames_says_so(converted):
+    seq = sluice.open(converted)
+    with pytest.raises(ValueError, match="less than two frames"):
+        seq.frames(memory=1000)
+    assert len(list(seq.frames(0, 3, memory=64 << 20))) == 3

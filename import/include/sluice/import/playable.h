@@ -37,6 +37,9 @@ struct CacheEvents {
 
 struct PlayableOptions {
   CacheUse use = CacheUse::Cache;
+  // Where cached conversions go (created if missing); empty: .sluice-cache/
+  // beside the input where that folder is writable, else the user cache.
+  std::filesystem::path cache_folder;
   IsolationPolicy isolation;   // how the conversion reads third-party formats
   ConvertObserver observer;    // the conversion's plan, progress and notes
   CacheEvents events;
