@@ -17,15 +17,6 @@ FileHeader parse_container_head(std::span<const std::byte> head, const ErrorLoca
   return parse_file_header(head, where);  // checks the size it states against what is there
 }
 
-std::span<const std::byte> frame_table(const EncodedFrame& frame, size_t attribute_count) {
-  const uint64_t bytes = frame_table_bytes(frame.header.chunks.size(), attribute_count);
-  return std::span(frame.record).first(std::min<uint64_t>(bytes, frame.record.size()));
-}
-
-FrameHeader parse_frame_table_bytes(std::span<const std::byte> table, size_t attribute_count, const ErrorLocation& where) {
-  return parse_frame_table(table, attribute_count, where);
-}
-
 std::vector<std::byte> container_tail(const FrameIndex& index, size_t attribute_count, uint64_t at) {
   std::vector<std::byte> tail = serialize_index(index, attribute_count);
   const std::vector<std::byte> footer = serialize_footer({at, tail.size()});

@@ -36,7 +36,6 @@ void FrameFeed::set_views(std::span<const View> views, const FluidOptions& fluid
   player_.set_demand(view_demand(views, renderer_.scene(), fluid, lod, margin));
 }
 
-void FrameFeed::read_everything() { player_.set_demand({}); }
 
 FeedUpdate FrameFeed::update() {
   renderer_.wait_upload(pending_);  // the player may now take those buffers back

@@ -25,14 +25,6 @@ std::vector<std::byte> container_head(const FileHeader& header);
 // Throws io::Error naming `where` when they do not hold one.
 FileHeader parse_container_head(std::span<const std::byte> head, const ErrorLocation& where = {});
 
-// The frame table at the start of an encoded record (its header and chunk
-// table): all a process that writes the index needs of a frame another
-// process wrote. A view into `frame.record`.
-std::span<const std::byte> frame_table(const EncodedFrame& frame, size_t attribute_count);
-// A frame header back from frame_table's bytes. Throws io::Error.
-FrameHeader parse_frame_table_bytes(std::span<const std::byte> table, size_t attribute_count,
-                                    const ErrorLocation& where = {});
-
 // The frame index and footer, written at `at`: the end of the last record.
 std::vector<std::byte> container_tail(const FrameIndex& index, size_t attribute_count, uint64_t at);
 

@@ -71,8 +71,6 @@ class FrameFeed {
   // per displayed frame is fine), before update(). Never called: every
   // tier is read.
   void set_views(std::span<const View> views, const FluidOptions& fluid, const LodOptions& lod, float margin);
-  // Read every tier again (the demand of no views): `--layers all`, LOD off.
-  void read_everything();
 
   FeedUpdate update();
   const FeedUpdate& last() const { return last_; }
