@@ -429,7 +429,8 @@ void run_view_bench(const ViewBenchOptions& o) {
                s == Segment::Pause ? "-" : num(r.first_seconds * 1e3, 1) + " ms", steady,
                s == Segment::Pause ? mb(double(r.bytes_read)) + " (refinement)" : mb(per),
                s == Segment::Pause ? mb(double(r.device_bytes)) : mb(device) + (per > 0 && cold ? " (" + num(device / per, 2) + "x)" : ""),
-               by_view ? num(double(r.runs) / read, 1) : "-", num(double(r.records) / read, 0),
+               // (Relayed frames are checked on the read threads: no worker records.)
+               by_view ? num(double(r.runs) / read, 1) : "-", r.records ? num(double(r.records) / read, 0) : "-",
                r.records ? num(1e6 * r.worker_seconds / double(r.records), 1) : "-",
                r.record_bytes ? num(100.0 * double(r.bytes_read) / double(r.record_bytes), 1) + "%" : "-", bound,
                std::to_string(r.refinements)});
