@@ -134,13 +134,8 @@ void run_convert(const ConvertCommand& c) {
               smaller ? "smaller" : "larger");
 }
 
-}  // namespace
-
-void add_convert(CLI::App& app) {
-  auto c = std::make_shared<ConvertCommand>();
-  import::ConvertOptions* o = &c->conversion;
-  CLI::App* cmd = app.add_subcommand("convert", "Convert simulation output (VTK, CSV, XYZ) into a .sluice file");
-  cmd->footer(
+// `sluice convert --help`'s text after the options.
+constexpr const char* kConvertFooter =
       "INPUT is a file, a quoted glob ('out/fluid_*.vtu', naturally sorted: 2 before 10), a .pvd series or a\n"
       "directory. Formats: .vtu .vtp .pvtu .pvtp .vtk (legacy) .pvd .csv .xyz.\n\n"
       "Each particle gets a 16-bit LOD value hashed from its id array (id, Idp, gid, ... are found\n"
@@ -160,7 +155,15 @@ void add_convert(CLI::App& app) {
       "A bad frame stops the conversion (the output keeps the frames before it) unless --skip-bad.\n\n"
       "A .sluice INPUT is rewritten in the layout --format names (default 2.0, frames ordered coarse to\n"
       "fine): `sluice convert old.sluice -o new.sluice`. Its header, layers and attributes are kept; positions\n"
-      "are quantized again in the new cells, each within the file's stated bound of the input's.\n");
+      "are quantized again in the new cells, each within the file's stated bound of the input's.\n";
+
+}  // namespace
+
+void add_convert(CLI::App& app) {
+  auto c = std::make_shared<ConvertCommand>();
+  import::ConvertOptions* o = &c->conversion;
+  CLI::App* cmd = app.add_subcommand("convert", "Convert simulation output (VTK, CSV, XYZ) into a .sluice file");
+  cmd->footer(kConvertFooter);
   cmd->add_option("input", o->input, "File, quoted glob, .pvd or directory")->required();
   cmd->add_option("-o,--output", c->output, "Output file (default: named after the input)");
   cmd->add_option("-a,--attribute", o->attributes, "Point-data array to keep for colouring (repeat, or a,b)")

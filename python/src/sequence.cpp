@@ -305,13 +305,18 @@ Returns:
 
 }  // namespace
 
-void bind_sequence(py::module_& m) {
+namespace {
+
+void bind_frame_stream(py::module_& m) {
   py::class_<Stream>(m, "FrameStream", "Frames streamed through the prefetch pipeline (Sequence.frames()).")
       .def("__iter__", [](Stream& s) -> Stream& { return s; })
       .def("__next__", &Stream::next)
       .def("__len__", &Stream::remaining, "Frames left.")
       .def_property_readonly("window", &Stream::window, "Frames the prefetch window holds at once, as planned.");
 
+}
+
+void bind_sequence_class(py::module_& m) {
   py::class_<Sequence>(m, "Sequence", "A .sluice file: its description, its frames by number, and streaming.")
       .def("__len__", &Sequence::size, "Number of frames.")
       .def("__getitem__", [](const Sequence& s, int64_t i) { return s.frame(i, s.request("all", std::nullopt, std::nullopt)); },
@@ -400,6 +405,9 @@ void bind_sequence(py::module_& m) {
         return "<sluice.Sequence '" + s.reader().path() + "': " + std::to_string(s.size()) + " frames>";
       });
 
+}
+
+void bind_open(py::module_& m) {
   m.def("open", [](const py::object& path, bool cache, std::optional<std::filesystem::path> cache_dir, py::object progress) {
           return std::make_unique<Sequence>(py::str(py::module_::import("os").attr("fspath")(path)).cast<std::string>(),
                                             cache, std::move(cache_dir), std::move(progress));
@@ -431,6 +439,14 @@ Raises:
         that cannot be converted (the message names the file and frame).
 )", py::arg("path"), py::kw_only(), py::arg("cache") = true, py::arg("cache_dir") = py::none(),
         py::arg("progress") = py::none());
+}
+
+}  // namespace
+
+void bind_sequence(py::module_& m) {
+  bind_frame_stream(m);
+  bind_sequence_class(m);
+  bind_open(m);
 }
 
 }  // namespace sluice::python

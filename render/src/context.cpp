@@ -156,9 +156,11 @@ std::vector<DeviceInfo> Context::list_devices() {
   return out;
 }
 
-Context::Context(const ContextOptions& options) : impl_(std::make_unique<Impl>()) {
-  Impl& c = *impl_;
-  c.options = options;
+namespace {
+
+// The loader, the validation layer where asked and installed, the instance
+// and its messenger.
+void open_instance(detail::ContextImpl& c, const ContextOptions& options) {
   if (c.context.enumerateInstanceVersion() < VK_API_VERSION_1_3) {
     throw Error("the Vulkan loader is older than 1.3 (" +
                              format_api_version(c.context.enumerateInstanceVersion()) + ")");
@@ -182,14 +184,13 @@ Context::Context(const ContextOptions& options) : impl_(std::make_unique<Impl>()
                                               T::eGeneral | T::eValidation | T::ePerformance, &debug_callback, &c);
     c.messenger = vk::raii::DebugUtilsMessengerEXT(c.instance, info);
   }
+}
 
-  // Device choice: explicit index or name, else the best-ranked usable one.
-  vk::raii::PhysicalDevices devices(c.instance);
-  std::vector<DeviceInfo> infos;
-  for (uint32_t i = 0; i < devices.size(); ++i) infos.push_back(describe(devices[i], i, options.presentation));
-  if (infos.empty()) throw Error("no Vulkan device found (is mesa-vulkan-drivers or a GPU driver installed?)");
+// The device `want` names (an index or part of a name), else the
+// best-ranked usable one. Throws Error listing the devices when none fits.
+uint32_t choose_device(const vk::raii::PhysicalDevices& devices, const std::vector<DeviceInfo>& infos,
+                       const std::string& want) {
   int chosen = -1;
-  const std::string& want = options.device;
   if (!want.empty()) {
     const bool numeric = std::all_of(want.begin(), want.end(), [](char ch) { return std::isdigit(static_cast<unsigned char>(ch)); });
     for (const DeviceInfo& d : infos) {
@@ -220,11 +221,13 @@ Context::Context(const ContextOptions& options) : impl_(std::make_unique<Impl>()
       throw Error("no Vulkan device can run sluice:" + list);
     }
   }
-  c.physical = std::move(devices[size_t(chosen)]);
-  c.info = infos[size_t(chosen)];
-  c.properties = c.physical.getProperties();
-  c.memory = c.physical.getMemoryProperties();
+  return uint32_t(chosen);
+}
 
+// Queues (one graphics+compute family, a transfer-only family where there
+// is one, a second queue of it for the relay), extensions and features; the
+// device and the handles it hands out.
+void create_device(detail::ContextImpl& c, const ContextOptions& options) {
   // Queues: one graphics+compute family; a transfer-only family if there is one.
   const auto families = c.physical.getQueueFamilyProperties();
   std::optional<uint32_t> graphics, transfer;
@@ -274,6 +277,24 @@ Context::Context(const ContextOptions& options) : impl_(std::make_unique<Impl>()
                static_cast<VkDevice>(*c.device),      c.graphics_family,
                static_cast<VkQueue>(*c.graphics_queue), c.transfer_family != c.graphics_family ? c.transfer_family : UINT32_MAX,
                c.transfer_family != c.graphics_family ? static_cast<VkQueue>(*c.transfer_queue) : VK_NULL_HANDLE};
+}
+
+}  // namespace
+
+Context::Context(const ContextOptions& options) : impl_(std::make_unique<Impl>()) {
+  Impl& c = *impl_;
+  c.options = options;
+  open_instance(c, options);
+  const vk::raii::PhysicalDevices devices(c.instance);
+  std::vector<DeviceInfo> infos;
+  for (uint32_t i = 0; i < devices.size(); ++i) infos.push_back(describe(devices[i], i, options.presentation));
+  if (infos.empty()) throw Error("no Vulkan device found (is mesa-vulkan-drivers or a GPU driver installed?)");
+  const uint32_t chosen = choose_device(devices, infos, options.device);
+  c.physical = devices[chosen];
+  c.info = infos[chosen];
+  c.properties = c.physical.getProperties();
+  c.memory = c.physical.getMemoryProperties();
+  create_device(c, options);
 }
 
 Context::Context(const HostVulkan& host) : impl_(std::make_unique<Impl>()) {
