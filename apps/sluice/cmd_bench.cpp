@@ -8,9 +8,10 @@
 
 namespace sluice::app {
 
-void add_bench(CLI::App& app) {
-  CLI::App* bench = app.add_subcommand("bench", "Measure throughput; print tables side by side with the peers");
-  bench->require_subcommand(1);
+namespace {
+
+// `sluice bench io`: VTK's readers against .sluice on the same frames.
+void add_bench_io(CLI::App* bench) {
   auto io = std::make_shared<bench::IoBenchOptions>();
   CLI::App* cmd = bench->add_subcommand("io", "VTK's XML reader against .sluice read+decode on the same frames");
   cmd->footer("Example: sluice bench io 'data/dam_break_3d/*.vtu' --threads 16");
@@ -23,7 +24,10 @@ void add_bench(CLI::App& app) {
       ->capture_default_str()
       ->check(CLI::Range(1, 1000));
   cmd->callback([io] { bench::run_io_bench(*io); });
+}
 
+// `sluice bench band`: the narrow-band classifier.
+void add_bench_band(CLI::App* bench) {
   auto band = std::make_shared<bench::BandBenchOptions>();
   CLI::App* bc = bench->add_subcommand("band", "The narrow-band classifier (LNM) on the input's frames, against the exact narrow band");
   bc->footer(
@@ -42,7 +46,10 @@ void add_bench(CLI::App& app) {
     if (band->input.empty() && band->synth == 0) throw CLI::ValidationError("bench band", "give an input or --synth N");
     bench::run_band_bench(*band);
   });
+}
 
+// `sluice bench stream`: the streaming pipeline against the machine's bounds.
+void add_bench_stream(CLI::App* bench) {
   auto stream = std::make_shared<bench::StreamBenchOptions>();
   auto stream_memory = std::make_shared<std::string>();
   CLI::App* st = bench->add_subcommand("stream", "The streaming pipeline from storage and the page cache, against the machine's bounds");
@@ -88,7 +95,10 @@ void add_bench(CLI::App& app) {
       bench::run_stream_bench(*stream);
     }
   });
+}
 
+// `sluice bench view`: reading by the view on a scripted camera path.
+void add_bench_view(CLI::App* bench) {
   auto view = std::make_shared<bench::ViewBenchOptions>();
   auto view_size = std::make_shared<std::string>("1920x1080");
   auto view_memory = std::make_shared<std::string>();
@@ -135,6 +145,17 @@ void add_bench(CLI::App& app) {
     throw std::runtime_error("bench view: this build has no renderer (SLUICE_WITH_RENDER=OFF)");
 #endif
   });
+}
+
+}  // namespace
+
+void add_bench(CLI::App& app) {
+  CLI::App* bench = app.add_subcommand("bench", "Measure throughput; print tables side by side with the peers");
+  bench->require_subcommand(1);
+  add_bench_io(bench);
+  add_bench_band(bench);
+  add_bench_stream(bench);
+  add_bench_view(bench);
 }
 
 }  // namespace sluice::app
