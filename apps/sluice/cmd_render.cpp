@@ -53,14 +53,11 @@ std::string frame_path(const std::string& out, uint64_t frame, bool single) {
   return (p / name).string();
 }
 
-void run_render(const RenderCommand& o, const ViewSettings& v) {
-  namespace fs = std::filesystem;
-  const PlayableFile input = open_playable(o.input, {o.no_cache, o.quiet});
-  render::Context context(v.context_options());
-  // Frames stream through the runtime (read ahead, decoded on every core
-  // into staging) like playback: every frame due at once, none skipped
-  // (hold), the first bad frame stops the render with its error; the one
-  // fixed camera reads the tiers it draws (the same pixels as a full read).
+// Frames stream through the runtime (read ahead, decoded on every core
+// into staging) like playback: every frame due at once, none skipped
+// (hold), the first bad frame stops the render with its error; the one
+// fixed camera reads the tiers it draws (the same pixels as a full read).
+render::StreamOptions stream_options(const RenderCommand& o, const ViewSettings& v) {
   render::StreamOptions so;
   so.player.frame_rate = 1e9;
   so.player.end = runtime::EndMode::Stop;
@@ -71,15 +68,12 @@ void run_render(const RenderCommand& o, const ViewSettings& v) {
   so.motion = render::ViewMotion::Fixed;
   so.up = v.up_override();
   render::apply_particles(v.particles, so.renderer);
-  render::Stream stream(context, input.path(), so);
-  const io::ContainerReader& reader = stream.reader();
-  // A list (0,25,50) plays every frame between its first and last and draws those listed.
-  const std::vector<uint64_t> frames = parse_frame_list(o.frames, reader.frame_count());
-  const uint64_t first = frames.front(), last = frames.back();
-  const auto [width, height] = parse_size(o.size);
-  const bool video = fs::path(o.out).extension() == ".mp4";
-  const bool single = frames.size() == 1;
-  // Like convert and export: nothing is overwritten unless asked.
+  return so;
+}
+
+// Like convert and export: nothing is overwritten unless asked.
+void refuse_existing(const RenderCommand& o, const std::vector<uint64_t>& frames, bool video, bool single) {
+  namespace fs = std::filesystem;
   std::vector<std::string> outputs;
   if (video) outputs.push_back(o.out);
   else for (uint64_t f : frames) outputs.push_back(frame_path(o.out, f, single));
@@ -88,6 +82,22 @@ void run_render(const RenderCommand& o, const ViewSettings& v) {
       throw std::runtime_error(taken + " exists; pass --force to overwrite it, or -o to write elsewhere");
     }
   }
+}
+
+void run_render(const RenderCommand& o, const ViewSettings& v) {
+  namespace fs = std::filesystem;
+  const PlayableFile input = open_playable(o.input, {o.no_cache, o.quiet});
+  render::Context context(v.context_options());
+  const render::StreamOptions so = stream_options(o, v);
+  render::Stream stream(context, input.path(), so);
+  const io::ContainerReader& reader = stream.reader();
+  // A list (0,25,50) plays every frame between its first and last and draws those listed.
+  const std::vector<uint64_t> frames = parse_frame_list(o.frames, reader.frame_count());
+  const uint64_t first = frames.front(), last = frames.back();
+  const auto [width, height] = parse_size(o.size);
+  const bool video = fs::path(o.out).extension() == ".mp4";
+  const bool single = frames.size() == 1;
+  refuse_existing(o, frames, video, single);
   if (!video && fs::path(o.out).extension() != ".png" && o.out.find('%') == std::string::npos) {
     fs::create_directories(o.out);
   }
