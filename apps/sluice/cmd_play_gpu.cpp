@@ -28,6 +28,38 @@ double median(std::vector<double> v) {
   return v[v.size() / 2];
 }
 
+// What a GPU playback measured, per new frame after the first pass.
+struct GpuPlayTally {
+  std::vector<double> intervals, render_ms, upload_ms, decode_ms;
+  uint64_t ticks = 0, new_frames = 0;
+};
+
+// The closing report of `play --headless --gpu`.
+void report(const PlayOptions& o, bool gpu_decode, double elapsed, const runtime::PlaybackStats& s, const GpuPlayTally& t) {
+  const double frame = median(t.intervals), draw = median(t.render_ms), copy = median(t.upload_ms), decode = median(t.decode_ms);
+  std::printf("played %s through the renderer: %llu new frames in %s (%s frames/s), %llu refreshes; stalls %llu, "
+              "drops %llu, errors %llu, frames served from memory %llu\n",
+              o.file.c_str(), (unsigned long long)t.new_frames, human_duration(elapsed).c_str(),
+              fixed(double(t.new_frames) / elapsed, 1).c_str(), (unsigned long long)t.ticks, (unsigned long long)s.stalls,
+              (unsigned long long)s.drops, (unsigned long long)s.errors, (unsigned long long)s.pipeline.cache_hits);
+  std::printf("  %s\n", reads_text(s.pipeline).c_str());
+  if (gpu_decode) {
+    std::printf("  frames relayed to device memory as read (the window in device memory): %llu of %llu read\n",
+                (unsigned long long)s.pipeline.frames_relayed, (unsigned long long)s.pipeline.frames_read);
+  }
+  if (t.intervals.empty()) {
+    std::printf("  (play more than one pass over the file, e.g. --loop --seconds 10, for per-frame medians)\n");
+    return;
+  }
+  std::printf("  per new frame after the first pass (medians of %zu): interval %s ms, GPU render %s ms, GPU upload copy %s ms, "
+              "GPU decode %s ms (%s)\n",
+              t.intervals.size(), fixed(frame, 2).c_str(), fixed(draw, 2).c_str(), fixed(copy, 2).c_str(), fixed(decode, 2).c_str(),
+              gpu_decode ? "frames decoded on the GPU" : "frames decoded on the CPU");
+  std::printf("  interval / (render + upload) = %s; interval / max(render, upload) = %s (1.0: the copy is hidden "
+              "behind rendering or the other way round)\n",
+              fixed(frame / std::max(draw + copy, 1e-9), 2).c_str(), fixed(frame / std::max(std::max(draw, copy), 1e-9), 2).c_str());
+}
+
 }  // namespace
 
 void run_play_gpu(const PlayOptions& o, const WindowPlayOptions& w) {
@@ -113,30 +145,8 @@ void run_play_gpu(const PlayOptions& o, const WindowPlayOptions& w) {
     std::fprintf(stderr, "sluice: %llu Vulkan validation errors\n", (unsigned long long)context.validation_errors());
     throw ExitCode{1};
   }
-  const double elapsed = std::chrono::duration<double>(Steady::now() - start).count();
-  const runtime::PlaybackStats s = player.stats();
-  const double frame = median(intervals), draw = median(render_ms), copy = median(upload_ms), decode = median(decode_ms);
-  std::printf("played %s through the renderer: %llu new frames in %s (%s frames/s), %llu refreshes; stalls %llu, "
-              "drops %llu, errors %llu, frames served from memory %llu\n",
-              o.file.c_str(), (unsigned long long)new_frames, human_duration(elapsed).c_str(),
-              fixed(double(new_frames) / elapsed, 1).c_str(), (unsigned long long)ticks, (unsigned long long)s.stalls,
-              (unsigned long long)s.drops, (unsigned long long)s.errors, (unsigned long long)s.pipeline.cache_hits);
-  std::printf("  %s\n", reads_text(s.pipeline).c_str());
-  if (gpu_decode) {
-    std::printf("  frames relayed to device memory as read (the window in device memory): %llu of %llu read\n",
-                (unsigned long long)s.pipeline.frames_relayed, (unsigned long long)s.pipeline.frames_read);
-  }
-  if (intervals.empty()) {
-    std::printf("  (play more than one pass over the file, e.g. --loop --seconds 10, for per-frame medians)\n");
-    return;
-  }
-  std::printf("  per new frame after the first pass (medians of %zu): interval %s ms, GPU render %s ms, GPU upload copy %s ms, "
-              "GPU decode %s ms (%s)\n",
-              intervals.size(), fixed(frame, 2).c_str(), fixed(draw, 2).c_str(), fixed(copy, 2).c_str(), fixed(decode, 2).c_str(),
-              gpu_decode ? "frames decoded on the GPU" : "frames decoded on the CPU");
-  std::printf("  interval / (render + upload) = %s; interval / max(render, upload) = %s (1.0: the copy is hidden "
-              "behind rendering or the other way round)\n",
-              fixed(frame / std::max(draw + copy, 1e-9), 2).c_str(), fixed(frame / std::max(std::max(draw, copy), 1e-9), 2).c_str());
+  report(o, gpu_decode, std::chrono::duration<double>(Steady::now() - start).count(), player.stats(),
+         {std::move(intervals), std::move(render_ms), std::move(upload_ms), std::move(decode_ms), ticks, new_frames});
 }
 
 }  // namespace sluice::app
