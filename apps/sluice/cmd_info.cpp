@@ -6,6 +6,7 @@
 
 #include "commands.h"
 #include "human.h"
+#include "json_text.h"
 #include "sluice/io/gpu_decode_plan.h"
 #include "sluice/io/reader.h"
 
@@ -64,26 +65,6 @@ double median_step(const std::vector<io::FrameIndexEntry>& frames) {
   if (steps.empty()) return 0;
   std::nth_element(steps.begin(), steps.begin() + steps.size() / 2, steps.end());
   return steps[steps.size() / 2];
-}
-
-std::string json_string(const std::string& s) {
-  std::string out = "\"";
-  for (char c : s) {
-    if (c == '"' || c == '\\') out += '\\', out += c;
-    else if (static_cast<unsigned char>(c) < 0x20) {
-      char buf[8];
-      std::snprintf(buf, sizeof buf, "\\u%04x", c);
-      out += buf;
-    } else out += c;
-  }
-  return out + "\"";
-}
-
-std::string json_number(double v) {
-  if (!std::isfinite(v)) return "null";
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.9g", v);
-  return buf;
 }
 
 std::string json_box(const io::Aabb& b) {

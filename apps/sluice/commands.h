@@ -15,6 +15,7 @@ void add_synth(CLI::App& app);
 void add_export(CLI::App& app);
 // Only in builds with SLUICE_WITH_RENDER:
 void add_render(CLI::App& app);
+void add_devices(CLI::App& app);
 void add_bench_render(CLI::App& bench);
 void add_bench_layers(CLI::App& bench);  // `sluice bench layers`  // `sluice bench render`, under the bench command
 // Only in builds with SLUICE_WITH_XR:

@@ -35,6 +35,7 @@ int main(int argc, char** argv) {
   sluice::app::add_export(app);
 #if SLUICE_WITH_RENDER
   sluice::app::add_render(app);
+  sluice::app::add_devices(app);
   sluice::app::add_bench_render(*app.get_subcommand("bench"));
   sluice::app::add_bench_layers(*app.get_subcommand("bench"));
 #endif

@@ -157,6 +157,23 @@ TEST(Friction, FrameLists) {
   EXPECT_FALSE(fs::exists(dir / "out/x_00004.vtp"));
 }
 
+// `sluice devices` lists what --device takes: here lavapipe, usable, at
+// index 0 (as text and JSON), and that index picks it.
+TEST(Friction, DevicesNameWhatDeviceTakes) {
+  const Result text = sluice("devices");
+  ASSERT_EQ(text.status, 0) << text.out;
+  EXPECT_NE(text.out.find("0: llvmpipe"), std::string::npos) << text.out;
+  EXPECT_NE(text.out.find("sluice runs on it"), std::string::npos) << text.out;
+  const Result json = sluice("devices --json");
+  ASSERT_EQ(json.status, 0) << json.out;
+  EXPECT_NE(json.out.find("\"usable\": true"), std::string::npos) << json.out;
+  const fs::path dir = with_sample("devices");
+  const Result r = sluice("render " + (dir / "d.sluice").string() + " --frames 0 --size 64x48 -q --device 0 -o " +
+                          (dir / "d.png").string());
+  EXPECT_EQ(r.status, 0) << r.out;
+  EXPECT_TRUE(fs::exists(dir / "d.png"));
+}
+
 // Recover keeps the frames after a damaged one, rebuilds a damaged header
 // from its copy, and fails when there is nothing to save.
 TEST(Recover, SavesEveryGoodFrame) {
