@@ -40,9 +40,11 @@ bool thickness_filtered(const FluidOptions& o) {
          o.display_mode != DisplayMode::ThicknessBuffer;
 }
 
-Globals make_globals(const SceneInfo& scene, const View& view_in, const FluidOptions& o, const LodOptions& lod,
-                     const ViewSetup& v) {
-  Globals g{};
+namespace {
+
+// The camera: matrices, frustum planes, the eye, viewports and each
+// pixel's eye ray.
+void set_camera(Globals& g, const View& view_in, const ViewSetup& v) {
   const Mat4& view = view_in.view;
   const Mat4& proj = view_in.projection;
   g.view = view;
@@ -83,8 +85,11 @@ Globals make_globals(const SceneInfo& scene, const View& view_in, const FluidOpt
   };
   ray(g.ray, float(v.width), float(v.height));
   ray(g.thick_ray, float(v.thick_width), float(v.thick_height));
+}
 
-  const float radius = effective_radius(o, scene);
+// The splats' size, the LOD rule and the colour mapping.
+void set_lod_and_color(Globals& g, const SceneInfo& scene, const FluidOptions& o, const LodOptions& lod,
+                       const ViewSetup& v, float radius) {
   const float max_splat = lod.max_splat_pixels > 0 ? std::min(lod.max_splat_pixels, v.max_point_size) : v.max_point_size;
   set4(g.radius, radius, v.max_point_size, max_splat, std::max(lod.near_cull_distance, 0.0f));
 
@@ -106,12 +111,17 @@ Globals make_globals(const SceneInfo& scene, const View& view_in, const FluidOpt
   if (o.color_min) cmin = *o.color_min;
   if (o.color_max) cmax = *o.color_max;
   set4(g.color, cmin, cmax > cmin ? 1.0f / (cmax - cmin) : 0.0f, g.modes[3] ? 1.0f : 0.0f, float(uint32_t(o.colormap)));
+}
 
+// The screen-space filters and the shading.
+void set_filters_and_shading(Globals& g, const SceneInfo& scene, const FluidOptions& o, const LodOptions& lod,
+                             const ViewSetup& v, float radius) {
   // Filter scales in world units, relative to the sphere radius: sigma of
   // half a radius smooths the bumps between overlapping spheres; delta and mu
   // are the narrow-range thresholds (Truong & Yuksel).
   // In density-preserving LOD the kept splats are larger and sparser: scale
   // the filter by their typical growth (importance 1: level^(-1/3)).
+  const float level = std::clamp(lod.level, 0.0f, 1.0f);
   const float growth = lod.mode == LodMode::DensityPreserving && level > 0
                            ? std::min(std::cbrt(1.0f / level), std::max(lod.max_splat_scale, 1.0f))
                            : 1.0f;
@@ -129,7 +139,10 @@ Globals make_globals(const SceneInfo& scene, const View& view_in, const FluidOpt
   g.display[1] = o.ground ? 1u : 0u;
   g.display[2] = v.write_aux ? 1u : 0u;
   g.display[3] = depth_filtered(o) ? 1u : 0u;
+}
 
+// The ground, the light, the scene's extent and the splat pass's fixed point.
+void set_scene(Globals& g, const SceneInfo& scene, const FluidOptions& o, float radius) {
   const Vec3 up = length(o.up) > 0 ? normalize(o.up) : Vec3{0, 0, 1};
   // The ground touches the bounds' lowest corner along up, a radius below.
   float lowest = dot(scene.bounds.min, up);
@@ -155,6 +168,18 @@ Globals make_globals(const SceneInfo& scene, const View& view_in, const FluidOpt
   // slower on the H100 (10M particles, both eyes of 2064x2208: 9.53 against
   // 4.77 ms; 256: 4.83, 1024: 4.77, 16384: 4.84; docs/measurements.md).
   set4(g.splat, fixed, 1.0f / fixed, 1024.0f, 0);
+}
+
+}  // namespace
+
+Globals make_globals(const SceneInfo& scene, const View& view_in, const FluidOptions& o, const LodOptions& lod,
+                     const ViewSetup& v) {
+  Globals g{};
+  set_camera(g, view_in, v);
+  const float radius = effective_radius(o, scene);
+  set_lod_and_color(g, scene, o, lod, v, radius);
+  set_filters_and_shading(g, scene, o, lod, v, radius);
+  set_scene(g, scene, o, radius);
   return g;
 }
 
