@@ -262,14 +262,11 @@ uint64_t submit_decode(detail::RendererImpl& r, FrameSet& set, uint64_t copy_val
   return r.upload_value + 1;
 }
 
-// Submits the copy of `set`'s frame (particle_count, chunk_count,
-// has_attribute) from the sources into its device buffers, which grow to
-// fit; with `encoded`, the copy of its staged area and then its decode.
-// The chunk table source must be set.staging at `chunks_offset` (it is
-// validated there). Returns the frame's ticket: the value the copy, or for
-// an encoded frame the decode, signals on the upload timeline.
-uint64_t upload_frame(detail::RendererImpl& r, FrameSet& set, UploadSource particles_src, vk::DeviceSize chunks_offset,
-                      UploadSource attribute_src, const EncodedSource* encoded = nullptr) {
+// Checks the staged chunk table (at `chunks_offset` of set.staging) against
+// the frame's particles, decides what the GPU will do with the frame
+// (classify it, shape it) and sizes its device buffers and the work lists
+// for it. Returns the table.
+const GpuChunk* size_set(detail::RendererImpl& r, FrameSet& set, vk::DeviceSize chunks_offset) {
   const uint64_t n = set.particle_count;
   const uint32_t chunks = set.chunk_count;
   // Device buffers sized for this frame; the work lists for its worst case.
@@ -311,6 +308,49 @@ uint64_t upload_frame(detail::RendererImpl& r, FrameSet& set, UploadSource parti
   r.ensure(r.draws, std::max<uint64_t>((n + room) * 8, 16), kDeviceUsage, MemoryKind::DeviceLocal);
   // Large splats: up to one entry per drawn item and eye (two eyes in one pass).
   r.ensure(r.big, std::max<uint64_t>((n + room) * 4 * 2, 16), kDeviceUsage, MemoryKind::DeviceLocal);
+  return table;
+}
+
+// Submits the copy recorded in `cmd` to the transfer queue, and for an
+// encoded frame the decode after it on the graphics queue; the upload
+// timeline's value rises in the order the values are signalled.
+void submit_copy(detail::RendererImpl& r, FrameSet& set, vk::CommandBuffer cmd, const EncodedSource* encoded) {
+  const vk::CommandBufferSubmitInfo cb(cmd);
+  set.decoded_on_gpu = false;
+  if (encoded) {
+    // The copy signals its own timeline; the decode, on the graphics
+    // queue, waits for it and signals the upload timeline (in order).
+    ++r.copy_value;
+    const vk::SemaphoreSubmitInfo copied(*r.copy_done, r.copy_value, vk::PipelineStageFlagBits2::eAllCommands);
+    r.ctx.submit(r.ctx.transfer_queue, vk::SubmitInfo2({}, {}, cb, copied));
+    r.upload_value = submit_decode(r, set, r.copy_value, *encoded);
+    r.last_decode_ticket = r.upload_value;
+  } else {
+    // A timeline's values must rise in the order they are signalled: after
+    // a decode's signal on the graphics queue, the transfer queue's waits
+    // for it first.
+    const vk::SemaphoreSubmitInfo after_decode(*r.upload_done, r.last_decode_ticket, vk::PipelineStageFlagBits2::eAllCommands);
+    const bool order = r.last_decode_ticket > 0 && r.last_decode_ticket == r.upload_value;
+    ++r.upload_value;
+    const vk::SemaphoreSubmitInfo signal(*r.upload_done, r.upload_value, vk::PipelineStageFlagBits2::eAllCommands);
+    r.ctx.submit(r.ctx.transfer_queue,
+                 vk::SubmitInfo2({}, order ? vk::ArrayProxyNoTemporaries<const vk::SemaphoreSubmitInfo>(after_decode)
+                                           : vk::ArrayProxyNoTemporaries<const vk::SemaphoreSubmitInfo>(),
+                                 cb, signal));
+  }
+}
+
+// Submits the copy of `set`'s frame (particle_count, chunk_count,
+// has_attribute) from the sources into its device buffers, which grow to
+// fit; with `encoded`, the copy of its staged area and then its decode.
+// The chunk table source must be set.staging at `chunks_offset` (it is
+// validated there). Returns the frame's ticket: the value the copy, or for
+// an encoded frame the decode, signals on the upload timeline.
+uint64_t upload_frame(detail::RendererImpl& r, FrameSet& set, UploadSource particles_src, vk::DeviceSize chunks_offset,
+                      UploadSource attribute_src, const EncodedSource* encoded = nullptr) {
+  const uint64_t n = set.particle_count;
+  const uint32_t chunks = set.chunk_count;
+  const GpuChunk* table = size_set(r, set, chunks_offset);
 
   if (encoded) {
     if (!encoded->resident) r.ensure(set.encoded, encoded->plan->staged_bytes(), kDeviceUsage, MemoryKind::DeviceLocal);
@@ -352,29 +392,7 @@ uint64_t upload_frame(detail::RendererImpl& r, FrameSet& set, UploadSource parti
   }
   cmd.writeTimestamp2(vk::PipelineStageFlagBits2::eAllCommands, *set.stamps, 1);
   cmd.end();
-  const vk::CommandBufferSubmitInfo cb(cmd);
-  set.decoded_on_gpu = false;
-  if (encoded) {
-    // The copy signals its own timeline; the decode, on the graphics
-    // queue, waits for it and signals the upload timeline (in order).
-    ++r.copy_value;
-    const vk::SemaphoreSubmitInfo copied(*r.copy_done, r.copy_value, vk::PipelineStageFlagBits2::eAllCommands);
-    r.ctx.submit(r.ctx.transfer_queue, vk::SubmitInfo2({}, {}, cb, copied));
-    r.upload_value = submit_decode(r, set, r.copy_value, *encoded);
-    r.last_decode_ticket = r.upload_value;
-  } else {
-    // A timeline's values must rise in the order they are signalled: after
-    // a decode's signal on the graphics queue, the transfer queue's waits
-    // for it first.
-    const vk::SemaphoreSubmitInfo after_decode(*r.upload_done, r.last_decode_ticket, vk::PipelineStageFlagBits2::eAllCommands);
-    const bool order = r.last_decode_ticket > 0 && r.last_decode_ticket == r.upload_value;
-    ++r.upload_value;
-    const vk::SemaphoreSubmitInfo signal(*r.upload_done, r.upload_value, vk::PipelineStageFlagBits2::eAllCommands);
-    r.ctx.submit(r.ctx.transfer_queue,
-                 vk::SubmitInfo2({}, order ? vk::ArrayProxyNoTemporaries<const vk::SemaphoreSubmitInfo>(after_decode)
-                                           : vk::ArrayProxyNoTemporaries<const vk::SemaphoreSubmitInfo>(),
-                                 cb, signal));
-  }
+  submit_copy(r, set, cmd, encoded);
   set.ticket = r.upload_value;
   set.upload_ms = -1;
   return set.ticket;
