@@ -444,9 +444,11 @@ bool views_tile_target(const RenderTarget& target, std::span<const View> views) 
 }
 }  // namespace
 
-FrameSync Renderer::record(VkCommandBuffer command_buffer, const RenderTarget& target, std::span<const View> views,
-                           const FluidOptions& options, const LodOptions& lod) {
-  Impl& r = *impl_;
+namespace {
+
+// record()'s contract (renderer.h): a command buffer, 1 to 4 views of one
+// size inside the target, a colour image, 1 layer or 2 with two views.
+void check_record_arguments(VkCommandBuffer command_buffer, const RenderTarget& target, std::span<const View> views) {
   if (!command_buffer) throw Error("record: no command buffer");
   if (views.empty() || views.size() > kMaxViews) throw Error("record: 1 to 4 views");
   if (!target.color_view || !target.color_image || target.width == 0 || target.height == 0) {
@@ -468,6 +470,16 @@ FrameSync Renderer::record(VkCommandBuffer command_buffer, const RenderTarget& t
       throw Error("record: both eyes of a 2-layer target need the same viewport");
     }
   }
+}
+
+}  // namespace
+
+FrameSync Renderer::record(VkCommandBuffer command_buffer, const RenderTarget& target, std::span<const View> views,
+                           const FluidOptions& options, const LodOptions& lod) {
+  Impl& r = *impl_;
+  check_record_arguments(command_buffer, target, views);
+  const uint32_t layers = target.layer_count;
+  const Viewport size = views[0].viewport;
 
   r.collect_retired();
   const uint32_t slot_index = uint32_t(r.frames_recorded % r.slots.size());
