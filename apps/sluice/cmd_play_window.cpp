@@ -293,6 +293,73 @@ double display_refresh_hz() {
 
 }  // namespace
 
+namespace {
+
+// What the window shows at the start: the file, the look, the first frame.
+Player initial_state(const io::ContainerReader& reader, const render::StreamOptions& so, const PlayOptions& o,
+                     const WindowPlayOptions& wo, const render::SceneInfo& scene, const render::Context& context) {
+  const ViewSettings& v = wo.view;
+  Player p;
+  p.reader = &reader;
+  p.layers = so.layers;
+  p.particles = so.renderer;
+  p.frames = reader.frame_count();
+  p.frame = std::min<uint64_t>(o.start, p.frames - 1);
+  p.hud = !wo.no_hud;
+  p.fluid = v.fluid_options(scene);
+  p.lod = v.lod_options();
+  p.device = context.device().name + " (" + context.device().type + ")";
+  p.times_known = reader.header().time_source != io::TimeSource::FrameNumber;
+  return p;
+}
+
+// The HUD's frame rate and stream rates, over the last half second or so.
+struct HudRates {
+  Clock::time_point since;
+  int frames = 0;
+  runtime::PlaybackStats before;
+  void tick(Player& p, runtime::Player& playback, Clock::time_point now) {
+    ++frames;
+    const double span = std::chrono::duration<double>(now - since).count();
+    if (span < 0.5) return;
+    p.shown_fps = double(frames) / span;
+    frames = 0;
+    since = now;
+    // Stream stats refresh with the rates, not every frame (a snapshot allocates).
+    p.stream = playback.stats();
+    p.rates = runtime::rates_between(before.pipeline, p.stream.pipeline);
+    before = p.stream;
+  }
+};
+
+// The frame just presented, saved as a PNG: to `path` (--screenshot), or
+// sluice_FRAME.png beside where sluice runs (the S key).
+void save_capture(desktop::Window& window, Player& p, const std::string& path) {
+  const render::Image shot{window.width(), window.height(), window.read_presented()};
+  if (!shot.rgba.empty()) {
+    char name[64];
+    std::snprintf(name, sizeof name, "sluice_%05llu.png", (unsigned long long)p.frame);
+    const std::string to = path.empty() ? name : path;
+    render::write_png(to, shot);
+    p.message = "saved " + to;
+    std::printf("saved %s\n", to.c_str());
+  } else {
+    p.message = "this swapchain cannot be read back";
+  }
+  p.screenshot = false;
+}
+
+void report_played(const std::string& file, const runtime::PlaybackStats& s, const render::StagingAllocator& staging,
+                   const render::Camera& camera) {
+  std::printf("played %s: %llu frames shown, stalls %llu, drops %llu, errors %llu; staging held %s at most%s\n",
+              file.c_str(), (unsigned long long)s.frames_shown, (unsigned long long)s.stalls, (unsigned long long)s.drops,
+              (unsigned long long)s.errors, human_bytes(double(staging.peak_held_bytes())).c_str(),
+              staging.fallback_allocations() ? " (some frames in host memory: the driver refused more staging)" : "");
+  std::printf("  last view: --camera \"%s\"\n", camera.to_string().c_str());
+}
+
+}  // namespace
+
 void run_play_window(const PlayOptions& o, const WindowPlayOptions& wo) {
   const ViewSettings& v = wo.view;
   const auto [w, h] = parse_size(wo.size);
@@ -310,17 +377,7 @@ void run_play_window(const PlayOptions& o, const WindowPlayOptions& wo) {
   const io::ContainerReader& reader = stream.reader();
   const render::SceneInfo& scene = stream.scene();
 
-  Player p;
-  p.reader = &reader;
-  p.layers = so.layers;
-  p.particles = so.renderer;
-  p.frames = reader.frame_count();
-  p.frame = std::min<uint64_t>(o.start, p.frames - 1);
-  p.hud = !wo.no_hud;
-  p.fluid = v.fluid_options(scene);
-  p.lod = v.lod_options();
-  p.device = context.device().name + " (" + context.device().type + ")";
-  p.times_known = reader.header().time_source != io::TimeSource::FrameNumber;
+  Player p = initial_state(reader, so, o, wo, scene, context);
 
   desktop::WindowOptions options;
   options.width = w;
@@ -343,9 +400,9 @@ void run_play_window(const PlayOptions& o, const WindowPlayOptions& wo) {
   p.io_mode = playback.pipeline().io_mode();
   if (!o.paused) playback.play();
 
-  auto last = Clock::now(), fps_since = last;
-  runtime::PlaybackStats stats_before = playback.stats();
-  int presented = 0, fps_frames = 0;
+  auto last = Clock::now();
+  HudRates rates{last, 0, playback.stats()};
+  int presented = 0;
   FrameErrors errors;
   while (!window.should_close()) {
     desktop::poll_window_events();
@@ -356,18 +413,7 @@ void run_play_window(const PlayOptions& o, const WindowPlayOptions& wo) {
     const auto now = Clock::now();
     p.frame_ms = std::chrono::duration<double, std::milli>(now - last).count();
     last = now;
-    // Frame rate and stream rates over the last half second or so.
-    ++fps_frames;
-    const double span = std::chrono::duration<double>(now - fps_since).count();
-    if (span >= 0.5) {
-      p.shown_fps = double(fps_frames) / span;
-      fps_frames = 0;
-      fps_since = now;
-      // Stream stats refresh with the rates, not every frame (a snapshot allocates).
-      p.stream = playback.stats();
-      p.rates = runtime::rates_between(stats_before.pipeline, p.stream.pipeline);
-      stats_before = p.stream;
-    }
+    rates.tick(p, playback, now);
 
     // Frames are read for the view and look the next frames are drawn with.
     const render::View view = window_view();
@@ -398,32 +444,11 @@ void run_play_window(const PlayOptions& o, const WindowPlayOptions& wo) {
     const bool capture = p.screenshot || (last_for_exit && !wo.screenshot.empty());
     if (!window.present(stream.renderer(), p.camera, p.fluid, p.lod, p.hud, capture)) continue;
     if (p.has_frame) ++presented;
-    if (capture) {
-      const render::Image shot{window.width(), window.height(), window.read_presented()};
-      if (!shot.rgba.empty()) {
-        char name[64];
-        std::snprintf(name, sizeof name, "sluice_%05llu.png", (unsigned long long)p.frame);
-        const std::string path = last_for_exit && !wo.screenshot.empty() ? wo.screenshot : name;
-        render::write_png(path, shot);
-        p.message = "saved " + path;
-        std::printf("saved %s\n", path.c_str());
-      } else {
-        p.message = "this swapchain cannot be read back";
-      }
-      p.screenshot = false;
-    }
+    if (capture) save_capture(window, p, last_for_exit ? wo.screenshot : std::string());
     if (wo.exit_after > 0 && presented >= wo.exit_after) break;
   }
   errors.print_unshown();
-  const runtime::PlaybackStats s = playback.stats();
-  if (!o.quiet) {
-    std::printf("played %s: %llu frames shown, stalls %llu, drops %llu, errors %llu; staging held %s at most%s\n",
-                o.file.c_str(), (unsigned long long)s.frames_shown, (unsigned long long)s.stalls,
-                (unsigned long long)s.drops, (unsigned long long)s.errors,
-                human_bytes(double(stream.staging().peak_held_bytes())).c_str(),
-                stream.staging().fallback_allocations() ? " (some frames in host memory: the driver refused more staging)" : "");
-    std::printf("  last view: --camera \"%s\"\n", p.camera.to_string().c_str());
-  }
+  if (!o.quiet) report_played(o.file, playback.stats(), stream.staging(), p.camera);
   if (context.validation_active() && context.validation_errors() > 0) {
     std::fprintf(stderr, "sluice: %llu Vulkan validation errors\n", (unsigned long long)context.validation_errors());
     throw ExitCode{2};
