@@ -66,6 +66,38 @@ std::string states_text(uint32_t seen) {
   return out;
 }
 
+// What the controllers asked for this frame: play or pause, step, the LOD level.
+void apply_commands(const xr::Commands& c, runtime::Player& player, render::LodOptions& lod) {
+  if (c.toggle_play) player.state() == runtime::PlayerState::Playing ? player.pause() : player.play();
+  if (c.step != 0) player.step(c.step);
+  if (c.lod_delta != 0) {
+    lod.level = std::clamp(lod.level + c.lod_delta, 0.02f, 1.0f);
+    if (lod.mode == render::LodMode::Off && lod.level < 1) lod.mode = render::LodMode::DensityPreserving;
+  }
+}
+
+// Both eyes recorded into the frame's command buffer: in one pass into an
+// array swapchain, else one record() per eye.
+render::FrameSync record_eyes(render::Stream& stream, const xr::Frame& frame, const std::array<render::View, 2>& views) {
+  if (frame.stereo) return stream.record(frame.command_buffer, frame.stereo_target, views);
+  render::FrameSync sync;
+  for (size_t e = 0; e < 2; ++e) sync = stream.record(frame.command_buffer, frame.eyes[e].target, std::span(&views[e], 1));
+  return sync;
+}
+
+void report_xr(uint64_t drawn, double elapsed, const xr::SessionCounters& n, const runtime::PlaybackStats& s,
+               const std::vector<double>& gpu_ms, bool array_swapchain) {
+  std::printf("xr: %llu frames drawn in %s (%s frames/s), %llu ended, %llu with a stereo projection layer, %llu with depth; "
+              "states: %s\n",
+              (unsigned long long)drawn, human_duration(elapsed).c_str(), fixed(double(drawn) / std::max(elapsed, 1e-9), 1).c_str(),
+              (unsigned long long)n.frames, (unsigned long long)n.projection_layers, (unsigned long long)n.depth_layers,
+              states_text(n.states_seen).c_str());
+  std::printf("  %llu media frames shown; stalls %llu, drops %llu, errors %llu; GPU %s ms (median) per %s\n",
+              (unsigned long long)s.frames_shown, (unsigned long long)s.stalls, (unsigned long long)s.drops,
+              (unsigned long long)s.errors, fixed(median(gpu_ms), 2).c_str(),
+              array_swapchain ? "frame (both eyes in one pass)" : "eye");
+}
+
 void run_xr(const XrOptions& o) {
   const PlayOptions& p = o.play;
   xr::SessionOptions so;
@@ -120,12 +152,7 @@ void run_xr(const XrOptions& o) {
     const double dt = last_display < 0 ? 0 : frame.display_seconds - last_display;
     last_display = frame.display_seconds;
     const xr::Commands c = controls.update(frame.actions, dt);
-    if (c.toggle_play) player.state() == runtime::PlayerState::Playing ? player.pause() : player.play();
-    if (c.step != 0) player.step(c.step);
-    if (c.lod_delta != 0) {
-      lod.level = std::clamp(lod.level + c.lod_delta, 0.02f, 1.0f);
-      if (lod.mode == render::LodMode::Off && lod.level < 1) lod.mode = render::LodMode::DensityPreserving;
-    }
+    apply_commands(c, player, lod);
     std::array<render::View, 2> views;
     if (frame.render) {
       for (size_t e = 0; e < 2; ++e) {
@@ -139,15 +166,7 @@ void run_xr(const XrOptions& o) {
     stream.set_look(stream.fluid(), lod);
     stream.update();
     errors.drain(player);
-    render::FrameSync sync;
-    if (frame.render) {
-      if (frame.stereo) {
-        sync = stream.record(frame.command_buffer, frame.stereo_target, views);  // both eyes, one pass
-      } else {
-        for (size_t e = 0; e < 2; ++e) sync = stream.record(frame.command_buffer, frame.eyes[e].target, std::span(&views[e], 1));
-      }
-    }
-    session.end_frame(frame, sync);
+    session.end_frame(frame, frame.render ? record_eyes(stream, frame, views) : render::FrameSync{});
     if (frame.render) ++drawn;
     ++ended;
     const render::FrameStats stats = stream.renderer().last_stats();
@@ -166,18 +185,8 @@ void run_xr(const XrOptions& o) {
     }
   }
   errors.print_unshown();
-  const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  const xr::SessionCounters n = session.counters();
-  const runtime::PlaybackStats s = player.stats();
-  std::printf("xr: %llu frames drawn in %s (%s frames/s), %llu ended, %llu with a stereo projection layer, %llu with depth; "
-              "states: %s\n",
-              (unsigned long long)drawn, human_duration(elapsed).c_str(), fixed(double(drawn) / std::max(elapsed, 1e-9), 1).c_str(),
-              (unsigned long long)n.frames, (unsigned long long)n.projection_layers, (unsigned long long)n.depth_layers,
-              states_text(n.states_seen).c_str());
-  std::printf("  %llu media frames shown; stalls %llu, drops %llu, errors %llu; GPU %s ms (median) per %s\n",
-              (unsigned long long)s.frames_shown, (unsigned long long)s.stalls, (unsigned long long)s.drops,
-              (unsigned long long)s.errors, fixed(median(gpu_ms), 2).c_str(),
-              sys.array_swapchain ? "frame (both eyes in one pass)" : "eye");
+  report_xr(drawn, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), session.counters(),
+            player.stats(), gpu_ms, sys.array_swapchain);
   if (so.validation && session.validation_errors() > 0) {
     std::fprintf(stderr, "sluice: %llu Vulkan validation errors\n", (unsigned long long)session.validation_errors());
     throw ExitCode{1};
