@@ -74,7 +74,10 @@ struct detail::SessionImpl {
 
   // vulkan.cpp
   void create_instance();
-  void create_vulkan();
+  void create_vulkan();  // the three below, in order
+  void create_vulkan_instance();
+  void create_vulkan_device();
+  void create_frame_resources();
   void destroy_vulkan();
   // session.cpp
   void create_session();

@@ -147,11 +147,19 @@ void detail::SessionImpl::create_instance() {
   }
 }
 
+// The order OpenXR's Vulkan enable2 asks for: the runtime's Vulkan
+// instance, then the device it picks, then sluice's context on them.
 void detail::SessionImpl::create_vulkan() {
+  create_vulkan_instance();
+  create_vulkan_device();
+  create_frame_resources();
+}
+
+// Vulkan 1.3 through the runtime (xrCreateVulkanInstanceKHR), with the
+// validation layer and its messenger where asked and installed.
+void detail::SessionImpl::create_vulkan_instance() {
   auto requirements_of = instance_function<PFN_xrGetVulkanGraphicsRequirements2KHR>(instance, "xrGetVulkanGraphicsRequirements2KHR");
   auto create_instance_of = instance_function<PFN_xrCreateVulkanInstanceKHR>(instance, "xrCreateVulkanInstanceKHR");
-  auto device_of = instance_function<PFN_xrGetVulkanGraphicsDevice2KHR>(instance, "xrGetVulkanGraphicsDevice2KHR");
-  auto create_device_of = instance_function<PFN_xrCreateVulkanDeviceKHR>(instance, "xrCreateVulkanDeviceKHR");
 
   XrGraphicsRequirementsVulkan2KHR requirements{XR_TYPE_GRAPHICS_REQUIREMENTS_VULKAN2_KHR};
   check(requirements_of(instance, system_id, &requirements), instance, "xrGetVulkanGraphicsRequirements2KHR");
@@ -198,7 +206,15 @@ void detail::SessionImpl::create_vulkan() {
         vkGetInstanceProcAddr(vk_instance, "vkCreateDebugUtilsMessengerEXT"));
     if (create_messenger) create_messenger(vk_instance, &messenger_info, nullptr, &messenger);
   }
+}
 
+// The GPU the runtime picked, checked for sluice, and a device on it
+// through the runtime (xrCreateVulkanDeviceKHR) with sluice's extensions and
+// features and a graphics+compute queue (a transfer one where there is one).
+void detail::SessionImpl::create_vulkan_device() {
+  auto device_of = instance_function<PFN_xrGetVulkanGraphicsDevice2KHR>(instance, "xrGetVulkanGraphicsDevice2KHR");
+  auto create_device_of = instance_function<PFN_xrCreateVulkanDeviceKHR>(instance, "xrCreateVulkanDeviceKHR");
+  VkResult vk_result = VK_SUCCESS;
   XrVulkanGraphicsDeviceGetInfoKHR device_get{XR_TYPE_VULKAN_GRAPHICS_DEVICE_GET_INFO_KHR};
   device_get.systemId = system_id;
   device_get.vulkanInstance = vk_instance;
@@ -258,7 +274,11 @@ void detail::SessionImpl::create_vulkan() {
     throw Error("vkCreateDevice through the OpenXR runtime failed (VkResult " + std::to_string(int(vk_result)) + ")");
   }
   vkGetDeviceQueue(device, graphics_family, 0, &graphics_queue);
+}
 
+// sluice's context on the runtime's handles, and the session's command
+// pool, command buffers and fences.
+void detail::SessionImpl::create_frame_resources() {
   render::HostVulkan host;
   host.handles.instance = vk_instance;
   host.handles.physical_device = physical_device;
