@@ -264,6 +264,106 @@ std::vector<uint64_t> parse_counts(const std::string& text) {
   return out;
 }
 
+namespace {
+
+// The per-pass table of every case.
+void print_passes(const std::vector<Case>& cases) {
+  std::vector<std::string> header{"frame", "particles", "LOD", "drawn"};
+  if (!cases.empty()) {
+    for (const render::PassTime& p : cases[0].stats.passes) header.push_back(p.name);
+  }
+  header.insert(header.end(), {"GPU ms", "wall ms", "cull Mp/ms", "upload ms", "ellipsoids ms (once a frame)"});
+  Table passes(header);
+  for (const Case& c : cases) {
+    std::vector<std::string> row{c.name, count_name(c.particles), c.lod, count_name(c.stats.drawn)};
+    double cull = 0;
+    for (const render::PassTime& p : c.stats.passes) {
+      row.push_back(num(p.ms, 2));
+      if (p.name == "cull") cull = p.ms;
+    }
+    row.push_back(num(c.stats.gpu_ms, 2));
+    row.push_back(num(c.wall_ms, 1));
+    row.push_back(cull > 0 ? num(double(c.particles) / 1e6 / cull, 2) : "-");
+    row.push_back(num(c.stats.upload_ms, 2));
+    row.push_back(c.ellipsoids_ms < 0 ? "-" : num(c.ellipsoids_ms, 2));
+    passes.row(row);
+  }
+  passes.print("Per-pass time (ms, from timestamps; 'wall' is the render() call, submit to fence)");
+}
+
+// The cases as CSV (o.csv), one row each, the device named.
+void write_csv(const RenderBenchOptions& o, const std::vector<Case>& cases, const render::DeviceInfo& dev) {
+  std::ofstream csv(o.csv);
+  csv << "frame,particles,lod,drawn";
+  if (!cases.empty()) {
+    for (const render::PassTime& p : cases[0].stats.passes) csv << "," << p.name << "_ms";
+  }
+  csv << ",gpu_ms,wall_ms,vtk_ms,ellipsoids_ms,device\n";
+  for (const Case& c : cases) {
+    csv << '"' << c.name << "\"," << c.particles << ",\"" << c.lod << "\"," << c.stats.drawn;
+    for (const render::PassTime& p : c.stats.passes) csv << "," << p.ms;
+    csv << "," << c.stats.gpu_ms << "," << c.wall_ms << "," << (c.vtk_ms < 0 ? std::string() : std::to_string(c.vtk_ms))
+        << "," << (c.ellipsoids_ms < 0 ? std::string() : std::to_string(c.ellipsoids_ms)) << ",\"" << dev.name << "\"\n";
+  }
+  if (!csv) throw std::runtime_error(o.csv + ": cannot write");
+  std::printf("\nwrote %s\n", o.csv.c_str());
+}
+
+// GPU ms against particles, one line per LOD setting of the synthetic
+// frames (and VTK's wall ms where it ran), as an SVG (o.plot).
+void write_plot(const RenderBenchOptions& o, const std::vector<Case>& cases, const render::DeviceInfo& dev) {
+  std::vector<PlotSeries> series;
+  auto series_named = [&](const std::string& name) -> PlotSeries& {
+    for (PlotSeries& s : series) {
+      if (s.name == name) return s;
+    }
+    return series.emplace_back(PlotSeries{name, {}});
+  };
+  for (const Case& c : cases) {
+    if (c.name.rfind("synthetic", 0) == 0) {
+      series_named("sluice, LOD " + c.lod).points.emplace_back(double(c.particles), c.stats.gpu_ms);
+    }
+    if (c.vtk_ms >= 0) series_named("VTK fluid mapper (wall)").points.emplace_back(double(c.particles), c.vtk_ms);
+  }
+  write_loglog_svg(o.plot, "Frame time at " + std::to_string(o.width) + "x" + std::to_string(o.height) + ", " + dev.name,
+                   "particles per frame", "GPU ms per frame", std::move(series));
+  std::printf("wrote %s\n", o.plot.c_str());
+}
+
+// One stereo pass against two mono passes, per frame and LOD setting.
+void print_stereo(const RenderBenchOptions& o, const std::vector<Case>& cases) {
+  // Beside the budget of a 90 Hz headset (11.1 ms for both eyes).
+  Table stereo({"frame", "LOD", "drawn (one pass)", "one pass ms", "two mono passes ms", "two / one", "within 11.1 ms"});
+  for (size_t i = 0; i + 1 < cases.size(); i += 2) {
+    const Case& one = cases[i];
+    const Case& two = cases[i + 1];
+    const std::string frame = one.name.substr(0, one.name.rfind(", stereo"));
+    stereo.row({frame, one.lod, count_name(one.stats.drawn), num(one.stats.gpu_ms, 2), num(two.stats.gpu_ms, 2),
+                num(two.stats.gpu_ms / std::max(one.stats.gpu_ms, 1e-9), 2) + "x", one.stats.gpu_ms <= 11.1 ? "yes" : "no"});
+  }
+  stereo.print("Stereo: both eyes at " + std::to_string(o.width) + "x" + std::to_string(o.height) +
+               " each, in one pass (2-layer target) against two mono passes of the same views (GPU ms)");
+}
+
+// sluice against VTK's fluid mapper, where the peer ran.
+void print_peer(const RenderBenchOptions& o, const std::vector<Case>& cases) {
+  bool any_vtk = false;
+  Table peer({"frame", "particles", "sluice GPU ms", "sluice wall ms", "VTK ms", "VTK / sluice (wall)"});
+  for (const Case& c : cases) {
+    if (c.vtk_ms < 0) continue;
+    any_vtk = true;
+    peer.row({c.name, count_name(c.particles), num(c.stats.gpu_ms, 1), num(c.wall_ms, 1), num(c.vtk_ms, c.vtk_ms < 100 ? 1 : 0),
+              num(c.vtk_ms / c.wall_ms, 1) + "x"});
+  }
+  if (any_vtk) {
+    peer.print("Against VTK 9 vtkOpenGLFluidMapper (same frame, camera, radius and size; NarrowRange, "
+               "TransparentFluidVolume; VTK time is " +
+                 std::string(o.vtk_peer.empty() ? "a Render() call under Xvfb)" : "a Render() call and glFinish, EGL)"));
+  }
+}
+
+}  // namespace
+
 void run_render_bench(const RenderBenchOptions& o) {
   render::ContextOptions co;
   co.device = o.device;
@@ -381,94 +481,11 @@ void run_render_bench(const RenderBenchOptions& o) {
     }
   }
 
-  // Per-pass table.
-  std::vector<std::string> header{"frame", "particles", "LOD", "drawn"};
-  if (!cases.empty()) {
-    for (const render::PassTime& p : cases[0].stats.passes) header.push_back(p.name);
-  }
-  header.insert(header.end(), {"GPU ms", "wall ms", "cull Mp/ms", "upload ms", "ellipsoids ms (once a frame)"});
-  Table passes(header);
-  for (const Case& c : cases) {
-    std::vector<std::string> row{c.name, count_name(c.particles), c.lod, count_name(c.stats.drawn)};
-    double cull = 0;
-    for (const render::PassTime& p : c.stats.passes) {
-      row.push_back(num(p.ms, 2));
-      if (p.name == "cull") cull = p.ms;
-    }
-    row.push_back(num(c.stats.gpu_ms, 2));
-    row.push_back(num(c.wall_ms, 1));
-    row.push_back(cull > 0 ? num(double(c.particles) / 1e6 / cull, 2) : "-");
-    row.push_back(num(c.stats.upload_ms, 2));
-    row.push_back(c.ellipsoids_ms < 0 ? "-" : num(c.ellipsoids_ms, 2));
-    passes.row(row);
-  }
-  passes.print("Per-pass time (ms, from timestamps; 'wall' is the render() call, submit to fence)");
-  if (!o.csv.empty()) {
-    std::ofstream csv(o.csv);
-    csv << "frame,particles,lod,drawn";
-    if (!cases.empty()) {
-      for (const render::PassTime& p : cases[0].stats.passes) csv << "," << p.name << "_ms";
-    }
-    csv << ",gpu_ms,wall_ms,vtk_ms,ellipsoids_ms,device\n";
-    for (const Case& c : cases) {
-      csv << '"' << c.name << "\"," << c.particles << ",\"" << c.lod << "\"," << c.stats.drawn;
-      for (const render::PassTime& p : c.stats.passes) csv << "," << p.ms;
-      csv << "," << c.stats.gpu_ms << "," << c.wall_ms << "," << (c.vtk_ms < 0 ? std::string() : std::to_string(c.vtk_ms))
-          << "," << (c.ellipsoids_ms < 0 ? std::string() : std::to_string(c.ellipsoids_ms)) << ",\"" << dev.name << "\"\n";
-    }
-    if (!csv) throw std::runtime_error(o.csv + ": cannot write");
-    std::printf("\nwrote %s\n", o.csv.c_str());
-  }
-
-  if (!o.plot.empty()) {
-    // GPU ms against particles, one line per LOD setting of the synthetic
-    // frames (and VTK's wall ms where it ran).
-    std::vector<PlotSeries> series;
-    auto series_named = [&](const std::string& name) -> PlotSeries& {
-      for (PlotSeries& s : series) {
-        if (s.name == name) return s;
-      }
-      return series.emplace_back(PlotSeries{name, {}});
-    };
-    for (const Case& c : cases) {
-      if (c.name.rfind("synthetic", 0) == 0) {
-        series_named("sluice, LOD " + c.lod).points.emplace_back(double(c.particles), c.stats.gpu_ms);
-      }
-      if (c.vtk_ms >= 0) series_named("VTK fluid mapper (wall)").points.emplace_back(double(c.particles), c.vtk_ms);
-    }
-    write_loglog_svg(o.plot, "Frame time at " + std::to_string(o.width) + "x" + std::to_string(o.height) + ", " + dev.name,
-                     "particles per frame", "GPU ms per frame", std::move(series));
-    std::printf("wrote %s\n", o.plot.c_str());
-  }
-
-  if (o.stereo) {
-    // One pass against two, per frame and LOD setting, beside the budget of
-    // a 90 Hz headset (11.1 ms for both eyes).
-    Table stereo({"frame", "LOD", "drawn (one pass)", "one pass ms", "two mono passes ms", "two / one", "within 11.1 ms"});
-    for (size_t i = 0; i + 1 < cases.size(); i += 2) {
-      const Case& one = cases[i];
-      const Case& two = cases[i + 1];
-      const std::string frame = one.name.substr(0, one.name.rfind(", stereo"));
-      stereo.row({frame, one.lod, count_name(one.stats.drawn), num(one.stats.gpu_ms, 2), num(two.stats.gpu_ms, 2),
-                  num(two.stats.gpu_ms / std::max(one.stats.gpu_ms, 1e-9), 2) + "x", one.stats.gpu_ms <= 11.1 ? "yes" : "no"});
-    }
-    stereo.print("Stereo: both eyes at " + std::to_string(o.width) + "x" + std::to_string(o.height) +
-                 " each, in one pass (2-layer target) against two mono passes of the same views (GPU ms)");
-  }
-
-  bool any_vtk = false;
-  Table peer({"frame", "particles", "sluice GPU ms", "sluice wall ms", "VTK ms", "VTK / sluice (wall)"});
-  for (const Case& c : cases) {
-    if (c.vtk_ms < 0) continue;
-    any_vtk = true;
-    peer.row({c.name, count_name(c.particles), num(c.stats.gpu_ms, 1), num(c.wall_ms, 1), num(c.vtk_ms, c.vtk_ms < 100 ? 1 : 0),
-              num(c.vtk_ms / c.wall_ms, 1) + "x"});
-  }
-  if (any_vtk) {
-    peer.print("Against VTK 9 vtkOpenGLFluidMapper (same frame, camera, radius and size; NarrowRange, "
-               "TransparentFluidVolume; VTK time is " +
-                 std::string(o.vtk_peer.empty() ? "a Render() call under Xvfb)" : "a Render() call and glFinish, EGL)"));
-  }
+  print_passes(cases);
+  if (!o.csv.empty()) write_csv(o, cases, dev);
+  if (!o.plot.empty()) write_plot(o, cases, dev);
+  if (o.stereo) print_stereo(o, cases);
+  print_peer(o, cases);
 }
 
 }  // namespace sluice::bench
