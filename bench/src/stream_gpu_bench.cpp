@@ -253,6 +253,42 @@ std::string percent(double share) { return num(100 * share, 0) + "%"; }
 
 }  // namespace
 
+namespace {
+
+// Beneath the bounds table: the copy by depth, the decode's passes, frame 0's planes.
+void print_bound_details(uint64_t copy_bytes, const CopyGrid& copies, const DecodeAlone& alone) {
+  std::printf("  host -> device copies of %.1f MB, GB/s by copies queued at once:", double(copy_bytes) / 1e6);
+  for (size_t k = 0; k < CopyGrid::kDepths.size(); ++k) {
+    std::printf(" %d: %.2f plain, %.2f cached%s", CopyGrid::kDepths[k], copies.plain[k], copies.cached[k],
+                k + 1 < CopyGrid::kDepths.size() ? ";" : "\n");
+  }
+  if (alone.pass_ms.size() == 2) {
+    std::printf("  GPU decode passes: tile sums %.3f ms, decode %.3f ms; %zu chunks, %zu tiles\n", alone.pass_ms[0],
+                alone.pass_ms[1], alone.plan.chunks.size(), alone.plan.tile_chunk.size());
+  }
+  std::printf("  frame 0's planes: %llu stored, %llu bit-packed, %llu zstd (inflated on the CPU)\n",
+              (unsigned long long)alone.plan.stored_planes, (unsigned long long)alone.plan.packed_planes,
+              (unsigned long long)alone.plan.zstd_planes);
+}
+
+// The pipeline rows: GPU decoding relayed, mapped, pread; CPU decoding.
+struct Way {
+  bool gpu, mapped, relayed;
+};
+constexpr std::array<Way, 4> kWays{Way{true, true, true}, Way{true, true, false}, Way{true, false, false},
+                                   Way{false, true, false}};
+
+void print_imported_copy(const render::ImportedCopy& imported, double staged) {
+  if (imported.imported) {
+    std::printf("  host -> device copy from the file's mapping (page-cache pages imported, no CPU copy): %.2f GB/s, "
+                "%.1f frames/s encoded\n", imported.gbps, imported.gbps * 1e9 / staged);
+  } else {
+    std::printf("  host -> device copy from the file's mapping: not imported: %s\n", imported.refusal.c_str());
+  }
+}
+
+}  // namespace
+
 void run_stream_gpu_bench(const StreamBenchOptions& o) {
   const io::ContainerReader reader(o.file);
   if (reader.frame_count() == 0) throw io::Error({o.file}, "has no frames to stream");
@@ -336,28 +372,12 @@ void run_stream_gpu_bench(const StreamBenchOptions& o) {
   bounds.row({"GPU decode alone, frame resident", num((staged / (alone.ms * 1e-3)) / 1e9, 1), num(1e3 / alone.ms, 1),
               num(double(alone.particles) / (alone.ms * 1e-3) / 1e9, 1) + " G particles/s (" + num(alone.ms, 3) + " ms a frame)"});
   bounds.print("Bounds, measured now");
-  std::printf("  host -> device copies of %.1f MB, GB/s by copies queued at once:", double(copy_bytes) / 1e6);
-  for (size_t k = 0; k < CopyGrid::kDepths.size(); ++k) {
-    std::printf(" %d: %.2f plain, %.2f cached%s", CopyGrid::kDepths[k], copies.plain[k], copies.cached[k],
-                k + 1 < CopyGrid::kDepths.size() ? ";" : "\n");
-  }
-  if (alone.pass_ms.size() == 2) {
-    std::printf("  GPU decode passes: tile sums %.3f ms, decode %.3f ms; %zu chunks, %zu tiles\n", alone.pass_ms[0],
-                alone.pass_ms[1], alone.plan.chunks.size(), alone.plan.tile_chunk.size());
-  }
-  std::printf("  frame 0's planes: %llu stored, %llu bit-packed, %llu zstd (inflated on the CPU)\n",
-              (unsigned long long)alone.plan.stored_planes, (unsigned long long)alone.plan.packed_planes,
-              (unsigned long long)alone.plan.zstd_planes);
+  print_bound_details(copy_bytes, copies, alone);
   std::fflush(stdout);
 
   // 2. The pipeline into device memory, GPU decode and CPU decode.
   // The relayed row: the window in device memory, filled through a ring
   // as read (runtime/relay.h); the others stage the window on the host.
-  struct Way {
-    bool gpu, mapped, relayed;
-  };
-  constexpr std::array<Way, 4> kWays{Way{true, true, true}, Way{true, true, false}, Way{true, false, false},
-                                     Way{false, true, false}};
   DeviceSetup relayed_setup = setup;
   relayed_setup.staging.resident = true;
   if (o.ring_slots > 0) relayed_setup.staging.ring_slots = o.ring_slots;
@@ -415,13 +435,7 @@ void run_stream_gpu_bench(const StreamBenchOptions& o) {
   // Last: after NVIDIA 580 refuses the import (ErrorOutOfDeviceMemory), the
   // next device allocation fails too (measured on the H200, 2026-12-03).
   step("the copy from the file's mapping, imported");
-  const render::ImportedCopy imported = copy_from_mapping(context, o.file, copy_bytes);
-  if (imported.imported) {
-    std::printf("  host -> device copy from the file's mapping (page-cache pages imported, no CPU copy): %.2f GB/s, "
-                "%.1f frames/s encoded\n", imported.gbps, imported.gbps * 1e9 / staged);
-  } else {
-    std::printf("  host -> device copy from the file's mapping: not imported: %s\n", imported.refusal.c_str());
-  }
+  print_imported_copy(copy_from_mapping(context, o.file, copy_bytes), staged);
 }
 
 }  // namespace sluice::bench
