@@ -36,7 +36,7 @@ size_t plan_runs(std::span<const io::ChunkDesc> records, uint64_t record_at, uin
   };
   for (const io::ChunkDesc& c : records) {
     const uint64_t begin = record_at + c.offset, end = begin + c.compressed_size;
-    if (to > from && begin >= from && begin <= to + limits.gap) {
+    if (to > from && joins_run(from, to, begin, limits.gap)) {
       to = std::max(to, end);
       continue;
     }

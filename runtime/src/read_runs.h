@@ -28,6 +28,13 @@ struct ByteRun {
 // while reading 64 KiB through costs at most a 64 KiB read.
 inline constexpr uint64_t kRunGap = 64 << 10;
 
+// Whether a record starting at `begin` is read with the open run [from, to):
+// it lies after the run's start and at most `gap` past its end. The one
+// rule of plan_runs() and of the relay's reads (record_read.cpp).
+inline bool joins_run(uint64_t from, uint64_t to, uint64_t begin, uint64_t gap) {
+  return begin >= from && begin <= to + gap;
+}
+
 struct RunLimits {
   uint64_t align = 1;          // offsets and lengths of reads are multiples of it (1: none)
   uint64_t gap = kRunGap;      // records at most this far apart share a run

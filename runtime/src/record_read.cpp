@@ -186,11 +186,13 @@ void PipelineCore::relay_chunks(const PieceRound& round, uint64_t p) {
     uint64_t bytes = 0;
     uint32_t last = c;
     if (together) {
+      // Joined as plan_runs() joins them, and no longer than a ring slot.
       const uint64_t from = round.chunks[c].offset;
-      while (last < end && round.chunks[last].offset >= from &&
-             round.chunks[last].offset + round.chunks[last].compressed_size - from <= most &&
-             (last == c || round.chunks[last].offset <= round.chunks[last - 1].offset + round.chunks[last - 1].compressed_size + kRunGap)) {
-        bytes = round.chunks[last].offset + round.chunks[last].compressed_size - from;
+      while (last < end) {
+        const io::ChunkDesc& next = round.chunks[last];
+        if (last > c && !joins_run(from, from + bytes, next.offset, kRunGap)) break;
+        if (next.offset < from || next.offset + next.compressed_size - from > most) break;
+        bytes = std::max(bytes, next.offset + next.compressed_size - from);
         ++last;
       }
     } else {
