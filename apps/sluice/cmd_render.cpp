@@ -88,12 +88,14 @@ void run_render(const RenderCommand& o, const ViewSettings& v) {
   namespace fs = std::filesystem;
   const PlayableFile input = open_playable(o.input, {o.no_cache, o.quiet});
   render::Context context(v.context_options());
-  const render::StreamOptions so = stream_options(o, v);
+  // A list (0,25,50) plays every frame between its first and last and
+  // draws those listed; nothing past the last is read.
+  const std::vector<uint64_t> frames = parse_frame_list(o.frames, io::ContainerReader(input.path()).frame_count());
+  const uint64_t first = frames.front(), last = frames.back();
+  render::StreamOptions so = stream_options(o, v);
+  so.player.frames = last + 1;
   render::Stream stream(context, input.path(), so);
   const io::ContainerReader& reader = stream.reader();
-  // A list (0,25,50) plays every frame between its first and last and draws those listed.
-  const std::vector<uint64_t> frames = parse_frame_list(o.frames, reader.frame_count());
-  const uint64_t first = frames.front(), last = frames.back();
   const auto [width, height] = parse_size(o.size);
   const bool video = fs::path(o.out).extension() == ".mp4";
   const bool single = frames.size() == 1;

@@ -33,7 +33,7 @@ const char* state_name(PlayerState state) {
 Player::Player(const io::ContainerReader& reader, FrameAllocator& allocator, const Clock& clock, PlayerOptions options)
     : clock_(clock),
       options_(std::move(options)),
-      frame_count_(reader.frame_count()),
+      frame_count_(options_.frames > 0 ? std::min(options_.frames, reader.frame_count()) : reader.frame_count()),
       pipeline_(reader, allocator, options_.pipeline),
       clock_state_(media_rate(reader, options_.frame_rate)),
       end_(options_.end) {

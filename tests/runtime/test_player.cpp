@@ -103,6 +103,29 @@ TEST_F(PlayerTest, ReversePlaysBackwardsAndEndsAtFrameZero) {
   EXPECT_EQ(t.frame->frame(), 39u);
 }
 
+// PlayerOptions::frames: the file ends early for this player: frames 3..5
+// are shown, it ends at 5, and nothing past 5 is read (a window of 12).
+TEST_F(PlayerTest, APlayerOfTheFirstFramesReadsNothingPastThem) {
+  const io::ContainerReader reader(*path_);
+  HostFrameAllocator allocator;
+  VirtualClock clock;
+  PlayerOptions o = small_options();
+  o.start_frame = 3;
+  o.frames = 6;
+  Player player(reader, allocator, clock, o);
+  EXPECT_EQ(player.frame_count(), 6u);
+  advance(clock, player, 0);
+  player.play();
+  std::vector<uint64_t> shown;
+  for (int i = 0; i < 10; ++i) {
+    const Tick t = advance(clock, player, 1 / kFps);
+    if (t.changed) shown.push_back(t.frame->frame());
+  }
+  EXPECT_EQ(shown, (std::vector<uint64_t>{4, 5}));
+  EXPECT_EQ(player.state(), PlayerState::Ended);
+  EXPECT_LE(player.stats().pipeline.frames_read, 3u) << "frames 3, 4 and 5 only";
+}
+
 TEST_F(PlayerTest, FastRatesFetchEveryNthFrameForTheDisplay) {
   const io::ContainerReader reader(*path_);
   HostFrameAllocator allocator;

@@ -53,6 +53,10 @@ struct PlayerOptions {
   double display_rate = 0;  // display refreshes per second, for the stride; 0: fetch every frame
   double rate = 1.0;        // initial playback rate
   uint64_t start_frame = 0;
+  // Play only the file's first `frames` frames (0: all of them): the end,
+  // loop and bounce come there, and the pipeline reads nothing past it (a
+  // render of frames 3..5 reads no frame 6).
+  uint64_t frames = 0;
   EndMode end = EndMode::Stop;
   RealTimePolicy policy = RealTimePolicy::HoldLastFrame;
   ErrorPolicy on_error = ErrorPolicy::SkipFrame;
