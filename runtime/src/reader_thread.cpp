@@ -119,8 +119,12 @@ void PipelineCore::adopt_schedule(ReaderState& rs) {
     rs.generation = generation_.load(kRelaxed);
   }
   rs.next_k = 0;
-  // Kernel readahead only helps going forward one frame at a time.
-  const bool sequential = rs.schedule.direction > 0 && rs.schedule.stride == 1;
+  // Kernel readahead only helps going forward one frame at a time, and
+  // only where frames are read whole: past a frame's wanted prefix it reads
+  // the layers left out (the interior), which no later read wants. Prefix
+  // reads are asked for exactly (will_need) instead.
+  const bool whole = reader_.frame_count() == 0 || !reads_prefix(reader_.index().frames.front());
+  const bool sequential = whole && rs.schedule.direction > 0 && rs.schedule.stride == 1;
   source_->set_access(sequential ? AccessPattern::Sequential : AccessPattern::Random);
 }
 
