@@ -117,6 +117,10 @@ void add_bench_view(CLI::App* bench) {
   vw->add_flag("--stereo", view->stereo, "Both eyes in one pass (a headset's view)");
   vw->add_option("--lod", view->lod, "clod or density")->capture_default_str()->check(CLI::IsMember({"clod", "density"}));
   vw->add_option("--lod-level", view->level, "LOD level, 0..1")->capture_default_str()->check(CLI::Range(0.0f, 1.0f));
+  vw->add_option("--cache-steps", view->cache_steps,
+                 "The same from the page cache, where the file may loop: more than the file's frames give steadier\n"
+                 "rates (default: --steps)")
+      ->check(CLI::Range(2u, 100000u));
   vw->add_option("--steps", view->steps, "Frames of the orbit and of the fly-in each")->capture_default_str()
       ->check(CLI::Range(2u, 100000u));
   vw->add_option("--memory", *view_memory, "Memory cap of the pipeline, e.g. 16G (default: 4G)");

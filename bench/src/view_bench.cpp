@@ -73,7 +73,7 @@ struct Path {
   std::vector<Step> orbit, fly_in;
 };
 
-Path make_path(const render::SceneInfo& scene, const ViewBenchOptions& o) {
+Path make_path(const render::SceneInfo& scene, const ViewBenchOptions& o, uint32_t steps) {
   const render::Bounds& b = scene.bounds;
   const render::Vec3 up = scene.up;
   const float extent = std::max({b.max.x - b.min.x, b.max.y - b.min.y, b.max.z - b.min.z});
@@ -84,9 +84,9 @@ Path make_path(const render::SceneInfo& scene, const ViewBenchOptions& o) {
     return v * std::cos(angle) + render::cross(axis, v) * std::sin(angle) + axis * (render::dot(axis, v) * (1 - std::cos(angle)));
   };
   render::Camera last = overview;
-  for (uint32_t k = 0; k < o.steps; ++k) {
+  for (uint32_t k = 0; k < steps; ++k) {
     render::Camera c = overview;
-    c.eye = overview.target + turned(overview.eye - overview.target, 1.5707963f * float(k) / float(o.steps));
+    c.eye = overview.target + turned(overview.eye - overview.target, 1.5707963f * float(k) / float(steps));
     p.orbit.push_back({views_of(c, o, extent)});
     last = c;
   }
@@ -103,8 +103,8 @@ Path make_path(const render::SceneInfo& scene, const ViewBenchOptions& o) {
   render::Camera close = overview;
   close.target = centre - along * (0.25f * length) + axis * (0.1f * height);
   close.eye = close.target - along * (0.2f * b.diagonal()) + axis * (0.12f * b.diagonal());
-  for (uint32_t k = 0; k < o.steps; ++k) {
-    const float t = float(k + 1) / float(o.steps);
+  for (uint32_t k = 0; k < steps; ++k) {
+    const float t = float(k + 1) / float(steps);
     const float s = t * t * (3 - 2 * t);
     render::Camera c = last;
     c.eye = lerp(last.eye, close.eye, s);
@@ -168,7 +168,8 @@ class Bench {
         context_(context),
         reader_(reader),
         scene_(render::scene_info(reader)),
-        path_(make_path(scene_, o)),
+        path_(make_path(scene_, o, o.steps)),
+        cache_path_(make_path(scene_, o, o.cache_steps > 0 ? o.cache_steps : o.steps)),
         renderer_(context, scene_, {.frames_in_flight = 2}),
         timed_(context, o.width, o.height, {.frames_in_flight = 2, .read_back = false, .layers = o.stereo ? 2u : 1u}),
         checked_(context, o.width, o.height, {.frames_in_flight = 1, .read_back = true, .layers = o.stereo ? 2u : 1u}) {
@@ -248,6 +249,7 @@ class Bench {
   }
 
   const Path& path() const { return path_; }
+  const Path& cache_path() const { return cache_path_; }
 
  private:
   // A player over the file as the players make it (FrameFeed::configure,
@@ -343,7 +345,7 @@ class Bench {
   render::Context& context_;
   const io::ContainerReader& reader_;
   render::SceneInfo scene_;
-  Path path_;
+  Path path_, cache_path_;
   render::Renderer renderer_;
   render::OffscreenTarget timed_, checked_;
   render::FluidOptions fluid_;
@@ -391,8 +393,9 @@ void run_view_bench(const ViewBenchOptions& o) {
               (unsigned long long)reader.frame_count(), mb(double(file_bytes) / double(reader.frame_count())).c_str(),
               reader.header().version_major, reader.header().version_minor);
   std::printf("device: %s (%s); host: %s, %d cores\n", dev.name.c_str(), dev.type.c_str(), cpu_model().c_str(), core_count());
-  std::printf("view: %ux%u%s, %s %.2f; %u frames per moving segment; the surface and blobs (players' default)\n", o.width,
-              o.height, o.stereo ? " per eye, two eyes" : "", o.lod.c_str(), double(o.level), o.steps);
+  std::printf("view: %ux%u%s, %s %.2f; %u frames per moving segment (%u from the page cache); the surface and blobs "
+              "(players' default)\n", o.width, o.height, o.stereo ? " per eye, two eyes" : "", o.lod.c_str(), double(o.level),
+              o.steps, o.cache_steps > 0 ? o.cache_steps : o.steps);
 
   const uint64_t frames = reader.frame_count();
   const uint64_t fly_first = o.steps % frames;
@@ -440,11 +443,12 @@ void run_view_bench(const ViewBenchOptions& o) {
   };
   const auto drop = [&] { drop_from_page_cache(o.file, 0, std::filesystem::file_size(o.file)); };
   const auto segments = [&](const char* from, bool cold) {
+    const Path& path = cold ? bench.path() : bench.cache_path();
     for (const bool by_view : {false, true}) {
       if (cold) drop();
-      add(Segment::Orbit, by_view, from, bench.play(bench.path().orbit, 0, by_view, false));
+      add(Segment::Orbit, by_view, from, bench.play(path.orbit, 0, by_view, false));
       if (cold) drop();
-      add(Segment::FlyIn, by_view, from, bench.play(bench.path().fly_in, fly_first, by_view, false));
+      add(Segment::FlyIn, by_view, from, bench.play(path.fly_in, fly_first, by_view, false));
       if (cold) drop();
       add(Segment::Pause, by_view, from, bench.pause(pause_frame, by_view, false));
     }

@@ -30,6 +30,9 @@ struct ViewBenchOptions {
   float level = 0.3f;
   uint64_t memory = 0;                   // the pipeline's memory cap; 0: 4 GiB
   uint32_t steps = 48;                   // frames of the orbit and of the fly-in each
+  // The same from the page cache, where the file may loop (more frames than
+  // it has give steadier rates); 0: `steps`.
+  uint32_t cache_steps = 0;
   bool storage = true;                   // also from storage (drops the file from the page cache)
   bool psnr = true;                      // the quality pass
   std::string decode = "auto";           // auto | cpu | gpu
