@@ -8,6 +8,7 @@ packages=(
   libzstd-dev libtbb-dev libxxhash-dev libcli11-dev libvtk9-dev zlib1g-dev
   libgtest-dev libbenchmark-dev
   python3-dev pybind11-dev python3-numpy python3-pytest python3-matplotlib
+  mypy  # the Python module's stubs checked against the examples (python.stubs)
   clang libclang-rt-14-dev
   openmpi-bin libopenmpi-dev  # convert --mpi, and its test under mpirun
 )

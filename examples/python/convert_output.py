@@ -14,7 +14,7 @@ import time
 import sluice
 
 
-def main():
+def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("input", help="a file, a glob, a .pvd or a directory")
     parser.add_argument("output", help="the .sluice file to write")
@@ -23,7 +23,7 @@ def main():
 
     start = time.monotonic()
 
-    def progress(p):
+    def progress(p: dict[str, int]) -> None:
         rate = p["frames_done"] / max(time.monotonic() - start, 1e-9)
         end = "\n" if p["frames_done"] == p["frames"] else ""
         print(f"\rconverting {p['frames_done']}/{p['frames']} frames, {rate:.1f} frames/s, "

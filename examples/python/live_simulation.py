@@ -18,21 +18,24 @@ import sys
 import time
 
 import numpy as np
+import numpy.typing as npt
 
 import sluice
+
+Array = npt.NDArray[np.float32]
 
 TANK = np.array([1.6, 0.8, 1.0], dtype=np.float32)
 SPACING = np.float32(0.025)
 
 
-def initial_block():
-    n = (np.array([0.5, 0.5, 0.45]) / SPACING).astype(int)
+def initial_block() -> tuple[Array, Array]:
+    n = tuple(int(k) for k in np.array([0.5, 0.5, 0.45]) / SPACING)
     g = np.indices(n).reshape(3, -1).T.astype(np.float32)
-    x = (g + 0.5) * SPACING + np.float32([0.1, 0.15, 0.45])
+    x: Array = (g + 0.5) * SPACING + np.array([0.1, 0.15, 0.45], dtype=np.float32)
     return x, np.zeros_like(x)
 
 
-def push_apart(x, v, dt):
+def push_apart(x: Array, v: Array, dt: float) -> None:
     """Particles closer than the spacing push each other apart (grid cells of one spacing)."""
     cell = np.floor(x / SPACING).astype(np.int64)
     key = (cell[:, 0] * 73856093) ^ (cell[:, 1] * 19349663) ^ (cell[:, 2] * 83492791)
@@ -53,7 +56,7 @@ def push_apart(x, v, dt):
 RNG = np.random.default_rng(1)
 
 
-def step(x, v, dt):
+def step(x: Array, v: Array, dt: float) -> None:
     v[:, 2] -= 9.81 * dt
     push_apart(x, v, dt)
     x += v * dt
@@ -74,7 +77,7 @@ def step(x, v, dt):
     v *= 0.999
 
 
-def main():
+def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--steps", type=int, default=200)
     parser.add_argument("--record", default=None, help="a .sluice file for the frames shown")
@@ -85,7 +88,8 @@ def main():
 
     x, v = initial_block()
     dt = 1 / 120
-    view = sluice.LiveView(((0, 0, 0), tuple(TANK.tolist())), window=not args.offscreen, spacing=float(SPACING),
+    tank = (float(TANK[0]), float(TANK[1]), float(TANK[2]))
+    view = sluice.LiveView(((0.0, 0.0, 0.0), tank), window=not args.offscreen, spacing=float(SPACING),
                            attributes=["speed"], color="speed", record=args.record, keep_all=args.keep_all,
                            fps=60, title="sluice: a falling block")
     start = time.monotonic()

@@ -22,7 +22,7 @@ import numpy as np  # noqa: E402
 import sluice  # noqa: E402
 
 
-def main():
+def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("file", help=".sluice file")
     parser.add_argument("--out", default="quantity.png", help="the plot (PNG)")
@@ -33,15 +33,21 @@ def main():
     up = "xyz".index(seq.up[-1])
     along = 0 if up != 0 else 1  # the first horizontal axis
     wanted = ["rho"] if "rho" in seq.attributes else []
-    times, front, height, rho = [], [], [], []
+    times: list[float] = []
+    front: list[float] = []
+    height: list[float] = []
+    rho: list[float] = []
     for f in seq.frames(lod_level=args.lod, attributes=wanted):
         p = f.positions
-        times.append(f.time)
-        front.append(np.quantile(p[:, along], 0.995))
-        height.append(np.quantile(p[:, up], 0.995) - p[:, up].min())
+        # An input without times has None: the frame number stands in.
+        t = f.time if f.time is not None else float(f.index)
+        times.append(t)
+        front.append(float(np.quantile(p[:, along], 0.995)))
+        height.append(float(np.quantile(p[:, up], 0.995) - p[:, up].min()))
         if wanted:
             rho.append(float(f["rho"].mean()))
-        print(f"frame {f.index:4d}  t={f.time:7.3f} s  {len(f):9d} particles  front {front[-1]:.3f}")
+        print(f"frame {f.index:4d}  t={t:7.3f} {'s' if f.time is not None else '(no times)'}  {len(f):9d} particles  "
+              f"front {front[-1]:.3f}")
 
     rows = 3 if wanted else 2
     fig, axes = plt.subplots(rows, 1, sharex=True, figsize=(6, 2.2 * rows))
