@@ -2,6 +2,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <map>
+#include <optional>
+#include <tuple>
 #include <vector>
 
 #include "commands.h"
@@ -17,6 +20,7 @@ struct InfoOptions {
   std::string file;
   bool json = false;
   bool all_frames = false;
+  std::optional<uint64_t> records;  // --records FRAME
 };
 
 const char* coding_name(io::PositionCoding c) {
@@ -225,6 +229,46 @@ void print_text(const io::ContainerReader& r, bool all_frames) {
   }
 }
 
+// One frame's records by layer and tier span: how many, how many
+// particles, bytes, and how wide their boxes are (what a view's read can
+// leave out: docs/format.md, "Layout of a frame").
+void print_records(const io::ContainerReader& r, uint64_t frame) {
+  if (frame >= r.frame_count()) {
+    throw std::runtime_error("--records: no frame " + std::to_string(frame) + " (the file has " +
+                             std::to_string(r.frame_count()) + ")");
+  }
+  const io::FrameHeader h = r.read_table(frame);
+  struct Span {
+    uint64_t records = 0, particles = 0, bytes = 0;
+    double widest = 0, width_sum = 0;
+  };
+  // (the layer's place in a frame: all or surface, blobs, interior; first tier, last tier)
+  const auto place = [](io::Layer l) { return l == io::Layer::Blobs ? 1 : l == io::Layer::Interior ? 2 : 0; };
+  std::map<std::tuple<int, int, int, int>, Span> spans;
+  for (const io::ChunkDesc& c : h.chunks) {
+    Span& s = spans[{place(c.layer), int(c.layer), int(c.tier), int(c.last_tier)}];
+    double width = 0;
+    for (int a = 0; a < 3; ++a) width = std::max<double>(width, c.bounds.max[size_t(a)] - c.bounds.min[size_t(a)]);
+    ++s.records;
+    s.particles += c.particle_count;
+    s.bytes += c.compressed_size;
+    s.widest = std::max(s.widest, width);
+    s.width_sum += width;
+  }
+  std::printf("%s frame %llu: %zu records, %s (layout %s)\n", r.path().c_str(), (unsigned long long)frame, h.chunks.size(),
+              human_bytes(double(h.frame_bytes)).c_str(), h.coarse_to_fine ? "coarse to fine, 2.0" : "cells, 1.x");
+  std::printf("  %-9s %-6s %8s %12s %10s %10s %12s %12s\n", "layer", "tiers", "records", "particles", "bytes",
+              "mean rec", "widest box", "mean box");
+  for (const auto& [key, s] : spans) {
+    const auto [order, layer, first, last] = key;
+    const std::string tiers = first == last ? std::to_string(first) : std::to_string(first) + "-" + std::to_string(last);
+    std::printf("  %-9s %-6s %8llu %12s %10s %10s %12s %12s\n", io::layer_name(io::Layer(layer)), tiers.c_str(),
+                (unsigned long long)s.records, human_count(double(s.particles)).c_str(), human_bytes(double(s.bytes)).c_str(),
+                human_bytes(double(s.bytes) / double(s.records)).c_str(), fixed(s.widest, 3).c_str(),
+                fixed(s.width_sum / double(s.records), 3).c_str());
+  }
+}
+
 }  // namespace
 
 void add_info(CLI::App& app) {
@@ -233,9 +277,14 @@ void add_info(CLI::App& app) {
   cmd->add_option("file", o->file, ".sluice file")->required();
   cmd->add_flag("--json", o->json, "Print JSON for scripts (every frame)");
   cmd->add_flag("--all-frames", o->all_frames, "List every frame, not the first and last five");
+  cmd->add_option("--records", o->records,
+                  "One frame's records by layer and LOD tier span: count, particles, bytes, box widths (what reading\n"
+                  "by the view can leave out)")
+      ->type_name("FRAME");
   cmd->callback([o] {
     const io::ContainerReader reader(o->file);
-    if (o->json) print_json(reader);
+    if (o->records) print_records(reader, *o->records);
+    else if (o->json) print_json(reader);
     else print_text(reader, o->all_frames);
   });
 }

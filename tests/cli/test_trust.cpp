@@ -174,6 +174,24 @@ TEST(Friction, DevicesNameWhatDeviceTakes) {
   EXPECT_TRUE(fs::exists(dir / "d.png"));
 }
 
+// `sluice info --records FRAME` lists a frame's records by layer and tier
+// span; a frame past the end is an error naming the count.
+TEST(Friction, InfoRecordsListsAFramesRecordsBySpan) {
+  const fs::path dir = fresh_dir("records");
+  const std::string file = (dir / "s.sluice").string();
+  const Result synth = sluice("synth -n 200000 --frames 2 -q -o " + file);
+  ASSERT_EQ(synth.status, 0) << synth.out;
+  const Result r = sluice("info " + file + " --records 1");
+  ASSERT_EQ(r.status, 0) << r.out;
+  EXPECT_NE(r.out.find("frame 1:"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("coarse to fine"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("surface"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("blobs"), std::string::npos) << r.out;
+  const Result past = sluice("info " + file + " --records 2");
+  EXPECT_NE(past.status, 0);
+  EXPECT_NE(past.out.find("no frame 2 (the file has 2)"), std::string::npos) << past.out;
+}
+
 // Recover keeps the frames after a damaged one, rebuilds a damaged header
 // from its copy, and fails when there is nothing to save.
 TEST(Recover, SavesEveryGoodFrame) {
