@@ -3,7 +3,6 @@
 
 #include <unistd.h>
 
-#include <array>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
@@ -15,12 +14,12 @@
 #include "sluice/io/format.h"
 #include "sluice/import/source.h"
 #include "sluice/io/output_lock.h"
+#include "sluice/io/reader.h"
 
 namespace sluice::import {
 namespace fs = std::filesystem;
 namespace {
 
-constexpr std::array<unsigned char, 8> kMagic = {0x89, 'S', 'L', 'U', 'I', 'C', 'E', '\n'};
 
 // A name for the cache file: the .pvd/file stem, or the folder a glob or
 // directory lies in.
@@ -108,7 +107,7 @@ PlayableFile open_playable_in(const fs::path& dir, const std::string& name, cons
   const io::OutputLock entry(key_file, io::OutputLock::Wait::Yes, [&o](const fs::path& locked, long pid) {
     if (o.events.waiting) o.events.waiting(locked.parent_path().string(), pid);
   });
-  if (is_sluice_file(file) && fs::exists(key_file, ec) && read_text(key_file) == key) {
+  if (io::is_container(file) && fs::exists(key_file, ec) && read_text(key_file) == key) {
     if (o.events.reused) o.events.reused(file.string());
     return PlayableFile(file.string(), false);
   }
@@ -135,17 +134,8 @@ PlayableFile::~PlayableFile() {
   fs::remove(path_, ec);
 }
 
-bool is_sluice_file(const fs::path& path) {
-  std::error_code ec;
-  if (!fs::is_regular_file(path, ec)) return false;
-  std::ifstream in(path, std::ios::binary);
-  std::array<unsigned char, 8> head{};
-  in.read(reinterpret_cast<char*>(head.data()), head.size());
-  return in.gcount() == 8 && head == kMagic;
-}
-
 PlayableFile open_playable(const std::string& input, const PlayableOptions& o) {
-  if (is_sluice_file(input)) return PlayableFile(input, false);
+  if (io::is_container(input)) return PlayableFile(input, false);
   if (o.use == CacheUse::Temporary) {
     const fs::path tmp = fs::temp_directory_path() / ("sluice-" + std::to_string(::getpid()) + "-" + cache_name(input) + ".sluice");
     if (o.events.converting) o.events.converting(tmp.string());

@@ -149,6 +149,8 @@ std::vector<uint16_t> lod_values_of(const DecodedFrame& frame, PositionCoding co
 }
 
 bool is_container(const std::filesystem::path& path) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) return false;
   const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
   if (fd < 0) return false;
   std::array<uint8_t, kFileMagic.size()> magic{};

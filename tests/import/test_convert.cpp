@@ -190,7 +190,7 @@ TEST(ImportPlayable, TheCacheConvertsOnceThenReuses) {
   {
     const sluice::import::PlayableFile file = sluice::import::open_playable(input, o);
     first = file.path();
-    EXPECT_TRUE(sluice::import::is_sluice_file(first));
+    EXPECT_TRUE(sluice::io::is_container(first));
   }
   EXPECT_TRUE(fs::exists(first)) << "a cache entry stays";
   const sluice::import::PlayableFile again = sluice::import::open_playable(input, o);
@@ -210,7 +210,7 @@ TEST(ImportPlayable, ATemporaryConversionGoesWithItsFile) {
     sluice::import::PlayableFile file = sluice::import::open_playable((dir / "frame_*.csv").string(), o);
     const sluice::import::PlayableFile moved = std::move(file);
     path = moved.path();
-    EXPECT_TRUE(sluice::import::is_sluice_file(path));
+    EXPECT_TRUE(sluice::io::is_container(path));
   }
   EXPECT_FALSE(fs::exists(path)) << "removed once, by the file it moved into";
 }

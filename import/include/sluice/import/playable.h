@@ -61,8 +61,6 @@ class PlayableFile {
   bool temporary_;
 };
 
-// True when `path` is a regular file that starts with the .sluice magic.
-bool is_sluice_file(const std::filesystem::path& path);
 
 // Returns `input` itself when it is a .sluice file; else converts it (every
 // point array carried, the rest convert()'s defaults) or reuses the cache.

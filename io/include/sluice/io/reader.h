@@ -18,9 +18,9 @@
 
 namespace sluice::io {
 
-// Whether the file at `path` starts as a .sluice file does (its magic):
-// for tools that take simulation output or a .sluice file. False when it
-// cannot be read.
+// Whether `path` is a regular file that starts as a .sluice file does (its
+// magic): for tools that take simulation output or a .sluice file. False
+// when it cannot be read.
 bool is_container(const std::filesystem::path& path);
 
 class ContainerReader {
