@@ -17,16 +17,16 @@
 namespace sluice::io {
 namespace {
 
-// Whether every chunk of `frame` decodes on the GPU (no zstd plane).
-bool decodes_on_gpu(const ContainerReader& input, uint64_t frame) {
+// Whether every chunk of frame `frame` (its `record`, parsed as `header`)
+// decodes on the GPU (no zstd plane).
+bool decodes_on_gpu(const ContainerReader& input, uint64_t frame, std::span<const std::byte> record,
+                    const FrameHeader& header) {
   if (!gpu_decodable(input.header())) return false;
-  const std::vector<std::byte> record = input.read_record(frame);
-  const FrameHeader header = input.parse_record(frame, record);
   GpuDecodePlan plan;
   plan_gpu_frame(header, input.header(), {}, plan, input.location(frame));
   for (size_t c = 0; c < header.chunks.size(); ++c) {
     const ChunkDesc& chunk = header.chunks[c];
-    const auto payload = std::span<const std::byte>(record).subspan(chunk.offset, chunk.compressed_size);
+    const auto payload = record.subspan(chunk.offset, chunk.compressed_size);
     if (!plan_gpu_chunk(payload, header, input.header(), {}, c, plan, input.location(frame, c))) return false;
   }
   return true;
@@ -55,7 +55,10 @@ EncodeOptions encoding_of(const ContainerReader& input, const RelayoutOptions& o
   e.layers = false;
   e.lod_tiers = false;
   if (input.frame_count() == 0) return e;
-  const FrameHeader first = input.read_table(0);
+  // Frame 0 read once: its table for the layers and tiers, its planes for
+  // the coding.
+  const std::vector<std::byte> record = input.read_record(0);
+  const FrameHeader first = input.parse_record(0, record);
   for (const ChunkDesc& c : first.chunks) {
     e.layers |= c.layer != Layer::All;
     e.lod_tiers |= c.tier > 0 || c.last_tier > 0;
@@ -63,7 +66,7 @@ EncodeOptions encoding_of(const ContainerReader& input, const RelayoutOptions& o
   // Unset (0) gives the encoder's default of twice the spacing.
   e.band_voxel = first.blob_voxel;
   e.planes = options.planes ? *options.planes
-             : decodes_on_gpu(input, 0) ? PlaneCoding::GpuDecodable
+             : decodes_on_gpu(input, 0, record, first) ? PlaneCoding::GpuDecodable
                                         : PlaneCoding::Packed;
   return e;
 }

@@ -94,6 +94,33 @@ TEST(Relayout, A1_5FileRewrittenAs2_0HoldsTheSameParticles) {
   }
 }
 
+// The plane coding follows the input's first frame: GPU-decodable stays
+// so (players decode it on the GPU), zstd planes give the default packing.
+TEST(Relayout, APlaneCodingTheGpuDecodesIsKept) {
+  test::TempDir dir;
+  const io::FileHeader h = header_for(1, io::PositionCoding::Quantized16);
+  for (const io::PlaneCoding planes : {io::PlaneCoding::GpuDecodable, io::PlaneCoding::Zstd}) {
+    const auto path = dir / (planes == io::PlaneCoding::Zstd ? "zstd.sluice" : "gpu.sluice");
+    {
+      io::ContainerWriter w(path, h);
+      const io::ParticleFrame f = test::scattered_frame(30000, 3);
+      const std::vector<uint16_t> lod = io::lod_values(f.ids, f.count());
+      io::FrameInput in;
+      in.positions = f.positions;
+      in.lod = lod;
+      in.attributes.push_back(f.attributes[0]);
+      io::EncodeOptions o;
+      o.chunk_particles = 4096;
+      o.planes = planes;
+      w.append(io::encode_frame(in, h, o));
+      w.finish();
+    }
+    const io::ContainerReader reader(path);
+    const io::EncodeOptions used = io::encoding_of(reader, {});
+    EXPECT_EQ(used.planes, planes == io::PlaneCoding::Zstd ? io::PlaneCoding::Packed : io::PlaneCoding::GpuDecodable);
+  }
+}
+
 TEST(Relayout, Float32PositionsComeThroughBitForBit) {
   test::TempDir dir;
   const auto old_path = write_scattered(dir / "old.sluice", header_for(2, io::PositionCoding::Float32), false);
