@@ -21,10 +21,14 @@ bool has_stencil(vk::Format f) {
 
 // A caller's image from one layout to another, ordered against all work on
 // the queue before and after (the host's own passes are unknown to us).
+// A host image's layers of `target` from one layout to another; by default
+// after everything before and before everything after on the queue.
 vk::ImageMemoryBarrier2 host_barrier(VkImage image, vk::ImageAspectFlags aspect, const RenderTarget& target, VkImageLayout from,
-                                     vk::ImageLayout to) {
-  return vk::ImageMemoryBarrier2(Stage::eAllCommands, Access::eMemoryWrite, Stage::eAllCommands,
-                                 Access::eMemoryRead | Access::eMemoryWrite, vk::ImageLayout(from), to, VK_QUEUE_FAMILY_IGNORED,
+                                     vk::ImageLayout to, vk::PipelineStageFlags2 src_stage = Stage::eAllCommands,
+                                     vk::AccessFlags2 src_access = Access::eMemoryWrite,
+                                     vk::PipelineStageFlags2 dst_stage = Stage::eAllCommands,
+                                     vk::AccessFlags2 dst_access = Access::eMemoryRead | Access::eMemoryWrite) {
+  return vk::ImageMemoryBarrier2(src_stage, src_access, dst_stage, dst_access, vk::ImageLayout(from), to, VK_QUEUE_FAMILY_IGNORED,
                                  VK_QUEUE_FAMILY_IGNORED, vk::Image(image),
                                  vk::ImageSubresourceRange(aspect, 0, 1, target.base_layer, target.layer_count));
 }
@@ -41,10 +45,8 @@ vk::ImageAspectFlags depth_aspect(VkFormat f) {
 void relayout_depth(vk::CommandBuffer cmd, const RenderTarget& target, vk::ImageLayout from, vk::ImageLayout to,
                     vk::PipelineStageFlags2 src_stage, vk::AccessFlags2 src_access, vk::PipelineStageFlags2 dst_stage,
                     vk::AccessFlags2 dst_access) {
-  const vk::ImageMemoryBarrier2 b(src_stage, src_access, dst_stage, dst_access, from, to, VK_QUEUE_FAMILY_IGNORED,
-                                  VK_QUEUE_FAMILY_IGNORED, vk::Image(target.depth_image),
-                                  vk::ImageSubresourceRange(depth_aspect(target.depth_format), 0, 1, target.base_layer,
-                                                            target.layer_count));
+  const vk::ImageMemoryBarrier2 b = host_barrier(target.depth_image, depth_aspect(target.depth_format), target,
+                                                  VkImageLayout(from), to, src_stage, src_access, dst_stage, dst_access);
   cmd.pipelineBarrier2(vk::DependencyInfo({}, {}, {}, b));
 }
 
