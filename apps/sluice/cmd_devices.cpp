@@ -12,18 +12,13 @@
 namespace sluice::app {
 namespace {
 
-std::string api_text(uint32_t v) {
-  return std::to_string(VK_API_VERSION_MAJOR(v)) + "." + std::to_string(VK_API_VERSION_MINOR(v)) + "." +
-         std::to_string(VK_API_VERSION_PATCH(v));
-}
-
 void print_text(const std::vector<render::DeviceInfo>& devices) {
   if (devices.empty()) {
     std::printf("no Vulkan device found (install a GPU driver, or mesa-vulkan-drivers for the CPU's lavapipe)\n");
     return;
   }
   for (const render::DeviceInfo& d : devices) {
-    std::printf("%u: %s (%s, Vulkan %s, %s)\n", d.index, d.name.c_str(), d.type.c_str(), api_text(d.api_version).c_str(),
+    std::printf("%u: %s (%s, Vulkan %s, %s)\n", d.index, d.name.c_str(), d.type.c_str(), render::format_api_version(d.api_version).c_str(),
                 d.driver.c_str());
     std::printf("   %s of device memory; splats up to %.0f pixels; %s\n", human_bytes(double(d.device_local_bytes)).c_str(),
                 double(d.max_point_size), d.usable ? "sluice runs on it" : ("cannot run sluice: " + d.why_not).c_str());
@@ -39,7 +34,7 @@ void print_json(const std::vector<render::DeviceInfo>& devices) {
     std::printf("%s\n  {\"index\": %u, \"name\": %s, \"type\": %s, \"driver\": %s, \"api_version\": %s, "
                 "\"device_local_bytes\": %llu, \"max_point_size\": %s, \"usable\": %s, \"why_not\": %s}",
                 i ? "," : "", d.index, json_string(d.name).c_str(), json_string(d.type).c_str(),
-                json_string(d.driver).c_str(), json_string(api_text(d.api_version)).c_str(),
+                json_string(d.driver).c_str(), json_string(render::format_api_version(d.api_version)).c_str(),
                 (unsigned long long)d.device_local_bytes, json_number(d.max_point_size).c_str(), d.usable ? "true" : "false",
                 json_string(d.why_not).c_str());
   }
