@@ -33,6 +33,17 @@ Tick advance(VirtualClock& clock, Player& player, double seconds) {
   return player.update();
 }
 
+// Plays `ticks` frame intervals of a 30 fps file and returns the frames
+// that came on screen, in order.
+std::vector<uint64_t> frames_shown(VirtualClock& clock, Player& player, int ticks) {
+  std::vector<uint64_t> shown;
+  for (int i = 0; i < ticks; ++i) {
+    const Tick t = advance(clock, player, 1 / kFps);
+    if (t.changed) shown.push_back(t.frame->frame());
+  }
+  return shown;
+}
+
 uint64_t step_target(uint64_t from, int64_t n, EndMode mode, uint64_t frames) {
   const auto count = static_cast<int64_t>(frames);
   const int64_t to = static_cast<int64_t>(from) + n;
@@ -90,12 +101,7 @@ TEST_F(PlayerTest, ReversePlaysBackwardsAndEndsAtFrameZero) {
   Player player(reader, allocator, clock, o);
   advance(clock, player, 0);
   player.play();
-  std::vector<uint64_t> shown;
-  for (int i = 0; i < 15; ++i) {
-    const Tick t = advance(clock, player, 1 / kFps);
-    if (t.changed) shown.push_back(t.frame->frame());
-  }
-  EXPECT_EQ(shown, (std::vector<uint64_t>{9, 8, 7, 6, 5, 4, 3, 2, 1, 0}));
+  EXPECT_EQ(frames_shown(clock, player, 15), (std::vector<uint64_t>{9, 8, 7, 6, 5, 4, 3, 2, 1, 0}));
   EXPECT_EQ(player.state(), PlayerState::Ended);
   player.play();  // from the end, play starts over (in the direction of the rate)
   const Tick t = advance(clock, player, 0);
@@ -116,12 +122,7 @@ TEST_F(PlayerTest, APlayerOfTheFirstFramesReadsNothingPastThem) {
   EXPECT_EQ(player.frame_count(), 6u);
   advance(clock, player, 0);
   player.play();
-  std::vector<uint64_t> shown;
-  for (int i = 0; i < 10; ++i) {
-    const Tick t = advance(clock, player, 1 / kFps);
-    if (t.changed) shown.push_back(t.frame->frame());
-  }
-  EXPECT_EQ(shown, (std::vector<uint64_t>{4, 5}));
+  EXPECT_EQ(frames_shown(clock, player, 10), (std::vector<uint64_t>{4, 5}));
   EXPECT_EQ(player.state(), PlayerState::Ended);
   EXPECT_LE(player.stats().pipeline.frames_read, 3u) << "frames 3, 4 and 5 only";
 }
