@@ -309,7 +309,7 @@ Player initial_state(const io::ContainerReader& reader, const render::StreamOpti
   p.fluid = v.fluid_options(scene);
   p.lod = v.lod_options();
   p.device = context.device().name + " (" + context.device().type + ")";
-  p.times_known = reader.header().time_source != io::TimeSource::FrameNumber;
+  p.times_known = io::times_stated(reader.header());
   return p;
 }
 

@@ -94,6 +94,8 @@ const char* time_source_name(TimeSource t) {
   }
 }
 
+bool times_stated(const FileHeader& h) { return h.time_source != TimeSource::FrameNumber; }
+
 std::vector<std::byte> serialize_file_header(const FileHeader& h) {
   std::vector<std::byte> out;
   ByteWriter w(out);

@@ -17,8 +17,6 @@ py::array_t<T> give(std::vector<T>&& values, std::vector<py::ssize_t> shape, Arr
 
 }  // namespace
 
-bool states_times(const io::FileHeader& header) { return header.time_source != io::TimeSource::FrameNumber; }
-
 Frame make_frame(uint64_t index, io::ParticleArrays&& arrays, const std::vector<std::string>& names, bool timed,
                  ArrayPool* pool) {
   Frame f;

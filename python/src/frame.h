@@ -29,12 +29,9 @@ class ArrayPool;
 
 // Moves `arrays` into numpy (no copy). `names[i]` names arrays.attributes[i].
 // With a pool, the arrays' memory goes back to it when they die. `timed`:
-// the file states times (states_times()); otherwise the frame has none.
+// the file states times (io::times_stated()); otherwise the frame has none.
 Frame make_frame(uint64_t index, io::ParticleArrays&& arrays, const std::vector<std::string>& names, bool timed,
                  ArrayPool* pool = nullptr);
-// Whether a file's frame times are the input's or a step given, not frame
-// numbers standing in for times the input did not state.
-bool states_times(const io::FileHeader& header);
 // Spare arrays from `pool` for the next frame of a stream.
 io::ParticleArrays spare_arrays(ArrayPool& pool, size_t attributes);
 

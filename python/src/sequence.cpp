@@ -125,7 +125,7 @@ class Sequence {
       io::ParticleScratch own;
       io::read_particles(*reader_, number, r.query, arrays, lock.owns_lock() ? scratch_ : own);
     }
-    return make_frame(number, std::move(arrays), r.names, states_times(reader_->header()), pool_.get());
+    return make_frame(number, std::move(arrays), r.names, io::times_stated(reader_->header()), pool_.get());
   }
 
   py::dict info() const {
@@ -148,10 +148,7 @@ class Sequence {
     uint64_t particles = 0;  // as `sluice info`: surface and interior, not blobs
     for (const io::FrameIndexEntry& e : index.frames) particles += e.count_in(io::LayerSet::particles());
     d["particles"] = particles;
-    d["times"] = h.time_source == io::TimeSource::Input  ? "input"
-                 : h.time_source == io::TimeSource::Step ? "step"
-                 : h.time_source == io::TimeSource::FrameNumber ? "none"
-                                                                : "unstated";
+    d["times"] = io::times_stated(h) ? io::time_source_name(h.time_source) : "none";
     d["bounds"] = py::make_tuple(py::make_tuple(index.bounds.min[0], index.bounds.min[1], index.bounds.min[2]),
                                  py::make_tuple(index.bounds.max[0], index.bounds.max[1], index.bounds.max[2]));
     return d;
@@ -177,7 +174,7 @@ class Stream {
          uint32_t window = 0)
       : names_(std::move(r.names)),
         loop_(range.loop),
-        timed_(states_times(reader->header())),
+        timed_(io::times_stated(reader->header())),
         lender_(std::make_shared<Lender>(std::move(reader), range, std::move(r.query), memory, window)) {}
 
   Frame next() {
@@ -265,7 +262,7 @@ class Stream {
 
   std::vector<std::string> names_;
   bool loop_ = false;
-  bool timed_ = true;  // the file states times (states_times())
+  bool timed_ = true;  // the file states times (io::times_stated())
   std::shared_ptr<ArrayPool> pool_ = std::make_shared<ArrayPool>();  // the arrays of copied frames Python let go of
   std::shared_ptr<Lender> lender_;
 };
@@ -365,7 +362,7 @@ void bind_sequence_class(py::module_& m) {
            }, "Streams every frame (see frames()).")
       .def_property_readonly("path", [](const Sequence& s) { return s.reader().path(); })
       .def_property_readonly("times", [](const Sequence& s) -> py::object {
-             if (!states_times(s.reader().header())) return py::none();
+             if (!io::times_stated(s.reader().header())) return py::none();
              std::vector<double> t;
              for (const io::FrameIndexEntry& e : s.reader().index().frames) t.push_back(e.time);
              return py::array_t<double>(py::ssize_t(t.size()), t.data());

@@ -117,6 +117,10 @@ struct FileHeader {
 // for other majors. encode_frame() lays frames out by the header's major.
 void set_format_version(FileHeader& h, uint16_t major);
 
+// Whether the file's frame times are the input's or a step given, not frame
+// numbers standing in for times the input did not state.
+bool times_stated(const FileHeader& h);
+
 // 1/1024 of the spacing: boxes of at most 128 spacings, about what the
 // default 65,536-particle chunks had before the bound (docs/format.md).
 inline constexpr uint8_t kDefaultPrecisionBits = 10;
