@@ -496,6 +496,11 @@ for stage in $stages; do
       run $S bench view $T/v20.sluice --steps ${VIEW_STEPS:-12} --cache-steps ${CACHE_STEPS:-60} --memory 24G --no-psnr --no-storage
       run $S bench view $T/v20.sluice --steps ${VIEW_STEPS:-12} --cache-steps ${CACHE_STEPS:-60} --memory 24G --no-psnr --no-storage --stereo --size 2064x2208
       ;;
+    layoutparts)  # issue 45: where a step's time goes once playing (wait, commit, upload, render), storage and page cache, mono
+      run $S bench render --sizes 10M --repeats 3 >/dev/null  # warm-up
+      run $S synth -n 100M --frames ${VIEW_FRAMES:-12} -o $T/v20.sluice --force -q --gpu-decodable
+      run $S bench view $T/v20.sluice --steps ${VIEW_STEPS:-12} --cache-steps ${CACHE_STEPS:-60} --memory 24G --no-psnr
+      ;;
     layoutq)  # pictures: the orbit by view against the full read (PSNR), format 2.0
       run $S bench view $T/v20.sluice --steps ${VIEW_STEPS:-12} --memory 24G --no-storage
       ;;

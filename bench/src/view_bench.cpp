@@ -127,6 +127,10 @@ render::DecodeSite decode_site(const std::string& s) {
   return render::DecodeSite::Auto;
 }
 
+struct StepTimes {
+  double wait_ms = 0, commit_ms = 0, upload_ms = 0;
+};
+
 struct Run {
   uint64_t frames_shown = 0, frames_read = 0, bytes_read = 0, record_bytes = 0, refinements = 0;
   uint64_t device_bytes = 0;  // what storage delivered meanwhile (process_read_bytes)
@@ -142,6 +146,11 @@ struct Run {
   double start_seconds = 0;  // of which making the player (staging, window, threads)
   double worst_psnr = std::numeric_limits<double>::infinity();
   double median_psnr = std::numeric_limits<double>::infinity();
+  // Once playing (the steps after the first), each step's wall time in
+  // parts (ms): waiting for the player's next frame, committing it to the
+  // renderer, waiting for its upload (the GPU's copy and decode), and
+  // recording and submitting the frame's render.
+  std::vector<double> wait_ms, commit_ms, upload_ms, render_ms;
 };
 
 // The full read's picture of `frame` for `views` (quality pass only).
@@ -192,11 +201,20 @@ class Bench {
     const double start_seconds = std::chrono::duration<double>(Clock::now() - t0).count();
     p.player.play();
     double first_seconds = 0;
+    Run r;
     for (const Step& step : steps) {
       p.player.set_demand(demand(step.views, lod, by_view));
-      const render::FeedUpdate fed = p.next_frame();
-      if (&step == &steps.front()) first_seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+      StepTimes times;
+      const render::FeedUpdate fed = p.next_frame(times);
+      const auto rendering = Clock::now();
+      if (&step == &steps.front()) first_seconds = std::chrono::duration<double>(rendering - t0).count();
       target.render(renderer_, step.views, fluid_, lod);
+      if (&step != &steps.front()) {
+        r.wait_ms.push_back(times.wait_ms);
+        r.commit_ms.push_back(times.commit_ms);
+        r.upload_ms.push_back(times.upload_ms);
+        r.render_ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - rendering).count());
+      }
       if (ref) {
         const render::Image shown{target.width(), target.height(), target.read_rgba8()};
         db.push_back(render::psnr(shown, ref->picture(fed.frame, step.views, fluid_, lod)));
@@ -204,7 +222,7 @@ class Bench {
     }
     target.finish();
     const double seconds = std::chrono::duration<double>(Clock::now() - t0).count();
-    Run r = finish(p, {}, seconds, uint64_t(steps.size()), db);
+    finish(r, p, {}, seconds, uint64_t(steps.size()), db);
     r.first_seconds = first_seconds;
     r.start_seconds = start_seconds;
     r.device_bytes = process_read_bytes() - device_before;
@@ -216,7 +234,8 @@ class Bench {
   Run pause(uint64_t frame, bool by_view, bool quality) {
     const std::vector<render::View>& views = path_.orbit.front().views;
     Player p(*this, frame, demand(views, lod_options(o_, o_.level), by_view));
-    p.next_frame();  // paused: the start frame is shown once read
+    StepTimes ignored;
+    p.next_frame(ignored);  // paused: the start frame is shown once read
     const render::LodOptions full = lod_options(o_, 1.0f);
     const runtime::PlaybackStats before = p.player.stats();
     const uint64_t device_before = process_read_bytes();
@@ -243,7 +262,8 @@ class Bench {
     }
     checked_.finish();
     const double seconds = std::chrono::duration<double>(Clock::now() - t0).count();
-    Run r = finish(p, before, seconds, 1, db);
+    Run r;
+    finish(r, p, before, seconds, 1, db);
     r.device_bytes = process_read_bytes() - device_before;
     return r;
   }
@@ -268,14 +288,19 @@ class Bench {
           feed(b.renderer_, player, &staging, -1),
           renderer(b.renderer_) {}
 
-    render::FeedUpdate next_frame() {
-      const auto deadline = Clock::now() + std::chrono::seconds(120);
+    render::FeedUpdate next_frame(StepTimes& times) {
+      const auto t0 = Clock::now();
+      const auto deadline = t0 + std::chrono::seconds(120);
       while (true) {
         player.wait_for_due();
         const render::FeedUpdate fed = feed.update();
         if (const auto error = player.pop_error()) throw std::runtime_error(error->text());
         if (fed.changed) {
+          const auto committed = Clock::now();
           renderer.wait_upload(fed.ticket);
+          times.commit_ms = fed.commit_wall_ms;
+          times.wait_ms = std::chrono::duration<double, std::milli>(committed - t0).count() - fed.commit_wall_ms;
+          times.upload_ms = std::chrono::duration<double, std::milli>(Clock::now() - committed).count();
           return fed;
         }
         if (Clock::now() > deadline) throw std::runtime_error("bench view: no frame arrived within 120 s");
@@ -311,10 +336,9 @@ class Bench {
     return std::max({b.max.x - b.min.x, b.max.y - b.min.y, b.max.z - b.min.z});
   }
 
-  static Run finish(Player& p, const runtime::PlaybackStats& before, double seconds, uint64_t shown,
-                    std::vector<double>& db) {
+  static void finish(Run& r, Player& p, const runtime::PlaybackStats& before, double seconds, uint64_t shown,
+                     std::vector<double>& db) {
     const runtime::PlaybackStats after = p.player.stats();
-    Run r;
     r.seconds = seconds;
     r.frames_shown = shown;
     r.frames_read = after.pipeline.frames_read - before.pipeline.frames_read;
@@ -338,7 +362,6 @@ class Bench {
       r.worst_psnr = *std::min_element(db.begin(), db.end());
       r.median_psnr = median(db);
     }
-    return r;
   }
 
   const ViewBenchOptions& o_;
@@ -413,6 +436,16 @@ void run_view_bench(const ViewBenchOptions& o) {
       std::printf("disk: O_DIRECT refused here; no sequential bound measured\n");
     }
   }
+  // Where a step's time goes once playing (medians over the steps after the first).
+  Table parts({"segment", "read", "from", "step ms", "waiting for the frame", "commit", "upload (GPU copy, decode)",
+               "render (record, submit)"});
+  const auto add_parts = [&](Segment s, bool by_view, const char* from, const Run& r) {
+    if (s == Segment::Pause || r.wait_ms.empty()) return;
+    std::vector<double> step(r.wait_ms.size());
+    for (size_t k = 0; k < step.size(); ++k) step[k] = r.wait_ms[k] + r.commit_ms[k] + r.upload_ms[k] + r.render_ms[k];
+    parts.row({segment_name(s), by_view ? "by view" : "full", from, num(median(step), 2), num(median(r.wait_ms), 2),
+               num(median(r.commit_ms), 2), num(median(r.upload_ms), 2), num(median(r.render_ms), 2)});
+  };
   Table table({"segment", "read", "from", "frames/s", "first frame (start)", "frames/s after it", "read per frame", "device per frame", "runs per frame",
                "records per frame", "worker us per record", "of the records", "of the disk's bound", "refinements"});
   const auto add = [&](Segment s, bool by_view, const char* from, const Run& r) {
@@ -440,6 +473,7 @@ void run_view_bench(const ViewBenchOptions& o) {
                r.records ? num(1e6 * r.worker_seconds / double(r.records), 1) : "-",
                r.record_bytes ? num(100.0 * double(r.bytes_read) / double(r.record_bytes), 1) + "%" : "-", bound,
                std::to_string(r.refinements)});
+    add_parts(s, by_view, from, r);
   };
   const auto drop = [&] { drop_from_page_cache(o.file, 0, std::filesystem::file_size(o.file)); };
   const auto segments = [&](const char* from, bool cold) {
@@ -462,6 +496,7 @@ void run_view_bench(const ViewBenchOptions& o) {
   segments("page cache", false);
   table.print("Frames through the players' path, full read against reading by the view (the time of a pause is its "
               "refinement's)");
+  parts.print("A step's wall time in parts once playing (medians of the steps after the first, ms)");
 
   // The fly-in's last frame alone, from the page cache, read by its view
   // and whole: the share of the full read's bytes the view read, beside the
