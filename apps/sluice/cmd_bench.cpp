@@ -126,6 +126,9 @@ void add_bench_view(CLI::App* bench) {
   vw->add_option("--memory", *view_memory, "Memory cap of the pipeline, e.g. 16G (default: 4G)");
   vw->add_flag("!--no-storage", view->storage, "Skip the storage passes (they drop the file from the page cache)");
   vw->add_flag("!--no-psnr", view->psnr, "Skip the quality pass");
+  vw->add_flag("--close-up-only", view->close_up_only,
+               "Only the close-up's read share against the share of the frame in view (no timed segments):\n"
+               "quick to compare layouts");
   vw->add_option("--decode", view->decode, "auto, cpu or gpu")->capture_default_str()->check(CLI::IsMember({"auto", "cpu", "gpu"}));
   vw->add_option("--device", view->device, "Vulkan device (index or name; default: the first GPU)");
   vw->add_option("--read-threads", view->read_threads, "Threads reading a frame's pieces at once (default: the pipeline's)")

@@ -400,6 +400,28 @@ double share_in_view(const io::ContainerReader& reader, uint64_t frame, const st
 std::string mb(double bytes) { return num(bytes / 1e6, 1) + " MB"; }
 std::string db_text(double v) { return std::isinf(v) ? "identical" : num(v, 1) + " dB"; }
 
+// The fly-in's last frame alone, from the page cache, read by its view and
+// whole: the share of the full read's bytes the view read, beside the share
+// of the particles that lie in the view (any layout's floor at level 1; at a
+// lower level the view needs less of the far ones).
+void print_close_up(Bench& bench, const io::ContainerReader& reader, const ViewBenchOptions& o) {
+  const uint64_t frames = reader.frame_count();
+  const uint64_t fly_first = o.steps % frames;
+  const std::vector<Step> close{bench.path().fly_in.back()};
+  const uint64_t frame = (fly_first + o.steps - 1) % frames;
+  const Run view = bench.play(close, frame, true, false), whole = bench.play(close, frame, false, false);
+  // Per frame read: the player reads ahead of the one frame shown, more
+  // frames the smaller they are.
+  const auto per_frame = [](const Run& r) { return r.frames_read ? double(r.bytes_read) / double(r.frames_read) : 0.0; };
+  const double in_view = share_in_view(reader, frame, close.front().views);
+  std::printf("\nThe close-up (the fly-in's last view), frame %llu: reading by the view read %s of the full read "
+              "(%s of %s a frame read); %s of the frame's surface particles and blobs lie in the view\n",
+              (unsigned long long)frame,
+              per_frame(whole) > 0 ? (num(100.0 * per_frame(view) / per_frame(whole), 1) + "%").c_str() : "-",
+              mb(per_frame(view)).c_str(), mb(per_frame(whole)).c_str(),
+              (num(100.0 * in_view, 1) + "%").c_str());
+}
+
 }  // namespace
 
 void run_view_bench(const ViewBenchOptions& o) {
@@ -420,6 +442,7 @@ void run_view_bench(const ViewBenchOptions& o) {
               "(players' default)\n", o.width, o.height, o.stereo ? " per eye, two eyes" : "", o.lod.c_str(), double(o.level),
               o.steps, o.cache_steps > 0 ? o.cache_steps : o.steps);
 
+  if (o.close_up_only) return print_close_up(bench, reader, o);
   const uint64_t frames = reader.frame_count();
   const uint64_t fly_first = o.steps % frames;
   const uint64_t pause_frame = (2 * uint64_t(o.steps)) % frames;
@@ -498,22 +521,7 @@ void run_view_bench(const ViewBenchOptions& o) {
               "refinement's)");
   parts.print("A step's wall time in parts once playing (medians of the steps after the first, ms)");
 
-  // The fly-in's last frame alone, from the page cache, read by its view
-  // and whole: the share of the full read's bytes the view read, beside the
-  // share of the particles that lie in the view (any layout's floor at
-  // level 1; at a lower level the view needs less of the far ones).
-  {
-    const std::vector<Step> close{bench.path().fly_in.back()};
-    const uint64_t frame = (fly_first + o.steps - 1) % frames;
-    const Run view = bench.play(close, frame, true, false), whole = bench.play(close, frame, false, false);
-    const double in_view = share_in_view(reader, frame, close.front().views);
-    std::printf("\nThe close-up (the fly-in's last view), frame %llu: reading by the view read %s of the full read "
-                "(%s of %s); %s of the frame's surface particles and blobs lie in the view\n",
-                (unsigned long long)frame,
-                whole.bytes_read ? (num(100.0 * double(view.bytes_read) / double(whole.bytes_read), 1) + "%").c_str() : "-",
-                mb(double(view.bytes_read)).c_str(), mb(double(whole.bytes_read)).c_str(),
-                (num(100.0 * in_view, 1) + "%").c_str());
-  }
+  print_close_up(bench, reader, o);
 
   if (o.psnr) {
     Table quality({"segment", "read", "frames", "PSNR worst", "PSNR median", "read per frame"});

@@ -40,6 +40,9 @@ struct ViewBenchOptions {
   int read_threads = 0;                  // the pipeline's (ReadSettings::threads); 0: its default
   bool mapped_reads = true;              // false: pread (ReadSettings::mapped)
   bool direct_io = false;                // O_DIRECT reads (ReadSettings::direct_io)
+  // Only the close-up's read share (no timed segments, no pictures): what a
+  // layout's cells leave out of a close view, quick to compare.
+  bool close_up_only = false;
 };
 
 // Throws io::Error on a bad file.
