@@ -151,6 +151,11 @@ struct Run {
   // renderer, waiting for its upload (the GPU's copy and decode), and
   // recording and submitting the frame's render.
   std::vector<double> wait_ms, commit_ms, upload_ms, render_ms;
+  // Frames decoded and waiting after each such step: 0 most of the time
+  // means the reader keeps the consumer waiting, more means the consumer
+  // is the slower side.
+  std::vector<double> ready;
+  double read_seconds = 0;  // the reader's time with a read in flight
 };
 
 // The full read's picture of `frame` for `views` (quality pass only).
@@ -214,6 +219,7 @@ class Bench {
         r.commit_ms.push_back(times.commit_ms);
         r.upload_ms.push_back(times.upload_ms);
         r.render_ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - rendering).count());
+        r.ready.push_back(double(p.player.pipeline().stats().frames_ready));
       }
       if (ref) {
         const render::Image shown{target.width(), target.height(), target.read_rgba8()};
@@ -346,6 +352,7 @@ class Bench {
     r.record_bytes = after.pipeline.record_bytes - before.pipeline.record_bytes;
     r.refinements = after.refinements - before.refinements;
     r.runs = after.pipeline.runs_read - before.pipeline.runs_read;
+    r.read_seconds = after.pipeline.read_seconds - before.pipeline.read_seconds;
     const auto records = [](const runtime::PlaybackStats& s) {
       uint64_t n = 0;
       for (const runtime::WorkerStats& w : s.pipeline.workers) n += w.chunks;
@@ -461,13 +468,14 @@ void run_view_bench(const ViewBenchOptions& o) {
   }
   // Where a step's time goes once playing (medians over the steps after the first).
   Table parts({"segment", "read", "from", "step ms", "waiting for the frame", "commit", "upload (GPU copy, decode)",
-               "render (record, submit)"});
+               "render (record, submit)", "frames ready after it", "reading a frame read"});
   const auto add_parts = [&](Segment s, bool by_view, const char* from, const Run& r) {
     if (s == Segment::Pause || r.wait_ms.empty()) return;
     std::vector<double> step(r.wait_ms.size());
     for (size_t k = 0; k < step.size(); ++k) step[k] = r.wait_ms[k] + r.commit_ms[k] + r.upload_ms[k] + r.render_ms[k];
     parts.row({segment_name(s), by_view ? "by view" : "full", from, num(median(step), 2), num(median(r.wait_ms), 2),
-               num(median(r.commit_ms), 2), num(median(r.upload_ms), 2), num(median(r.render_ms), 2)});
+               num(median(r.commit_ms), 2), num(median(r.upload_ms), 2), num(median(r.render_ms), 2), num(median(r.ready), 1),
+               r.frames_read ? num(1e3 * r.read_seconds / double(r.frames_read), 2) : "-"});
   };
   Table table({"segment", "read", "from", "frames/s", "first frame (start)", "frames/s after it", "read per frame", "device per frame", "runs per frame",
                "records per frame", "worker us per record", "of the records", "of the disk's bound", "refinements"});
