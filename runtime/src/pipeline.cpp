@@ -106,7 +106,7 @@ PipelineCore::PipelineCore(const io::ContainerReader& reader, FrameAllocator& al
   arena_.initialize(decode_threads_, 0);  // no slot reserved: only workers decode
   read_crew_.start(read_threads_ - 1);
 
-  initial_plan_ = plan_now(allocator_.kept_bytes());  // blocks a previous pipeline left for reuse count as ours
+  initial_plan_ = SlotWindow::plan(window_parts(), allocator_.kept_bytes());  // blocks a previous pipeline left for reuse count as ours
   // Chunk tables sized for the file's largest frame in the slots a window of
   // this plan cycles through (the reader takes free slots last-in first-out);
   // others get theirs at first use. Parsing a record then never allocates.
@@ -118,7 +118,7 @@ PipelineCore::PipelineCore(const io::ContainerReader& reader, FrameAllocator& al
     slots_[s].where.file = reader_.path();
   }
   counters_.window_frames.store(initial_plan_.frames, kRelaxed);
-  counters_.active_frames.store(initial_active(initial_plan_), kRelaxed);
+  counters_.active_frames.store(SlotWindow::initial_active(window_parts(), initial_plan_), kRelaxed);
   counters_.record_buffers.store(initial_plan_.record_buffers, kRelaxed);
   if (options_.window.on_change) options_.window.on_change({0, initial_plan_});
 

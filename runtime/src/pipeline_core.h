@@ -1,6 +1,7 @@
 // The pipeline's internals, shared by its parts:
 //   pipeline.cpp       construction, the consumer's side, stats
-//   reader_thread.cpp  the reader thread: schedule, window, reads, dispatch
+//   reader_thread.cpp  the reader thread: schedule, reads, dispatch
+//   slot_window.cpp    the reader's window: slots, record buffers, memory held
 //   read_target.cpp    where a frame's bytes go, and in what pieces
 //   record_read.cpp    the pieces, read on the crew (read_crew.cpp)
 //   decode_task.cpp    TBB decode of a frame's chunks and its completion
@@ -23,37 +24,18 @@
 #include <vector>
 
 #include "aligned_buffer.h"
+#include "counters.h"
 #include "demand_box.h"
 #include "mpsc_ring.h"
 #include "slot.h"
+#include "slot_window.h"
 #include "spsc_ring.h"
 #include "sluice/runtime/pipeline.h"
 #include "sluice/runtime/relay.h"
 
 namespace sluice::runtime::detail {
 
-// Per decode worker, on its own cache line: workers never share a written line.
-struct alignas(64) WorkerCounters {
-  std::atomic<uint64_t> chunks{0};
-  std::atomic<uint64_t> output_bytes{0};
-  std::atomic<uint64_t> busy_ns{0};
-};
-
-struct Counters {
-  std::atomic<uint64_t> record_bytes{0}, frames_by_demand{0}, runs_read{0}, run_bytes_asked{0};
-  std::atomic<uint64_t> bytes_read{0}, read_ns{0}, frames_read{0}, frames_in_place{0}, frames_relayed{0}, cache_hits{0};
-  std::atomic<uint64_t> frames_decoded{0}, decoded_bytes{0}, frames_cancelled{0};
-  std::atomic<uint64_t> frames_delivered{0}, frames_failed{0};
-  std::atomic<uint64_t> held_bytes{0}, peak_record_bytes{0};
-  std::atomic<uint32_t> window_frames{0}, active_frames{0}, record_buffers{0}, frames_ready{0};
-};
-
 class PipelineCore;
-
-// Frames the reader keeps ahead of the playhead (delivered and not yet
-// released ones count) in a window of `frames`: the rest is kept for frames
-// behind it.
-inline uint32_t ahead_most(uint32_t frames) { return frames - frames / 4; }
 
 // One read of a byte range in pieces on the read crew (record_read.cpp): the
 // crew calls it once per piece until the round is joined, so it lives until
@@ -108,21 +90,15 @@ class PendingReads {
 
 // What only the reader thread touches.
 struct ReaderState {
+  explicit ReaderState(const SlotWindow::Parts& parts, const WindowPlan& initial) : window(parts, initial) {}
   uint64_t generation = ~uint64_t(0);
   PlaybackSchedule schedule;
   uint64_t next_k = 0;                  // next entry of the schedule to fetch
   uint32_t out = 0;                     // entries pushed and not yet returned
-  std::vector<uint32_t> free_slots;
-  std::vector<uint32_t> cached;         // decoded frames behind the playhead, oldest first (a slot count at most)
-  std::vector<uint32_t> draining;       // returned while still decoding
-  std::vector<uint32_t> free_records;   // record buffers not in use
-  WindowPlan plan;
-  uint32_t active = 2;                  // slots in use at most: grows to plan.frames (slow start)
-  uint64_t frames_started = 0;
-  uint64_t next_evaluation = 0;
-  uint64_t decoded_held = 0;            // bytes of allocator buffers held
-  uint64_t record_held = 0;             // bytes of record buffers held
+  SlotWindow window;
   PendingReads pending;                 // records read in the background
+  // Slots out of the window's lists: published and not returned, or read in the background.
+  uint32_t in_flight() const { return out + pending.size(); }
 };
 
 class PipelineCore {
@@ -163,15 +139,8 @@ class PipelineCore {
   bool reader_iteration(ReaderState& rs);  // false: nothing to do until woken
   void adopt_schedule(ReaderState& rs);
   void collect_returns(ReaderState& rs);
-  void collect_records(ReaderState& rs);
-  void settle(ReaderState& rs, uint32_t s, SlotState state);
-  void reevaluate(ReaderState& rs);
-  WindowPlan plan_now(uint64_t held) const;
-  void shrink_to_window(ReaderState& rs);
-  // What the pipeline holds: decoded buffers in use and kept, records.
-  uint64_t held_now(const ReaderState& rs) const;
-  bool evict_oldest(ReaderState& rs);
-  void free_slot(ReaderState& rs, uint32_t s);
+  // What the reader's window works on (slot_window.h).
+  SlotWindow::Parts window_parts();
   Start start_entry(ReaderState& rs, uint64_t k, uint64_t frame);
   // Where a frame's bytes go: its record buffer, or (kept-encoded frames from
   // a buffered source) straight into its staged area, the record being its
@@ -185,7 +154,6 @@ class PipelineCore {
     bool by_runs = false;         // runs_to_read(): the runs of the slot's wanted chunks (slot.runs), not dst
   };
   ReadTarget record_target(ReaderState& rs, Slot& slot, uint32_t record);
-  AlignedBuffer& record_buffer(ReaderState& rs, uint32_t record, uint64_t bytes);
   ReadTarget staged_target(ReaderState& rs, Slot& slot);
   bool reads_in_place() const;
   bool reads_by_demand();  // the latest demand leaves something out, and chunks can be read one by one
@@ -233,8 +201,6 @@ class PipelineCore {
   void finish_entry(ReaderState& rs, uint32_t s, uint64_t k);
   void abandon_read(ReaderState& rs, uint32_t s);
   void set_layout(Slot& slot, uint64_t particles, uint64_t encoded_bytes) const;
-  void allocate_buffers(ReaderState& rs, Slot& slot);
-  void release_buffers(ReaderState& rs, Slot& slot);
   void move_to_larger_area(ReaderState& rs, Slot& slot, uint64_t staged_bytes);
   // record_read.cpp: reads [0, need) of `dst` from `offset` in pieces, on
   // read_threads_ threads, in two halves (read_crew.h): begin, other work,
@@ -269,10 +235,6 @@ class PipelineCore {
   bool short_of_latest(const Slot& slot);
   void publish(ReaderState& rs, uint32_t s, uint64_t k);
   void fail(ReaderState& rs, uint32_t s, uint64_t k, FrameError error);
-  uint32_t ahead_limit(const ReaderState& rs) const;  // ahead_most(rs.active)
-  bool grow(ReaderState& rs);
-  uint32_t initial_active(const WindowPlan& plan) const;
-  uint32_t occupied(const ReaderState& rs) const;
 
   // decode workers (decode_task.cpp)
   void decode_frame(Slot& slot, uint32_t s) noexcept;

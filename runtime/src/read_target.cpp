@@ -17,26 +17,13 @@ uint64_t round_up(uint64_t n, uint64_t to) { return (n + to - 1) / to * to; }
 
 }  // namespace
 
-// A record buffer of at least `bytes`, its growth counted as held.
-AlignedBuffer& PipelineCore::record_buffer(ReaderState& rs, uint32_t record, uint64_t bytes) {
-  AlignedBuffer& buffer = records_[record];
-  const size_t before = buffer.capacity();
-  buffer.reserve(bytes);
-  if (buffer.capacity() != before) {
-    rs.record_held += buffer.capacity() - before;
-    counters_.held_bytes.store(held_now(rs), kRelaxed);
-    if (rs.record_held > counters_.peak_record_bytes.load(kRelaxed)) counters_.peak_record_bytes.store(rs.record_held, kRelaxed);
-  }
-  return buffer;
-}
-
 PipelineCore::ReadTarget PipelineCore::record_target(ReaderState& rs, Slot& slot, uint32_t record) {
   const io::FrameIndexEntry& e = reader_.index().frames[slot.frame];
   const uint64_t align = std::max<size_t>(1, source_->alignment());
   const uint64_t begin = e.offset / align * align;
   const uint64_t need = e.offset + e.bytes - begin;  // bytes from `begin` the frame needs
   const uint64_t span = round_up(need, align);
-  AlignedBuffer& buffer = record_buffer(rs, record, std::max<uint64_t>(footprint_.record_bytes, span));
+  AlignedBuffer& buffer = rs.window.record_buffer(record, std::max<uint64_t>(footprint_.record_bytes, span));
   return {buffer.span().first(span), begin, need, buffer.span().subspan(e.offset - begin, e.bytes)};
 }
 
@@ -77,9 +64,9 @@ PipelineCore::ReadTarget PipelineCore::relayed_target(ReaderState& rs, Slot& slo
   set_layout(slot, e.count_in(options_.layers),
              encoded_block_bytes(io::staged_bytes_bound(e.bytes, e.chunk_count, e.particle_count, 0)));
   slot.layout.resident = true;
-  allocate_buffers(rs, slot);
+  rs.window.allocate_buffers(slot);
   const uint64_t table = std::min<uint64_t>(e.bytes, io::frame_table_bytes(e.chunk_count, reader_.header().attributes.size()));
-  const std::span<std::byte> into = record_buffer(rs, record, table).span().first(table);
+  const std::span<std::byte> into = rs.window.record_buffer(record, table).span().first(table);
   return {into, e.offset, table, into};
 }
 
@@ -91,7 +78,7 @@ PipelineCore::ReadTarget PipelineCore::staged_target(ReaderState& rs, Slot& slot
   const io::FrameIndexEntry& e = reader_.index().frames[slot.frame];
   set_layout(slot, e.count_in(options_.layers),
              encoded_block_bytes(io::staged_bytes_bound(e.bytes, e.chunk_count, e.particle_count, 0)));
-  allocate_buffers(rs, slot);
+  rs.window.allocate_buffers(slot);
   if (slot.buffers.particles.size() < e.bytes) {
     throw io::Error(reader_.location(slot.frame), "the frame allocator returned buffers smaller than the frame");
   }

@@ -14,27 +14,25 @@ namespace {
 
 constexpr auto kRelaxed = std::memory_order_relaxed;
 
-// Small moves of the window are noise (MemAvailable wobbles); follow a
-// change only when it is worth an eighth of the window.
-bool worth_changing(uint32_t from, uint32_t to) {
-  const uint32_t margin = from / 8;
-  return to + margin < from || to > from + margin;
-}
-
 }  // namespace
 
+SlotWindow::Parts PipelineCore::window_parts() {
+  SlotWindow::Parts p;
+  p.slots = slots_.get();
+  p.slot_count = slot_count_;
+  p.records = &records_;
+  p.allocator = &allocator_;
+  p.counters = &counters_;
+  p.options = &options_.window;
+  p.footprint = footprint_;
+  p.file_frames = reader_.frame_count();
+  p.decode_threads = decode_threads_;
+  p.frames_decoding = &frames_decoding_;
+  return p;
+}
+
 void PipelineCore::reader_main() {
-  ReaderState rs;
-  rs.plan = initial_plan_;
-  rs.active = initial_active(rs.plan);  // as the constructor reported it
-  rs.next_evaluation = options_.window.reevaluate_every;
-  // Every list a slot count long at most: reserved once, so the frame path
-  // never allocates.
-  rs.free_slots.reserve(slot_count_);
-  rs.cached.reserve(slot_count_);
-  rs.draining.reserve(slot_count_);
-  for (uint32_t s = slot_count_; s-- > 0;) rs.free_slots.push_back(s);
-  for (auto r = static_cast<uint32_t>(records_.size()); r-- > 0;) rs.free_records.push_back(r);
+  ReaderState rs(window_parts(), initial_plan_);  // the plan the constructor reported
   try {
     while (true) {
       // The wake count is read before anything it guards, stopping_ too: a
@@ -64,16 +62,20 @@ void PipelineCore::reader_main() {
 
 bool PipelineCore::reader_iteration(ReaderState& rs) {
   collect_returns(rs);
-  collect_records(rs);
+  rs.window.take_record_returns(record_returns_);
   adopt_schedule(rs);
-  if (rs.frames_started >= rs.next_evaluation) reevaluate(rs);
-  shrink_to_window(rs);
+  rs.window.reevaluate_if_due();
+  // A record read in the background whose buffers come after it is parsed
+  // (CPU decoding) will take one of the kept ones: it counts as free here.
+  uint32_t unbuffered = 0;
+  for (uint32_t i = 0; i < rs.pending.size(); ++i) unbuffered += !slots_[rs.pending.at(i).slot].has_buffers;
+  rs.window.shrink(rs.in_flight(), unbuffered);
   // Nothing more to start: the record read in the background is finished
   // now, not when the next one begins.
   const auto frame = rs.schedule.frame_at(rs.next_k);
   if (!frame) return settle_pending(rs);
-  if (rs.out + rs.pending.size() >= ahead_limit(rs)) {
-    if (!grow(rs)) return settle_pending(rs);
+  if (rs.in_flight() >= rs.window.ahead_limit()) {
+    if (!rs.window.grow()) return settle_pending(rs);
     return true;  // grown: measured again against the larger limit (never past ahead_most of the window)
   }
   switch (start_entry(rs, rs.next_k, *frame)) {
@@ -82,29 +84,6 @@ bool PipelineCore::reader_iteration(ReaderState& rs) {
     case Start::Blocked: return settle_pending(rs);
   }
   return false;
-}
-
-uint32_t PipelineCore::ahead_limit(const ReaderState& rs) const { return ahead_most(rs.active); }
-
-bool PipelineCore::grow(ReaderState& rs) {
-  // Slow start: a fresh frame buffer costs a page fault per 4 KiB on first
-  // use, and a window whose buffers are all fresh makes every frame pay it.
-  // So the window starts small (its buffers are soon reused) and grows only
-  // while the reader is ahead of the consumer and decoding is idle: when a
-  // deeper prefetch is both useful and free.
-  if (rs.active >= rs.plan.frames || frames_decoding_.load(std::memory_order_acquire) > 0) return false;
-  ++rs.active;
-  counters_.active_frames.store(rs.active, kRelaxed);
-  return true;
-}
-
-uint32_t PipelineCore::initial_active(const WindowPlan& plan) const {
-  if (!options_.window.slow_start) return plan.frames;
-  return std::min<uint32_t>(plan.frames, static_cast<uint32_t>(std::max(4, decode_threads_ + 2)));
-}
-
-uint32_t PipelineCore::occupied(const ReaderState& rs) const {
-  return rs.out + rs.pending.size() + static_cast<uint32_t>(rs.cached.size() + rs.draining.size());
 }
 
 void PipelineCore::adopt_schedule(ReaderState& rs) {
@@ -132,152 +111,30 @@ void PipelineCore::collect_returns(ReaderState& rs) {
   uint32_t s;
   while (returns_.try_pop(s)) {
     --rs.out;
-    const SlotState state = slots_[s].state.load(std::memory_order_acquire);
-    if (state == SlotState::Decoding) rs.draining.push_back(s);
-    else settle(rs, s, state);
+    rs.window.returned(s);
   }
-  // Dropped work finishes quickly: its remaining chunks are skipped.
-  std::erase_if(rs.draining, [&](uint32_t d) {
-    const SlotState state = slots_[d].state.load(std::memory_order_acquire);
-    if (state == SlotState::Decoding) return false;
-    settle(rs, d, state);
-    return true;
-  });
-}
-
-void PipelineCore::settle(ReaderState& rs, uint32_t s, SlotState state) {
-  Slot& slot = slots_[s];
-  if ((state == SlotState::Ready || state == SlotState::Shown) && slot.has_buffers && !slot.spoiled) {
-    slot.state.store(SlotState::Cached, kRelaxed);
-    rs.cached.push_back(s);
-  } else {
-    free_slot(rs, s);
-  }
-}
-
-void PipelineCore::release_buffers(ReaderState& rs, Slot& slot) {
-  if (!slot.has_buffers) return;
-  rs.decoded_held -= allocator_.bytes_for(slot.layout);
-  allocator_.release(slot.buffers);
-  slot.has_buffers = false;
-  counters_.held_bytes.store(held_now(rs), kRelaxed);
-}
-
-void PipelineCore::free_slot(ReaderState& rs, uint32_t s) {
-  Slot& slot = slots_[s];
-  release_buffers(rs, slot);
-  slot.state.store(SlotState::Free, kRelaxed);
-  rs.free_slots.push_back(s);
-}
-
-bool PipelineCore::evict_oldest(ReaderState& rs) {
-  if (rs.cached.empty()) return false;
-  const uint32_t s = rs.cached.front();
-  rs.cached.erase(rs.cached.begin());
-  free_slot(rs, s);
-  return true;
-}
-
-void PipelineCore::shrink_to_window(ReaderState& rs) {
-  while (occupied(rs) > rs.active && evict_oldest(rs)) {
-  }
-  // Memory held follows the window: kept buffers beyond the free slots'
-  // worth go back (steady playback never has more, so nothing is freed).
-  // A record read in the background whose buffers come after it is parsed
-  // (CPU decoding) will take one of the kept ones: it counts as free here.
-  uint64_t unbuffered = 0;
-  for (uint32_t i = 0; i < rs.pending.size(); ++i) unbuffered += !slots_[rs.pending.at(i).slot].has_buffers;
-  const uint64_t free_slots = (rs.active > occupied(rs) ? rs.active - occupied(rs) : 0) + unbuffered;
-  if (allocator_.kept_bytes() > free_slots * footprint_.decoded_bytes) {
-    allocator_.trim(free_slots * footprint_.decoded_bytes);
-    counters_.held_bytes.store(held_now(rs), kRelaxed);
-  }
-}
-
-uint64_t PipelineCore::held_now(const ReaderState& rs) const {
-  return rs.decoded_held + allocator_.kept_bytes() + rs.record_held;
-}
-
-void PipelineCore::collect_records(ReaderState& rs) {
-  uint32_t r;
-  while (record_returns_.try_pop(r)) rs.free_records.push_back(r);
-  // Give memory back when the plan allows fewer record buffers than we hold.
-  auto allocated = std::count_if(records_.begin(), records_.end(), [](const AlignedBuffer& b) { return b.capacity() > 0; });
-  for (uint32_t f : rs.free_records) {
-    if (allocated <= rs.plan.record_buffers) break;
-    if (records_[f].capacity() == 0) continue;
-    rs.record_held -= records_[f].capacity();
-    records_[f].release();
-    --allocated;
-  }
-  counters_.held_bytes.store(held_now(rs), kRelaxed);
-}
-
-WindowPlan PipelineCore::plan_now(uint64_t held) const {
-  BudgetReading reading;
-  reading.host = read_host_memory(options_.window.budget.host_paths);
-  reading.held_bytes = held;
-  if (options_.window.device_budget) reading.device_available = options_.window.device_budget->available_bytes();
-  WindowPlan plan = plan_window(footprint_, reading, options_.window.budget, decode_threads_);
-  // More slots than frames would hold copies of the same frames (a short
-  // loop); with one slot per frame a loop is read once and then served from
-  // memory.
-  const auto frames = static_cast<uint32_t>(std::min<uint64_t>(reader_.frame_count(), plan.frames));
-  if (frames < plan.frames) {
-    plan.frames = std::max<uint32_t>(2, frames);
-    plan.record_buffers = std::min(plan.record_buffers, plan.frames);
-    plan.limited_by = "frames in the file";
-  }
-  return plan;
-}
-
-void PipelineCore::reevaluate(ReaderState& rs) {
-  rs.next_evaluation = rs.frames_started + std::max<uint32_t>(1, options_.window.reevaluate_every);
-  const WindowPlan plan = plan_now(held_now(rs));
-  if (!worth_changing(rs.plan.frames, plan.frames)) return;
-  const uint32_t previous = rs.plan.frames;
-  rs.plan = plan;
-  rs.active = options_.window.slow_start ? std::min(rs.active, plan.frames) : plan.frames;
-  counters_.active_frames.store(rs.active, kRelaxed);
-  counters_.window_frames.store(plan.frames, kRelaxed);
-  counters_.record_buffers.store(plan.record_buffers, kRelaxed);
-  if (options_.window.on_change) options_.window.on_change({previous, plan});
+  rs.window.settle_drained();
 }
 
 PipelineCore::Start PipelineCore::start_entry(ReaderState& rs, uint64_t k, uint64_t frame) {
   // A decoded copy kept behind the playhead (the newest, if several).
-  const auto hit = std::find_if(rs.cached.rbegin(), rs.cached.rend(), [&](uint32_t s) { return slots_[s].frame == frame; });
-  if (hit != rs.cached.rend() && short_of_latest(slots_[*hit])) {
-    // Read for a smaller demand than today's: read it again (refinement).
+  if (const auto hit = rs.window.take_cached(frame)) {
     const uint32_t s = *hit;
-    rs.cached.erase(std::next(hit).base());
-    free_slot(rs, s);
-  } else if (hit != rs.cached.rend()) {
-    const uint32_t s = *hit;
-    rs.cached.erase(std::next(hit).base());
-    settle_all_pending(rs);  // entries go out in schedule order
-    slots_[s].generation = rs.generation;
-    slots_[s].state.store(SlotState::Ready, std::memory_order_release);
-    counters_.cache_hits.fetch_add(1, kRelaxed);
-    publish(rs, s, k);
-    return Start::Pushed;
+    if (short_of_latest(slots_[s])) {
+      rs.window.free_slot(s);  // read for a smaller demand than today's: read it again (refinement)
+    } else {
+      settle_all_pending(rs);  // entries go out in schedule order
+      slots_[s].generation = rs.generation;
+      slots_[s].state.store(SlotState::Ready, std::memory_order_release);
+      counters_.cache_hits.fetch_add(1, kRelaxed);
+      publish(rs, s, k);
+      return Start::Pushed;
+    }
   }
 
-  while (occupied(rs) >= rs.active && evict_oldest(rs)) {
-  }
-  if (occupied(rs) >= rs.active) return Start::Blocked;
-  const auto in_use = static_cast<uint32_t>(records_.size() - rs.free_records.size());
-  if (rs.free_records.empty() || in_use >= rs.plan.record_buffers) return Start::Blocked;
-
-  // Prefer a record buffer that already has memory.
-  auto pick = std::find_if(rs.free_records.begin(), rs.free_records.end(),
-                           [&](uint32_t r) { return records_[r].capacity() > 0; });
-  if (pick == rs.free_records.end()) pick = rs.free_records.begin();
-  const uint32_t record = *pick;
-  rs.free_records.erase(pick);
-  const uint32_t s = rs.free_slots.back();
-  rs.free_slots.pop_back();
-
+  const auto claimed = rs.window.claim(rs.in_flight());
+  if (!claimed) return Start::Blocked;
+  const uint32_t s = claimed->slot, record = claimed->record;
   Slot& slot = slots_[s];
   slot.frame = frame;
   slot.spoiled = false;
@@ -287,7 +144,7 @@ PipelineCore::Start PipelineCore::start_entry(ReaderState& rs, uint64_t k, uint6
   slot.skipped.store(false, kRelaxed);
   slot.error_claimed.store(false, kRelaxed);
   slot.state.store(SlotState::Reading, kRelaxed);
-  ++rs.frames_started;
+  rs.window.count_started();
 
   // Whether this frame is read by the demand, decided once (set_demand may
   // change the latest demand while it is read).
@@ -421,11 +278,9 @@ void PipelineCore::finish_read(ReaderState& rs, uint32_t s, uint64_t k, ReadOutc
 // go back; nothing is published.
 void PipelineCore::abandon_read(ReaderState& rs, uint32_t s) {
   Slot& slot = slots_[s];
-  release_buffers(rs, slot);
-  rs.free_records.push_back(slot.record);
+  rs.window.return_record(slot.record);
   slot.record = kNoRecord;
-  slot.state.store(SlotState::Free, kRelaxed);
-  rs.free_slots.push_back(s);
+  rs.window.free_slot(s);
 }
 
 void PipelineCore::finish_entry(ReaderState& rs, uint32_t s, uint64_t k) {
@@ -451,7 +306,7 @@ void PipelineCore::finish_entry(ReaderState& rs, uint32_t s, uint64_t k) {
 
   const size_t chunks = slot.header.chunks.size();
   if (chunks == 0 || slot.relayed) {  // an empty frame, or one relayed (checked and planned as read): nothing to do
-    rs.free_records.push_back(slot.record);
+    rs.window.return_record(slot.record);
     slot.record = kNoRecord;
     counters_.frames_decoded.fetch_add(1, kRelaxed);
     slot.state.store(SlotState::Ready, std::memory_order_release);
@@ -488,13 +343,6 @@ void PipelineCore::set_layout(Slot& slot, uint64_t particles, uint64_t encoded_b
   slot.layout.resident = false;
 }
 
-void PipelineCore::allocate_buffers(ReaderState& rs, Slot& slot) {
-  slot.buffers = allocator_.allocate(slot.layout);
-  slot.has_buffers = true;
-  rs.decoded_held += allocator_.bytes_for(slot.layout);
-  counters_.held_bytes.store(held_now(rs), kRelaxed);
-}
-
 // A frame read in place whose planes inflate past its area: a larger area,
 // the record copied to its start.
 void PipelineCore::move_to_larger_area(ReaderState& rs, Slot& slot, uint64_t staged_bytes) {
@@ -506,18 +354,13 @@ void PipelineCore::move_to_larger_area(ReaderState& rs, Slot& slot, uint64_t sta
     throw io::Error(reader_.location(slot.frame), "the frame allocator returned buffers smaller than the frame");
   }
   std::memcpy(buffers.particles.data(), slot.record_bytes.data(), slot.record_bytes.size());
-  release_buffers(rs, slot);
-  slot.layout = larger;
-  slot.buffers = buffers;
-  slot.has_buffers = true;
-  rs.decoded_held += allocator_.bytes_for(slot.layout);
-  counters_.held_bytes.store(held_now(rs), kRelaxed);
+  rs.window.replace_buffers(slot, larger, buffers);
   slot.record_bytes = buffers.particles.first(slot.record_bytes.size());
 }
 
 void PipelineCore::read_again_on_host(ReaderState& rs, Slot& slot) {
   relay_off_ = true;
-  release_buffers(rs, slot);
+  rs.window.release_buffers(slot);
   slot.relayed = false;
   slot.checked_on_read = false;  // the workers check the chunks
   const ReadTarget whole = staged_target(rs, slot);  // on this thread (a rare path)
@@ -560,7 +403,7 @@ void PipelineCore::prepare_decode(ReaderState& rs, Slot& slot) {
       counters_.frames_in_place.fetch_add(1, kRelaxed);
     }
   }
-  if (!slot.has_buffers) allocate_buffers(rs, slot);
+  if (!slot.has_buffers) rs.window.allocate_buffers(slot);
 
   const uint32_t streams = slot.layout.attribute_streams;
   bool fits = slot.buffers.particles.size() >= slot.layout.particle_bytes() && slot.buffers.attributes.size() >= streams;
@@ -594,7 +437,7 @@ void PipelineCore::fail(ReaderState& rs, uint32_t s, uint64_t k, FrameError erro
   Slot& slot = slots_[s];
   slot.error = std::move(error);
   if (slot.record != kNoRecord) {
-    rs.free_records.push_back(slot.record);
+    rs.window.return_record(slot.record);
     slot.record = kNoRecord;
   }
   counters_.frames_failed.fetch_add(1, kRelaxed);
