@@ -61,8 +61,9 @@ PipelineCore::PipelineCore(const io::ContainerReader& reader, FrameAllocator& al
       options_(std::move(options)),
       decode_threads_(options_.decode.threads > 0 ? options_.decode.threads
                                                   : default_thread_split(tbb::info::default_concurrency(), options_.decode.mode).decode),
-      delivery_(std::max<uint32_t>(2, options_.window.budget.ring_capacity)),
-      returns_(std::max<uint32_t>(2, options_.window.budget.ring_capacity)),
+      slot_count_(std::max<uint32_t>(2, options_.window.budget.ring_capacity)),
+      slots_(std::make_unique<Slot[]>(slot_count_)),
+      delivery_({slots_.get(), slot_count_, &counters_, &reader_wake_, &reader_failed_}),
       record_returns_(size_t(decode_threads_) + 1),
       records_(size_t(decode_threads_) + 1),
       demand_(options_.demand) {
@@ -87,8 +88,6 @@ PipelineCore::PipelineCore(const io::ContainerReader& reader, FrameAllocator& al
   source_ = options_.read.source ? options_.read.source
                             : std::make_shared<FileRecordSource>(reader_.path(), reader_.descriptor(), options_.read.direct_io,
                                                                  options_.read.mapped);
-  slot_count_ = std::max<uint32_t>(2, options_.window.budget.ring_capacity);
-  slots_ = std::make_unique<Slot[]>(slot_count_);
   for (const io::FrameIndexEntry& e : reader_.index().frames) most_chunks_ = std::max(most_chunks_, e.chunk_count);
   workers_ = std::make_unique<WorkerCounters[]>(worker_slots());
   scratch_ = std::make_unique<io::DecodeScratch[]>(worker_slots());  // made here, not on a worker's first chunk
@@ -141,16 +140,6 @@ PipelineCore::~PipelineCore() {
   }
 }
 
-void PipelineCore::wake_reader() {
-  reader_wake_.fetch_add(1, std::memory_order_release);
-  reader_wake_.notify_one();
-}
-
-void PipelineCore::wake_consumer() {
-  consumer_wake_.fetch_add(1, std::memory_order_release);
-  consumer_wake_.notify_one();
-}
-
 uint64_t PipelineCore::restart(const PlaybackSchedule& schedule) {
   if (schedule.frame_count > reader_.frame_count() || schedule.stride == 0 ||
       (schedule.direction != 1 && schedule.direction != -1)) {
@@ -164,101 +153,19 @@ uint64_t PipelineCore::restart(const PlaybackSchedule& schedule) {
     g = generation_.load(kRelaxed) + 1;
     generation_.store(g, std::memory_order_release);
   }
-  schedule_ = schedule;
-  consumer_generation_ = g;
-  next_sequence_ = 0;
-  front();  // gives back what is queued of older generations
+  delivery_.begin(schedule, g);
   wake_reader();
   return g;
 }
 
-void PipelineCore::release(uint32_t s) {
-  --handles_held_;
-  give_back(s);
-}
-
-void PipelineCore::give_back(uint32_t s) {
-  // The return ring holds every slot at once: a push cannot fail.
-  if (!returns_.try_push(s)) std::terminate();
-  wake_reader();
-}
-
-const Entry* PipelineCore::front() {
-  // Entries of older generations form a prefix of the ring: the reader may
-  // still push one it was working on when restart() came. Drop them here,
-  // checking the very entry returned, so a late arrival is never mistaken
-  // for the current generation's.
-  while (const Entry* e = delivery_.peek(0)) {
-    if (e->generation == consumer_generation_) return e;
-    Entry gone;
-    delivery_.try_pop(gone);
-    slots_[gone.slot].abandoned.store(true, std::memory_order_release);
-    give_back(gone.slot);
-  }
-  return nullptr;
-}
-
-NextEntry PipelineCore::describe(const Entry* e, size_t i) const {
-  NextEntry n;
-  n.sequence = next_sequence_ + i;
-  if (!e) {
-    const auto frame = schedule_.frame_at(n.sequence);
-    n.end = !frame || reader_failed_.load(std::memory_order_acquire);
-    n.frame = frame.value_or(0);
-    return n;
-  }
-  n.frame = e->frame;
-  switch (slots_[e->slot].state.load(std::memory_order_acquire)) {
-    case SlotState::Ready: n.status = EntryStatus::Ready; break;
-    case SlotState::Failed: n.status = EntryStatus::Failed; break;
-    default: n.status = EntryStatus::Pending; break;
-  }
-  return n;
-}
-
-NextEntry PipelineCore::peek(size_t i) {
-  // Behind a current head every entry is current.
-  return describe(front() ? delivery_.peek(i) : nullptr, i);
-}
-
-NextEntry PipelineCore::wait_next() {
-  while (true) {
-    const uint32_t seen = consumer_wake_.load(std::memory_order_acquire);
-    const Entry* e = front();
-    if (!e) {
-      const NextEntry n = describe(nullptr, 0);
-      if (n.end) return n;
-      // The reader starts no frame while the consumer's handles fill what it
-      // may keep ahead: waiting would never end.
-      const uint32_t window = counters_.window_frames.load(kRelaxed);
-      if (handles_held_ >= ahead_most(window)) {
-        throw Error("Pipeline::wait_next(): the consumer holds " + std::to_string(handles_held_) +
-                               " frames, all the reader may keep ahead in a window of " + std::to_string(window) +
-                               ": release one (FrameHandle::reset) before waiting for the next");
-      }
-      consumer_wake_.wait(seen, std::memory_order_acquire);
-      continue;
-    }
-    const SlotState state = slots_[e->slot].state.load(std::memory_order_acquire);
-    if (state == SlotState::Ready || state == SlotState::Failed) return describe(e, 0);
-    slots_[e->slot].state.wait(state, std::memory_order_acquire);
-  }
-}
-
 FrameHandle PipelineCore::take() {
-  const Entry* e = front();
-  const SlotState state = e ? slots_[e->slot].state.load(std::memory_order_acquire) : SlotState::Free;
-  if (state != SlotState::Ready && state != SlotState::Failed) {
-    throw Error("Pipeline::take(): the next entry is not ready (check peek() or wait_next() first)");
-  }
-  Entry entry;
-  delivery_.try_pop(entry);
-  ++next_sequence_;
+  const Delivery::Taken taken = delivery_.take();
+  const Entry& entry = taken.entry;
   FrameHandle h;
   h.frame_ = entry.frame;
   h.generation_ = entry.generation;
   h.sequence_ = entry.sequence;
-  if (state == SlotState::Failed) {
+  if (taken.state == SlotState::Failed) {
     const Slot& slot = slots_[entry.slot];
     h.error_ = std::make_unique<FrameError>(slot.error);
     if (h.error_->message.empty()) h.error_->message = "failed, and there was no memory left to say why";
@@ -270,32 +177,15 @@ FrameHandle PipelineCore::take() {
       chunk = c.index;
       if (c.tier > 0 || c.continues_cell) h.error_->message += " (LOD tier " + std::to_string(c.tier) + " of its cell)";
     }
-    give_back(entry.slot);
+    delivery_.give_back(entry.slot);
   } else {
     slots_[entry.slot].state.store(SlotState::Shown, kRelaxed);
-    ++handles_held_;
+    delivery_.hold();
     h.owner_ = this;
     h.slot_ = entry.slot;
     counters_.frames_delivered.fetch_add(1, kRelaxed);
   }
   return h;
-}
-
-void PipelineCore::drop() {
-  Entry entry;
-  if (!front() || !delivery_.try_pop(entry)) throw Error("Pipeline::drop(): no entry to drop");
-  ++next_sequence_;
-  slots_[entry.slot].abandoned.store(true, std::memory_order_release);
-  give_back(entry.slot);
-}
-
-uint32_t PipelineCore::ready_count() {
-  uint32_t ready = 0;
-  for (size_t i = 0; const Entry* e = front() ? delivery_.peek(i) : nullptr; ++i) {
-    if (slots_[e->slot].state.load(std::memory_order_acquire) == SlotState::Ready) ++ready;
-  }
-  counters_.frames_ready.store(ready, kRelaxed);
-  return ready;
 }
 
 PipelineStats PipelineCore::stats() const {
@@ -383,13 +273,13 @@ Pipeline::Pipeline(const io::ContainerReader& reader, FrameAllocator& allocator,
 Pipeline::~Pipeline() = default;
 
 uint64_t Pipeline::restart(const PlaybackSchedule& schedule) { return core_->restart(schedule); }
-const PlaybackSchedule& Pipeline::schedule() const { return core_->schedule_; }
-uint64_t Pipeline::generation() const { return core_->consumer_generation_; }
-NextEntry Pipeline::peek(size_t i) { return core_->peek(i); }
-NextEntry Pipeline::wait_next() { return core_->wait_next(); }
+const PlaybackSchedule& Pipeline::schedule() const { return core_->delivery_.schedule(); }
+uint64_t Pipeline::generation() const { return core_->delivery_.generation(); }
+NextEntry Pipeline::peek(size_t i) { return core_->delivery_.peek(i); }
+NextEntry Pipeline::wait_next() { return core_->delivery_.wait_next(); }
 FrameHandle Pipeline::take() { return core_->take(); }
-void Pipeline::drop() { core_->drop(); }
-uint32_t Pipeline::ready_count() { return core_->ready_count(); }
+void Pipeline::drop() { core_->delivery_.drop(); }
+uint32_t Pipeline::ready_count() { return core_->delivery_.ready_count(); }
 PipelineStats Pipeline::stats() const { return core_->stats(); }
 uint32_t Pipeline::window() const { return core_->counters_.window_frames.load(std::memory_order_relaxed); }
 uint32_t Pipeline::most_ahead() const { return detail::ahead_most(window()); }

@@ -1,5 +1,6 @@
 // The pipeline's internals, shared by its parts:
-//   pipeline.cpp       construction, the consumer's side, stats
+//   pipeline.cpp       construction, restart and take, stats
+//   delivery.cpp       entries to the consumer in schedule order, slots back
 //   reader_thread.cpp  the reader thread: schedule, reads, dispatch
 //   slot_window.cpp    the reader's window: slots, record buffers, memory held
 //   read_target.cpp    where a frame's bytes go, and in what pieces
@@ -25,6 +26,7 @@
 
 #include "aligned_buffer.h"
 #include "counters.h"
+#include "delivery.h"
 #include "demand_box.h"
 #include "mpsc_ring.h"
 #include "slot.h"
@@ -106,15 +108,10 @@ class PipelineCore {
   PipelineCore(const io::ContainerReader& reader, FrameAllocator& allocator, PipelineOptions options);
   ~PipelineCore();
 
-  // --- consumer side (pipeline.cpp) ---
+  // --- consumer side (pipeline.cpp; the rest is delivery_'s) ---
   uint64_t restart(const PlaybackSchedule& schedule);
-  NextEntry peek(size_t i);
-  NextEntry wait_next();
   FrameHandle take();
-  void drop();
-  uint32_t ready_count();
-  void give_back(uint32_t slot);  // a slot back to the reader (a dropped entry, a failed handle)
-  void release(uint32_t slot);    // a handle's release: give_back, one handle fewer held
+  void release(uint32_t slot) { delivery_.release(slot); }  // a handle's release
   const Slot& slot(uint32_t s) const { return slots_[s]; }
   // The consumer's, while it holds the slot's handle (FrameHandle::spoil).
   void spoil(uint32_t s) { slots_[s].spoiled = true; }
@@ -129,10 +126,6 @@ class PipelineCore {
  private:
   friend class sluice::runtime::Pipeline;
   enum class Start { Pushed, Cancelled, Blocked };
-
-  // consumer side
-  const Entry* front();  // the head entry of the current generation, stale ones dropped
-  NextEntry describe(const Entry* e, size_t i) const;
 
   // reader thread (reader_thread.cpp)
   void reader_main();
@@ -247,8 +240,7 @@ class PipelineCore {
   void finish_decode(uint32_t s);
   bool stale(const Slot& slot) const;
 
-  void wake_reader();
-  void wake_consumer();
+  void wake_reader() { wake(reader_wake_); }
   // TBB numbers an arena's slots 0..max_concurrency (slot 0 is for a thread
   // joining from outside): one counter per slot.
   uint32_t worker_slots() const { return static_cast<uint32_t>(decode_threads_) + 1; }
@@ -271,10 +263,9 @@ class PipelineCore {
   std::chrono::steady_clock::time_point started_ = std::chrono::steady_clock::now();
 
   // Slots, rings and record buffers (capacities fixed at construction).
-  std::unique_ptr<Slot[]> slots_;
   uint32_t slot_count_ = 0;
-  SpscRing<Entry> delivery_;          // reader -> consumer
-  SpscRing<uint32_t> returns_;        // consumer -> reader
+  std::unique_ptr<Slot[]> slots_;
+  Delivery delivery_;                 // entries to the consumer, slots back (delivery.h)
   MpscRing<uint32_t> record_returns_; // decode workers -> reader
   std::vector<AlignedBuffer> records_;
 
@@ -287,16 +278,9 @@ class PipelineCore {
   std::atomic<uint64_t> generation_{0};    // written under control_mutex_
   std::atomic<bool> stopping_{false};
   std::atomic<uint32_t> reader_wake_{0};   // bumped whenever the reader may have work
-  std::atomic<uint32_t> consumer_wake_{0}; // bumped whenever an entry is pushed
   std::atomic<bool> reader_failed_{false};
   std::atomic<uint32_t> frames_decoding_{0};  // frames handed to the workers and not finished
   FrameError fatal_;                       // written before reader_failed_ is set
-
-  // Consumer-only.
-  PlaybackSchedule schedule_;
-  uint64_t consumer_generation_ = 0;
-  uint64_t next_sequence_ = 0;
-  uint32_t handles_held_ = 0;  // taken and not released
 
   // Stats.
   Counters counters_;

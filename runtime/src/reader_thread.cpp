@@ -47,7 +47,7 @@ void PipelineCore::reader_main() {
     // failed entries): tell the consumer nothing more will come.
     fatal_ = {{reader_.path()}, std::string("the reader thread stopped: ") + e.what()};
     reader_failed_.store(true, std::memory_order_release);
-    wake_consumer();
+    delivery_.wake_consumer();
   }
   // Reads still running write into buffers this thread accounts for, and
   // their rounds live in `rs`: they end here (stopping: their pieces are
@@ -109,7 +109,7 @@ void PipelineCore::adopt_schedule(ReaderState& rs) {
 
 void PipelineCore::collect_returns(ReaderState& rs) {
   uint32_t s;
-  while (returns_.try_pop(s)) {
+  while (delivery_.take_return(s)) {
     --rs.out;
     rs.window.returned(s);
   }
@@ -446,10 +446,8 @@ void PipelineCore::fail(ReaderState& rs, uint32_t s, uint64_t k, FrameError erro
 }
 
 void PipelineCore::publish(ReaderState& rs, uint32_t s, uint64_t k) {
-  // The window never holds more entries than the ring: a push cannot fail.
-  if (!delivery_.try_push({s, slots_[s].generation, k, slots_[s].frame})) std::terminate();
+  delivery_.publish({s, slots_[s].generation, k, slots_[s].frame});
   ++rs.out;
-  wake_consumer();
 }
 
 }  // namespace sluice::runtime::detail
