@@ -64,7 +64,6 @@ PipelineCore::PipelineCore(const io::ContainerReader& reader, FrameAllocator& al
       slot_count_(std::max<uint32_t>(2, options_.window.budget.ring_capacity)),
       slots_(std::make_unique<Slot[]>(slot_count_)),
       delivery_({slots_.get(), slot_count_, &counters_, &reader_wake_, &reader_failed_}),
-      record_returns_(size_t(decode_threads_) + 1),
       records_(size_t(decode_threads_) + 1),
       demand_(options_.demand) {
   if ((options_.decode.mode == DecodeMode::KeepEncoded)) {
@@ -89,20 +88,14 @@ PipelineCore::PipelineCore(const io::ContainerReader& reader, FrameAllocator& al
                             : std::make_shared<FileRecordSource>(reader_.path(), reader_.descriptor(), options_.read.direct_io,
                                                                  options_.read.mapped);
   for (const io::FrameIndexEntry& e : reader_.index().frames) most_chunks_ = std::max(most_chunks_, e.chunk_count);
-  workers_ = std::make_unique<WorkerCounters[]>(worker_slots());
-  scratch_ = std::make_unique<io::DecodeScratch[]>(worker_slots());  // made here, not on a worker's first chunk
+  decoders_.emplace(Decoders::Parts{slots_.get(), &reader_, &options_, &counters_, &stopping_, &generation_, &reader_wake_,
+                                    decode_threads_, records_.size(), stream_of_attribute_, attribute_of_stream_});
 
   // Readers come out of the cores by default; with a worker count given they
   // come on top of it: a quarter as many (1 to 4).
   read_threads_ = options_.read.threads > 0    ? options_.read.threads
                   : options_.decode.threads > 0 ? std::clamp(decode_threads_ / 4, 1, 4)
                                                 : default_thread_split(tbb::info::default_concurrency(), options_.decode.mode).read;
-  // TBB workers wanted: every decode slot (the read helpers are threads of
-  // their own, read_crew.h).
-  if (decode_threads_ + 1 > tbb::info::default_concurrency()) {
-    parallelism_.emplace(tbb::global_control::max_allowed_parallelism, size_t(decode_threads_) + 1);
-  }
-  arena_.initialize(decode_threads_, 0);  // no slot reserved: only workers decode
   read_crew_.start(read_threads_ - 1);
 
   initial_plan_ = SlotWindow::plan(window_parts(), allocator_.kept_bytes());  // blocks a previous pipeline left for reuse count as ours
@@ -129,12 +122,7 @@ PipelineCore::~PipelineCore() {
   wake_reader();
   if (reader_thread_.joinable()) reader_thread_.join();
   // Decode tasks still running see stopping_ and skip their remaining chunks.
-  // Waited for from outside the arena: the workers finish them.
-  try {
-    decode_group_.wait();
-  } catch (...) {
-    // Decode tasks catch everything themselves; nothing may leave a destructor.
-  }
+  decoders_->wait();
   for (uint32_t s = 0; s < slot_count_; ++s) {
     if (slots_[s].has_buffers) allocator_.release(slots_[s].buffers);
   }
@@ -217,12 +205,7 @@ PipelineStats PipelineCore::stats() const {
   s.frames_ready = c.frames_ready.load(kRelaxed);
   s.held_bytes = c.held_bytes.load(kRelaxed);
   s.peak_record_bytes = c.peak_record_bytes.load(kRelaxed);
-  for (uint32_t w = 0; w < worker_slots(); ++w) {
-    const WorkerCounters& wc = workers_[w];
-    const uint64_t chunks = wc.chunks.load(kRelaxed);
-    if (chunks == 0) continue;
-    s.workers.push_back({w, chunks, wc.output_bytes.load(kRelaxed), double(wc.busy_ns.load(kRelaxed)) * 1e-9});
-  }
+  decoders_->add_stats(s);
   return s;
 }
 

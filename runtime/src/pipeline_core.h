@@ -5,12 +5,9 @@
 //   slot_window.cpp    the reader's window: slots, record buffers, memory held
 //   read_target.cpp    where a frame's bytes go, and in what pieces
 //   record_read.cpp    the pieces, read on the crew (read_crew.cpp)
-//   decode_task.cpp    TBB decode of a frame's chunks and its completion
+//   decoders.cpp       TBB decode of a frame's chunks and its completion
 #pragma once
 
-#include <tbb/global_control.h>
-#include <tbb/task_arena.h>
-#include <tbb/task_group.h>
 
 #include "read_crew.h"
 
@@ -26,6 +23,7 @@
 
 #include "aligned_buffer.h"
 #include "counters.h"
+#include "decoders.h"
 #include "delivery.h"
 #include "demand_box.h"
 #include "mpsc_ring.h"
@@ -229,23 +227,7 @@ class PipelineCore {
   void publish(ReaderState& rs, uint32_t s, uint64_t k);
   void fail(ReaderState& rs, uint32_t s, uint64_t k, FrameError error);
 
-  // decode workers (decode_task.cpp)
-  void decode_frame(Slot& slot, uint32_t s) noexcept;
-  void decode_chunk(Slot& slot, size_t c) noexcept;
-  // Claims the frame's error (the first one wins) and records what
-  // `describe()` returns; never throws: without memory to describe it the
-  // message stays empty and the consumer says so.
-  template <class Describe>
-  void claim_error(Slot& slot, Describe describe) noexcept;
-  void finish_decode(uint32_t s);
-  bool stale(const Slot& slot) const;
-
   void wake_reader() { wake(reader_wake_); }
-  // TBB numbers an arena's slots 0..max_concurrency (slot 0 is for a thread
-  // joining from outside): one counter per slot.
-  uint32_t worker_slots() const { return static_cast<uint32_t>(decode_threads_) + 1; }
-  // A world-unit chunk: decoded into the worker's cache, then converted into the frame's arrays.
-  void convert_chunk(Slot& slot, size_t c, io::DecodeScratch& scratch);
 
   // Fixed at construction.
   std::shared_ptr<RecordSource> source_;
@@ -266,7 +248,6 @@ class PipelineCore {
   uint32_t slot_count_ = 0;
   std::unique_ptr<Slot[]> slots_;
   Delivery delivery_;                 // entries to the consumer, slots back (delivery.h)
-  MpscRing<uint32_t> record_returns_; // decode workers -> reader
   std::vector<AlignedBuffer> records_;
 
   // The views' demand (set_demand), taken by the reader thread per frame.
@@ -279,20 +260,13 @@ class PipelineCore {
   std::atomic<bool> stopping_{false};
   std::atomic<uint32_t> reader_wake_{0};   // bumped whenever the reader may have work
   std::atomic<bool> reader_failed_{false};
-  std::atomic<uint32_t> frames_decoding_{0};  // frames handed to the workers and not finished
   FrameError fatal_;                       // written before reader_failed_ is set
 
   // Stats.
   Counters counters_;
-  std::unique_ptr<io::DecodeScratch[]> scratch_;  // one per arena slot (a worker's index)
-  std::unique_ptr<WorkerCounters[]> workers_;
 
-  // Decode: our own arena, sized to decode_threads_. The global_control lets
-  // TBB start that many workers even where it would otherwise keep one core
-  // for a master thread that never joins this arena.
-  std::optional<tbb::global_control> parallelism_;
-  tbb::task_arena arena_;
-  tbb::task_group decode_group_;
+  // The decode workers (decoders.h): made once the attribute streams are known.
+  std::optional<Decoders> decoders_;
   // Reads: the reader thread plus read_threads_ - 1 helper threads copy the
   // pieces of one record at once (page-cache copies and O_DIRECT requests
   // both scale with it).
@@ -303,19 +277,5 @@ class PipelineCore {
 
   std::thread reader_thread_;  // last: started once everything above exists
 };
-
-template <class Describe>
-void PipelineCore::claim_error(Slot& slot, Describe describe) noexcept {
-  if (slot.error_claimed.exchange(true, std::memory_order_acq_rel)) return;
-  try {
-    slot.error = describe();
-  } catch (...) {
-    // No memory to say why: name the frame (no allocation) and leave the
-    // message empty; the consumer reports that.
-    slot.error.where.frame = slot.frame;
-    slot.error.where.chunk.reset();
-    slot.error.message.clear();
-  }
-}
 
 }  // namespace sluice::runtime::detail

@@ -27,7 +27,7 @@ SlotWindow::Parts PipelineCore::window_parts() {
   p.footprint = footprint_;
   p.file_frames = reader_.frame_count();
   p.decode_threads = decode_threads_;
-  p.frames_decoding = &frames_decoding_;
+  p.frames_decoding = &decoders_->in_flight();
   return p;
 }
 
@@ -62,7 +62,7 @@ void PipelineCore::reader_main() {
 
 bool PipelineCore::reader_iteration(ReaderState& rs) {
   collect_returns(rs);
-  rs.window.take_record_returns(record_returns_);
+  rs.window.take_record_returns(decoders_->record_returns());
   adopt_schedule(rs);
   rs.window.reevaluate_if_due();
   // A record read in the background whose buffers come after it is parsed
@@ -313,20 +313,10 @@ void PipelineCore::finish_entry(ReaderState& rs, uint32_t s, uint64_t k) {
     publish(rs, s, k);
     return;
   }
-  slot.chunks_left.store(static_cast<uint32_t>(chunks), kRelaxed);
-  frames_decoding_.fetch_add(1, kRelaxed);
+  decoders_->prepare(slot);
   slot.state.store(SlotState::Decoding, std::memory_order_release);
   publish(rs, s, k);
-  try {
-    if (options_.faults.before_decode_handoff) options_.faults.before_decode_handoff(frame);
-    arena_.enqueue(decode_group_.defer([this, &slot, s] { decode_frame(slot, s); }));
-  } catch (...) {
-    // The frame could not be handed to the workers (no memory for the
-    // task): it fails, in its place, as a decode would have failed it.
-    claim_error(slot, [&] { return FrameError{reader_.location(frame), "no memory to hand the frame to the decoders"}; });
-    slot.chunks_left.store(0, kRelaxed);
-    finish_decode(s);
-  }
+  decoders_->start(slot, s);
 }
 
 void PipelineCore::set_layout(Slot& slot, uint64_t particles, uint64_t encoded_bytes) const {

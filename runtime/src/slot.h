@@ -95,4 +95,21 @@ struct Entry {
   uint64_t frame = 0;
 };
 
+// Claims the frame's error (the first one wins, from any thread) and
+// records what `describe()` returns; never throws: without memory to
+// describe it the message stays empty and the consumer says so.
+template <class Describe>
+void claim_error(Slot& slot, Describe describe) noexcept {
+  if (slot.error_claimed.exchange(true, std::memory_order_acq_rel)) return;
+  try {
+    slot.error = describe();
+  } catch (...) {
+    // No memory to say why: name the frame (no allocation) and leave the
+    // message empty.
+    slot.error.where.frame = slot.frame;
+    slot.error.where.chunk.reset();
+    slot.error.message.clear();
+  }
+}
+
 }  // namespace sluice::runtime
