@@ -53,19 +53,26 @@ std::vector<uint32_t> stream_map(const io::ContainerReader& reader, const std::o
   return map;
 }
 
+uint32_t most_chunks_of(const io::ContainerReader& reader) {
+  uint32_t most = 0;
+  for (const io::FrameIndexEntry& e : reader.index().frames) most = std::max(most, e.chunk_count);
+  return most;
+}
+
 }  // namespace
 
 PipelineCore::PipelineCore(const io::ContainerReader& reader, FrameAllocator& allocator, PipelineOptions options)
     : reader_(reader),
       allocator_(allocator),
       options_(std::move(options)),
+      most_chunks_(most_chunks_of(reader_)),
       decode_threads_(options_.decode.threads > 0 ? options_.decode.threads
                                                   : default_thread_split(tbb::info::default_concurrency(), options_.decode.mode).decode),
       slot_count_(std::max<uint32_t>(2, options_.window.budget.ring_capacity)),
       slots_(std::make_unique<Slot[]>(slot_count_)),
       delivery_({slots_.get(), slot_count_, &counters_, &reader_wake_, &reader_failed_}),
       records_(size_t(decode_threads_) + 1),
-      demand_(options_.demand) {
+      demand_(options_.demand, counters_, most_chunks_) {
   if ((options_.decode.mode == DecodeMode::KeepEncoded)) {
     if (!io::gpu_decodable(reader_.header())) {
       throw io::Error({reader_.path()}, "frames cannot stay encoded for the GPU: its positions are float32");
@@ -87,7 +94,6 @@ PipelineCore::PipelineCore(const io::ContainerReader& reader, FrameAllocator& al
   source_ = options_.read.source ? options_.read.source
                             : std::make_shared<FileRecordSource>(reader_.path(), reader_.descriptor(), options_.read.direct_io,
                                                                  options_.read.mapped);
-  for (const io::FrameIndexEntry& e : reader_.index().frames) most_chunks_ = std::max(most_chunks_, e.chunk_count);
   decoders_.emplace(Decoders::Parts{slots_.get(), &reader_, &options_, &counters_, &stopping_, &generation_, &reader_wake_,
                                     decode_threads_, records_.size(), stream_of_attribute_, attribute_of_stream_});
 

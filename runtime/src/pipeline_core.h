@@ -3,6 +3,7 @@
 //   delivery.cpp       entries to the consumer in schedule order, slots back
 //   reader_thread.cpp  the reader thread: schedule, reads, dispatch
 //   slot_window.cpp    the reader's window: slots, record buffers, memory held
+//   read_demand.h      what the views need read of a frame
 //   read_target.cpp    where a frame's bytes go, and in what pieces
 //   record_read.cpp    the pieces, read on the crew (read_crew.cpp)
 //   decoders.cpp       TBB decode of a frame's chunks and its completion
@@ -25,7 +26,7 @@
 #include "counters.h"
 #include "decoders.h"
 #include "delivery.h"
-#include "demand_box.h"
+#include "read_demand.h"
 #include "mpsc_ring.h"
 #include "slot.h"
 #include "slot_window.h"
@@ -147,7 +148,6 @@ class PipelineCore {
   ReadTarget record_target(ReaderState& rs, Slot& slot, uint32_t record);
   ReadTarget staged_target(ReaderState& rs, Slot& slot);
   bool reads_in_place() const;
-  bool reads_by_demand();  // the latest demand leaves something out, and chunks can be read one by one
   void hint_chunks(const Slot& slot);  // will_need for the slot's wanted chunks, close runs joined
   // Whether the layers left out of options_.layers let the frame be read as
   // a prefix of its record: they include the layer written last.
@@ -219,11 +219,6 @@ class PipelineCore {
   // io::Error naming the chunk.
   void check_chunk(std::span<const std::byte> bytes, uint64_t frame, size_t c, uint64_t checksum);
   void prepare_decode(ReaderState& rs, Slot& slot);
-  // Keeps the tiers the latest demand needs of the frame's cells (once per
-  // read) and records what was kept (slot.cells).
-  void take_demand(Slot& slot);
-  // Whether the frame in `slot` lacks tiers the latest demand needs.
-  bool short_of_latest(const Slot& slot);
   void publish(ReaderState& rs, uint32_t s, uint64_t k);
   void fail(ReaderState& rs, uint32_t s, uint64_t k, FrameError error);
 
@@ -238,7 +233,7 @@ class PipelineCore {
   uint32_t attribute_streams_ = 0;
   FrameFootprint footprint_;
   io::ErrorLocation record_where_;  // the reader thread's: the file, and the frame it parses
-  uint32_t most_chunks_ = 0;        // of any frame in the file: a slot's chunk table is sized for it once
+  const uint32_t most_chunks_;      // of any frame in the file: a slot's chunk table is sized for it once
   WindowPlan initial_plan_;  // the reader starts from it
   int decode_threads_ = 1;
   int read_threads_ = 1;
@@ -250,8 +245,11 @@ class PipelineCore {
   Delivery delivery_;                 // entries to the consumer, slots back (delivery.h)
   std::vector<AlignedBuffer> records_;
 
-  // The views' demand (set_demand), taken by the reader thread per frame.
-  DemandBox demand_;
+  // What the views need read (set_demand), applied by the reader thread
+  // per frame (read_demand.h). A demand that leaves tiers out is read in
+  // runs of its chunks (table first), the CPU decode path too, O_DIRECT too
+  // (the runs are aligned).
+  ReadDemand demand_;
 
   // Control: the schedule the consumer asked for, picked up by the reader.
   std::mutex control_mutex_;

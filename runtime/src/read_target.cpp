@@ -50,10 +50,6 @@ void PipelineCore::hint_chunks(const Slot& slot) {
   if (to > from) source_->will_need(base + from, to - from);
 }
 
-// A demand that leaves tiers out is read in runs of its chunks (table
-// first), the CPU decode path too, O_DIRECT too (the runs are aligned).
-bool PipelineCore::reads_by_demand() { return !demand_.latest().everything(); }
-
 bool PipelineCore::relays() const { return relay_ != nullptr && !relay_off_ && reads_in_place(); }
 
 // The area is resident (device memory, relay.h); only the table is read
@@ -133,7 +129,7 @@ PipelineCore::ReadTarget PipelineCore::read_table(Slot& slot, const ReadTarget& 
 PipelineCore::ReadTarget PipelineCore::chunks_to_read(Slot& slot, std::span<std::byte> record, uint64_t record_bytes,
                                                       uint64_t table) {
   io::keep_layers(slot.header, options_.layers);
-  take_demand(slot);
+  demand_.apply(slot);
   const std::vector<io::ChunkDesc>& chunks = slot.header.chunks;
   uint64_t total = 0;
   for (size_t c = 0; c < chunks.size(); ++c) {

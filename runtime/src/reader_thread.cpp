@@ -120,7 +120,7 @@ PipelineCore::Start PipelineCore::start_entry(ReaderState& rs, uint64_t k, uint6
   // A decoded copy kept behind the playhead (the newest, if several).
   if (const auto hit = rs.window.take_cached(frame)) {
     const uint32_t s = *hit;
-    if (short_of_latest(slots_[s])) {
+    if (demand_.short_of(slots_[s])) {
       rs.window.free_slot(s);  // read for a smaller demand than today's: read it again (refinement)
     } else {
       settle_all_pending(rs);  // entries go out in schedule order
@@ -148,7 +148,7 @@ PipelineCore::Start PipelineCore::start_entry(ReaderState& rs, uint64_t k, uint6
 
   // Whether this frame is read by the demand, decided once (set_demand may
   // change the latest demand while it is read).
-  const bool by_demand = reads_by_demand();
+  const bool by_demand = demand_.leaves_out();
   // Ask the kernel for the next entry's bytes while this one is read: the
   // whole record when it is read whole, else its table (what else it needs
   // is hinted once the table is parsed: read_table), so that storage reads
@@ -290,7 +290,7 @@ void PipelineCore::finish_entry(ReaderState& rs, uint32_t s, uint64_t k) {
     record_where_.frame = frame;
     if (!slot.table_parsed) reader_.parse_record(frame, slot.record_bytes, slot.header, record_where_);  // no allocation per frame
     io::keep_layers(slot.header, options_.layers);  // the chunks read (decode checks their payloads lie in the prefix)
-    if (!slot.demand_applied) take_demand(slot);    // read whole: only the demanded tiers are decoded
+    if (!slot.demand_applied) demand_.apply(slot);    // read whole: only the demanded tiers are decoded
     slot.where.frame = frame;  // its file was set with its chunk table
     if (slot.relayed && slot.relay_refused.load(std::memory_order_acquire)) read_again_on_host(rs, slot);
     prepare_decode(rs, slot);
@@ -408,19 +408,6 @@ void PipelineCore::prepare_decode(ReaderState& rs, Slot& slot) {
   for (size_t a = 0; a < stream_of_attribute_.size(); ++a) {
     if (stream_of_attribute_[a] != ~0u) slot.attribute_targets[a] = slot.buffers.attributes[stream_of_attribute_[a]].data();
   }
-}
-
-void PipelineCore::take_demand(Slot& slot) {
-  const ViewDemand& demand = demand_.latest();
-  const size_t before = slot.header.chunks.size();
-  if (slot.cells.capacity() < most_chunks_) slot.cells.reserve(most_chunks_);  // once per slot
-  apply_demand(demand, slot.header, slot.cells);
-  slot.demand_applied = true;
-  if (slot.header.chunks.size() != before) counters_.frames_by_demand.fetch_add(1, kRelaxed);
-}
-
-bool PipelineCore::short_of_latest(const Slot& slot) {
-  return slot.demand_applied && short_of(demand_.latest(), slot.cells, slot.header.blob_voxel);
 }
 
 void PipelineCore::fail(ReaderState& rs, uint32_t s, uint64_t k, FrameError error) {
