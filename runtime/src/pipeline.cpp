@@ -77,7 +77,6 @@ PipelineCore::PipelineCore(const io::ContainerReader& reader, FrameAllocator& al
     if (!io::gpu_decodable(reader_.header())) {
       throw io::Error({reader_.path()}, "frames cannot stay encoded for the GPU: its positions are float32");
     }
-    relay_ = allocator_.relay();
   }
   const std::optional<std::vector<uint32_t>> none = std::vector<uint32_t>{};  // encoded: nothing decoded on the CPU
   stream_of_attribute_ = stream_map(reader_, (options_.decode.mode == DecodeMode::KeepEncoded) ? none : options_.decode.attributes, attribute_streams_);
@@ -91,18 +90,25 @@ PipelineCore::PipelineCore(const io::ContainerReader& reader, FrameAllocator& al
                      : largest_frame(reader_, attribute_streams_, &allocator_, options_.layers,
                                      options_.decode.mode == DecodeMode::KeepEncoded);
   record_where_.file = reader_.path();
-  source_ = options_.read.source ? options_.read.source
-                            : std::make_shared<FileRecordSource>(reader_.path(), reader_.descriptor(), options_.read.direct_io,
-                                                                 options_.read.mapped);
   decoders_.emplace(Decoders::Parts{slots_.get(), &reader_, &options_, &counters_, &stopping_, &generation_, &reader_wake_,
                                     decode_threads_, records_.size(), stream_of_attribute_, attribute_of_stream_});
 
   // Readers come out of the cores by default; with a worker count given they
   // come on top of it: a quarter as many (1 to 4).
-  read_threads_ = options_.read.threads > 0    ? options_.read.threads
+  RecordReads::Parts reads;
+  reads.reader = &reader_;
+  reads.options = &options_;
+  reads.counters = &counters_;
+  reads.stopping = &stopping_;
+  reads.generation = &generation_;
+  reads.source = options_.read.source ? options_.read.source
+                                      : std::make_shared<FileRecordSource>(reader_.path(), reader_.descriptor(),
+                                                                           options_.read.direct_io, options_.read.mapped);
+  if (options_.decode.mode == DecodeMode::KeepEncoded) reads.relay = allocator_.relay();
+  reads.threads = options_.read.threads > 0    ? options_.read.threads
                   : options_.decode.threads > 0 ? std::clamp(decode_threads_ / 4, 1, 4)
                                                 : default_thread_split(tbb::info::default_concurrency(), options_.decode.mode).read;
-  read_crew_.start(read_threads_ - 1);
+  reads_.emplace(std::move(reads));
 
   initial_plan_ = SlotWindow::plan(window_parts(), allocator_.kept_bytes());  // blocks a previous pipeline left for reuse count as ours
   // Chunk tables sized for the file's largest frame in the slots a window of
@@ -185,12 +191,13 @@ FrameHandle PipelineCore::take() {
 PipelineStats PipelineCore::stats() const {
   PipelineStats s;
   s.elapsed_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started_).count();
-  s.io_mode = source_->describe() + (read_threads_ > 1 ? ", " + std::to_string(read_threads_) + " read threads" : "");
+  const int threads = reads_->threads();
+  s.io_mode = reads_->source().describe() + (threads > 1 ? ", " + std::to_string(threads) + " read threads" : "");
   const Counters& c = counters_;
   s.bytes_read = c.bytes_read.load(kRelaxed);
-  s.read_seconds = double(read_ns_now()) * 1e-9;
-  s.read_thread_seconds = double(read_crew_.busy_ns()) * 1e-9;
-  s.read_threads = static_cast<uint32_t>(read_threads_);
+  s.read_seconds = double(reads_->read_ns_now()) * 1e-9;
+  s.read_thread_seconds = double(reads_->thread_busy_ns()) * 1e-9;
+  s.read_threads = static_cast<uint32_t>(threads);
   s.frames_read = c.frames_read.load(kRelaxed);
   s.record_bytes = c.record_bytes.load(kRelaxed);
   s.frames_by_demand = c.frames_by_demand.load(kRelaxed);

@@ -5,7 +5,7 @@
 //   slot_window.cpp    the reader's window: slots, record buffers, memory held
 //   read_demand.h      what the views need read of a frame
 //   read_target.cpp    where a frame's bytes go, and in what pieces
-//   record_read.cpp    the pieces, read on the crew (read_crew.cpp)
+//   record_reads.cpp   the pieces, read on the crew (read_crew.cpp), checked and relayed
 //   decoders.cpp       TBB decode of a frame's chunks and its completion
 #pragma once
 
@@ -27,6 +27,7 @@
 #include "decoders.h"
 #include "delivery.h"
 #include "read_demand.h"
+#include "record_reads.h"
 #include "mpsc_ring.h"
 #include "slot.h"
 #include "slot_window.h"
@@ -37,28 +38,6 @@
 namespace sluice::runtime::detail {
 
 class PipelineCore;
-
-// One read of a byte range in pieces on the read crew (record_read.cpp): the
-// crew calls it once per piece until the round is joined, so it lives until
-// then (on the caller's stack, or in ReaderState::pending).
-struct PieceRound {
-  PipelineCore* core = nullptr;
-  std::span<std::byte> dst;  // [0, need) comes from the file at `offset`; the rest is alignment padding
-  uint64_t offset = 0, need = 0, piece = 0, count = 0, frame = 0, generation = 0;
-  // A checked read: piece p reads chunks [cuts[p], cuts[p + 1]) to their
-  // offsets in dst (the record, at `offset` in the file) and checks them.
-  std::span<const io::ChunkDesc> chunks;
-  std::span<const uint32_t> cuts;  // empty: byte pieces
-  bool by_chunks() const { return !cuts.empty(); }
-  // Reads by demand (read_runs.h): piece p reads runs[p] of dst, with no
-  // check (the workers check the chunks; relayed frames are read by chunks).
-  std::span<const ByteRun> runs;
-  bool by_runs() const { return !runs.empty(); }
-  Slot* relayed = nullptr;  // a relayed read (relay.h): the chunks go through the relay into this slot's area, not dst
-  bool check = true;        // a checked read hashes each chunk as read; false: the decode workers check them
-  mutable std::atomic<bool> gave_up{false};  // a newer schedule (or stop) came first: the pieces left are skipped
-  void operator()(uint64_t p) const;
-};
 
 // A whole record the crew reads while the reader thread finishes the frames
 // before it (reader_thread.cpp: start_entry).
@@ -169,8 +148,6 @@ class PipelineCore {
   // read of a piece's chunks through the relay (on a read thread).
   bool relays() const;
   ReadTarget relayed_target(ReaderState& rs, Slot& slot, uint32_t record);
-  void relay_chunks(const PieceRound& round, uint64_t p);
-  void relay_large_chunk(Slot& slot, size_t c, uint64_t offset);
   // A relayed frame with zstd planes (the mixed rule needs the record on
   // the host): read again into a staged area in host memory; later frames
   // are no longer relayed.
@@ -193,31 +170,6 @@ class PipelineCore {
   void abandon_read(ReaderState& rs, uint32_t s);
   void set_layout(Slot& slot, uint64_t particles, uint64_t encoded_bytes) const;
   void move_to_larger_area(ReaderState& rs, Slot& slot, uint64_t staged_bytes);
-  // record_read.cpp: reads [0, need) of `dst` from `offset` in pieces, on
-  // read_threads_ threads, in two halves (read_crew.h): begin, other work,
-  // join; join is false if a newer generation (or stop) came first.
-  void begin_pieces(PieceRound& round, std::span<std::byte> dst, uint64_t offset, uint64_t need, uint64_t frame,
-                    uint64_t generation);
-  // The same for a checked read (chunks_to_read()): piece p reads and checks
-  // the slot's chunks [piece_cuts[p], piece_cuts[p + 1]).
-  void begin_chunk_pieces(PieceRound& round, Slot& slot, const ReadTarget& target, uint64_t generation);
-  // The same for the runs of a read by demand (runs_to_read()).
-  void begin_run_pieces(PieceRound& round, Slot& slot, const ReadTarget& target, uint64_t generation);
-  void begin_round(PieceRound& round);  // the common end of both: hands the round to the crew
-  bool join_pieces(PieceRound& round);
-  uint64_t read_ns_now() const;  // time with a read in flight, the open stretch included
-  friend struct PieceRound;
-  // `span`: through RecordSource::read_span (a run of a demand: no mapping,
-  // whose faults make the kernel read around them).
-  void read_piece(std::span<std::byte> piece, uint64_t offset, uint64_t required, uint64_t frame, uint64_t frame_end,
-                  bool span = false);
-  // Reads chunk `c` of the frame into `dst` from `offset` and checks it
-  // against its checksum; throws io::Error naming the chunk.
-  void read_chunk(std::span<std::byte> dst, uint64_t offset, uint64_t frame, size_t c, uint64_t checksum,
-                  Stores stores = Stores::Streaming);
-  // Checks chunk `c`'s bytes, already read, against its checksum; throws
-  // io::Error naming the chunk.
-  void check_chunk(std::span<const std::byte> bytes, uint64_t frame, size_t c, uint64_t checksum);
   void prepare_decode(ReaderState& rs, Slot& slot);
   void publish(ReaderState& rs, uint32_t s, uint64_t k);
   void fail(ReaderState& rs, uint32_t s, uint64_t k, FrameError error);
@@ -225,8 +177,6 @@ class PipelineCore {
   void wake_reader() { wake(reader_wake_); }
 
   // Fixed at construction.
-  std::shared_ptr<RecordSource> source_;
-  PieceRelay* relay_ = nullptr;  // the allocator's, for frames kept encoded; null: none
   bool relay_off_ = false;       // the reader thread's: a relayed frame had zstd planes
   std::vector<uint32_t> stream_of_attribute_;  // header attribute -> decoded stream, or ~0u
   std::vector<size_t> attribute_of_stream_;    // decoded stream -> header attribute
@@ -236,7 +186,6 @@ class PipelineCore {
   const uint32_t most_chunks_;      // of any frame in the file: a slot's chunk table is sized for it once
   WindowPlan initial_plan_;  // the reader starts from it
   int decode_threads_ = 1;
-  int read_threads_ = 1;
   std::chrono::steady_clock::time_point started_ = std::chrono::steady_clock::now();
 
   // Slots, rings and record buffers (capacities fixed at construction).
@@ -265,13 +214,9 @@ class PipelineCore {
 
   // The decode workers (decoders.h): made once the attribute streams are known.
   std::optional<Decoders> decoders_;
-  // Reads: the reader thread plus read_threads_ - 1 helper threads copy the
-  // pieces of one record at once (page-cache copies and O_DIRECT requests
-  // both scale with it).
-  ReadCrew read_crew_;
-  // When the crew last went from idle to reading (steady clock, ns; 0: idle).
-  // Written by the reader thread, read by stats().
-  std::atomic<uint64_t> reading_since_ns_{0};
+  // Reads on the crew (record_reads.h): made once the source and the
+  // thread count are known.
+  std::optional<RecordReads> reads_;
 
   std::thread reader_thread_;  // last: started once everything above exists
 };

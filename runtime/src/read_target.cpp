@@ -19,7 +19,7 @@ uint64_t round_up(uint64_t n, uint64_t to) { return (n + to - 1) / to * to; }
 
 PipelineCore::ReadTarget PipelineCore::record_target(ReaderState& rs, Slot& slot, uint32_t record) {
   const io::FrameIndexEntry& e = reader_.index().frames[slot.frame];
-  const uint64_t align = std::max<size_t>(1, source_->alignment());
+  const uint64_t align = std::max<size_t>(1, reads_->source().alignment());
   const uint64_t begin = e.offset / align * align;
   const uint64_t need = e.offset + e.bytes - begin;  // bytes from `begin` the frame needs
   const uint64_t span = round_up(need, align);
@@ -28,7 +28,7 @@ PipelineCore::ReadTarget PipelineCore::record_target(ReaderState& rs, Slot& slot
 }
 
 bool PipelineCore::reads_in_place() const {
-  return (options_.decode.mode == DecodeMode::KeepEncoded) && source_->alignment() <= 1;
+  return (options_.decode.mode == DecodeMode::KeepEncoded) && reads_->source().alignment() <= 1;
 }
 
 // The kernel is asked for every wanted chunk at once, runs less than
@@ -43,14 +43,14 @@ void PipelineCore::hint_chunks(const Slot& slot) {
       to = std::max(to, c.offset + c.compressed_size);
       continue;
     }
-    if (to > from) source_->will_need(base + from, to - from);
+    if (to > from) reads_->source().will_need(base + from, to - from);
     from = c.offset;
     to = c.offset + c.compressed_size;
   }
-  if (to > from) source_->will_need(base + from, to - from);
+  if (to > from) reads_->source().will_need(base + from, to - from);
 }
 
-bool PipelineCore::relays() const { return relay_ != nullptr && !relay_off_ && reads_in_place(); }
+bool PipelineCore::relays() const { return reads_->relay() != nullptr && !relay_off_ && reads_in_place(); }
 
 // The area is resident (device memory, relay.h); only the table is read
 // into host memory, the slot's record buffer. The area's size is the
@@ -99,13 +99,13 @@ bool PipelineCore::reads_prefix(const io::FrameIndexEntry& e) const {
 // only).
 PipelineCore::ReadTarget PipelineCore::read_table(Slot& slot, const ReadTarget& whole) {
   const io::FrameIndexEntry& e = reader_.index().frames[slot.frame];
-  const uint64_t align = std::max<size_t>(1, source_->alignment());
+  const uint64_t align = std::max<size_t>(1, reads_->source().alignment());
   const uint64_t table = std::min<uint64_t>(e.bytes, io::frame_table_bytes(e.chunk_count, reader_.header().attributes.size()));
   const auto into = static_cast<uint64_t>(whole.record.data() - whole.dst.data());  // where the record starts in dst
   const uint64_t first = round_up(into + table, align);
   // By demand not through the mapping: a fault there makes the kernel read
   // around it (read_ahead_kb, doubled for sequential play) what the view leaves out.
-  read_piece(whole.dst.first(first), whole.offset, into + table, slot.frame, whole.offset + whole.need, slot.by_demand);
+  reads_->read_piece(whole.dst.first(first), whole.offset, into + table, slot.frame, whole.offset + whole.need, slot.by_demand);
   record_where_.frame = slot.frame;
   reader_.parse_table(slot.frame, whole.record.first(table), slot.header, record_where_);
   const uint64_t end = io::layers_end(slot.header, options_.layers, reader_.header().attributes.size());
@@ -113,7 +113,7 @@ PipelineCore::ReadTarget PipelineCore::read_table(Slot& slot, const ReadTarget& 
   if (slot.relayed) return chunks_to_read(slot, {}, end, table);
   if (slot.by_demand) return runs_to_read(slot, whole, end, table, first);
   if (slot.checked_on_read || slot.by_demand) return chunks_to_read(slot, whole.record.first(end), end, table);
-  source_->will_need(whole.offset + first, wanted - std::min(wanted, first));
+  reads_->source().will_need(whole.offset + first, wanted - std::min(wanted, first));
   ReadTarget rest;
   rest.offset = whole.offset + first;
   rest.record = whole.record.first(end);
@@ -153,8 +153,8 @@ PipelineCore::ReadTarget PipelineCore::chunks_to_read(Slot& slot, std::span<std:
   // reading), at most one per chunk; cut where the running sum crosses each
   // equal share. A relayed piece fits a ring slot.
   uint64_t most = std::max<uint64_t>(options_.read.piece_bytes, 1);
-  if (slot.relayed) most = std::min(most, std::max<uint64_t>(relay_->piece_bytes(), 1));
-  const uint64_t threads = uint64_t(read_crew_.helpers()) + 1;
+  if (slot.relayed) most = std::min(most, std::max<uint64_t>(reads_->relay()->piece_bytes(), 1));
+  const uint64_t threads = uint64_t(reads_->helpers()) + 1;
   const uint64_t at_most = (total + most - 1) / most;
   const uint64_t pieces = std::min<uint64_t>(chunks.size(), (at_most + threads - 1) / threads * threads);
   slot.piece_cuts.clear();
@@ -175,7 +175,7 @@ PipelineCore::ReadTarget PipelineCore::runs_to_read(Slot& slot, const ReadTarget
                                                     uint64_t table, uint64_t skip) {
   chunks_to_read(slot, whole.record.first(record_bytes), record_bytes, table);
   const auto into = static_cast<uint64_t>(whole.record.data() - whole.dst.data());  // where the record starts in dst
-  const RunLimits limits{.align = std::max<uint64_t>(1, source_->alignment()),
+  const RunLimits limits{.align = std::max<uint64_t>(1, reads_->source().alignment()),
                          .gap = kRunGap,
                          .piece = std::max<uint64_t>(options_.read.piece_bytes, 1)};
   slot.run_count = static_cast<uint32_t>(plan_runs(slot.header.chunks, into, whole.dst.size(), whole.need, skip, limits, slot.runs));

@@ -52,12 +52,7 @@ void PipelineCore::reader_main() {
   // Reads still running write into buffers this thread accounts for, and
   // their rounds live in `rs`: they end here (stopping: their pieces are
   // skipped).
-  while (read_crew_.in_flight() > 0) {
-    try {
-      read_crew_.join();
-    } catch (...) {  // the frame is dropped with the pipeline
-    }
-  }
+  reads_->drain();
 }
 
 bool PipelineCore::reader_iteration(ReaderState& rs) {
@@ -104,7 +99,7 @@ void PipelineCore::adopt_schedule(ReaderState& rs) {
   // reads are asked for exactly (will_need) instead.
   const bool whole = reader_.frame_count() == 0 || !reads_prefix(reader_.index().frames.front());
   const bool sequential = whole && rs.schedule.direction > 0 && rs.schedule.stride == 1;
-  source_->set_access(sequential ? AccessPattern::Sequential : AccessPattern::Random);
+  reads_->source().set_access(sequential ? AccessPattern::Sequential : AccessPattern::Random);
 }
 
 void PipelineCore::collect_returns(ReaderState& rs) {
@@ -156,7 +151,7 @@ PipelineCore::Start PipelineCore::start_entry(ReaderState& rs, uint64_t k, uint6
   if (const auto next = rs.schedule.frame_at(k + 1)) {
     const io::FrameIndexEntry& e = reader_.index().frames[*next];
     const bool whole = !reads_in_place() && !reads_prefix(e) && !by_demand;
-    source_->will_need(e.offset, whole ? e.bytes : io::frame_table_bytes(e.chunk_count, reader_.header().attributes.size()));
+    reads_->source().will_need(e.offset, whole ? e.bytes : io::frame_table_bytes(e.chunk_count, reader_.header().attributes.size()));
   }
 
   ReadTarget target;
@@ -211,11 +206,11 @@ void PipelineCore::begin_background_read(ReaderState& rs, uint32_t s, uint64_t k
   read.k = k;
   read.record = target.record;
   if (target.by_runs) {
-    begin_run_pieces(read.round, slots_[s], target, rs.generation);
+    reads_->begin_runs(read.round, slots_[s], target.dst, target.offset, target.need, rs.generation);
   } else if (target.by_chunks) {
-    begin_chunk_pieces(read.round, slots_[s], target, rs.generation);
+    reads_->begin_chunks(read.round, slots_[s], target.record, target.offset, rs.generation);
   } else {
-    begin_pieces(read.round, target.dst, target.offset, target.need, slots_[s].frame, rs.generation);
+    reads_->begin_bytes(read.round, target.dst, target.offset, target.need, slots_[s].frame, rs.generation);
   }
 
   if (joined) finish_read(rs, joined_slot, joined_k, outcome, std::move(error));
@@ -229,7 +224,7 @@ PipelineCore::ReadOutcome PipelineCore::join_pending(ReaderState& rs, FrameError
   const uint64_t frame = slot.frame;
   bool completed = false;
   try {
-    completed = join_pieces(read.round);
+    completed = reads_->join(read.round);
   } catch (const io::Error& e) {
     rs.pending.pop();
     error = FrameError::from(e);
@@ -356,17 +351,17 @@ void PipelineCore::read_again_on_host(ReaderState& rs, Slot& slot) {
   const ReadTarget whole = staged_target(rs, slot);  // on this thread (a rare path)
   slot.record_bytes = whole.record;
   if (!slot.by_demand) {
-    read_piece(whole.dst, whole.offset, whole.need, slot.frame, whole.offset + whole.need);
+    reads_->read_piece(whole.dst, whole.offset, whole.need, slot.frame, whole.offset + whole.need);
     return;
   }
   // The table and the runs of the records the demand kept (slot.header), no more.
   const uint64_t table = std::min<uint64_t>(whole.need, io::frame_table_bytes(reader_.index().frames[slot.frame].chunk_count,
                                                                              reader_.header().attributes.size()));
-  read_piece(whole.dst.first(table), whole.offset, table, slot.frame, whole.offset + whole.need, true);
+  reads_->read_piece(whole.dst.first(table), whole.offset, table, slot.frame, whole.offset + whole.need, true);
   plan_runs(slot.header.chunks, 0, whole.dst.size(), whole.need, table,
             {.align = 1, .gap = kRunGap, .piece = std::max<uint64_t>(options_.read.piece_bytes, 1)}, slot.runs);
   for (const ByteRun& run : slot.runs) {
-    read_piece(whole.dst.subspan(run.at, run.length), whole.offset + run.at, run.required, slot.frame,
+    reads_->read_piece(whole.dst.subspan(run.at, run.length), whole.offset + run.at, run.required, slot.frame,
                whole.offset + run.at + run.required, true);
   }
 }

@@ -1,13 +1,12 @@
-// Reading a frame record: in pieces (so a seek cancels a big read early),
-// several at once when read_threads > 1 (read_crew.h). One thread copying
-// out of the page cache tops out well below what the decode workers take.
+#include "record_reads.h"
+
 #include <algorithm>
 #include <chrono>
 #include <cstring>
 #include <vector>
 
-#include "pipeline_core.h"
 #include "sluice/io/checksum.h"
+#include "sluice/io/gpu_decode_plan.h"
 
 namespace sluice::runtime::detail {
 namespace {
@@ -24,34 +23,45 @@ uint64_t steady_ns() {
 
 }  // namespace
 
-void PipelineCore::read_piece(std::span<std::byte> piece, uint64_t offset, uint64_t required, uint64_t frame,
+RecordReads::RecordReads(Parts parts) : parts_(std::move(parts)) { crew_.start(parts_.threads - 1); }
+
+void RecordReads::drain() noexcept {
+  while (crew_.in_flight() > 0) {
+    try {
+      crew_.join();
+    } catch (...) {  // the frame is dropped with the pipeline
+    }
+  }
+}
+
+void RecordReads::read_piece(std::span<std::byte> piece, uint64_t offset, uint64_t required, uint64_t frame,
                               uint64_t frame_end, bool span) {
   uint64_t got = 0;
   while (got < required) {  // the source may return less than asked: carry on from there
-    const size_t n = span ? source_->read_span(piece.subspan(got), offset + got) : source_->read_at(piece.subspan(got), offset + got);
+    const size_t n = span ? parts_.source->read_span(piece.subspan(got), offset + got) : parts_.source->read_at(piece.subspan(got), offset + got);
     if (n == 0) {
-      throw io::Error(reader_.location(frame), "the file ends at byte " + std::to_string(offset + got) +
+      throw io::Error(parts_.reader->location(frame), "the file ends at byte " + std::to_string(offset + got) +
                                                    " but the frame runs to byte " + std::to_string(frame_end) +
                                                    " (short read: was the file cut while playing?)");
     }
     got += n;
-    counters_.bytes_read.fetch_add(n, kRelaxed);
+    parts_.counters->bytes_read.fetch_add(n, kRelaxed);
   }
 }
 
-void PipelineCore::begin_pieces(PieceRound& round, std::span<std::byte> dst, uint64_t offset, uint64_t need,
-                                uint64_t frame, uint64_t generation) {
-  const uint64_t align = std::max<size_t>(1, source_->alignment());
+void RecordReads::begin_bytes(PieceRound& round, std::span<std::byte> dst, uint64_t offset, uint64_t need,
+                              uint64_t frame, uint64_t generation) {
+  const uint64_t align = std::max<size_t>(1, parts_.source->alignment());
   // Pieces of at most ReadSettings::piece_bytes, as many as a multiple of the
   // threads reading them, of equal size: every thread reads the same share
   // and none waits for a straggler at the end of the record (9 pieces of
   // 8 MiB on 4 threads take 3 rounds where 12 of 6 MiB take the same 3 with
   // less in each).
-  const uint64_t most = round_up(std::max<uint64_t>(options_.read.piece_bytes, 1), align);
-  const uint64_t threads = uint64_t(read_crew_.helpers()) + 1;
+  const uint64_t most = round_up(std::max<uint64_t>(parts_.options->read.piece_bytes, 1), align);
+  const uint64_t threads = uint64_t(crew_.helpers()) + 1;
   const uint64_t at_most = (dst.size() + most - 1) / most;
   const uint64_t even = (at_most + threads - 1) / threads * threads;
-  round.core = this;
+  round.reads = this;
   round.dst = dst;
   round.offset = offset;
   round.need = need;
@@ -63,14 +73,15 @@ void PipelineCore::begin_pieces(PieceRound& round, std::span<std::byte> dst, uin
   round.cuts = {};  // byte pieces (the round may have held a checked read before)
   round.runs = {};
   round.relayed = nullptr;
-  begin_round(round);
+  begin(round);
 }
 
-void PipelineCore::begin_run_pieces(PieceRound& round, Slot& slot, const ReadTarget& target, uint64_t generation) {
-  round.core = this;
-  round.dst = target.dst;
-  round.offset = target.offset;
-  round.need = target.need;
+void RecordReads::begin_runs(PieceRound& round, Slot& slot, std::span<std::byte> dst, uint64_t offset, uint64_t need,
+                             uint64_t generation) {
+  round.reads = this;
+  round.dst = dst;
+  round.offset = offset;
+  round.need = need;
   round.frame = slot.frame;
   round.generation = generation;
   round.chunks = {};
@@ -79,20 +90,21 @@ void PipelineCore::begin_run_pieces(PieceRound& round, Slot& slot, const ReadTar
   round.count = slot.runs.size();
   round.relayed = nullptr;
   round.check = false;
-  begin_round(round);
+  begin(round);
 }
 
-void PipelineCore::begin_round(PieceRound& round) {
+void RecordReads::begin(PieceRound& round) {
   round.gave_up.store(false, kRelaxed);
-  if (read_crew_.in_flight() == 0) reading_since_ns_.store(steady_ns(), kRelaxed);
-  read_crew_.begin(round.count, round);
+  if (crew_.in_flight() == 0) reading_since_ns_.store(steady_ns(), kRelaxed);
+  crew_.begin(round.count, round);
 }
 
-void PipelineCore::begin_chunk_pieces(PieceRound& round, Slot& slot, const ReadTarget& target, uint64_t generation) {
-  round.core = this;
-  round.dst = target.record;
-  round.offset = target.offset;
-  round.need = target.record.size();
+void RecordReads::begin_chunks(PieceRound& round, Slot& slot, std::span<std::byte> record, uint64_t offset,
+                               uint64_t generation) {
+  round.reads = this;
+  round.dst = record;
+  round.offset = offset;
+  round.need = record.size();
   round.frame = slot.frame;
   round.generation = generation;
   round.chunks = slot.header.chunks;
@@ -101,16 +113,16 @@ void PipelineCore::begin_chunk_pieces(PieceRound& round, Slot& slot, const ReadT
   round.count = slot.piece_cuts.size() - 1;
   round.relayed = slot.relayed ? &slot : nullptr;
   round.check = slot.checked_on_read;
-  begin_round(round);
+  begin(round);
 }
 
-void PipelineCore::read_chunk(std::span<std::byte> dst, uint64_t offset, uint64_t frame, size_t c, uint64_t checksum,
+void RecordReads::read_chunk(std::span<std::byte> dst, uint64_t offset, uint64_t frame, size_t c, uint64_t checksum,
                               Stores stores) {
   uint64_t got_checksum = 0;
-  const size_t got = source_->read_checked(dst, offset, got_checksum, stores);
-  counters_.bytes_read.fetch_add(got, kRelaxed);
+  const size_t got = parts_.source->read_checked(dst, offset, got_checksum, stores);
+  parts_.counters->bytes_read.fetch_add(got, kRelaxed);
   if (got == dst.size() && got_checksum == checksum) return;
-  io::ErrorLocation at = reader_.location(frame);  // only now: it allocates
+  io::ErrorLocation at = parts_.reader->location(frame);  // only now: it allocates
   at.chunk = c;
   if (got < dst.size()) {
     throw io::Error(at, "the file ends at byte " + std::to_string(offset + got) + " but the chunk runs to byte " +
@@ -119,9 +131,9 @@ void PipelineCore::read_chunk(std::span<std::byte> dst, uint64_t offset, uint64_
   throw io::Error(at, "chunk checksum mismatch (the chunk's bytes are corrupt)");
 }
 
-void PipelineCore::check_chunk(std::span<const std::byte> bytes, uint64_t frame, size_t c, uint64_t checksum) {
+void RecordReads::check_chunk(std::span<const std::byte> bytes, uint64_t frame, size_t c, uint64_t checksum) {
   if (io::chunk_checksum(bytes) == checksum) return;
-  io::ErrorLocation at = reader_.location(frame);  // only now: it allocates
+  io::ErrorLocation at = parts_.reader->location(frame);  // only now: it allocates
   at.chunk = c;
   throw io::Error(at, "chunk checksum mismatch (the chunk's bytes are corrupt)");
 }
@@ -130,18 +142,18 @@ void PipelineCore::check_chunk(std::span<const std::byte> bytes, uint64_t frame,
 // alignment padding and may lie beyond the end of the file. With no helpers
 // the crew runs the pieces in order on the joining thread.
 void PieceRound::operator()(uint64_t p) const {
-  if (gave_up.load(kRelaxed) || core->stopping_.load(kRelaxed) || core->generation_.load(kRelaxed) != generation) {
+  if (gave_up.load(kRelaxed) || reads->parts_.stopping->load(kRelaxed) || reads->parts_.generation->load(kRelaxed) != generation) {
     gave_up.store(true, kRelaxed);
     return;
   }
   if (by_runs()) {
     const ByteRun& run = runs[p];
-    core->read_piece(dst.subspan(run.at, run.length), offset + run.at, run.required, frame, offset + run.at + run.required,
+    reads->read_piece(dst.subspan(run.at, run.length), offset + run.at, run.required, frame, offset + run.at + run.required,
                      true);
     return;
   }
   if (by_chunks() && relayed) {
-    core->relay_chunks(*this, p);
+    reads->relay_chunks(*this, p);
     return;
   }
   if (by_chunks()) {
@@ -149,17 +161,17 @@ void PieceRound::operator()(uint64_t p) const {
       const io::ChunkDesc& chunk = chunks[c];
       const std::span<std::byte> into = dst.subspan(chunk.offset, chunk.compressed_size);
       if (check) {
-        core->read_chunk(into, offset + chunk.offset, frame, c, chunk.checksum);
+        reads->read_chunk(into, offset + chunk.offset, frame, c, chunk.checksum);
       } else {  // decode_chunk checks it: hashing it here too would read it twice
         const uint64_t at = offset + chunk.offset;
-        core->read_piece(into, at, into.size(), frame, at + into.size());
+        reads->read_piece(into, at, into.size(), frame, at + into.size());
       }
     }
     return;
   }
   const uint64_t at = p * piece;
   const uint64_t length = std::min(piece, dst.size() - at);
-  core->read_piece(dst.subspan(at, length), offset + at, std::min(length, need - at), frame, offset + need);
+  reads->read_piece(dst.subspan(at, length), offset + at, std::min(length, need - at), frame, offset + need);
 }
 
 // A relayed piece: its chunks, packed one after another into ring slots
@@ -167,10 +179,10 @@ void PieceRound::operator()(uint64_t p) const {
 // checked and planned while the cache holds them, then sent to their place
 // in the frame's resident area. Runs of chunks that follow each other in
 // the record go as one range.
-void PipelineCore::relay_chunks(const PieceRound& round, uint64_t p) {
+void RecordReads::relay_chunks(const PieceRound& round, uint64_t p) {
   Slot& slot = *round.relayed;
-  const uint64_t most = relay_->piece_bytes();
-  const io::GpuPlanOptions plan_options{.color_attribute = options_.decode.color_attribute};
+  const uint64_t most = parts_.relay->piece_bytes();
+  const io::GpuPlanOptions plan_options{.color_attribute = parts_.options->decode.color_attribute};
   thread_local std::vector<PieceRelay::Range> ranges;  // grows once per thread
   uint32_t c = round.cuts[p];
   const uint32_t end = round.cuts[p + 1];
@@ -198,14 +210,14 @@ void PipelineCore::relay_chunks(const PieceRound& round, uint64_t p) {
     } else {
       while (last < end && bytes + round.chunks[last].compressed_size <= most) bytes += round.chunks[last++].compressed_size;
     }
-    const std::span<std::byte> piece = relay_->claim(bytes);
+    const std::span<std::byte> piece = parts_.relay->claim(bytes);
     try {
       ranges.clear();
       if (together) {
         const uint64_t from = round.offset + round.chunks[c].offset;
         read_piece(piece.first(bytes), from, bytes, round.frame, from + bytes, true);
-        counters_.runs_read.fetch_add(1, kRelaxed);
-        counters_.run_bytes_asked.fetch_add(bytes, kRelaxed);
+        parts_.counters->runs_read.fetch_add(1, kRelaxed);
+        parts_.counters->run_bytes_asked.fetch_add(bytes, kRelaxed);
       }
       uint64_t at = 0;
       for (uint32_t k = c; k < last; ++k) {
@@ -217,9 +229,9 @@ void PipelineCore::relay_chunks(const PieceRound& round, uint64_t p) {
         } else {
           read_chunk(dst, round.offset + chunk.offset, round.frame, k, chunk.checksum, Stores::Cached);
         }
-        if (!io::plan_gpu_chunk(dst, slot.header, reader_.header(), plan_options, k, slot.plan, slot.where)) {
+        if (!io::plan_gpu_chunk(dst, slot.header, parts_.reader->header(), plan_options, k, slot.plan, slot.where)) {
           slot.relay_refused.store(true, kRelaxed);  // zstd planes: the frame is read again on the host
-          relay_->give_back(piece);
+          parts_.relay->give_back(piece);
           return;
         }
         PieceRelay::Range* run = ranges.empty() ? nullptr : &ranges.back();
@@ -231,61 +243,61 @@ void PipelineCore::relay_chunks(const PieceRound& round, uint64_t p) {
         at += chunk.compressed_size;
       }
     } catch (...) {
-      relay_->give_back(piece);
+      parts_.relay->give_back(piece);
       throw;
     }
-    relay_->send(piece, slot.buffers, ranges);
+    parts_.relay->send(piece, slot.buffers, ranges);
     c = last;
   }
 }
 
 // A chunk larger than a ring slot: read and checked whole into this
 // thread's own buffer (kept for the next), then sent in slot-sized parts.
-void PipelineCore::relay_large_chunk(Slot& slot, size_t c, uint64_t offset) {
+void RecordReads::relay_large_chunk(Slot& slot, size_t c, uint64_t offset) {
   const io::ChunkDesc& chunk = slot.header.chunks[c];
   thread_local std::vector<std::byte> whole;
   whole.resize(chunk.compressed_size);
   if (slot.by_demand) {  // no mapping (read_runs.h)
     read_piece(whole, offset + chunk.offset, whole.size(), slot.frame, offset + chunk.offset + whole.size(), true);
     check_chunk(whole, slot.frame, c, chunk.checksum);
-    counters_.runs_read.fetch_add(1, kRelaxed);
-    counters_.run_bytes_asked.fetch_add(whole.size(), kRelaxed);
+    parts_.counters->runs_read.fetch_add(1, kRelaxed);
+    parts_.counters->run_bytes_asked.fetch_add(whole.size(), kRelaxed);
   } else {
     read_chunk(whole, offset + chunk.offset, slot.frame, c, chunk.checksum);
   }
-  if (!io::plan_gpu_chunk(whole, slot.header, reader_.header(), {.color_attribute = options_.decode.color_attribute}, c,
+  if (!io::plan_gpu_chunk(whole, slot.header, parts_.reader->header(), {.color_attribute = parts_.options->decode.color_attribute}, c,
                           slot.plan, slot.where)) {
     slot.relay_refused.store(true, kRelaxed);
     return;
   }
-  const uint64_t most = relay_->piece_bytes();
+  const uint64_t most = parts_.relay->piece_bytes();
   for (uint64_t at = 0; at < whole.size(); at += most) {
     const uint64_t n = std::min<uint64_t>(most, whole.size() - at);
-    const std::span<std::byte> piece = relay_->claim(n);
+    const std::span<std::byte> piece = parts_.relay->claim(n);
     std::memcpy(piece.data(), whole.data() + at, n);
     const PieceRelay::Range range{0, chunk.offset + at, n};
-    relay_->send(piece, slot.buffers, {&range, 1});
+    parts_.relay->send(piece, slot.buffers, {&range, 1});
   }
 }
 
 // Read time is wall time with a round in flight: two rounds at once count
 // once. A stretch still open counts up to now (stats()).
-uint64_t PipelineCore::read_ns_now() const {
+uint64_t RecordReads::read_ns_now() const {
   const uint64_t since = reading_since_ns_.load(kRelaxed);
-  const uint64_t closed = counters_.read_ns.load(kRelaxed);
+  const uint64_t closed = parts_.counters->read_ns.load(kRelaxed);
   const uint64_t now = steady_ns();
   return closed + (since != 0 && now > since ? now - since : 0);
 }
 
-bool PipelineCore::join_pieces(PieceRound& round) {
+bool RecordReads::join(PieceRound& round) {
   auto count_time = [&] {
-    if (read_crew_.in_flight() > 0) return;
+    if (crew_.in_flight() > 0) return;
     // Cleared first: stats() may miss this stretch for an instant, never count it twice.
     const uint64_t since = reading_since_ns_.exchange(0, kRelaxed);
-    counters_.read_ns.fetch_add(steady_ns() - since, kRelaxed);
+    parts_.counters->read_ns.fetch_add(steady_ns() - since, kRelaxed);
   };
   try {
-    read_crew_.join();
+    crew_.join();
   } catch (...) {
     count_time();
     throw;
