@@ -258,6 +258,41 @@ TEST_F(DemandTest, ThePipelineReadsOnlyTheDemandedTiers) {
   }
 }
 
+// The layer spans a frame holds (a run of records of one layer): a demand
+// of every cell's first tiers is one prefix of each (format 2.0).
+size_t layer_spans(const io::FrameHeader& h) {
+  size_t spans = 0;
+  for (size_t c = 0; c < h.chunks.size(); ++c) spans += c == 0 || h.chunks[c].layer != h.chunks[c - 1].layer;
+  return spans;
+}
+
+TEST_F(DemandTest, ACoarseToFineOverviewIsARunALayerAndNoByteIsReadTwice) {
+  const io::ContainerReader reader(path_);
+  ASSERT_EQ(reader.header().version_major, 2);
+  uint64_t tables = 0, most_runs = 0;
+  for (uint64_t f = 0; f < reader.frame_count(); ++f) {
+    const io::FrameIndexEntry& e = reader.index().frames[f];
+    tables += io::frame_table_bytes(e.chunk_count, reader.header().attributes.size());
+    most_runs += layer_spans(reader.read_table(f));
+  }
+  // An overview (every cell, its first tiers), and a close view at full
+  // detail (the cells it sees, every tier).
+  const ViewDemand overview = ViewDemand::uniform(0.3f), close = demand_of(kNearEye, kCentre, 1.0f);
+  for (const bool encoded : {false, true}) {
+    SCOPED_TRACE(encoded ? "kept encoded" : "decoded on the CPU");
+    const PipelineStats o = stream(reader, overview, encoded).stats;
+    EXPECT_EQ(o.frames_by_demand, reader.frame_count());
+    EXPECT_LE(o.runs_read, most_runs) << "at most one run a layer a frame";
+    EXPECT_GE(o.runs_read, reader.frame_count());
+    // Every byte read once: the tables, then the runs (which hold the
+    // wanted records and the short gaps between them).
+    EXPECT_EQ(o.bytes_read, tables + o.run_bytes);
+    const PipelineStats c = stream(reader, close, encoded).stats;
+    EXPECT_EQ(c.bytes_read, tables + c.run_bytes);
+    EXPECT_LE(c.runs_read, reader.frame_count() * 4 * io::kLodTiers) << "a close view's runs are few";
+  }
+}
+
 TEST_F(DemandTest, APausedPlayerReadsWhatTheLargerDemandLacks) {
   const io::ContainerReader reader(path_);
   HostFrameAllocator allocator;
