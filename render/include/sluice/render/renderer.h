@@ -213,7 +213,7 @@ inline constexpr uint64_t kAutoAnisotropicLimit = 2'000'000;
 
 struct RendererOptions {
   uint32_t frames_in_flight = 2;  // see the contract above; 1..8
-  // Keep each view's eye normals and depth for read_surface() (inspection.h; costs
+  // Keep each view's eye normals and depth for read_surface() (render/internal: inspection.h; costs
   // 16 bytes per pixel per frame).
   bool debug_surfaces = false;
   // Frames that arrive without layers (files converted with --no-layers,
