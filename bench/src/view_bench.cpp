@@ -156,6 +156,7 @@ struct Run {
   // is the slower side.
   std::vector<double> ready;
   double read_seconds = 0;  // the reader's time with a read in flight
+  runtime::PipelineStats::RelayTimes relay;  // the read threads' time on relayed frames, by part
 };
 
 // The full read's picture of `frame` for `views` (quality pass only).
@@ -353,6 +354,10 @@ class Bench {
     r.refinements = after.refinements - before.refinements;
     r.runs = after.pipeline.runs_read - before.pipeline.runs_read;
     r.read_seconds = after.pipeline.read_seconds - before.pipeline.read_seconds;
+    const auto& a = after.pipeline.relay;
+    const auto& b = before.pipeline.relay;
+    r.relay = {a.claim_seconds - b.claim_seconds, a.copy_seconds - b.copy_seconds, a.check_seconds - b.check_seconds,
+               a.plan_seconds - b.plan_seconds, a.send_seconds - b.send_seconds};
     const auto records = [](const runtime::PlaybackStats& s) {
       uint64_t n = 0;
       for (const runtime::WorkerStats& w : s.pipeline.workers) n += w.chunks;
@@ -405,6 +410,17 @@ double share_in_view(const io::ContainerReader& reader, uint64_t frame, const st
 }
 
 std::string mb(double bytes) { return num(bytes / 1e6, 1) + " MB"; }
+
+// The read threads' time on relayed frames by part, ms a frame read summed
+// over the threads ("-" where no frame was relayed).
+std::string relay_parts(const Run& r) {
+  const runtime::PipelineStats::RelayTimes& t = r.relay;
+  const double total = t.claim_seconds + t.copy_seconds + t.check_seconds + t.plan_seconds + t.send_seconds;
+  if (r.frames_read == 0 || total <= 0) return "-";
+  const auto ms = [&](double seconds) { return num(1e3 * seconds / double(r.frames_read), 2); };
+  return ms(t.claim_seconds) + "/" + ms(t.copy_seconds) + "/" + ms(t.check_seconds) + "/" + ms(t.plan_seconds) + "/" +
+         ms(t.send_seconds);
+}
 std::string db_text(double v) { return std::isinf(v) ? "identical" : num(v, 1) + " dB"; }
 
 // The fly-in's last frame alone, from the page cache, read by its view and
@@ -468,14 +484,15 @@ void run_view_bench(const ViewBenchOptions& o) {
   }
   // Where a step's time goes once playing (medians over the steps after the first).
   Table parts({"segment", "read", "from", "step ms", "waiting for the frame", "commit", "upload (GPU copy, decode)",
-               "render (record, submit)", "frames ready after it", "reading a frame read"});
+               "render (record, submit)", "frames ready after it", "reading a frame read",
+               "relay claim/copy/check/plan/send a frame read"});
   const auto add_parts = [&](Segment s, bool by_view, const char* from, const Run& r) {
     if (s == Segment::Pause || r.wait_ms.empty()) return;
     std::vector<double> step(r.wait_ms.size());
     for (size_t k = 0; k < step.size(); ++k) step[k] = r.wait_ms[k] + r.commit_ms[k] + r.upload_ms[k] + r.render_ms[k];
     parts.row({segment_name(s), by_view ? "by view" : "full", from, num(median(step), 2), num(median(r.wait_ms), 2),
                num(median(r.commit_ms), 2), num(median(r.upload_ms), 2), num(median(r.render_ms), 2), num(median(r.ready), 1),
-               r.frames_read ? num(1e3 * r.read_seconds / double(r.frames_read), 2) : "-"});
+               r.frames_read ? num(1e3 * r.read_seconds / double(r.frames_read), 2) : "-", relay_parts(r)});
   };
   Table table({"segment", "read", "from", "frames/s", "first frame (start)", "frames/s after it", "read per frame", "device per frame", "runs per frame",
                "records per frame", "worker us per record", "of the records", "of the disk's bound", "refinements"});

@@ -21,6 +21,8 @@ struct Counters {
   std::atomic<uint64_t> frames_delivered{0}, frames_failed{0};
   std::atomic<uint64_t> held_bytes{0}, peak_record_bytes{0};
   std::atomic<uint32_t> window_frames{0}, active_frames{0}, record_buffers{0}, frames_ready{0};
+  // The read threads' time on relayed frames, by part (PipelineStats::RelayTimes).
+  std::atomic<uint64_t> relay_claim_ns{0}, relay_copy_ns{0}, relay_check_ns{0}, relay_plan_ns{0}, relay_send_ns{0};
 };
 
 }  // namespace sluice::runtime::detail

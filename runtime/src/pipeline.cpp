@@ -205,6 +205,11 @@ PipelineStats PipelineCore::stats() const {
   s.run_bytes = c.run_bytes_asked.load(kRelaxed);
   s.frames_in_place = c.frames_in_place.load(kRelaxed);
   s.frames_relayed = c.frames_relayed.load(kRelaxed);
+  s.relay.claim_seconds = double(c.relay_claim_ns.load(kRelaxed)) * 1e-9;
+  s.relay.copy_seconds = double(c.relay_copy_ns.load(kRelaxed)) * 1e-9;
+  s.relay.check_seconds = double(c.relay_check_ns.load(kRelaxed)) * 1e-9;
+  s.relay.plan_seconds = double(c.relay_plan_ns.load(kRelaxed)) * 1e-9;
+  s.relay.send_seconds = double(c.relay_send_ns.load(kRelaxed)) * 1e-9;
   s.cache_hits = c.cache_hits.load(kRelaxed);
   s.frames_decoded = c.frames_decoded.load(kRelaxed);
   s.decoded_bytes = c.decoded_bytes.load(kRelaxed);

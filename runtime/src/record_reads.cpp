@@ -21,6 +21,20 @@ uint64_t steady_ns() {
                                    .count());
 }
 
+// Adds the time since the last lap to a counter (the relay's parts).
+class Laps {
+ public:
+  Laps() : last_(steady_ns()) {}
+  void lap(std::atomic<uint64_t>& into) {
+    const uint64_t now = steady_ns();
+    into.fetch_add(now - last_, kRelaxed);
+    last_ = now;
+  }
+
+ private:
+  uint64_t last_;
+};
+
 }  // namespace
 
 RecordReads::RecordReads(Parts parts) : parts_(std::move(parts)) { crew_.start(parts_.threads - 1); }
@@ -210,14 +224,18 @@ void RecordReads::relay_chunks(const PieceRound& round, uint64_t p) {
     } else {
       while (last < end && bytes + round.chunks[last].compressed_size <= most) bytes += round.chunks[last++].compressed_size;
     }
+    Counters& counters = *parts_.counters;
+    Laps laps;
     const std::span<std::byte> piece = parts_.relay->claim(bytes);
+    laps.lap(counters.relay_claim_ns);
     try {
       ranges.clear();
       if (together) {
         const uint64_t from = round.offset + round.chunks[c].offset;
         read_piece(piece.first(bytes), from, bytes, round.frame, from + bytes, true);
-        parts_.counters->runs_read.fetch_add(1, kRelaxed);
-        parts_.counters->run_bytes_asked.fetch_add(bytes, kRelaxed);
+        counters.runs_read.fetch_add(1, kRelaxed);
+        counters.run_bytes_asked.fetch_add(bytes, kRelaxed);
+        laps.lap(counters.relay_copy_ns);
       }
       uint64_t at = 0;
       for (uint32_t k = c; k < last; ++k) {
@@ -226,10 +244,14 @@ void RecordReads::relay_chunks(const PieceRound& round, uint64_t p) {
         const std::span<std::byte> dst = piece.subspan(at, chunk.compressed_size);
         if (together) {
           check_chunk(dst, round.frame, k, chunk.checksum);
-        } else {
+          laps.lap(counters.relay_check_ns);
+        } else {  // copied and checked in one pass
           read_chunk(dst, round.offset + chunk.offset, round.frame, k, chunk.checksum, Stores::Cached);
+          laps.lap(counters.relay_copy_ns);
         }
-        if (!io::plan_gpu_chunk(dst, slot.header, parts_.reader->header(), plan_options, k, slot.plan, slot.where)) {
+        const bool planned = io::plan_gpu_chunk(dst, slot.header, parts_.reader->header(), plan_options, k, slot.plan, slot.where);
+        laps.lap(counters.relay_plan_ns);
+        if (!planned) {
           slot.relay_refused.store(true, kRelaxed);  // zstd planes: the frame is read again on the host
           parts_.relay->give_back(piece);
           return;
@@ -247,6 +269,7 @@ void RecordReads::relay_chunks(const PieceRound& round, uint64_t p) {
       throw;
     }
     parts_.relay->send(piece, slot.buffers, ranges);
+    laps.lap(counters.relay_send_ns);
     c = last;
   }
 }

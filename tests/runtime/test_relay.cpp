@@ -165,6 +165,12 @@ TEST_F(RelayTest, RelayedFramesDecodeToTheSameParticles) {
   EXPECT_EQ(stats.frames_relayed, 12u);
   EXPECT_EQ(stats.frames_failed, 0u);
   EXPECT_GE(relay.sent(), 12u);
+  // The read threads' time on them is accounted by part: every relayed
+  // record is copied (checked as copied here: whole frames) and planned.
+  EXPECT_GT(stats.relay.copy_seconds, 0.0);
+  EXPECT_GT(stats.relay.plan_seconds, 0.0);
+  EXPECT_GT(stats.relay.send_seconds, 0.0);
+  EXPECT_EQ(stats.relay.check_seconds, 0.0) << "whole frames are checked as they are copied, not apart";
 }
 
 // Fewer slots than read threads, and slots smaller than a chunk: threads

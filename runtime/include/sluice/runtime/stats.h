@@ -45,6 +45,13 @@ struct PipelineStats {
   uint64_t frames_in_place = 0;
   // ... of which relayed to device memory as read (runtime/relay.h).
   uint64_t frames_relayed = 0;
+  // Where the read threads' time on relayed frames went, summed over the
+  // threads: waiting for a ring slot (claim), copying into it, checking the
+  // records' checksums, planning them for the GPU (their plane tables), and
+  // handing the slot on (send).
+  struct RelayTimes {
+    double claim_seconds = 0, copy_seconds = 0, check_seconds = 0, plan_seconds = 0, send_seconds = 0;
+  } relay;
   uint64_t cache_hits = 0;     // entries served from a frame kept in memory, no read or decode
 
   // Decode workers.
