@@ -220,7 +220,7 @@ class Bench {
         r.commit_ms.push_back(times.commit_ms);
         r.upload_ms.push_back(times.upload_ms);
         r.render_ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - rendering).count());
-        r.ready.push_back(double(p.player.pipeline().stats().frames_ready));
+        r.ready.push_back(double(p.player.pipeline().ready_count()));  // this thread is the consumer: no stats() snapshot a step
       }
       if (ref) {
         const render::Image shown{target.width(), target.height(), target.read_rgba8()};

@@ -201,8 +201,7 @@ void Decoders::finish(uint32_t s) {
   frames_decoding_.fetch_sub(1, std::memory_order_release);
   slot.state.store(result, std::memory_order_release);
   slot.state.notify_all();  // a consumer may be waiting for this frame
-  parts_.reader_wake->fetch_add(1, std::memory_order_release);  // the record buffer, or a drained slot, is free
-  parts_.reader_wake->notify_one();
+  wake(*parts_.reader_wake);  // the record buffer, or a drained slot, is free
 }
 
 }  // namespace sluice::runtime::detail

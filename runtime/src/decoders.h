@@ -28,6 +28,7 @@
 #include "counters.h"
 #include "mpsc_ring.h"
 #include "slot.h"
+#include "wake.h"
 #include "sluice/io/codec.h"
 #include "sluice/io/reader.h"
 #include "sluice/runtime/pipeline.h"

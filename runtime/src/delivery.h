@@ -17,15 +17,10 @@
 #include "counters.h"
 #include "slot.h"
 #include "spsc_ring.h"
+#include "wake.h"
 #include "sluice/runtime/pipeline.h"
 
 namespace sluice::runtime::detail {
-
-// Bumps `wake` and wakes one thread waiting on it.
-inline void wake(std::atomic<uint32_t>& counter) {
-  counter.fetch_add(1, std::memory_order_release);
-  counter.notify_one();
-}
 
 class Delivery {
  public:

@@ -32,6 +32,7 @@
 #include "slot.h"
 #include "slot_window.h"
 #include "spsc_ring.h"
+#include "wake.h"
 #include "sluice/runtime/pipeline.h"
 #include "sluice/runtime/relay.h"
 

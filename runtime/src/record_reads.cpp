@@ -1,6 +1,7 @@
 #include "record_reads.h"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cstring>
 #include <vector>
@@ -21,21 +22,36 @@ uint64_t steady_ns() {
                                    .count());
 }
 
-// Adds the time since the last lap to a counter (the relay's parts).
-class Laps {
+}  // namespace
+
+// The relay's parts timed on one read thread, each lap the time since the
+// last; added to the shared counters once, when it ends, not per record
+// (every read thread adds to those counters' cache line).
+class RelayLaps {
  public:
-  Laps() : last_(steady_ns()) {}
-  void lap(std::atomic<uint64_t>& into) {
+  enum Part { Claim, Copy, Check, Plan, Send, kParts };
+  explicit RelayLaps(Counters& counters) : counters_(counters), last_(steady_ns()) {}
+  RelayLaps(const RelayLaps&) = delete;
+  RelayLaps& operator=(const RelayLaps&) = delete;
+  ~RelayLaps() {
+    const std::array<std::atomic<uint64_t>*, kParts> into{&counters_.relay_claim_ns, &counters_.relay_copy_ns,
+                                                          &counters_.relay_check_ns, &counters_.relay_plan_ns,
+                                                          &counters_.relay_send_ns};
+    for (int p = 0; p < kParts; ++p) {
+      if (ns_[size_t(p)]) into[size_t(p)]->fetch_add(ns_[size_t(p)], kRelaxed);
+    }
+  }
+  void lap(Part part) {
     const uint64_t now = steady_ns();
-    into.fetch_add(now - last_, kRelaxed);
+    ns_[size_t(part)] += now - last_;
     last_ = now;
   }
 
  private:
+  Counters& counters_;
   uint64_t last_;
+  std::array<uint64_t, kParts> ns_{};
 };
-
-}  // namespace
 
 RecordReads::RecordReads(Parts parts) : parts_(std::move(parts)) { crew_.start(parts_.threads - 1); }
 
@@ -198,11 +214,12 @@ void RecordReads::relay_chunks(const PieceRound& round, uint64_t p) {
   const uint64_t most = parts_.relay->piece_bytes();
   const io::GpuPlanOptions plan_options{.color_attribute = parts_.options->decode.color_attribute};
   thread_local std::vector<PieceRelay::Range> ranges;  // grows once per thread
+  RelayLaps laps(*parts_.counters);
   uint32_t c = round.cuts[p];
   const uint32_t end = round.cuts[p + 1];
   while (c < end && !slot.relay_refused.load(kRelaxed)) {
     if (round.chunks[c].compressed_size > most) {
-      relay_large_chunk(slot, c, round.offset);
+      relay_large_chunk(slot, c, round.offset, laps);
       ++c;
       continue;
     }
@@ -224,18 +241,16 @@ void RecordReads::relay_chunks(const PieceRound& round, uint64_t p) {
     } else {
       while (last < end && bytes + round.chunks[last].compressed_size <= most) bytes += round.chunks[last++].compressed_size;
     }
-    Counters& counters = *parts_.counters;
-    Laps laps;
     const std::span<std::byte> piece = parts_.relay->claim(bytes);
-    laps.lap(counters.relay_claim_ns);
+    laps.lap(RelayLaps::Claim);
     try {
       ranges.clear();
       if (together) {
         const uint64_t from = round.offset + round.chunks[c].offset;
         read_piece(piece.first(bytes), from, bytes, round.frame, from + bytes, true);
-        counters.runs_read.fetch_add(1, kRelaxed);
-        counters.run_bytes_asked.fetch_add(bytes, kRelaxed);
-        laps.lap(counters.relay_copy_ns);
+        parts_.counters->runs_read.fetch_add(1, kRelaxed);
+        parts_.counters->run_bytes_asked.fetch_add(bytes, kRelaxed);
+        laps.lap(RelayLaps::Copy);
       }
       uint64_t at = 0;
       for (uint32_t k = c; k < last; ++k) {
@@ -244,13 +259,13 @@ void RecordReads::relay_chunks(const PieceRound& round, uint64_t p) {
         const std::span<std::byte> dst = piece.subspan(at, chunk.compressed_size);
         if (together) {
           check_chunk(dst, round.frame, k, chunk.checksum);
-          laps.lap(counters.relay_check_ns);
+          laps.lap(RelayLaps::Check);
         } else {  // copied and checked in one pass
           read_chunk(dst, round.offset + chunk.offset, round.frame, k, chunk.checksum, Stores::Cached);
-          laps.lap(counters.relay_copy_ns);
+          laps.lap(RelayLaps::Copy);
         }
         const bool planned = io::plan_gpu_chunk(dst, slot.header, parts_.reader->header(), plan_options, k, slot.plan, slot.where);
-        laps.lap(counters.relay_plan_ns);
+        laps.lap(RelayLaps::Plan);
         if (!planned) {
           slot.relay_refused.store(true, kRelaxed);  // zstd planes: the frame is read again on the host
           parts_.relay->give_back(piece);
@@ -269,27 +284,32 @@ void RecordReads::relay_chunks(const PieceRound& round, uint64_t p) {
       throw;
     }
     parts_.relay->send(piece, slot.buffers, ranges);
-    laps.lap(counters.relay_send_ns);
+    laps.lap(RelayLaps::Send);
     c = last;
   }
 }
 
 // A chunk larger than a ring slot: read and checked whole into this
 // thread's own buffer (kept for the next), then sent in slot-sized parts.
-void RecordReads::relay_large_chunk(Slot& slot, size_t c, uint64_t offset) {
+void RecordReads::relay_large_chunk(Slot& slot, size_t c, uint64_t offset, RelayLaps& laps) {
   const io::ChunkDesc& chunk = slot.header.chunks[c];
   thread_local std::vector<std::byte> whole;
   whole.resize(chunk.compressed_size);
   if (slot.by_demand) {  // no mapping (read_runs.h)
     read_piece(whole, offset + chunk.offset, whole.size(), slot.frame, offset + chunk.offset + whole.size(), true);
+    laps.lap(RelayLaps::Copy);
     check_chunk(whole, slot.frame, c, chunk.checksum);
+    laps.lap(RelayLaps::Check);
     parts_.counters->runs_read.fetch_add(1, kRelaxed);
     parts_.counters->run_bytes_asked.fetch_add(whole.size(), kRelaxed);
   } else {
     read_chunk(whole, offset + chunk.offset, slot.frame, c, chunk.checksum);
+    laps.lap(RelayLaps::Copy);
   }
-  if (!io::plan_gpu_chunk(whole, slot.header, parts_.reader->header(), {.color_attribute = parts_.options->decode.color_attribute}, c,
-                          slot.plan, slot.where)) {
+  const bool planned = io::plan_gpu_chunk(whole, slot.header, parts_.reader->header(),
+                                          {.color_attribute = parts_.options->decode.color_attribute}, c, slot.plan, slot.where);
+  laps.lap(RelayLaps::Plan);
+  if (!planned) {
     slot.relay_refused.store(true, kRelaxed);
     return;
   }
@@ -297,9 +317,12 @@ void RecordReads::relay_large_chunk(Slot& slot, size_t c, uint64_t offset) {
   for (uint64_t at = 0; at < whole.size(); at += most) {
     const uint64_t n = std::min<uint64_t>(most, whole.size() - at);
     const std::span<std::byte> piece = parts_.relay->claim(n);
+    laps.lap(RelayLaps::Claim);
     std::memcpy(piece.data(), whole.data() + at, n);
+    laps.lap(RelayLaps::Copy);
     const PieceRelay::Range range{0, chunk.offset + at, n};
     parts_.relay->send(piece, slot.buffers, {&range, 1});
+    laps.lap(RelayLaps::Send);
   }
 }
 

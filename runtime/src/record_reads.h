@@ -33,6 +33,7 @@
 namespace sluice::runtime::detail {
 
 class RecordReads;
+class RelayLaps;
 
 // One read in pieces on the crew: the crew calls it once per piece until the
 // round is joined, so it lives until then (on the caller's stack, or in
@@ -115,7 +116,7 @@ class RecordReads {
   // io::Error naming the chunk.
   void check_chunk(std::span<const std::byte> bytes, uint64_t frame, size_t c, uint64_t checksum);
   void relay_chunks(const PieceRound& round, uint64_t p);
-  void relay_large_chunk(Slot& slot, size_t c, uint64_t offset);
+  void relay_large_chunk(Slot& slot, size_t c, uint64_t offset, RelayLaps& laps);
 
   Parts parts_;
   ReadCrew crew_;
