@@ -501,6 +501,15 @@ for stage in $stages; do
       run $S synth -n 100M --frames ${VIEW_FRAMES:-12} -o $T/v20.sluice --force -q --gpu-decodable
       run $S bench view $T/v20.sluice --steps ${VIEW_STEPS:-12} --cache-steps ${CACHE_STEPS:-60} --memory 24G --no-psnr
       ;;
+    relayab)  # issue 45: a ring slot holds several runs, sends submitted together; this build against BASE (pack.sh BASE=...), alternated
+      run $S bench render --sizes 10M --repeats 3 >/dev/null  # warm-up
+      run $S synth -n 100M --frames ${VIEW_FRAMES:-12} -o $T/v20.sluice --force -q --gpu-decodable
+      for i in 1 2 3; do
+        for b in ./.gpu/sluice_base $S; do
+          run $b bench view $T/v20.sluice --steps ${VIEW_STEPS:-12} --cache-steps ${CACHE_STEPS:-60} --memory 24G --no-psnr
+        done
+      done
+      ;;
     layoutq)  # pictures: the orbit by view against the full read (PSNR), format 2.0
       run $S bench view $T/v20.sluice --steps ${VIEW_STEPS:-12} --memory 24G --no-storage
       ;;

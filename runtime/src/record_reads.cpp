@@ -16,6 +16,14 @@ constexpr auto kRelaxed = std::memory_order_relaxed;
 
 uint64_t round_up(uint64_t n, uint64_t to) { return (n + to - 1) / to * to; }
 
+// One run of a demand in a ring slot: chunks [first, last), whose bytes
+// [from, from + bytes) of the record (gaps read through included) lie at
+// `at` in the slot.
+struct SlotRun {
+  uint32_t first = 0, last = 0;
+  uint64_t from = 0, bytes = 0, at = 0;
+};
+
 uint64_t steady_ns() {
   return static_cast<uint64_t>(std::chrono::duration_cast<std::chrono::nanoseconds>(
                                    std::chrono::steady_clock::now().time_since_epoch())
@@ -204,16 +212,48 @@ void PieceRound::operator()(uint64_t p) const {
   reads->read_piece(dst.subspan(at, length), offset + at, std::min(length, need - at), frame, offset + need);
 }
 
+namespace {
+
+// The runs of a demand (as plan_runs() joins chunks) from chunk `c` on that
+// fit one after another into a ring slot of `most` bytes, at most `end`;
+// none when chunk `c` alone is larger. Returns the chunk after the last.
+uint32_t gather_runs(std::span<const io::ChunkDesc> chunks, uint32_t c, uint32_t end, uint64_t most,
+                     std::vector<SlotRun>& runs) {
+  runs.clear();
+  uint64_t used = 0;
+  while (c < end && chunks[c].compressed_size <= most - used) {
+    const uint64_t from = chunks[c].offset;
+    uint64_t bytes = 0;
+    uint32_t last = c;
+    while (last < end) {
+      const io::ChunkDesc& next = chunks[last];
+      if (last > c && !joins_run(from, from + bytes, next.offset, kRunGap)) break;
+      if (next.offset < from || next.offset + next.compressed_size - from > most - used) break;
+      bytes = std::max(bytes, next.offset + next.compressed_size - from);
+      ++last;
+    }
+    runs.push_back({c, last, from, bytes, used});
+    used += bytes;
+    c = last;
+  }
+  return c;
+}
+
+}  // namespace
+
 // A relayed piece: its chunks, packed one after another into ring slots
 // (as many as fit each), read out of the page cache with plain stores,
 // checked and planned while the cache holds them, then sent to their place
-// in the frame's resident area. Runs of chunks that follow each other in
-// the record go as one range.
+// in the frame's resident area, a slot in one send (each send is a queue
+// submission on the GPU's side). Runs of chunks that follow each other in
+// the record go as one range. By demand, a slot holds as many of the
+// demand's runs as fit, each read with one read of its own.
 void RecordReads::relay_chunks(const PieceRound& round, uint64_t p) {
   Slot& slot = *round.relayed;
   const uint64_t most = parts_.relay->piece_bytes();
   const io::GpuPlanOptions plan_options{.color_attribute = parts_.options->decode.color_attribute};
   thread_local std::vector<PieceRelay::Range> ranges;  // grows once per thread
+  thread_local std::vector<SlotRun> runs;              // by demand: the runs in the slot
   RelayLaps laps(*parts_.counters);
   uint32_t c = round.cuts[p];
   const uint32_t end = round.cuts[p + 1];
@@ -223,21 +263,12 @@ void RecordReads::relay_chunks(const PieceRound& round, uint64_t p) {
       ++c;
       continue;
     }
-    // By demand: the chunks that lie close together are read at once,
-    // with the bytes between them (one read, not one a chunk; read_runs.h).
     const bool together = slot.by_demand;
     uint64_t bytes = 0;
     uint32_t last = c;
     if (together) {
-      // Joined as plan_runs() joins them, and no longer than a ring slot.
-      const uint64_t from = round.chunks[c].offset;
-      while (last < end) {
-        const io::ChunkDesc& next = round.chunks[last];
-        if (last > c && !joins_run(from, from + bytes, next.offset, kRunGap)) break;
-        if (next.offset < from || next.offset + next.compressed_size - from > most) break;
-        bytes = std::max(bytes, next.offset + next.compressed_size - from);
-        ++last;
-      }
+      last = gather_runs(round.chunks, c, end, most, runs);
+      bytes = runs.back().at + runs.back().bytes;
     } else {
       while (last < end && bytes + round.chunks[last].compressed_size <= most) bytes += round.chunks[last++].compressed_size;
     }
@@ -246,16 +277,22 @@ void RecordReads::relay_chunks(const PieceRound& round, uint64_t p) {
     try {
       ranges.clear();
       if (together) {
-        const uint64_t from = round.offset + round.chunks[c].offset;
-        read_piece(piece.first(bytes), from, bytes, round.frame, from + bytes, true);
-        parts_.counters->runs_read.fetch_add(1, kRelaxed);
-        parts_.counters->run_bytes_asked.fetch_add(bytes, kRelaxed);
+        for (const SlotRun& run : runs) {
+          const uint64_t from = round.offset + run.from;
+          read_piece(piece.subspan(run.at, run.bytes), from, run.bytes, round.frame, from + run.bytes, true);
+          parts_.counters->runs_read.fetch_add(1, kRelaxed);
+          parts_.counters->run_bytes_asked.fetch_add(run.bytes, kRelaxed);
+        }
         laps.lap(RelayLaps::Copy);
       }
       uint64_t at = 0;
+      size_t r = 0;  // by demand: the run chunk k lies in
       for (uint32_t k = c; k < last; ++k) {
         const io::ChunkDesc& chunk = round.chunks[k];
-        if (together) at = chunk.offset - round.chunks[c].offset;
+        if (together) {
+          while (k >= runs[r].last) ++r;
+          at = runs[r].at + (chunk.offset - runs[r].from);
+        }
         const std::span<std::byte> dst = piece.subspan(at, chunk.compressed_size);
         if (together) {
           check_chunk(dst, round.frame, k, chunk.checksum);

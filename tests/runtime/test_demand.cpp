@@ -14,6 +14,7 @@
 #include <random>
 #include <thread>
 
+#include "demand_test_util.h"
 #include "runtime_test_util.h"
 #include "sluice/io/lod.h"
 #include "sluice/io/reader.h"
@@ -26,90 +27,10 @@ namespace sluice::runtime {
 namespace {
 
 namespace fs = std::filesystem;
-using Mat = std::array<float, 16>;  // column-major
-
-float& at(Mat& m, int r, int c) { return m[size_t(c) * 4 + size_t(r)]; }
-
-// World -> eye, looking from `eye` at `target` with +z up.
-Mat look_at(std::array<float, 3> eye, std::array<float, 3> target) {
-  auto sub = [](auto a, auto b) { return std::array<float, 3>{a[0] - b[0], a[1] - b[1], a[2] - b[2]}; };
-  auto norm = [](std::array<float, 3> v) {
-    const float l = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-    return std::array<float, 3>{v[0] / l, v[1] / l, v[2] / l};
-  };
-  auto cross = [](auto a, auto b) {
-    return std::array<float, 3>{a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-  };
-  auto dot = [](auto a, auto b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; };
-  const auto f = norm(sub(target, eye));
-  const auto s = norm(cross(f, std::array<float, 3>{0, 0, 1}));
-  const auto u = cross(s, f);
-  Mat m{};
-  for (int c = 0; c < 3; ++c) {
-    at(m, 0, c) = s[size_t(c)];
-    at(m, 1, c) = u[size_t(c)];
-    at(m, 2, c) = -f[size_t(c)];
-  }
-  at(m, 0, 3) = -dot(s, eye);
-  at(m, 1, 3) = -dot(u, eye);
-  at(m, 2, 3) = dot(f, eye);
-  at(m, 3, 3) = 1;
-  return m;
-}
-
-// Eye -> Vulkan clip (y down, depth 0..1, standard), vertical fov 45 degrees.
-Mat perspective(float aspect, float near_plane, float far_plane) {
-  const float t = 1.0f / std::tan(0.5f * 45.0f * 3.14159265f / 180.0f);
-  Mat m{};
-  at(m, 0, 0) = t / aspect;
-  at(m, 1, 1) = -t;
-  at(m, 2, 2) = far_plane / (near_plane - far_plane);
-  at(m, 2, 3) = near_plane * far_plane / (near_plane - far_plane);
-  at(m, 3, 2) = -1;
-  return m;
-}
-
-ViewDemand demand_of(std::array<float, 3> eye, std::array<float, 3> target, float level, bool lod = true) {
-  ViewDemand d;
-  d.views.push_back({look_at(eye, target), perspective(16.0f / 9.0f, 0.01f, 100.0f)});
-  d.lod = lod;
-  d.level = level;
-  d.reference_distance = 1.5f;  // about the data's diagonal
-  d.particle_radius = 0.005f;
-  d.particle_reach = 0.005f;
-  return d;
-}
-
-// A scattered block (1 x 0.6 x 0.3) with random ids: chunks of 8192 written
-// as LOD tiers (scattered data: tiers pay).
-// `major`: the container's layout (io::set_format_version).
-fs::path write_scattered(const fs::path& path, uint64_t frames, uint32_t n, uint16_t major = io::kFormatMajor) {
-  io::FileHeader header;
-  io::set_format_version(header, major);
-  header.particle_spacing = 0.01f;
-  header.particle_radius = 0.005f;
-  header.frame_rate = 30;
-  io::ContainerWriter writer(path, header);
-  for (uint64_t f = 0; f < frames; ++f) {
-    std::mt19937 rng(uint32_t(f) + 11);
-    std::uniform_real_distribution<float> u(0, 1);
-    std::vector<float> xyz;
-    std::vector<uint16_t> lod;
-    for (uint32_t i = 0; i < n; ++i) {
-      xyz.insert(xyz.end(), {u(rng), 0.6f * u(rng), 0.3f * u(rng) + 0.01f * float(f)});
-      lod.push_back(io::lod_value_from_id(i));
-    }
-    io::FrameInput in;
-    in.positions = xyz;
-    in.lod = lod;
-    in.time = double(f) / 30;
-    io::EncodeOptions o;
-    o.chunk_particles = 8192;
-    writer.append(io::encode_frame(in, header, o));
-  }
-  writer.finish();
-  return path;
-}
+using test::at;
+using test::demand_of;
+using test::Mat;
+using test::write_scattered;
 
 class DemandTest : public ::testing::Test {
  protected:
