@@ -57,6 +57,8 @@ struct Pass {
   std::string window;  // in use / planned
   std::string io_mode;
   uint64_t cache_hits = 0;  // frames served from memory during the timing (should be 0)
+  uint64_t bytes_read = 0;    // what the pipeline asked of the file during the timing
+  uint64_t device_bytes = 0;  // what storage delivered meanwhile (process_read_bytes: readahead included)
 };
 
 struct PassSetup {
@@ -94,11 +96,14 @@ Pass stream(const io::ContainerReader& reader, const Slice& slice, const PassSet
   };
   if (loop) consume(pipeline.window(), 0);
   const PipelineStats before = pipeline.stats();
+  const uint64_t device_before = process_read_bytes();
   const auto start = Clock::now();
   Pass p;
   p.frames = consume(loop ? std::numeric_limits<uint64_t>::max() : slice.frames, loop ? min_seconds : 0);
   p.seconds = seconds_since(start);
+  p.device_bytes = process_read_bytes() - device_before;
   const PipelineStats after = pipeline.stats();
+  p.bytes_read = after.bytes_read - before.bytes_read;
   p.rates = runtime::rates_between(before, after);
   p.window = std::to_string(after.active_frames) + "/" + std::to_string(after.window_frames);
   p.io_mode = after.io_mode;
@@ -274,14 +279,20 @@ void run_stream_bench(const StreamBenchOptions& o) {
   std::printf("  page cache held %s of the frames for the page-cache passes\n", percent(warm_share).c_str());
 
   // 2. The pipeline, from storage and from the page cache.
-  Table passes({"source", "frames/s", "M particles/s", "read GB/s", "decoded GB/s", "window", "bound frames/s",
-                "vs bound", "limited by", "vs decode alone", "read path"});
+  Table passes({"source", "frames/s", "M particles/s", "read GB/s", "read a frame", "device a frame", "decoded GB/s", "window",
+                "bound frames/s", "vs bound", "limited by", "vs decode alone", "read path"});
   auto pass_row = [&](const std::string& name, const Pass& p, double read_bound, const std::string& read_name) {
     const double fps = double(p.frames) / p.seconds;
     const double read_fps = read_bound / in, copy_fps = copy_n / out;
     const bool read_slower = read_fps < copy_fps;
+    // What storage delivered beside what was asked (readahead cannot hide):
+    // about 0 from the page cache.
+    const double frames = double(std::max<uint64_t>(p.frames, 1));
+    const double asked = double(p.bytes_read) / frames, device = double(p.device_bytes) / frames;
     passes.row({name, num(fps, 1), num(fps * double(slice.particles) / double(slice.frames) / 1e6, 1),
-                num(p.rates.read_mbps / 1e3, 2), num(p.rates.decode_mbps / 1e3, 2), p.window,
+                num(p.rates.read_mbps / 1e3, 2), num(asked / 1e6, 1) + " MB",
+                num(device / 1e6, 1) + " MB" + (asked > 0 && device > 0 ? " (" + num(device / asked, 2) + "x)" : ""),
+                num(p.rates.decode_mbps / 1e3, 2), p.window,
                 num(std::min(read_fps, copy_fps), 1), percent(fps / std::min(read_fps, copy_fps)),
                 read_slower ? read_name : "memcpy, " + threads_text(all_cores), percent(fps / decode_fps), p.io_mode});
     if (p.cache_hits) {
