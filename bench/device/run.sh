@@ -501,7 +501,7 @@ for stage in $stages; do
       run $S synth -n 100M --frames ${VIEW_FRAMES:-12} -o $T/v20.sluice --force -q --gpu-decodable
       run $S bench view $T/v20.sluice --steps ${VIEW_STEPS:-12} --cache-steps ${CACHE_STEPS:-60} --memory 24G --no-psnr
       ;;
-    relayab)  # issue 45: a ring slot holds several runs, sends submitted together; this build against BASE (pack.sh BASE=...), alternated
+    relayab)  # issue 45: a ring slot holds several of a demand's runs (one send); this build against BASE (pack.sh BASE=...), alternated
       run $S bench render --sizes 10M --repeats 3 >/dev/null  # warm-up
       run $S synth -n 100M --frames ${VIEW_FRAMES:-12} -o $T/v20.sluice --force -q --gpu-decodable
       for i in 1 2 3; do

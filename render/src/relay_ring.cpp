@@ -38,10 +38,6 @@ RelayRing::~RelayRing() {
 
 void RelayRing::wait(uint64_t value) const {
   if (value == 0) return;
-  {
-    const std::lock_guard lock(mutex_);
-    if (broken_ && value > submitted_) return;  // its submission failed: it is never signalled
-  }
   const vk::Semaphore sem = *done_;
   const vk::SemaphoreWaitInfo info({}, sem, value);
   while (ctx_.device.waitSemaphores(info, UINT64_MAX) == vk::Result::eTimeout) {
@@ -103,68 +99,27 @@ void RelayRing::send(std::span<std::byte> piece, const runtime::FrameBuffers& fr
     cmd.begin(vk::CommandBufferBeginInfo(vk::CommandBufferUsageFlagBits::eOneTimeSubmit));
     if (!regions.empty()) cmd.copyBuffer(*memory_.buffer, *area.device.buffer, regions);
     cmd.end();
+    const vk::CommandBufferSubmitInfo cb(cmd);
+    std::unique_lock lock(mutex_);
+    const uint64_t value = submitted_ + 1;
+    const vk::SemaphoreSubmitInfo signal(*done_, value, vk::PipelineStageFlagBits2::eAllCommands);
+    // Values must rise in submission order: submitted under mutex_.
+    ctx_.submit(ctx_.relay_queue, vk::SubmitInfo2({}, {}, cb, signal));
+    submitted_ = value;
+    slot.ticket = value;
+    free_.push_back(s);
+    lock.unlock();
+    freed_.notify_one();
+    // The area's decode waits for its newest copy (several threads send into one area).
+    uint64_t seen = area.relayed.load(std::memory_order_relaxed);
+    while (seen < value && !area.relayed.compare_exchange_weak(seen, value, std::memory_order_relaxed)) {
+    }
   } catch (const vk::SystemError& e) {
     put_back(s);
     throw Error(std::string("relaying a piece to the GPU failed: ") + e.what());
   } catch (...) {
     put_back(s);
     throw;
-  }
-  uint64_t value = 0;
-  {
-    const std::lock_guard lock(mutex_);
-    value = ++assigned_;
-    slot.ticket = value;
-    queued_.push_back(s);
-  }
-  // The area's decode waits for its newest copy (several threads send into one area).
-  uint64_t seen = area.relayed.load(std::memory_order_relaxed);
-  while (seen < value && !area.relayed.compare_exchange_weak(seen, value, std::memory_order_relaxed)) {
-  }
-  submit_until(value);
-}
-
-// Waits, or submits, until `value`'s copy is submitted: a consumer that waits
-// for it on the GPU is submitted after it (on a queue shared with the relay,
-// a wait for a signal not yet submitted would stall the queue for good).
-void RelayRing::submit_until(uint64_t value) {
-  thread_local std::vector<uint32_t> batch;
-  thread_local std::vector<vk::CommandBufferSubmitInfo> buffers;
-  std::unique_lock lock(mutex_);
-  while (submitted_ < value) {
-    if (broken_) throw Error("relaying a piece to the GPU failed: an earlier submission of the relay failed");
-    if (submitting_) {  // that thread takes our copy along
-      submitted_now_.wait(lock);
-      continue;
-    }
-    submitting_ = true;
-    batch.swap(queued_);
-    queued_.clear();
-    const uint64_t newest = assigned_;  // the newest queued copy's: values rise in queue order
-    lock.unlock();
-    buffers.clear();
-    for (uint32_t s : batch) buffers.emplace_back(*slots_[s].cmd);
-    const vk::SemaphoreSubmitInfo signal(*done_, newest, vk::PipelineStageFlagBits2::eAllCommands);
-    bool failed = false;
-    std::string why;
-    try {
-      ctx_.submit(ctx_.relay_queue, vk::SubmitInfo2({}, {}, buffers, signal));
-    } catch (const vk::SystemError& e) {
-      failed = true;
-      why = e.what();
-    }
-    lock.lock();
-    submitting_ = false;
-    if (failed) {
-      broken_ = true;
-      for (uint32_t s : batch) slots_[s].ticket = 0;  // never signalled: claim() must not wait for it
-    } else {
-      submitted_ = newest;
-    }
-    for (uint32_t s : batch) free_.push_back(s);
-    freed_.notify_all();
-    submitted_now_.notify_all();
-    if (failed) throw Error("relaying a piece to the GPU failed: " + why);
   }
 }
 

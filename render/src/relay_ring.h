@@ -2,17 +2,9 @@
 // frames' pieces through (runtime/relay.h): slots of cached host-visible
 // memory the read threads write with plain stores, each copied by the GPU
 // into a frame's resident area on the context's relay queue right after.
-// Every copy gets the next value of the ring's timeline semaphore; a slot
-// is reused once its copy's value is reached, and the area remembers the
-// largest value copied into it (what its decode waits for).
-//
-// Copies sent at once go in one queue submission: a sending thread queues
-// its slot's command buffer and, unless another thread is submitting,
-// submits every copy queued (its own and those queued meanwhile) with one
-// signal, the newest value; otherwise it waits for that submission, which
-// takes its copy along or is followed by one that does. Up to 13 read
-// threads send at once on 16 cores (docs/measurements.md has what a
-// submission each cost).
+// Every copy signals the ring's timeline semaphore with the next value; a
+// slot is reused once its copy's value is reached, and the area remembers
+// the largest value copied into it (what its decode waits for).
 #pragma once
 
 #include <atomic>
@@ -70,24 +62,16 @@ class RelayRing final : public runtime::PieceRelay {
   };
   uint32_t slot_of(std::span<std::byte> piece) const;
   void put_back(uint32_t slot);
-  // Returns once the copy that signals `value` is submitted, by this thread
-  // (with every copy queued with it) or by another.
-  void submit_until(uint64_t value);
 
   const detail::ContextImpl& ctx_;
   uint64_t piece_bytes_;
   Buffer memory_;  // slots() * piece_bytes_, cached host-visible, mapped
   std::vector<Slot> slots_;
   vk::raii::Semaphore done_{nullptr};
-  mutable std::mutex mutex_;  // free_, queued_, submitting_, broken_, assigned_ and submitted_
+  mutable std::mutex mutex_;  // free_ and submitted_
   std::condition_variable freed_;
-  std::condition_variable submitted_now_;
-  std::deque<uint32_t> free_;    // oldest copy first
-  std::vector<uint32_t> queued_;  // slots sent and not yet submitted, in the order of their values
-  bool submitting_ = false;       // a thread is submitting a batch
-  bool broken_ = false;           // a submission failed: its copies are never signalled
-  uint64_t assigned_ = 0;         // the value the newest copy sent signals
-  uint64_t submitted_ = 0;        // the value the newest copy submitted signals
+  std::deque<uint32_t> free_;  // oldest copy first
+  uint64_t submitted_ = 0;     // the value the newest copy signals
 };
 
 }  // namespace sluice::render
