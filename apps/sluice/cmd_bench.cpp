@@ -74,6 +74,9 @@ void add_bench_stream(CLI::App* bench) {
   st->add_option("--ring-slots", stream->ring_slots,
                  "With --gpu: slots of the ring the relayed row reads through (default: the read threads + 4)");
   st->add_option("--ring-piece", *ring_piece, "With --gpu: bytes of a ring slot, e.g. 8M (default: 8M)");
+  st->add_flag("--ring-imported", stream->ring_imported,
+               "With --gpu: the ring in anonymous memory the device imports (VK_EXT_external_memory_host), not the "
+               "driver's own (the row says which it got)");
   st->callback([stream, stream_memory, stream_gpu, ring_piece] {
     if (!stream_memory->empty()) {
       const auto bytes = runtime::parse_byte_size(*stream_memory);

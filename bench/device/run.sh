@@ -501,6 +501,14 @@ for stage in $stages; do
       run $S synth -n 100M --frames ${VIEW_FRAMES:-12} -o $T/v20.sluice --force -q --gpu-decodable
       run $S bench view $T/v20.sluice --steps ${VIEW_STEPS:-12} --cache-steps ${CACHE_STEPS:-60} --memory 24G --no-psnr
       ;;
+    ringmem)  # issue 45: the relay's ring in the driver's memory against imported anonymous memory (--ring-imported), alternated; then 6 read threads
+      run $S synth -n 10M --frames 48 -o $T/t10m.sluice --force -q --gpu-decodable
+      for i in 1 2; do
+        run $S bench stream --gpu $T/t10m.sluice --no-storage --memory 16G --min-time 2
+        run $S bench stream --gpu $T/t10m.sluice --no-storage --memory 16G --min-time 2 --ring-imported
+      done
+      run $S bench stream --gpu $T/t10m.sluice --no-storage --memory 16G --min-time 2 --read-threads 6
+      ;;
     relayab)  # issue 45: a ring slot holds several of a demand's runs (one send); this build against BASE (pack.sh BASE=...), alternated
       run $S bench render --sizes 10M --repeats 3 >/dev/null  # warm-up
       run $S synth -n 100M --frames ${VIEW_FRAMES:-12} -o $T/v20.sluice --force -q --gpu-decodable

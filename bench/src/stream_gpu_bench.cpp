@@ -76,8 +76,9 @@ DevicePass stream_to_device(const io::ContainerReader& reader, const Slice& slic
                             const DeviceSetup& setup, bool gpu_decode, bool mapped, double min_seconds) {
   render::StagingAllocator staging(context, setup.staging);
   if (staging.resident()) {
-    std::fprintf(stderr, "  the relayed row's ring: %u slots of %.1f MiB, %s\n", staging.ring_slots(),
+    std::fprintf(stderr, "  the relayed row's ring: %u slots of %.1f MiB in %s, %s\n", staging.ring_slots(),
                  double(staging.ring_piece_bytes()) / (1 << 20),
+                 staging.ring_imported() ? "imported anonymous memory" : "the driver's memory",
                  context.relay_queue_shared() ? "sharing the transfer queue (Context::queue_lock)" : "on a queue of its own");
   }
   render::Renderer renderer(context, render::scene_info(reader));
@@ -148,6 +149,15 @@ DevicePass stream_to_device(const io::ContainerReader& reader, const Slice& slic
   p.fresh_blocks = staging.fresh_allocations() - blocks0;
   p.waiting_frames = waited_frames / p.seconds;
   p.waiting_gpu = waited_gpu / p.seconds;
+  if (stats.frames_relayed > stats0.frames_relayed) {
+    // The read threads' time on relayed frames by part (runtime::PipelineStats::relay).
+    const double read = double(std::max<uint64_t>(stats.frames_read - stats0.frames_read, 1));
+    const auto ms = [&](double a, double b) { return 1e3 * (a - b) / read; };
+    const runtime::PipelineStats::RelayTimes &t = stats.relay, &t0 = stats0.relay;
+    std::fprintf(stderr, "  the relayed row's read threads, ms a frame read: claim %.2f, copy %.2f, check %.2f, plan %.2f, send %.2f\n",
+                 ms(t.claim_seconds, t0.claim_seconds), ms(t.copy_seconds, t0.copy_seconds), ms(t.check_seconds, t0.check_seconds),
+                 ms(t.plan_seconds, t0.plan_seconds), ms(t.send_seconds, t0.send_seconds));
+  }
   flight.clear();
   return p;
 }
@@ -382,6 +392,7 @@ void run_stream_gpu_bench(const StreamBenchOptions& o) {
   relayed_setup.staging.resident = true;
   if (o.ring_slots > 0) relayed_setup.staging.ring_slots = o.ring_slots;
   if (o.ring_piece_bytes > 0) relayed_setup.staging.ring_piece_bytes = o.ring_piece_bytes;
+  if (o.ring_imported) relayed_setup.staging.ring_memory = render::RingMemory::Imported;
   std::array<DevicePass, kWays.size()> runs;
   for (size_t w = 0; w < kWays.size(); ++w) {
     step(kWays[w].relayed ? "the pipeline, GPU decoding, relayed" : kWays[w].gpu ? "the pipeline, GPU decoding" : "the pipeline, CPU decoding");

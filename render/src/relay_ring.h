@@ -11,6 +11,7 @@
 #include <condition_variable>
 #include <cstdint>
 #include <deque>
+#include <memory>
 #include <mutex>
 #include <vector>
 
@@ -36,9 +37,10 @@ struct ResidentArea {
 
 class RelayRing final : public runtime::PieceRelay {
  public:
-  // `slots` slots of `piece_bytes` each. Throws vk::SystemError when the
-  // memory cannot be had.
-  RelayRing(const detail::ContextImpl& ctx, uint32_t slots, uint64_t piece_bytes);
+  // `slots` slots of `piece_bytes` each, in anonymous memory the device
+  // imports when `import` and it can (imported()), else in the driver's.
+  // Throws vk::SystemError when the memory cannot be had.
+  RelayRing(const detail::ContextImpl& ctx, uint32_t slots, uint64_t piece_bytes, bool import);
   ~RelayRing() override;  // waits for the copies in flight
   RelayRing(const RelayRing&) = delete;
   RelayRing& operator=(const RelayRing&) = delete;
@@ -53,6 +55,7 @@ class RelayRing final : public runtime::PieceRelay {
   void wait(uint64_t value) const;
   void wait_all() const;  // every copy submitted so far
   uint32_t slots() const { return static_cast<uint32_t>(slots_.size()); }
+  bool imported() const { return host_ != nullptr; }
 
  private:
   struct Slot {
@@ -65,6 +68,13 @@ class RelayRing final : public runtime::PieceRelay {
 
   const detail::ContextImpl& ctx_;
   uint64_t piece_bytes_;
+  // Host memory the ring's buffer imports, unmapped after memory_ is freed
+  // (members go in reverse order); null when memory_ is the driver's own.
+  struct Unmap {
+    size_t bytes;  // no initializer: one makes a nested class not default-constructible inside RelayRing
+    void operator()(void* p) const;
+  };
+  std::unique_ptr<void, Unmap> host_;
   Buffer memory_;  // slots() * piece_bytes_, cached host-visible, mapped
   std::vector<Slot> slots_;
   vk::raii::Semaphore done_{nullptr};

@@ -73,7 +73,8 @@ StagingAllocator::StagingAllocator(Context& context, const StagingOptions& optio
   device_local_heap_ = heap_with(c, vk::MemoryPropertyFlagBits::eDeviceLocal);
   if (options_.resident) {
     const uint32_t slots = options_.ring_slots > 0 ? options_.ring_slots : default_ring_slots();
-    ring_ = std::make_unique<RelayRing>(c, slots, std::max<uint64_t>(options_.ring_piece_bytes, 4096));
+    ring_ = std::make_unique<RelayRing>(c, slots, std::max<uint64_t>(options_.ring_piece_bytes, 4096),
+                                        options_.ring_memory == RingMemory::Imported);
     budget_ = std::make_unique<HeapBudget>(context, *this, device_local_heap_, true);
   } else if (device_heap_) {
     budget_ = std::make_unique<HeapBudget>(context, *this, heap_, false);
@@ -83,6 +84,7 @@ StagingAllocator::StagingAllocator(Context& context, const StagingOptions& optio
 runtime::PieceRelay* StagingAllocator::relay() { return ring_.get(); }
 uint32_t StagingAllocator::ring_slots() const { return ring_ ? ring_->slots() : 0; }
 uint64_t StagingAllocator::ring_piece_bytes() const { return ring_ ? ring_->piece_bytes() : 0; }
+bool StagingAllocator::ring_imported() const { return ring_ && ring_->imported(); }
 
 VkSemaphore StagingAllocator::relay_semaphore() const { return ring_ ? static_cast<VkSemaphore>(ring_->semaphore()) : VK_NULL_HANDLE; }
 

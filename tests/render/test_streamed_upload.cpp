@@ -204,6 +204,21 @@ TEST_F(StreamedUpload, RelayedIntoDeviceMemoryMatchesLoadFrame) {
   EXPECT_EQ(stats.frames_read, kFrames);
 }
 
+// The ring in anonymous memory the device imports (RingMemory::Imported;
+// lavapipe offers VK_EXT_external_memory_host): the same pictures.
+TEST_F(StreamedUpload, RelayedThroughAnImportedRingMatchesLoadFrame) {
+  ValidationGuard guard;
+  const io::ContainerReader reader(gpu_path_);
+  const std::vector<Rendered> expected = reference(reader);
+  StagingAllocator staging(context(), {.resident = true, .ring_memory = RingMemory::Imported});
+  ASSERT_TRUE(staging.ring_imported()) << "the device did not import the ring";
+  runtime::PipelineStats stats;
+  expect_same(streamed(reader, staging, &staging, true, &stats), expected);
+  EXPECT_EQ(stats.frames_relayed, kFrames);
+  StagingAllocator driver(context(), {.resident = true});
+  EXPECT_FALSE(driver.ring_imported());
+}
+
 // Pieces smaller than a chunk (a chunk here is about 5 KB): each chunk is
 // read whole on its own and sent in parts, several slots at once.
 TEST_F(StreamedUpload, RelayedInPiecesSmallerThanAChunkMatchesLoadFrame) {

@@ -26,6 +26,7 @@ struct StreamBenchOptions {
   // --gpu: the relayed row's ring (render::StagingOptions; 0: its defaults).
   uint32_t ring_slots = 0;
   uint64_t ring_piece_bytes = 0;
+  bool ring_imported = false;  // the ring in imported anonymous memory (render::RingMemory::Imported)
 };
 
 // Throws io::Error on a bad file.

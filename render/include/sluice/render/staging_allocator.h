@@ -36,6 +36,16 @@ namespace sluice::render {
 
 class RelayRing;
 
+// Where the relay's ring lives in host memory.
+enum class RingMemory : uint8_t {
+  // Host-visible, cached memory the driver allocates.
+  Driver,
+  // Anonymous memory sluice maps and the device imports
+  // (VK_EXT_external_memory_host); the driver's memory where the device
+  // cannot import it (StagingAllocator::ring_imported() says which).
+  Imported,
+};
+
 struct StagingOptions {
   // Frames kept encoded live in device memory, relayed through a ring.
   bool resident = false;
@@ -44,6 +54,7 @@ struct StagingOptions {
   // docs/gpu_decode.md measures slot counts and sizes).
   uint32_t ring_slots = 0;
   uint64_t ring_piece_bytes = 8 << 20;
+  RingMemory ring_memory = RingMemory::Driver;  // docs/measurements.md, "The relay's sends"
 };
 
 class StagingAllocator final : public runtime::FrameAllocator {
@@ -63,6 +74,7 @@ class StagingAllocator final : public runtime::FrameAllocator {
   // The ring's shape (0 slots without a resident window).
   uint32_t ring_slots() const;
   uint64_t ring_piece_bytes() const;
+  bool ring_imported() const;  // the ring is imported host memory (RingMemory::Imported, and the device took it)
   // The ring's timeline semaphore, which a resident frame's decode waits on
   // (null without a resident window).
   VkSemaphore relay_semaphore() const;
