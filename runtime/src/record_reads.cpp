@@ -16,14 +16,6 @@ constexpr auto kRelaxed = std::memory_order_relaxed;
 
 uint64_t round_up(uint64_t n, uint64_t to) { return (n + to - 1) / to * to; }
 
-// One run of a demand in a ring slot: chunks [first, last), whose bytes
-// [from, from + bytes) of the record (gaps read through included) lie at
-// `at` in the slot.
-struct SlotRun {
-  uint32_t first = 0, last = 0;
-  uint64_t from = 0, bytes = 0, at = 0;
-};
-
 uint64_t steady_ns() {
   return static_cast<uint64_t>(std::chrono::duration_cast<std::chrono::nanoseconds>(
                                    std::chrono::steady_clock::now().time_since_epoch())
@@ -214,9 +206,18 @@ void PieceRound::operator()(uint64_t p) const {
 
 namespace {
 
+// One run of a demand in a ring slot: chunks [first, last), whose bytes
+// [from, from + bytes) of the record (gaps read through included) lie at
+// `at` in the slot.
+struct SlotRun {
+  uint32_t first = 0, last = 0;
+  uint64_t from = 0, bytes = 0, at = 0;
+};
+
 // The runs of a demand (as plan_runs() joins chunks) from chunk `c` on that
 // fit one after another into a ring slot of `most` bytes, at most `end`;
-// none when chunk `c` alone is larger. Returns the chunk after the last.
+// none when chunk `c` alone is larger (the caller relays such a chunk
+// apart). Returns the chunk after the last.
 uint32_t gather_runs(std::span<const io::ChunkDesc> chunks, uint32_t c, uint32_t end, uint64_t most,
                      std::vector<SlotRun>& runs) {
   runs.clear();
