@@ -324,9 +324,7 @@ Window::~Window() {
   glfwDestroyWindow(w.window);
 }
 
-GLFWwindow* Window::glfw() const { return impl_->window; }
 bool Window::should_close() const { return glfwWindowShouldClose(impl_->window) != 0; }
-void Window::request_close() { glfwSetWindowShouldClose(impl_->window, GLFW_TRUE); }
 uint32_t Window::width() const {
   int w = 0, h = 0;
   glfwGetFramebufferSize(impl_->window, &w, &h);

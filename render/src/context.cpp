@@ -113,7 +113,7 @@ VKAPI_ATTR VkBool32 VKAPI_CALL debug_callback(VkDebugUtilsMessageSeverityFlagBit
                                               const VkDebugUtilsMessengerCallbackDataEXT* data, void* user) {
   auto* impl = static_cast<detail::ContextImpl*>(user);
   const bool error = severity & VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT;
-  (error ? impl->errors : impl->warnings).fetch_add(1, std::memory_order_relaxed);
+  if (error) impl->errors.fetch_add(1, std::memory_order_relaxed);  // warnings are only kept as messages
   const std::string text = std::string(error ? "validation error: " : "validation warning: ") +
                            (data && data->pMessage ? data->pMessage : "");
   {
@@ -415,30 +415,11 @@ std::string device_unusable_reason(VkInstance instance, VkPhysicalDevice physica
 }
 
 const DeviceInfo& Context::device() const { return impl_->info; }
-bool Context::has_transfer_queue() const { return impl_->transfer_family != impl_->graphics_family; }
 bool Context::validation_active() const { return impl_->validation; }
 uint64_t Context::validation_errors() const { return impl_->errors.load(); }
-uint64_t Context::validation_warnings() const { return impl_->warnings.load(); }
 std::vector<std::string> Context::validation_messages() const {
   std::lock_guard lock(impl_->messages_mutex);
   return impl_->messages;
-}
-
-uint64_t Context::device_budget_bytes() const {
-  const Impl& c = *impl_;
-  uint64_t total = 0;
-  if (c.memory_budget) {
-    const auto chain = c.physical.getMemoryProperties2<vk::PhysicalDeviceMemoryProperties2,
-                                                       vk::PhysicalDeviceMemoryBudgetPropertiesEXT>();
-    const auto& props = chain.get<vk::PhysicalDeviceMemoryProperties2>().memoryProperties;
-    const auto& budget = chain.get<vk::PhysicalDeviceMemoryBudgetPropertiesEXT>();
-    for (uint32_t h = 0; h < props.memoryHeapCount; ++h) {
-      if (!(props.memoryHeaps[h].flags & vk::MemoryHeapFlagBits::eDeviceLocal)) continue;
-      total += budget.heapBudget[h] > budget.heapUsage[h] ? budget.heapBudget[h] - budget.heapUsage[h] : 0;
-    }
-    return total;
-  }
-  return c.info.device_local_bytes;
 }
 
 uint64_t Context::heap_available_bytes(uint32_t heap) const {

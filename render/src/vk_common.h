@@ -54,7 +54,7 @@ struct detail::ContextImpl {
   bool validation = false;
 
   // Debug messenger state (written from the driver's threads).
-  std::atomic<uint64_t> errors{0}, warnings{0};
+  std::atomic<uint64_t> errors{0};
   mutable std::mutex messages_mutex;
   std::vector<std::string> messages;
 

@@ -21,11 +21,6 @@ Vec3 horizontal(Vec3 a, Vec3 b) { return {b.x - a.x, 0, b.z - a.z}; }
 
 Controls::Controls(const Placement& initial, const ControlOptions& options) : options_(options), placement_(initial) {}
 
-void Controls::set_placement(const Placement& p) {
-  placement_ = p;
-  holding_ = {false, false};
-}
-
 void Controls::start_grab(const ActionState& state) {
   for (int h = 0; h < 2; ++h) {
     holding_[size_t(h)] = state.hands[size_t(h)].grab && state.hands[size_t(h)].pose_valid;

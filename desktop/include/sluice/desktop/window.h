@@ -63,9 +63,7 @@ class Window {
   Window(const Window&) = delete;
   Window& operator=(const Window&) = delete;
 
-  GLFWwindow* glfw() const;
   bool should_close() const;
-  void request_close();
   // Framebuffer size in pixels (0 x 0 while minimized).
   uint32_t width() const;
   uint32_t height() const;

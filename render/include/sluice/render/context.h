@@ -141,21 +141,15 @@ class Context {
   // The handles in use (a host's own, or the ones this Context created).
   const VulkanHandles& vulkan() const;
   bool owns_device() const;
-  bool has_transfer_queue() const;  // a separate transfer-only queue family is used for uploads
   // See "Queues" above. Any thread.
   bool relay_queue_shared() const;
   std::mutex& queue_lock() const;
-  // Device-local memory the process may still allocate, from
-  // VK_EXT_memory_budget where present (else the heap size): for the runtime's
-  // prefetch window.
-  uint64_t device_budget_bytes() const;
   // Bytes still free in one memory heap (budget - usage from
   // VK_EXT_memory_budget where present, else the heap size). Any thread.
   uint64_t heap_available_bytes(uint32_t heap) const;
 
   bool validation_active() const;
   uint64_t validation_errors() const;
-  uint64_t validation_warnings() const;
   std::vector<std::string> validation_messages() const;  // the first 32 errors and warnings
 
 

@@ -57,7 +57,6 @@ class Controls {
   // One frame: the actions' state and the seconds since the previous update.
   Commands update(const ActionState& state, double seconds);
   const Placement& placement() const { return placement_; }
-  void set_placement(const Placement& p);  // drops any grab in progress
 
  private:
   void start_grab(const ActionState& state);
