@@ -1,6 +1,7 @@
 // Vulkan instance, device selection and queues; buffer and image helpers.
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cctype>
 #include <cstdio>
 #include <cstring>
@@ -465,6 +466,33 @@ void detail::ContextImpl::submit(const vk::raii::Queue& queue, const vk::SubmitI
 void detail::ContextImpl::wait_idle(const vk::raii::Queue& queue) const {
   const std::lock_guard lock(queue_mutex);  // rare: teardown
   queue.waitIdle();
+}
+
+uint64_t host_import_alignment(const detail::ContextImpl& ctx) {
+  if (!ctx.external_memory_host) return 0;
+  return ctx.physical.getProperties2<vk::PhysicalDeviceProperties2, vk::PhysicalDeviceExternalMemoryHostPropertiesEXT>()
+      .get<vk::PhysicalDeviceExternalMemoryHostPropertiesEXT>()
+      .minImportedHostPointerAlignment;
+}
+
+Buffer import_host_buffer(const detail::ContextImpl& ctx, void* host, vk::DeviceSize bytes, vk::BufferUsageFlags usage) {
+  constexpr auto kHandle = vk::ExternalMemoryHandleTypeFlagBits::eHostAllocationEXT;
+  const vk::MemoryHostPointerPropertiesEXT pointer = ctx.device.getMemoryHostPointerPropertiesEXT(kHandle, host);
+  const vk::ExternalMemoryBufferCreateInfo external(kHandle);
+  vk::BufferCreateInfo info({}, bytes, usage, vk::SharingMode::eExclusive);
+  info.pNext = &external;
+  Buffer b;
+  b.buffer = vk::raii::Buffer(ctx.device, info);
+  const uint32_t types = b.buffer.getMemoryRequirements().memoryTypeBits & pointer.memoryTypeBits;
+  if (types == 0) return {};
+  const vk::ImportMemoryHostPointerInfoEXT import(kHandle, host);
+  vk::MemoryAllocateInfo allocate(bytes, uint32_t(std::countr_zero(types)));
+  allocate.pNext = &import;
+  b.memory = vk::raii::DeviceMemory(ctx.device, allocate);
+  b.buffer.bindMemory(*b.memory, 0);
+  b.size = bytes;
+  b.mapped = host;
+  return b;
 }
 
 Buffer create_buffer(const detail::ContextImpl& ctx, vk::DeviceSize size, vk::BufferUsageFlags usage, MemoryKind kind) {

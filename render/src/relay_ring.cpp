@@ -2,7 +2,6 @@
 
 #include <sys/mman.h>
 
-#include <bit>
 #include <stdexcept>
 
 #include "staging_block.h"
@@ -10,53 +9,20 @@
 
 namespace sluice::render {
 
-namespace {
-
-constexpr auto kHostAllocation = vk::ExternalMemoryHandleTypeFlagBits::eHostAllocationEXT;
-
-uint64_t import_alignment(const detail::ContextImpl& ctx) {
-  return ctx.physical.getProperties2<vk::PhysicalDeviceProperties2, vk::PhysicalDeviceExternalMemoryHostPropertiesEXT>()
-      .get<vk::PhysicalDeviceExternalMemoryHostPropertiesEXT>()
-      .minImportedHostPointerAlignment;
-}
-
-// A transfer source over `bytes` of `host` (aligned as the device asks),
-// imported; an empty Buffer when no memory type takes the pointer.
-Buffer imported_buffer(const detail::ContextImpl& ctx, void* host, uint64_t bytes) {
-  const vk::MemoryHostPointerPropertiesEXT pointer = ctx.device.getMemoryHostPointerPropertiesEXT(kHostAllocation, host);
-  const vk::ExternalMemoryBufferCreateInfo external(kHostAllocation);
-  vk::BufferCreateInfo info({}, bytes, vk::BufferUsageFlagBits::eTransferSrc, vk::SharingMode::eExclusive);
-  info.pNext = &external;
-  Buffer b;
-  b.buffer = vk::raii::Buffer(ctx.device, info);
-  const uint32_t types = b.buffer.getMemoryRequirements().memoryTypeBits & pointer.memoryTypeBits;
-  if (types == 0) return {};
-  const vk::ImportMemoryHostPointerInfoEXT import(kHostAllocation, host);
-  vk::MemoryAllocateInfo allocate(bytes, uint32_t(std::countr_zero(types)));
-  allocate.pNext = &import;
-  b.memory = vk::raii::DeviceMemory(ctx.device, allocate);
-  b.buffer.bindMemory(*b.memory, 0);
-  b.size = bytes;
-  b.mapped = host;
-  return b;
-}
-
-}  // namespace
-
 void RelayRing::Unmap::operator()(void* p) const { ::munmap(p, bytes); }
 
 RelayRing::RelayRing(const detail::ContextImpl& ctx, uint32_t slots, uint64_t piece_bytes, bool import)
     : ctx_(ctx), piece_bytes_(piece_bytes), slots_(slots) {
   const uint64_t bytes = uint64_t(slots) * piece_bytes;
-  if (import && ctx.external_memory_host) {
-    const uint64_t align = std::max<uint64_t>(import_alignment(ctx), 1);
+  const uint64_t align = import ? host_import_alignment(ctx) : 0;  // 0: the device cannot import
+  if (align > 0) {
     const uint64_t rounded = (bytes + align - 1) / align * align;
     // Pages populated now, as the driver's memory would be.
     void* p = ::mmap(nullptr, rounded, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS | MAP_POPULATE, -1, 0);
     if (p != MAP_FAILED) {
       host_ = std::unique_ptr<void, Unmap>(p, Unmap{rounded});
       try {
-        memory_ = imported_buffer(ctx, p, rounded);
+        memory_ = import_host_buffer(ctx, p, rounded, vk::BufferUsageFlagBits::eTransferSrc);
       } catch (const vk::SystemError&) {
         memory_ = {};  // refused: the driver's memory below
       }

@@ -3,7 +3,6 @@
 #include "sluice/render/transfer_bound.h"
 
 #include <algorithm>
-#include <bit>
 #include <chrono>
 #include <cstring>
 #include <vector>
@@ -69,19 +68,12 @@ double host_to_device_gbps(Context& context, uint64_t bytes, const CopyShape& sh
   return sustained_copy_gbps(ctx, *staging.buffer, bytes, shape.in_flight, shape.seconds);
 }
 
-uint64_t import_alignment(Context& context) {
-  detail::ContextImpl& ctx = context_impl(context);
-  if (!ctx.external_memory_host) return 0;
-  return ctx.physical
-      .getProperties2<vk::PhysicalDeviceProperties2, vk::PhysicalDeviceExternalMemoryHostPropertiesEXT>()
-      .get<vk::PhysicalDeviceExternalMemoryHostPropertiesEXT>()
-      .minImportedHostPointerAlignment;
-}
+uint64_t import_alignment(Context& context) { return host_import_alignment(context_impl(context)); }
 
 ImportedCopy imported_host_copy_gbps(Context& context, const void* host, uint64_t bytes, const CopyShape& shape) {
   detail::ContextImpl& ctx = context_impl(context);
   ImportedCopy out;
-  const uint64_t alignment = import_alignment(context);
+  const uint64_t alignment = host_import_alignment(ctx);
   if (alignment == 0) {
     out.refusal = "the device has no VK_EXT_external_memory_host";
     return out;
@@ -90,24 +82,14 @@ ImportedCopy imported_host_copy_gbps(Context& context, const void* host, uint64_
     out.refusal = "pointer or size not a multiple of " + std::to_string(alignment) + " bytes";
     return out;
   }
-  constexpr auto kHandle = vk::ExternalMemoryHandleTypeFlagBits::eHostAllocationEXT;
   try {
-    const vk::MemoryHostPointerPropertiesEXT pointer = ctx.device.getMemoryHostPointerPropertiesEXT(kHandle, host);
-    const vk::ExternalMemoryBufferCreateInfo external(kHandle);
-    vk::BufferCreateInfo info({}, bytes, vk::BufferUsageFlagBits::eTransferSrc, vk::SharingMode::eExclusive);
-    info.pNext = &external;
-    vk::raii::Buffer source(ctx.device, info);
-    const uint32_t types = source.getMemoryRequirements().memoryTypeBits & pointer.memoryTypeBits;
-    if (types == 0) {
+    // Imported read-only in effect: the copy only reads it.
+    const Buffer source = import_host_buffer(ctx, const_cast<void*>(host), bytes, vk::BufferUsageFlagBits::eTransferSrc);
+    if (!source.mapped) {
       out.refusal = "no memory type both the buffer and the imported pointer allow";
       return out;
     }
-    const vk::ImportMemoryHostPointerInfoEXT import(kHandle, const_cast<void*>(host));
-    vk::MemoryAllocateInfo allocate(bytes, uint32_t(std::countr_zero(types)));
-    allocate.pNext = &import;
-    vk::raii::DeviceMemory memory(ctx.device, allocate);
-    source.bindMemory(*memory, 0);
-    out.gbps = sustained_copy_gbps(ctx, *source, bytes, shape.in_flight, shape.seconds);
+    out.gbps = sustained_copy_gbps(ctx, *source.buffer, bytes, shape.in_flight, shape.seconds);
     out.imported = true;
   } catch (const vk::SystemError& e) {
     out.refusal = e.what();

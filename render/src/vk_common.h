@@ -88,6 +88,14 @@ struct Buffer {
 // Readback; plain Upload memory may be write-combined, slow to read.
 enum class MemoryKind { DeviceLocal, Upload, UploadRead, Readback };
 Buffer create_buffer(const detail::ContextImpl& ctx, vk::DeviceSize size, vk::BufferUsageFlags usage, MemoryKind kind);
+// VK_EXT_external_memory_host: the alignment an imported host pointer and
+// size need; 0 when the device cannot import.
+uint64_t host_import_alignment(const detail::ContextImpl& ctx);
+// A buffer over `bytes` of caller-owned host memory at `host` (both aligned
+// as host_import_alignment() says; the memory must outlive the buffer),
+// `mapped` at it. An empty Buffer when no memory type takes the pointer;
+// vk::SystemError when the driver refuses it.
+Buffer import_host_buffer(const detail::ContextImpl& ctx, void* host, vk::DeviceSize bytes, vk::BufferUsageFlags usage);
 // Makes `b` at least `size` bytes (contents lost when it grows). The old
 // buffer goes to `retire` when given (recorded work may still use it), else
 // it is freed before the new one is allocated.
