@@ -120,6 +120,10 @@ void add_bench_view(CLI::App* bench) {
   vw->add_flag("--stereo", view->stereo, "Both eyes in one pass (a headset's view)");
   vw->add_option("--lod", view->lod, "clod or density")->capture_default_str()->check(CLI::IsMember({"clod", "density"}));
   vw->add_option("--lod-level", view->level, "LOD level, 0..1")->capture_default_str()->check(CLI::Range(0.0f, 1.0f));
+  vw->add_option("--position-error", view->position_error,
+                 "Format 3.0 files: records far enough away are read without the low bits of their positions when\n"
+                 "that moves no particle more than this many pixels (0: always at full precision)")
+      ->capture_default_str()->check(CLI::Range(0.0f, 16.0f));
   vw->add_option("--cache-steps", view->cache_steps,
                  "The same from the page cache, where the file may loop: more than the file's frames give steadier\n"
                  "rates (default: --steps)")

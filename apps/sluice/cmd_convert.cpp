@@ -70,7 +70,7 @@ void run_relayout(const ConvertCommand& c, const CLI::App& cmd) {
     }
   }
   const uint16_t major = c.conversion.format_major;
-  const std::string version = major == 1 ? "1.5" : "2.0";
+  const std::string version = major == 1 ? "1.5" : std::to_string(major) + ".0";
   const std::string output = !c.output.empty() ? c.output
                              : std::filesystem::path(c.conversion.input).stem().string() + "-" + version + ".sluice";
   if (std::filesystem::exists(output) && !c.force) {

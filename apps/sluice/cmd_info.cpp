@@ -92,7 +92,8 @@ void print_json(const io::ContainerReader& r) {
   for (const auto& f : frames) particles += f.count_in(io::LayerSet::particles());
   std::printf("{\n  \"file\": %s,\n  \"format_version\": \"%u.%u\",\n  \"layout\": \"%s\",\n  \"file_bytes\": %llu,\n",
               json_string(r.path()).c_str(), h.version_major, h.version_minor,
-              h.version_major >= 2 ? "coarse_to_fine" : "cells", (unsigned long long)r.file_size());
+              h.version_major >= 3 ? "coarse_to_fine_split" : h.version_major == 2 ? "coarse_to_fine" : "cells",
+              (unsigned long long)r.file_size());
   std::printf("  \"position_coding\": \"%s\",\n  \"lod_source\": \"%s\",\n  \"lod_id_array\": %s,\n", coding_name(h.position_coding),
               h.lod_source == io::LodSource::IdHash ? "id_hash" : "particle_order", json_string(h.lod_id_array).c_str());
   std::printf("  \"particle_spacing\": %s,\n  \"particle_radius\": %s,\n  \"frame_rate\": %s,\n  \"source\": %s,\n",
@@ -153,7 +154,9 @@ void print_text(const io::ContainerReader& r, bool all_frames) {
   const size_t decoded = io::decoded_particle_bytes(h.position_coding) + 2 * h.attributes.size();
   std::printf("%s\n", r.path().c_str());
   std::printf("  format        %u.%u (%s), %s positions, %s\n", h.version_major, h.version_minor,
-              h.version_major >= 2 ? "frames ordered coarse to fine" : "each cell's tiers together",
+              h.version_major >= 3   ? "frames ordered coarse to fine, positions in two parts"
+              : h.version_major == 2 ? "frames ordered coarse to fine"
+                                     : "each cell's tiers together",
               h.position_coding == io::PositionCoding::Quantized16 ? "16-bit quantized" : "float32 (lossless)",
               human_bytes(double(r.file_size())).c_str());
   std::printf("  source        %s\n", h.source.c_str());
@@ -239,7 +242,7 @@ void print_records(const io::ContainerReader& r, uint64_t frame) {
   }
   const io::FrameHeader h = r.read_table(frame);
   struct Span {
-    uint64_t records = 0, particles = 0, bytes = 0;
+    uint64_t records = 0, particles = 0, bytes = 0, fine = 0;
     double widest = 0, width_sum = 0;
   };
   // (the layer's place in a frame: all or surface, blobs, interior; first tier, last tier)
@@ -252,18 +255,24 @@ void print_records(const io::ContainerReader& r, uint64_t frame) {
     ++s.records;
     s.particles += c.particle_count;
     s.bytes += c.compressed_size;
+    s.fine += c.fine.size;
     s.widest = std::max(s.widest, width);
     s.width_sum += width;
   }
   std::printf("%s frame %llu: %zu records, %s (layout %s)\n", r.path().c_str(), (unsigned long long)frame, h.chunks.size(),
-              human_bytes(double(h.frame_bytes)).c_str(), h.coarse_to_fine ? "coarse to fine, 2.0" : "cells, 1.x");
-  std::printf("  %-9s %-6s %8s %12s %10s %10s %12s %12s\n", "layer", "tiers", "records", "particles", "bytes",
+              human_bytes(double(h.frame_bytes)).c_str(),
+              h.split_positions ? "coarse to fine, positions in two parts, 3.0"
+              : h.coarse_to_fine ? "coarse to fine, 2.0"
+                                 : "cells, 1.x");
+  // "bytes": the records (what a far view reads); "fine": their fine parts (format 3.0).
+  std::printf("  %-9s %-6s %8s %12s %10s %10s %10s %12s %12s\n", "layer", "tiers", "records", "particles", "bytes", "fine",
               "mean rec", "widest box", "mean box");
   for (const auto& [key, s] : spans) {
     const auto [order, layer, first, last] = key;
     const std::string tiers = first == last ? std::to_string(first) : std::to_string(first) + "-" + std::to_string(last);
-    std::printf("  %-9s %-6s %8llu %12s %10s %10s %12s %12s\n", io::layer_name(io::Layer(layer)), tiers.c_str(),
+    std::printf("  %-9s %-6s %8llu %12s %10s %10s %10s %12s %12s\n", io::layer_name(io::Layer(layer)), tiers.c_str(),
                 (unsigned long long)s.records, human_count(double(s.particles)).c_str(), human_bytes(double(s.bytes)).c_str(),
+                s.fine > 0 ? human_bytes(double(s.fine)).c_str() : "-",
                 human_bytes(double(s.bytes) / double(s.records)).c_str(), fixed(s.widest, 3).c_str(),
                 fixed(s.width_sum / double(s.records), 3).c_str());
   }

@@ -163,6 +163,10 @@ void add_view_options(CLI::App& cmd, ViewSettings& v) {
       ->capture_default_str()->check(CLI::Range(0.0, 1.0))->group(lod);
   cmd.add_option("--near-cull", v.lod.near_cull_distance, "Drop particles nearer the eye than this (world units)")->group(lod);
   cmd.add_option("--max-splat", v.lod.max_splat_pixels, "Drop particles covering more pixels across than this")->group(lod);
+  cmd.add_option("--position-error", v.lod.position_error_pixels,
+                 "Format 3.0 files: read a record without the low bits of its positions when that moves none of\n"
+                 "its particles more than this many pixels on screen (0: always at full precision)")
+      ->capture_default_str()->check(CLI::Range(0.0, 16.0))->group(lod);
 }
 
 }  // namespace sluice::app

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Runs on the GPU machine (see bench/device/README.md): every benchmark the
 # issues ask GPU-machine figures for, in one call. Results go to $OUT.
-#   bash bench/device/run.sh [mpi] [io] [import] [layers] [band] [render] [stream] [split] [codec] [huge] [embed] [compare] [live] [stereo] [aniso] [xrsize] [firsthour] [streamcmp] [gpudecode] [gpuquick] [gpupair] [gpuab] [gpu100] [egl] [vtkpeer] [readpath] [importprobe] [relayprobe] [storeab] [gpusplit] [gpuplay] [gpuflight] [covered] [gpu100ab] [damf2] [gpusweep] [gpuvar] [relay] [relaytests] [relay100] [gpuplayall] [view] [viewall] [viewio] [tiersize] [tiergpu] [viewfull]   (default: io render stream)
+#   bash bench/device/run.sh [mpi] [io] [import] [layers] [band] [render] [stream] [split] [codec] [huge] [embed] [compare] [live] [stereo] [aniso] [xrsize] [firsthour] [streamcmp] [gpudecode] [gpuquick] [gpupair] [gpuab] [gpu100] [egl] [vtkpeer] [readpath] [importprobe] [relayprobe] [storeab] [gpusplit] [gpuplay] [gpuflight] [covered] [gpu100ab] [damf2] [gpusweep] [gpuvar] [relay] [relaytests] [relay100] [gpuplayall] [view] [viewall] [viewio] [tiersize] [tiergpu] [viewfull] [precision] [precision2]   (default: io render stream)
 set -uo pipefail
 # Folders on the GPU machine (it starts bare each session): SLUICE_SCRATCH holds
 # the unpacked libraries and the files stages write; OUT what comes back.
@@ -500,6 +500,18 @@ for stage in $stages; do
       run $S bench render --sizes 10M --repeats 3 >/dev/null  # warm-up
       run $S synth -n 100M --frames ${VIEW_FRAMES:-12} -o $T/v20.sluice --force -q --gpu-decodable
       run $S bench view $T/v20.sluice --steps ${VIEW_STEPS:-12} --cache-steps ${CACHE_STEPS:-60} --memory 24G --no-psnr
+      ;;
+    precision)  # issue 45: precision by distance (format 3.0) at the players' default error, with PSNR against the full read
+      run $S bench render --sizes 10M --repeats 3 >/dev/null  # warm-up
+      run $S synth -n 100M --frames ${VIEW_FRAMES:-12} -o $T/v30.sluice --force -q --gpu-decodable
+      run $S info $T/v30.sluice --records 1
+      run $S bench view $T/v30.sluice --steps ${VIEW_STEPS:-12} --cache-steps ${CACHE_STEPS:-60} --memory 24G
+      ;;
+    precision2)  # the same file at full precision (--position-error 0) and at 0.1 px (pictures only)
+      run $S bench render --sizes 10M --repeats 3 >/dev/null  # warm-up
+      run $S synth -n 100M --frames ${VIEW_FRAMES:-12} -o $T/v30.sluice --force -q --gpu-decodable
+      run $S bench view $T/v30.sluice --steps ${VIEW_STEPS:-12} --cache-steps ${CACHE_STEPS:-60} --memory 24G --position-error 0 --no-psnr
+      run $S bench view $T/v30.sluice --steps ${VIEW_STEPS:-12} --memory 24G --position-error 0.1 --no-storage
       ;;
     ringmem)  # issue 45: the relay's ring in the driver's memory against imported anonymous memory (--ring-imported), alternated; then 6 read threads
       run $S synth -n 10M --frames 48 -o $T/t10m.sluice --force -q --gpu-decodable

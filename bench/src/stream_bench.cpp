@@ -185,13 +185,19 @@ double chunk_read_decode_fps(const io::ContainerReader& reader, const Slice& sli
       tbb::parallel_for(size_t(0), h.chunks.size(), [&](size_t c) {
         thread_local io::DecodeScratch scratch;
         thread_local std::vector<std::byte> payload;
+        // The record's payload, then its fine part (format 3.0) after it.
         io::ChunkDesc chunk = h.chunks[c];
-        payload.resize(chunk.compressed_size);
-        const uint64_t at = reader.index().frames[f].offset + chunk.offset;
-        if (::pread(reader.descriptor(), payload.data(), payload.size(), static_cast<off_t>(at)) != ssize_t(payload.size())) {
-          throw io::Error(reader.location(f, c), "short read");
-        }
+        payload.resize(uint64_t(chunk.compressed_size) + chunk.fine.size);
+        const uint64_t base = reader.index().frames[f].offset;
+        const auto read = [&](uint64_t into, uint64_t from, uint64_t n) {
+          if (::pread(reader.descriptor(), payload.data() + into, n, static_cast<off_t>(base + from)) != ssize_t(n)) {
+            throw io::Error(reader.location(f, c), "short read");
+          }
+        };
+        read(0, chunk.offset, chunk.compressed_size);
+        if (chunk.fine.split()) read(chunk.compressed_size, chunk.fine.offset, chunk.fine.size);
         chunk.offset = 0;
+        chunk.fine.offset = chunk.compressed_size;
         io::decode_chunk(payload, chunk, reader.header(), {std::span(out).subspan(first[c] * stride, chunk.particle_count * stride), {}},
                          scratch, reader.location(f, c));
       });

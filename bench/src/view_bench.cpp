@@ -118,6 +118,7 @@ render::LodOptions lod_options(const ViewBenchOptions& o, float level) {
   render::LodOptions lod;
   lod.mode = o.lod == "density" ? render::LodMode::DensityPreserving : render::LodMode::Clod;
   lod.level = level;
+  lod.position_error_pixels = o.position_error;
   return lod;
 }
 

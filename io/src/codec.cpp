@@ -33,6 +33,12 @@ struct DecodeScratch::State {
   ZSTD_DCtx* zstd = ZSTD_createDCtx();
   std::vector<std::byte> raw;
   std::vector<const uint8_t*> planes;
+  std::vector<std::byte> fill;  // kCoarseFill's low and high bytes, fill_n of each (records without their fine part)
+  size_t fill_n = 0;
+  struct {
+    std::vector<std::byte> raw;  // a fine part's inflated planes
+    std::vector<const uint8_t*> planes;
+  } fine;
   ~State() { ZSTD_freeDCtx(zstd); }
 };
 
@@ -44,8 +50,18 @@ namespace {
 struct EncodedChunk {
   ChunkDesc desc;
   std::vector<std::byte> payload;
+  std::vector<std::byte> fine;  // format 3.0: the fine part (desc.fine), placed after its layer's records
   uint64_t raw_bytes = 0;
+  uint64_t bytes() const { return payload.size() + fine.size(); }
 };
+
+// Format 3.0 writes each quantized record's positions in two parts
+// (docs/format.md, "Precision parts"); frames stored for immediate
+// decoding (PlaneCoding::Stored) are read whole and gain nothing.
+bool splits_positions(const FileHeader& header, const EncodeOptions& options) {
+  return header.version_major >= 3 && header.position_coding == PositionCoding::Quantized16 &&
+         options.planes != PlaneCoding::Stored;
+}
 
 uint16_t quantize(double value, double lo, double inv_step) {
   const double q = std::nearbyint((value - lo) * inv_step);
@@ -143,9 +159,9 @@ void compress_planes(std::vector<std::byte>& raw, size_t n, const EncodeOptions&
   }
 }
 
-// Finds (and decompresses where needed) every plane of a chunk payload.
-void locate_planes(std::span<const std::byte> payload, ChunkCodec codec, size_t n, size_t planes,
-                   DecodeScratch::State& s, std::vector<const uint8_t*>& out, const ErrorLocation& where) {
+// Finds (and decompresses where needed, into `raw`) every plane of a chunk payload.
+void locate_planes(std::span<const std::byte> payload, ChunkCodec codec, size_t n, size_t planes, ZSTD_DCtx* zstd,
+                   std::vector<std::byte>& raw, std::vector<const uint8_t*>& out, const ErrorLocation& where) {
   out.resize(planes);
   if (codec == ChunkCodec::Stored) {
     if (payload.size() != n * planes) throw Error(where, "stored chunk has the wrong size");
@@ -153,7 +169,7 @@ void locate_planes(std::span<const std::byte> payload, ChunkCodec codec, size_t 
     return;
   }
   if (payload.size() < 4 * planes) throw Error(where, "chunk payload is smaller than its plane table");
-  if (s.raw.size() < n * planes) s.raw.resize(n * planes);
+  if (raw.size() < n * planes) raw.resize(n * planes);
   size_t at = 4 * planes;
   for (size_t p = 0; p < planes; ++p) {
     uint32_t entry;
@@ -164,14 +180,14 @@ void locate_planes(std::span<const std::byte> payload, ChunkCodec codec, size_t 
     if (size > payload.size() - at) throw Error(where, what + " runs past the chunk payload");
     const std::byte* src = payload.data() + at;
     if (packed) {
-      auto* dst = reinterpret_cast<uint8_t*>(s.raw.data() + p * n);
+      auto* dst = reinterpret_cast<uint8_t*>(raw.data() + p * n);
       unpack_plane({src, size}, n, dst, where, what);
       out[p] = dst;
     } else if (size == n) {
       out[p] = reinterpret_cast<const uint8_t*>(src);
     } else {
-      std::byte* dst = s.raw.data() + p * n;
-      const size_t got = ZSTD_decompressDCtx(s.zstd, dst, n, src, size);
+      std::byte* dst = raw.data() + p * n;
+      const size_t got = ZSTD_decompressDCtx(zstd, dst, n, src, size);
       if (ZSTD_isError(got)) throw Error(where, what + ": zstd: " + ZSTD_getErrorName(got));
       if (got != n) {
         throw Error(where, what + " decompressed to " + std::to_string(got) + " bytes, expected " + std::to_string(n));
@@ -201,7 +217,7 @@ Aabb box_of(const FrameInput& in, std::span<const uint32_t> members) {
 // one LOD tier of a cell (every tier of a cell is quantized in one box, so a
 // particle decodes to the same position whichever tiers are read).
 EncodedChunk encode_chunk(const FrameInput& in, std::span<const uint32_t> members, const Aabb& box, PositionCoding coding,
-                          const EncodeOptions& options) {
+                          const EncodeOptions& options, bool split = false) {
   const size_t n = members.size();
   const size_t attributes = in.attributes.size();
   EncodedChunk out;
@@ -222,10 +238,27 @@ EncodedChunk encode_chunk(const FrameInput& in, std::span<const uint32_t> member
   }
   std::sort(sorted.begin(), sorted.end());
 
-  const uint64_t raw_size = raw_chunk_bytes(coding, n, attributes);
+  // Split: the fine planes go to the fine part, not the record.
+  const uint64_t raw_size = raw_chunk_bytes(coding, n, attributes) - (split ? 2 * n : 0);
   std::vector<std::byte> raw(raw_size);
   std::byte* planes = raw.data();
-  if (coding == PositionCoding::Quantized16) {
+  if (split) {
+    // The record: the deltas of the codes' high 32 bits (non-negative: the
+    // codes are sorted); the fine part: their low 16 bits as they are
+    // (noise, stored, on scattered data; lattice-like data codes them small).
+    std::vector<std::byte> fine(2 * n);
+    uint64_t previous = 0;
+    for (size_t i = 0; i < n; ++i) {
+      const uint64_t high = sorted[i].first >> kFineCodeBits;
+      put_planes(planes, n, i, high - previous, 4);
+      put_planes(fine.data(), n, i, sorted[i].first & ((uint64_t{1} << kFineCodeBits) - 1), 2);
+      previous = high;
+    }
+    planes += 4 * n;
+    compress_planes(fine, n, options, out.fine, desc.fine.codec);
+    desc.fine.size = static_cast<uint32_t>(out.fine.size());
+    desc.fine.checksum = checksum(out.fine);
+  } else if (coding == PositionCoding::Quantized16) {
     uint64_t previous = 0;
     for (size_t i = 0; i < n; ++i) {
       put_planes(planes, n, i, sorted[i].first - previous, 6);
@@ -526,7 +559,8 @@ std::vector<EncodedChunk> encode_spans(const std::vector<MemberSet>& sets, const
     const Group& g = groups[pieces[c].group];
     const std::span<const uint32_t> members =
         std::span(g.order).subspan(pieces[c].range.begin, pieces[c].range.end - pieces[c].range.begin);
-    records[c] = encode_chunk(*g.in, members, box_of(*g.in, members), header.position_coding, options);
+    records[c] = encode_chunk(*g.in, members, box_of(*g.in, members), header.position_coding, options,
+                              splits_positions(header, options));
     records[c].desc.layer = layer;
     records[c].desc.tier = group_span[pieces[c].group].first;
     records[c].desc.last_tier = group_span[pieces[c].group].last;
@@ -536,7 +570,7 @@ std::vector<EncodedChunk> encode_spans(const std::vector<MemberSet>& sets, const
 
 uint64_t bytes_of(const std::vector<EncodedChunk>& records, size_t desc) {
   uint64_t bytes = 0;
-  for (const EncodedChunk& r : records) bytes += r.payload.size() + desc;
+  for (const EncodedChunk& r : records) bytes += r.bytes() + desc;
   return bytes;
 }
 
@@ -695,23 +729,45 @@ std::vector<EncodedChunk> encode_cells(const FrameInput& in, const FrameInput& b
   return keep_tiers_that_pay(std::move(records), jobs, cells, header, options);
 }
 
-// Places the records after the table and serializes the frame.
+// Places the records after the table and serializes the frame: each
+// layer's records, then (format 3.0) their fine parts in the same order, as
+// serialize_frame_table lists them.
 EncodedFrame finish_frame(EncodedFrame frame, std::vector<EncodedChunk> chunks, size_t attributes) {
   FrameHeader& fh = frame.header;
-  uint64_t offset = frame_table_bytes(chunks.size(), attributes);
   for (EncodedChunk& c : chunks) {
-    c.desc.index = static_cast<uint32_t>(fh.chunks.size());
-    c.desc.offset = offset;
-    offset += c.desc.compressed_size;
-    frame.raw_bytes += c.raw_bytes;
     fh.particle_count += c.desc.particle_count;
+    frame.raw_bytes += c.raw_bytes;
+    fh.split_positions = fh.split_positions || c.desc.fine.split();
     fh.chunks.push_back(c.desc);
+  }
+  uint64_t offset = frame_table_bytes(fh.table_records(), attributes);
+  uint32_t index = 0;
+  std::vector<const std::vector<std::byte>*> payloads;
+  payloads.reserve(fh.table_records());
+  for (size_t first = 0; first < chunks.size();) {
+    size_t end = first;
+    while (end < chunks.size() && chunks[end].desc.layer == chunks[first].desc.layer) {
+      ChunkDesc& d = fh.chunks[end];
+      d.index = index++;
+      d.offset = offset;
+      offset += d.compressed_size;
+      payloads.push_back(&chunks[end++].payload);
+    }
+    for (size_t c = first; c < end; ++c) {
+      ChunkDesc::Fine& fine = fh.chunks[c].fine;
+      if (!fine.split()) continue;
+      fine.index = index++;
+      fine.offset = offset;
+      offset += fine.size;
+      payloads.push_back(&chunks[c].fine);
+    }
+    first = end;
   }
   fh.frame_bytes = offset;
   if (!fh.coarse_to_fine) set_last_tiers(fh.chunks);
   frame.record = serialize_frame_table(fh, attributes);
   frame.record.reserve(offset);
-  for (const EncodedChunk& c : chunks) frame.record.insert(frame.record.end(), c.payload.begin(), c.payload.end());
+  for (const std::vector<std::byte>* p : payloads) frame.record.insert(frame.record.end(), p->begin(), p->end());
   return frame;
 }
 
@@ -762,6 +818,39 @@ void set_frame_number(EncodedFrame& frame, uint32_t frame_number, size_t attribu
   std::copy(table.begin(), table.end(), frame.record.begin());
 }
 
+namespace {
+
+// planes[0..1]: the fine part's two planes (checked), or without it bytes
+// of kCoarseFill (held in the scratch, past the record's inflated planes).
+void locate_fine(std::span<const std::byte> record, const ChunkDesc& chunk, DecodeScratch::State& s,
+                 std::vector<const uint8_t*>& planes, const ErrorLocation& where) {
+  const size_t n = chunk.particle_count;
+  if (chunk.fine.read()) {
+    const ChunkDesc::Fine& fine = chunk.fine;
+    const auto what = [&] { return "fine part (table record " + std::to_string(fine.index) + ")"; };  // only on error: it allocates
+    if (fine.offset > record.size() || fine.size > record.size() - fine.offset) {
+      throw Error(where, "the " + what() + " lies outside the frame record");
+    }
+    const std::span<const std::byte> bytes = record.subspan(fine.offset, fine.size);
+    if (checksum(bytes) != fine.checksum) throw Error(where, what() + " checksum mismatch (its bytes are corrupt)");
+    // Its planes inflate into a scratch of their own: the record's hold the rest.
+    locate_planes(bytes, fine.codec, n, 2, s.zstd, s.fine.raw, s.fine.planes, where);
+    planes[0] = s.fine.planes[0];
+    planes[1] = s.fine.planes[1];
+    return;
+  }
+  if (s.fill_n != n) {
+    s.fill.resize(2 * n);
+    std::fill(s.fill.begin(), s.fill.begin() + std::ptrdiff_t(n), std::byte(uint8_t(kCoarseFill & 0xff)));
+    std::fill(s.fill.begin() + std::ptrdiff_t(n), s.fill.end(), std::byte(uint8_t(kCoarseFill >> 8)));
+    s.fill_n = n;
+  }
+  planes[0] = reinterpret_cast<const uint8_t*>(s.fill.data());
+  planes[1] = planes[0] + n;
+}
+
+}  // namespace
+
 void decode_chunk(std::span<const std::byte> record, const ChunkDesc& chunk, const FileHeader& header,
                   const ChunkDestination& out, DecodeScratch& scratch, const ErrorLocation& where) {
   const size_t n = chunk.particle_count;
@@ -777,14 +866,24 @@ void decode_chunk(std::span<const std::byte> record, const ChunkDesc& chunk, con
   const uint64_t stored = checksum(payload);
   if (stored != chunk.checksum) throw Error(where, "chunk checksum mismatch (the chunk's bytes are corrupt)");
 
-  const size_t plane_count = raw_chunk_bytes(coding, 1, attributes);
+  const bool split = chunk.fine.split();
+  if (split && coding != PositionCoding::Quantized16) throw Error(where, "a record of float32 positions has a fine part");
   DecodeScratch::State& state = scratch.state();
   std::vector<const uint8_t*>& planes = state.planes;
-  locate_planes(payload, chunk.codec, n, plane_count, state, planes, where);
+  // Split positions: the record's planes after two for the fine part's.
+  const size_t fine_planes = split ? 2 : 0;
+  const size_t plane_count = raw_chunk_bytes(coding, 1, attributes) - fine_planes;
+  locate_planes(payload, chunk.codec, n, plane_count, state.zstd, state.raw, planes, where);
+  if (split) {
+    planes.insert(planes.begin(), 2, nullptr);
+    locate_fine(record, chunk, state, planes, where);
+  }
   const size_t first_lod = coding == PositionCoding::Quantized16 ? 6 : 12;
   const uint8_t* lod_lo = planes[first_lod];
   const uint8_t* lod_hi = planes[first_lod + 1];
-  if (coding == PositionCoding::Quantized16) {
+  if (split) {
+    unpack_split16(planes.data(), n, out.particles.data());
+  } else if (coding == PositionCoding::Quantized16) {
     unpack_quantized16(planes.data(), n, out.particles.data());
   } else {
     auto* dst = reinterpret_cast<uint32_t*>(out.particles.data());

@@ -188,34 +188,60 @@ FileHeader parse_file_header(std::span<const std::byte> bytes, const ErrorLocati
   return h;
 }
 
+namespace {
+
+void write_desc(ByteWriter& w, const FrameHeader& f, const ChunkDesc& c, bool fine = false) {
+  w.u64(c.offset);
+  w.u32(c.compressed_size);
+  w.u32(c.particle_count);
+  w.u8(static_cast<uint8_t>(c.layer));
+  w.u8(static_cast<uint8_t>(c.codec));
+  w.u8(c.tier | (fine ? kFinePartFlag : 0));  // format 1.4; reserved (0) before. 3.0: bit 7, a fine part
+  w.u8(f.coarse_to_fine ? c.last_tier : c.continues_cell ? 1 : 0);  // 2.0: last tier; 1.4: continues the cell
+  write_aabb(w, c.bounds);
+  w.u64(c.checksum);
+  for (const auto& range : c.attribute_ranges) {
+    w.f32(range[0]);
+    w.f32(range[1]);
+  }
+}
+
+// A fine part's record (format 3.0): its record's descriptor but for where
+// its bytes lie and the codec.
+void write_fine_desc(ByteWriter& w, const FrameHeader& f, const ChunkDesc& c) {
+  ChunkDesc fine = c;
+  fine.offset = c.fine.offset;
+  fine.compressed_size = c.fine.size;
+  fine.codec = c.fine.codec;
+  fine.checksum = c.fine.checksum;
+  write_desc(w, f, fine, true);
+}
+
+}  // namespace
+
 std::vector<std::byte> serialize_frame_table(const FrameHeader& f, size_t attribute_count) {
   std::vector<std::byte> out;
-  out.reserve(frame_table_bytes(f.chunks.size(), attribute_count));
+  const uint32_t records = f.table_records();
+  out.reserve(frame_table_bytes(records, attribute_count));
   ByteWriter w(out);
   w.u32(kFrameMagic);
   w.u32(f.frame_number);
   w.u64(f.frame_bytes);
   w.f64(f.time);
   w.u64(f.particle_count);
-  w.u32(static_cast<uint32_t>(f.chunks.size()));
-  w.u32(f.coarse_to_fine ? kFrameCoarseToFine : 0);  // flags
+  w.u32(records);
+  w.u32((f.coarse_to_fine ? kFrameCoarseToFine : 0) | (f.split_positions ? kFrameSplitPositions : 0));  // flags
   write_aabb(w, f.bounds);
   w.u32(static_cast<uint32_t>(attribute_count));
   w.f32(f.blob_voxel);  // format 1.3; reserved (0) before
-  for (const ChunkDesc& c : f.chunks) {
-    w.u64(c.offset);
-    w.u32(c.compressed_size);
-    w.u32(c.particle_count);
-    w.u8(static_cast<uint8_t>(c.layer));
-    w.u8(static_cast<uint8_t>(c.codec));
-    w.u8(c.tier);                           // format 1.4; reserved (0) before
-    w.u8(f.coarse_to_fine ? c.last_tier : c.continues_cell ? 1 : 0);  // 2.0: last tier; 1.4: continues the cell
-    write_aabb(w, c.bounds);
-    w.u64(c.checksum);
-    for (const auto& range : c.attribute_ranges) {
-      w.f32(range[0]);
-      w.f32(range[1]);
+  // Each layer's records, then (format 3.0) their fine parts in the same order.
+  for (size_t first = 0; first < f.chunks.size();) {
+    size_t end = first;
+    while (end < f.chunks.size() && f.chunks[end].layer == f.chunks[first].layer) write_desc(w, f, f.chunks[end++]);
+    for (size_t c = first; c < end; ++c) {
+      if (f.chunks[c].fine.split()) write_fine_desc(w, f, f.chunks[c]);
     }
+    first = end;
   }
   w.u64(checksum(out));
   return out;
@@ -279,6 +305,56 @@ FrameHeader parse_frame_table(std::span<const std::byte> record, size_t attribut
   return f;
 }
 
+namespace {
+
+// A fine part's record must describe its record (format 3.0): the same
+// particles, layer, tiers, box and ranges; 2 bytes a particle.
+void check_fine(ByteReader& r, const ChunkDesc& record, const ChunkDesc& fine) {
+  const auto which = [&] {  // only on failure: it allocates, and tables are parsed every frame
+    return "fine part (table record " + std::to_string(fine.index) + ") of record " + std::to_string(record.index);
+  };
+  if (fine.particle_count != record.particle_count || fine.layer != record.layer || fine.tier != record.tier ||
+      fine.last_tier != record.last_tier || !(fine.bounds == record.bounds)) {
+    r.fail(which() + " does not describe its record (count, layer, tiers or box differ)");
+  }
+  for (size_t a = 0; a < record.attribute_ranges.size(); ++a) {
+    if (fine.attribute_ranges[a] != record.attribute_ranges[a]) r.fail(which() + " does not describe its record (ranges differ)");
+  }
+}
+
+// Format 3.0: each layer's records are followed by their fine parts, one
+// per record, in the same order. Folds each into its record's
+// ChunkDesc::fine and leaves only the records in `chunks`. `fine[k]`: table
+// record k is a fine part.
+void fold_fine_parts(ByteReader& r, std::vector<ChunkDesc>& chunks, const std::vector<bool>& fine_part) {
+  size_t out = 0;
+  for (size_t first = 0; first < chunks.size();) {
+    size_t records = first;
+    while (records < chunks.size() && chunks[records].layer == chunks[first].layer && !fine_part[records]) ++records;
+    const size_t count = records - first;
+    if (count == 0) r.fail("a fine part (table record " + std::to_string(chunks[first].index) + ") precedes its layer's records");
+    if (records + count > chunks.size()) r.fail("a layer's records lack their fine parts (the table ends first)");
+    for (size_t k = 0; k < count; ++k) {
+      const ChunkDesc& fine = chunks[records + k];
+      if (!fine_part[records + k]) {
+        r.fail("table record " + std::to_string(fine.index) + " stands where the fine part of record " +
+               std::to_string(chunks[first + k].index) + " belongs");
+      }
+      check_fine(r, chunks[first + k], fine);
+      chunks[first + k].fine = {.offset = fine.offset, .size = fine.compressed_size, .codec = fine.codec,
+                                .checksum = fine.checksum, .index = fine.index, .dropped = false};
+    }
+    for (size_t k = 0; k < count; ++k) {
+      if (out != first + k) chunks[out] = chunks[first + k];
+      ++out;
+    }
+    first = records + count;
+  }
+  chunks.resize(out);
+}
+
+}  // namespace
+
 void parse_frame_table(std::span<const std::byte> record, size_t attribute_count, const ErrorLocation& where,
                        FrameHeader& f) {
   const FramePrefix prefix = parse_frame_prefix(record, where);
@@ -296,18 +372,22 @@ void parse_frame_table(std::span<const std::byte> record, size_t attribute_count
   f.particle_count = r.u64();
   r.u32();
   const uint32_t flags = r.u32();
-  if ((flags & ~kFrameCoarseToFine) != 0) r.fail("unknown frame flags " + std::to_string(flags));
+  if ((flags & ~(kFrameCoarseToFine | kFrameSplitPositions)) != 0) r.fail("unknown frame flags " + std::to_string(flags));
   f.coarse_to_fine = (flags & kFrameCoarseToFine) != 0;
+  f.split_positions = (flags & kFrameSplitPositions) != 0;
+  if (f.split_positions && !f.coarse_to_fine) r.fail("positions are split in a frame not ordered coarse to fine");
   f.bounds = read_aabb(r);
   check_aabb(r, f.bounds, true, "frame");
   if (r.u32() != attribute_count) r.fail("attribute count differs from the file header");
   f.blob_voxel = r.f32();
   if (!std::isfinite(f.blob_voxel) || f.blob_voxel < 0) r.fail("blob voxel side is not a finite size");
   f.chunks.resize(prefix.chunk_count);
-  uint64_t particles = 0;
+  thread_local std::vector<bool> fine_part;  // per table record (3.0); kept per thread: no allocation per frame
+  fine_part.assign(f.split_positions ? f.chunks.size() : 0, false);
   uint32_t index = 0;
   for (ChunkDesc& c : f.chunks) {
     c.index = index++;
+    c.fine = {};
     c.offset = r.u64();
     c.compressed_size = r.u32();
     c.particle_count = r.u32();
@@ -335,20 +415,28 @@ void parse_frame_table(std::span<const std::byte> record, size_t attribute_count
       r.fail("chunk payload lies outside the frame record");
     }
     if (c.layer == Layer::Blobs && !(f.blob_voxel > 0)) r.fail("blob chunk in a frame without a blob voxel side");
-    if (tier >= kLodTiers) r.fail("LOD tier " + std::to_string(tier) + " is out of range (0 to " + std::to_string(kLodTiers - 1) + ")");
-    c.tier = tier;
-    const ChunkDesc* before = &c == f.chunks.data() ? nullptr : &c - 1;
+    const bool fine = f.split_positions && (tier & kFinePartFlag) != 0;
+    if (fine) fine_part[c.index] = true;
+    const uint8_t t = fine ? uint8_t(tier & ~kFinePartFlag) : tier;
+    if (t >= kLodTiers) r.fail("LOD tier " + std::to_string(t) + " is out of range (0 to " + std::to_string(kLodTiers - 1) + ")");
+    c.tier = t;
     if (f.coarse_to_fine) {
       c.continues_cell = false;
       c.last_tier = cell;
-      check_coarse_to_fine(r, before, c);
     } else {
       if (cell > 1) r.fail("unknown cell flags " + std::to_string(cell));
       c.continues_cell = cell == 1;
-      if (c.continues_cell &&
-          (!before || before->layer != c.layer || before->tier >= c.tier || !(before->bounds == c.bounds))) {
-        r.fail("a record continues a cell it does not follow (tiers must rise within one layer and box)");
-      }
+    }
+  }
+  if (f.split_positions) fold_fine_parts(r, f.chunks, fine_part);
+  uint64_t particles = 0;
+  for (ChunkDesc& c : f.chunks) {
+    const ChunkDesc* before = &c == f.chunks.data() ? nullptr : &c - 1;
+    if (f.coarse_to_fine) {
+      check_coarse_to_fine(r, before, c);
+    } else if (c.continues_cell &&
+               (!before || before->layer != c.layer || before->tier >= c.tier || !(before->bounds == c.bounds))) {
+      r.fail("a record continues a cell it does not follow (tiers must rise within one layer and box)");
     }
     particles += c.particle_count;
   }
@@ -454,7 +542,7 @@ FrameIndexEntry index_entry_for(const FrameHeader& frame, uint64_t offset) {
   e.bytes = frame.frame_bytes;
   e.time = frame.time;
   e.particle_count = frame.particle_count;
-  e.chunk_count = static_cast<uint32_t>(frame.chunks.size());
+  e.chunk_count = frame.table_records();
   e.bounds = frame.bounds;
   for (const ChunkDesc& c : frame.chunks) e.layer_particles[static_cast<size_t>(c.layer)] += c.particle_count;
   return e;
@@ -483,11 +571,30 @@ void keep_layers(FrameHeader& frame, LayerSet set) {
 }
 
 uint64_t layers_end(const FrameHeader& frame, LayerSet set, size_t attribute_count) {
-  uint64_t end = frame_table_bytes(frame.chunks.size(), attribute_count);
+  uint64_t end = frame_table_bytes(frame.table_records(), attribute_count);
   for (const ChunkDesc& c : frame.chunks) {
-    if (set.has(c.layer)) end = std::max(end, c.offset + c.compressed_size);
+    if (!set.has(c.layer)) continue;
+    end = std::max(end, c.offset + c.compressed_size);
+    if (c.fine.split()) end = std::max(end, c.fine.offset + c.fine.size);
   }
   return end;
+}
+
+void record_parts(const FrameHeader& frame, std::vector<RecordPart>& out) {
+  out.clear();
+  const std::vector<ChunkDesc>& chunks = frame.chunks;
+  for (size_t first = 0; first < chunks.size();) {
+    size_t end = first;
+    for (; end < chunks.size() && chunks[end].layer == chunks[first].layer; ++end) {
+      const ChunkDesc& c = chunks[end];
+      out.push_back({c.offset, c.compressed_size, c.checksum, uint32_t(end), false});
+    }
+    for (size_t k = first; k < end; ++k) {
+      const ChunkDesc::Fine& f = chunks[k].fine;
+      if (f.read()) out.push_back({f.offset, f.size, f.checksum, uint32_t(k), true});
+    }
+    first = end;
+  }
 }
 
 uint64_t FrameIndexEntry::count_in(LayerSet set) const {
@@ -531,14 +638,14 @@ void IndexBuilder::add(const FrameSummary& frame, uint64_t offset) {
 }
 
 void set_format_version(FileHeader& h, uint16_t major) {
-  if (major == kFormatMajor) {
-    h.version_major = kFormatMajor;
-    h.version_minor = kFormatMinor;
+  if (major == kFormatMajor || major == 2) {
+    h.version_major = major;
+    h.version_minor = 0;
   } else if (major == 1) {
     h.version_major = 1;
     h.version_minor = kLegacyMinor;
   } else {
-    throw std::invalid_argument("format " + std::to_string(major) + ".x cannot be written (2.0, or 1.5)");
+    throw std::invalid_argument("format " + std::to_string(major) + ".x cannot be written (3.0, 2.0 or 1.5)");
   }
 }
 

@@ -91,19 +91,47 @@ bool plan_planes(std::span<const std::byte> bytes, uint64_t base, const ChunkDes
                  const GpuPlanOptions& options, GpuChunkPlan& g, const PlaneSink& zstd, const ErrorLocation& at) {
   thread_local std::vector<PlaneSource> sources;
   const size_t attributes = file.attributes.size();
-  const size_t planes = raw_chunk_bytes(file.position_coding, 1, attributes);
+  // Split: the record holds 2 planes fewer; the fine part's go to GPU planes 0-1.
+  const size_t fine = chunk.fine.split() ? 2 : 0;
+  const size_t planes = raw_chunk_bytes(file.position_coding, 1, attributes) - fine;
   const bool attribute = options.color_attribute >= 0 && size_t(options.color_attribute) < attributes;
   const uint64_t n = chunk.particle_count;
   if (chunk.offset < base || chunk.offset - base > bytes.size() || chunk.compressed_size > bytes.size() - (chunk.offset - base)) {
     throw Error(at, "a chunk payload lies outside the frame record");
   }
   locate(bytes.subspan(chunk.offset - base, chunk.compressed_size), chunk.offset, chunk.codec, n, planes, sources, at);
-  const size_t colour = 8 + 2 * size_t(attribute ? options.color_attribute : 0);
-  for (int k = 0; k < kGpuPlanes; ++k) {
+  const size_t colour = 8 - fine + 2 * size_t(attribute ? options.color_attribute : 0);
+  for (int k = int(fine); k < kGpuPlanes; ++k) {
     if (k >= 8 && !attribute) break;
-    const size_t p = k < 8 ? size_t(k) : colour + size_t(k - 8);
+    const size_t p = k < 8 ? size_t(k) - fine : colour + size_t(k - 8);
     const PlaneSource& s = sources[p];
     GpuPlane& out = g.planes[k];
+    switch (s.kind) {
+      case PlaneSource::Stored: out = {uint32_t(s.at), 0, 0, 0}; break;
+      case PlaneSource::Packed: out = packed_plane(bytes, base, s, n, p, at); break;
+      case PlaneSource::Zstd:
+        if (!zstd(out, s, p)) return false;
+        break;
+    }
+  }
+  return true;
+}
+
+// GPU planes 0-1 of a split chunk from its fine part's plane table;
+// `bytes` holds the record from byte `base` on, the fine part included.
+// False if a zstd plane was refused by `zstd`.
+bool plan_fine(std::span<const std::byte> bytes, uint64_t base, const ChunkDesc& chunk, GpuChunkPlan& g,
+               const PlaneSink& zstd, const ErrorLocation& at) {
+  thread_local std::vector<PlaneSource> sources;
+  const ChunkDesc::Fine& fine = chunk.fine;
+  const uint64_t n = chunk.particle_count;
+  if (fine.offset < base || fine.offset - base > bytes.size() || fine.size > bytes.size() - (fine.offset - base)) {
+    throw Error(at, "a fine part lies outside the frame record");
+  }
+  locate(bytes.subspan(fine.offset - base, fine.size), fine.offset, fine.codec, n, 2, sources, at);
+  for (size_t p = 0; p < 2; ++p) {
+    const PlaneSource& s = sources[p];
+    GpuPlane& out = g.planes[p];
     switch (s.kind) {
       case PlaneSource::Stored: out = {uint32_t(s.at), 0, 0, 0}; break;
       case PlaneSource::Packed: out = packed_plane(bytes, base, s, n, p, at); break;
@@ -121,7 +149,7 @@ void start_chunk(GpuDecodePlan& plan, const ChunkDesc& chunk, size_t c, uint64_t
   g = GpuChunkPlan{};
   g.first = uint32_t(first);
   g.count = chunk.particle_count;
-  g.with_attribute = attribute ? 1 : 0;
+  g.flags = (attribute ? kGpuWithAttribute : 0) | (chunk.fine.split() ? kGpuSplit : 0) | (chunk.fine.read() ? kGpuFine : 0);
   g.first_tile = uint32_t(plan.tile_chunk.size());
   plan.tile_chunk.insert(plan.tile_chunk.end(), (uint64_t(chunk.particle_count) + kGpuTile - 1) / kGpuTile, uint32_t(c));
 }
@@ -131,8 +159,9 @@ void count_planes(GpuDecodePlan& plan) {
   plan.stored_planes = plan.packed_planes = 0;
   plan.zstd_planes = plan.inflate.size();
   for (const GpuChunkPlan& g : plan.chunks) {
-    const int planes = g.with_attribute ? kGpuPlanes : 8;
-    for (int k = 0; k < planes; ++k) {
+    const int planes = (g.flags & kGpuWithAttribute) ? kGpuPlanes : 8;
+    const bool coarse = (g.flags & kGpuSplit) && !(g.flags & kGpuFine);  // planes 0-1 unused
+    for (int k = coarse ? 2 : 0; k < planes; ++k) {
       if (g.planes[k].width > 0) ++plan.packed_planes;
       else ++plan.stored_planes;
     }
@@ -170,7 +199,10 @@ void plan_gpu_frame(const FrameHeader& header, const FileHeader& file, const Gpu
   plan.record_bytes = 0;
   plan.inflated_bytes = 0;
   plan.stored_planes = plan.packed_planes = plan.zstd_planes = 0;
-  for (const ChunkDesc& c : header.chunks) plan.record_bytes = std::max(plan.record_bytes, c.offset + c.compressed_size);
+  for (const ChunkDesc& c : header.chunks) {
+    plan.record_bytes = std::max(plan.record_bytes, c.offset + c.compressed_size);
+    if (c.fine.read()) plan.record_bytes = std::max(plan.record_bytes, c.fine.offset + c.fine.size);
+  }
   plan.inflated_offset = round16(plan.record_bytes);
   uint64_t first = 0;
   for (size_t c = 0; c < header.chunks.size(); ++c) {
@@ -197,6 +229,18 @@ bool plan_gpu_chunk(std::span<const std::byte> payload, const FrameHeader& heade
   return plan_planes(payload, chunk.offset, chunk, file, options, plan.chunks[c], refuse, at);
 }
 
+bool plan_gpu_fine(std::span<const std::byte> payload, const FrameHeader& header, size_t c, GpuDecodePlan& plan,
+                   const ErrorLocation& where) {
+  ErrorLocation at = where;
+  at.chunk = c;
+  if (c >= plan.chunks.size() || c >= header.chunks.size() || !header.chunks[c].fine.read() ||
+      payload.size() != header.chunks[c].fine.size) {
+    throw Error(at, "plan_gpu_fine: the fine part or the plan does not match the frame");
+  }
+  const PlaneSink refuse = [](GpuPlane&, const PlaneSource&, size_t) { return false; };
+  return plan_fine(payload, header.chunks[c].fine.offset, header.chunks[c], plan.chunks[c], refuse, at);
+}
+
 void finish_gpu_plan(GpuDecodePlan& plan) { count_planes(plan); }
 
 void plan_gpu_decode(std::span<const std::byte> record, const FrameHeader& header, const FileHeader& file,
@@ -216,6 +260,7 @@ void plan_gpu_decode(std::span<const std::byte> record, const FrameHeader& heade
       return true;
     };
     plan_planes(record, 0, chunk, file, options, plan.chunks[c], inflate, at);
+    if (chunk.fine.read()) plan_fine(record, 0, chunk, plan.chunks[c], inflate, at);
     plan.chunk_inflate[c + 1] = uint32_t(plan.inflate.size());
   }
   count_planes(plan);
@@ -240,6 +285,16 @@ void stage_chunk(std::span<const std::byte> record, const FrameHeader& header, c
   const std::span<const std::byte> payload = record.subspan(chunk.offset, chunk.compressed_size);
   if (verify && checksum(payload) != chunk.checksum) fail("chunk checksum mismatch (the chunk's bytes are corrupt)");
   if (record.data() != encoded.data()) std::memcpy(encoded.data() + chunk.offset, payload.data(), payload.size());
+  if (chunk.fine.read()) {
+    if (chunk.fine.offset > record.size() || chunk.fine.size > record.size() - chunk.fine.offset) {
+      fail("the fine part (table record " + std::to_string(chunk.fine.index) + ") lies outside the frame record");
+    }
+    const std::span<const std::byte> fine = record.subspan(chunk.fine.offset, chunk.fine.size);
+    if (verify && checksum(fine) != chunk.fine.checksum) {
+      fail("fine part (table record " + std::to_string(chunk.fine.index) + ") checksum mismatch (its bytes are corrupt)");
+    }
+    if (record.data() != encoded.data()) std::memcpy(encoded.data() + chunk.fine.offset, fine.data(), fine.size());
+  }
   thread_local Holder zstd;
   for (uint32_t j = plan.chunk_inflate[c]; j < plan.chunk_inflate[c + 1]; ++j) {
     const InflateJob& job = plan.inflate[j];
@@ -303,15 +358,18 @@ void decode_plan_on_cpu(std::span<const std::byte> encoded, const GpuDecodePlan&
   for (const GpuChunkPlan& c : plan.chunks) {
     std::vector<PlaneReader> planes;
     for (const GpuPlane& p : c.planes) planes.push_back({base, p});
+    const bool split = (c.flags & kGpuSplit) != 0, fine = (c.flags & kGpuFine) != 0;
     uint64_t code = 0;
     uint16_t value = 0;
     for (uint32_t i = 0; i < c.count; ++i) {
       uint64_t delta = 0;
-      for (int b = 0; b < 6; ++b) delta |= uint64_t(planes[size_t(b)].next(i)) << (8 * b);
+      for (int b = split ? 2 : 0; b < 6; ++b) delta |= uint64_t(planes[size_t(b)].next(i)) << (8 * b);
       const uint64_t lod = planes[6].next(i) | uint64_t(planes[7].next(i)) << 8;
-      code += delta;
-      particles[c.first + i] = morton_to_packed16(code) | lod << 48;
-      if (c.with_attribute != 0) {
+      code += delta;  // split: the high 32 bits' delta, shifted by 16
+      uint64_t low = 0;
+      if (split) low = fine ? planes[0].next(i) | uint64_t(planes[1].next(i)) << 8 : kCoarseFill;
+      particles[c.first + i] = morton_to_packed16(code | low) | lod << 48;
+      if ((c.flags & kGpuWithAttribute) != 0) {
         value = uint16_t(value + (planes[8].next(i) | planes[9].next(i) << 8));
         attribute[c.first + i] = value;
       }

@@ -75,19 +75,24 @@ void thin_arrays(ParticleArrays& out, float level, float blob_voxel) {
   for (auto& a : out.attributes) a.resize(kept);
 }
 
-// The kept chunks' bytes of a frame record into `record` (the whole record's
-// size, only those ranges filled): one read per run of adjacent chunks.
+// The kept chunks' bytes (and fine parts) of a frame record into `record`
+// (the whole record's size, only those ranges filled): one read per run of
+// adjacent parts.
 uint64_t read_chunks(const ContainerReader& reader, uint64_t frame, const FrameHeader& header, uint64_t table_bytes,
                      std::span<std::byte> record) {
   const FrameIndexEntry& e = reader.index().frames[frame];
   const ErrorLocation where = reader.location(frame);
+  thread_local std::vector<RecordPart> parts;
+  record_parts(header, parts);
   uint64_t read = 0;
-  for (size_t c = 0; c < header.chunks.size();) {
-    const uint64_t begin = header.chunks[c].offset;
-    uint64_t end = begin + header.chunks[c].compressed_size;
+  for (size_t c = 0; c < parts.size();) {
+    const uint64_t begin = parts[c].offset;
+    uint64_t end = begin + parts[c].size;
     size_t next = c + 1;
-    while (next < header.chunks.size() && header.chunks[next].offset == end) end += header.chunks[next++].compressed_size;
-    if (begin < table_bytes || end > record.size()) throw Error(reader.location(frame, header.chunks[c].index), "chunk lies outside its record");
+    while (next < parts.size() && parts[next].offset == end) end += parts[next++].size;
+    if (begin < table_bytes || end > record.size()) {
+      throw Error(reader.location(frame, header.chunks[parts[c].chunk].index), "chunk lies outside its record");
+    }
     pread_all_or_throw(reader.descriptor(), record.subspan(begin, end - begin), e.offset + begin, where);
     read += end - begin;
     c = next;
@@ -234,7 +239,7 @@ void read_particles(const ContainerReader& reader, uint64_t frame, const Particl
   const FileHeader& file = reader.header();
   check_query(query, file, reader.location(frame));
   FrameHeader header = reader.read_table(frame);
-  const uint64_t table_bytes = frame_table_bytes(header.chunks.size(), file.attributes.size());
+  const uint64_t table_bytes = frame_table_bytes(header.table_records(), file.attributes.size());
   keep_layers(header, query.layers);
   if (query.lod_level < 1) {
     const uint32_t tiers = tiers_for_keep(query.lod_level);

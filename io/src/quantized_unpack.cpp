@@ -24,6 +24,20 @@ namespace sluice::io {
 namespace {
 
 constexpr uint64_t kDeltaMask = (uint64_t{1} << 48) - 1;
+constexpr uint64_t kFineMask = 0xffff;
+
+// One particle's code from its word and the code before it. Whole: the word
+// holds the code's delta in bytes 0-5. Split (format 3.0): bytes 0-1 are
+// the code's low 16 bits and bytes 2-5 the delta of its high 32.
+template <bool Split>
+inline uint64_t next_code(uint64_t code, uint64_t word) {
+  if constexpr (Split) {
+    const uint64_t high = (code >> 16) + ((word & kDeltaMask) >> 16);
+    return (high << 16 | (word & kFineMask)) & kDeltaMask;
+  } else {
+    return code + (word & kDeltaMask);
+  }
+}
 
 inline uint64_t gather_word(const uint8_t* const* p, size_t i) {
   return uint64_t(p[0][i]) | uint64_t(p[1][i]) << 8 | uint64_t(p[2][i]) << 16 | uint64_t(p[3][i]) << 24 |
@@ -31,10 +45,11 @@ inline uint64_t gather_word(const uint8_t* const* p, size_t i) {
 }
 
 // Particles [begin, n) given the code before `begin`; returns the last code.
+template <bool Split>
 uint64_t unpack_portable_from(const uint8_t* const* p, size_t begin, size_t n, uint64_t code, std::byte* dst) {
   for (size_t i = begin; i < n; ++i) {
     const uint64_t word = gather_word(p, i);
-    code += word & kDeltaMask;
+    code = next_code<Split>(code, word);
     const uint64_t packed = morton_to_packed16(code) | (word & ~kDeltaMask);
     std::memcpy(dst + 8 * i, &packed, 8);
   }
@@ -88,20 +103,20 @@ constexpr size_t kStreamFrom = 16384;
 
 // The block loop, shared by both x86 kernels; `Split` turns a Morton code
 // into x | y << 16 | z << 32.
-template <class Split>
-__attribute__((target("avx2,bmi2"), always_inline)) inline void unpack_blocks(const uint8_t* const* p, size_t n, std::byte* dst, Split split) {
+template <bool Split, class Decode>
+__attribute__((target("avx2,bmi2"), always_inline)) inline void unpack_blocks(const uint8_t* const* p, size_t n, std::byte* dst, Decode split) {
   alignas(32) uint64_t words[kBlock];
   alignas(32) uint64_t packed[kBlock];
   // Particles before the first 32-byte boundary of dst go the portable way.
   const size_t misaligned = reinterpret_cast<uintptr_t>(dst) % 32;
   size_t i = misaligned % 8 != 0 ? n : std::min(n, ((32 - misaligned) % 32) / 8);
-  uint64_t code = unpack_portable_from(p, 0, i, 0, dst);
+  uint64_t code = unpack_portable_from<Split>(p, 0, i, 0, dst);
   const bool stream = n >= kStreamFrom;
   for (; i + kBlock <= n; i += kBlock) {
     transpose_block(p, i, words);
     for (size_t j = 0; j < kBlock; ++j) {
       const uint64_t word = words[j];
-      code += word & kDeltaMask;
+      code = next_code<Split>(code, word);
       packed[j] = split(code) | (word & ~kDeltaMask);
     }
     auto* out = reinterpret_cast<__m256i*>(dst + 8 * i);
@@ -113,11 +128,12 @@ __attribute__((target("avx2,bmi2"), always_inline)) inline void unpack_blocks(co
     }
   }
   if (stream) _mm_sfence();  // streaming stores are weakly ordered: publish them before the caller does
-  unpack_portable_from(p, i, n, code, dst);
+  unpack_portable_from<Split>(p, i, n, code, dst);
 }
 
+template <bool Split>
 __attribute__((target("avx2,bmi2"))) void unpack_avx2_pext(const uint8_t* const* p, size_t n, std::byte* dst) {
-  unpack_blocks(p, n, dst, [](uint64_t code) __attribute__((target("avx2,bmi2"), always_inline)) {
+  unpack_blocks<Split>(p, n, dst, [](uint64_t code) __attribute__((target("avx2,bmi2"), always_inline)) {
     return _pext_u64(code, 0x249249249249ull) | _pext_u64(code, 0x492492492492ull) << 16 |
            _pext_u64(code, 0x924924924924ull) << 32;
   });
@@ -125,8 +141,9 @@ __attribute__((target("avx2,bmi2"))) void unpack_avx2_pext(const uint8_t* const*
 
 // Compiled for BMI2 too (the compiler's own shifts, never PEXT), so that one
 // block loop serves both kernels.
+template <bool Split>
 __attribute__((target("avx2,bmi2"))) void unpack_avx2_table(const uint8_t* const* p, size_t n, std::byte* dst) {
-  unpack_blocks(p, n, dst, [](uint64_t code) __attribute__((target("avx2,bmi2"), always_inline)) {
+  unpack_blocks<Split>(p, n, dst, [](uint64_t code) __attribute__((target("avx2,bmi2"), always_inline)) {
     return morton_to_packed16(code);
   });
 }
@@ -166,19 +183,37 @@ UnpackKernel chosen_unpack_kernel() {
   return UnpackKernel::Portable;
 }
 
-void unpack_quantized16_with(UnpackKernel kernel, const uint8_t* const* planes, size_t n, std::byte* dst) {
+namespace {
+
+template <bool Split>
+void unpack_with(UnpackKernel kernel, const uint8_t* const* planes, size_t n, std::byte* dst) {
   switch (kernel) {
 #if SLUICE_X86_KERNELS
-    case UnpackKernel::Avx2Pext: return unpack_avx2_pext(planes, n, dst);
-    case UnpackKernel::Avx2Table: return unpack_avx2_table(planes, n, dst);
+    case UnpackKernel::Avx2Pext: return unpack_avx2_pext<Split>(planes, n, dst);
+    case UnpackKernel::Avx2Table: return unpack_avx2_table<Split>(planes, n, dst);
 #endif
-    default: unpack_portable_from(planes, 0, n, 0, dst);
+    default: unpack_portable_from<Split>(planes, 0, n, 0, dst);
   }
+}
+
+}  // namespace
+
+void unpack_quantized16_with(UnpackKernel kernel, const uint8_t* const* planes, size_t n, std::byte* dst) {
+  unpack_with<false>(kernel, planes, n, dst);
+}
+
+void unpack_split16_with(UnpackKernel kernel, const uint8_t* const* planes, size_t n, std::byte* dst) {
+  unpack_with<true>(kernel, planes, n, dst);
 }
 
 void unpack_quantized16(const uint8_t* const* planes, size_t n, std::byte* dst) {
   static const UnpackKernel kernel = chosen_unpack_kernel();
-  unpack_quantized16_with(kernel, planes, n, dst);
+  unpack_with<false>(kernel, planes, n, dst);
+}
+
+void unpack_split16(const uint8_t* const* planes, size_t n, std::byte* dst) {
+  static const UnpackKernel kernel = chosen_unpack_kernel();
+  unpack_with<true>(kernel, planes, n, dst);
 }
 
 }  // namespace sluice::io

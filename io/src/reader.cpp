@@ -96,7 +96,7 @@ void ContainerReader::parse_table(uint64_t frame, std::span<const std::byte> pre
   parse_frame_table(prefix, header_.attributes.size(), where, h);
   const FrameIndexEntry& e = index_.frames.at(frame);
   if (h.frame_number != frame || h.frame_bytes != e.bytes || h.particle_count != e.particle_count ||
-      h.chunks.size() != e.chunk_count) {
+      h.table_records() != e.chunk_count) {
     throw Error(where, "frame header disagrees with the frame index");
   }
   std::array<uint64_t, kLayerCount> layers{};

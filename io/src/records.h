@@ -13,8 +13,13 @@ namespace sluice::io {
 inline constexpr std::array<uint8_t, 8> kFileMagic = {0x89, 'S', 'L', 'U', 'I', 'C', 'E', '\n'};
 inline constexpr uint32_t kFrameMagic = 0x52464C53;  // "SLFR"
 // Frame flags (frame header offset 36): bit 0, records ordered coarse to
-// fine (format 2.0). Other bits are rejected.
+// fine (format 2.0); bit 1, positions split into records and fine parts
+// (format 3.0, only with bit 0). Other bits are rejected.
 inline constexpr uint32_t kFrameCoarseToFine = 1;
+inline constexpr uint32_t kFrameSplitPositions = 2;
+// Chunk descriptor byte 18 (the tier), bit 7: the descriptor is a fine part
+// (format 3.0), not a record.
+inline constexpr uint8_t kFinePartFlag = 0x80;
 inline constexpr uint32_t kIndexMagic = 0x58494C53;  // "SLIX"
 inline constexpr uint32_t kHeaderCopyMagic = 0x43484C53;  // "SLHC": the header again, right after it (format 1.5)
 inline constexpr std::array<uint8_t, 8> kFooterMagic = {'S', 'L', 'U', 'I', 'C', 'E', 'I', 'X'};

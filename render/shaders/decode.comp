@@ -17,6 +17,10 @@
 // writes, bit for bit: x | y << 16 | z << 32 | lod << 48 per particle and
 // the colour attribute's 16-bit values.
 //
+// Split positions (format 3.0, flag SPLIT): planes 0-1 hold the codes' low
+// 16 bits as they are (flag FINE; without it every code's low bits are
+// COARSE_FILL) and planes 2-5 bytes 0-3 of the deltas of their high 32.
+//
 // A packed plane whose escape codes disagree with its stored escape count
 // (a corrupt file whose checksum was not checked) sets its chunk's error
 // word; reads stay inside the encoded area whatever the bytes say (the plan
@@ -44,10 +48,12 @@ struct Plane {
 struct ChunkPlan {
   uint first;
   uint count;
-  uint with_attribute;
+  uint flags;       // io::kGpuWithAttribute, kGpuSplit, kGpuFine
   uint first_tile;
   Plane planes[PLANES];
 };
+const uint WITH_ATTRIBUTE = 1, SPLIT = 2, FINE = 4;
+const uint COARSE_FILL = 0xE000u;  // io::kCoarseFill
 
 layout(buffer_reference, std430, buffer_reference_align = 4) readonly buffer Words { uint v[]; };
 layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer Plans { ChunkPlan c[]; };
@@ -201,14 +207,17 @@ void main() {
   Words w = Words(pc.encoded);
   TileSums sums = TileSums(pc.tile_sums);
   const uint t = gl_LocalInvocationID.x;
-  const uint planes = c.with_attribute != 0 ? PLANES : 8;
+  const bool colour = (c.flags & WITH_ATTRIBUTE) != 0;
+  const bool split = (c.flags & SPLIT) != 0, fine = (c.flags & FINE) != 0;
+  const uint planes = colour ? PLANES : 8;
+  const uint first_plane = split && !fine ? 2u : 0u;  // planes 0-1 unused: no fine part
   const uint base = (tile - c.first_tile) * TILE;
   const uint i0 = base + t * PER;
   const uint m = i0 < c.count ? min(PER, c.count - i0) : 0;
   clear_totals();
 
   if (pc.pass == 0) {
-    for (uint p = 0; p < planes; ++p) {
+    for (uint p = first_plane; p < planes; ++p) {
       uint found = 0;
       const uint64_t v = raw_values(w, c.planes[p], i0, m, found);
       add(COUNTS, p, found);
@@ -235,7 +244,7 @@ void main() {
   for (uint p = 0; p < PLANES; ++p) escapes_before[p] = totals[COUNTS][p];
   // Their bytes: the first escapes_before of each list, summed here (a few
   // loads a thread: escapes are rare) rather than in a pass of their own.
-  for (uint p = 0; p < planes; ++p) {
+  for (uint p = first_plane; p < planes; ++p) {
     const Plane plane = c.planes[p];
     if (plane.width == 0) continue;
     const uint end = min(escapes_before[p], plane.count);
@@ -247,9 +256,10 @@ void main() {
 
   uint64_t code_before = 0;  // the Morton code before this tile
   uint value_before = 0;     // the attribute value before this tile
-  for (uint p = 0; p < planes; ++p) {
+  const uint first_code_plane = split ? 2u : 0u;  // split: the low 16 bits are not deltas
+  for (uint p = first_plane; p < planes; ++p) {
     const uint bytes = totals[SUMS][p] + totals[ESCAPES][p];
-    if (p < 6) code_before += uint64_t(bytes) << (8 * p);
+    if (p >= first_code_plane && p < 6) code_before += uint64_t(bytes) << (8 * p);
     if (p >= 8) value_before += bytes << (8 * (p - 8));
   }
 
@@ -263,11 +273,11 @@ void main() {
   for (uint k = 0; k < WORDS; ++k) words[k] = 0;
   for (uint p = 0; p < PLANES; ++p) {
     uint found = 0;
-    raw[p] = p < planes ? raw_values(w, c.planes[p], i0, m, found) : 0;
+    raw[p] = p >= first_plane && p < planes ? raw_values(w, c.planes[p], i0, m, found) : 0;
     words[p / 2] |= found << (16 * (p % 2));
   }
   exclusive_sums(words, 5, totals_of);
-  for (uint p = 0; p < planes; ++p) {
+  for (uint p = first_plane; p < planes; ++p) {
     const uint k = escapes_before[p] + half16(words[p / 2], p % 2);
     raw[p] = resolve_escapes(w, c.planes[p], raw[p], m, k);
     escapes_before[p] += half16(totals_of[p / 2], p % 2);
@@ -283,7 +293,7 @@ void main() {
   uint piece[3] = uint[3](0, 0, 0);
   for (uint j = 0; j < PER; ++j) {
     uint64_t delta = 0;
-    for (uint q = 0; q < 3; ++q) {
+    for (uint q = first_code_plane / 2; q < 3; ++q) {
       const uint d = uint((raw[2 * q] >> (8 * j)) & 0xffUL) | (uint((raw[2 * q + 1] >> (8 * j)) & 0xffUL) << 8);
       piece[q] += d;
       delta |= uint64_t(d) << (16 * q);
@@ -300,11 +310,15 @@ void main() {
   exclusive_sums(words, 4, totals_of);
   const uint64_t codes_before = uint64_t(words[0]) + (uint64_t(words[1]) << 16) + (uint64_t(words[2]) << 32);
   for (uint j = 0; j < m; ++j) {
-    const uint64_t code = (code_before + codes_before + codes_local[j]) & 0xffffffffffffUL;
+    uint64_t code = (code_before + codes_before + codes_local[j]) & 0xffffffffffffUL;
+    if (split) {
+      const uint low = fine ? uint((raw[0] >> (8 * j)) & 0xffUL) | (uint((raw[1] >> (8 * j)) & 0xffUL) << 8) : COARSE_FILL;
+      code = (code & 0xffffffff0000UL) | uint64_t(low);
+    }
     const uint lod = uint((raw[6] >> (8 * j)) & 0xffUL) | (uint((raw[7] >> (8 * j)) & 0xffUL) << 8);
     const uvec3 xyz = morton_decode(code);
     out_particles.v[c.first + i0 + j] = uvec2(xyz.x | (xyz.y << 16), xyz.z | (lod << 16));
-    if (c.with_attribute != 0) {
+    if (colour) {
       out_values.v[c.first + i0 + j] = uint16_t((value_before + words[3] + values_local[j]) & 0xffffu);
     }
   }
@@ -312,7 +326,7 @@ void main() {
   // The chunk's last tile: every escape code must have had its escape.
   if (t == 0 && base + TILE >= c.count) {
     bool bad = false;
-    for (uint p = 0; p < planes; ++p) bad = bad || (c.planes[p].width != 0 && escapes_before[p] != c.planes[p].count);
+    for (uint p = first_plane; p < planes; ++p) bad = bad || (c.planes[p].width != 0 && escapes_before[p] != c.planes[p].count);
     if (bad) Errors(pc.errors).v[chunk] = 1;
   }
 }

@@ -11,7 +11,7 @@ runtime::ViewDemand view_demand(std::span<const View> views, const SceneInfo& sc
   runtime::ViewDemand d;
   for (const View& v : views) {
     if (d.views.size() == d.views.capacity()) break;
-    d.views.push_back({v.view.m, v.projection.m});
+    d.views.push_back({v.view.m, v.projection.m, v.viewport.width, v.viewport.height});
   }
   // The position hash orders nothing the file's tiers hold: every tier.
   d.lod = lod.mode != LodMode::Off && lod.random == LodRandom::Stable;
@@ -21,6 +21,7 @@ runtime::ViewDemand view_demand(std::span<const View> views, const SceneInfo& sc
   const float growth = lod.mode == LodMode::DensityPreserving ? std::max(lod.max_splat_scale, 1.0f) : 1.0f;
   d.particle_reach = d.particle_radius * growth;
   d.margin = std::max(margin, 0.0f);
+  d.position_error_pixels = std::max(lod.position_error_pixels, 0.0f);
   return d;
 }
 

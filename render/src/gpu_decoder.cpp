@@ -63,7 +63,7 @@ void GpuDecoder::load(std::span<const std::byte> record, const io::FrameHeader& 
   grow_buffer(r.ctx, r.errors, std::max<uint64_t>(plan.chunks.size() * 4, 16), kDeviceUsage, MemoryKind::DeviceLocal);
   r.ctx.run_once([&](vk::CommandBuffer cmd) { cmd.copyBuffer(*r.upload.buffer, *r.encoded.buffer, vk::BufferCopy(0, 0, bytes)); });
   r.particles = particles;
-  r.attribute = !plan.chunks.empty() && plan.chunks[0].with_attribute != 0;
+  r.attribute = !plan.chunks.empty() && (plan.chunks[0].flags & io::kGpuWithAttribute) != 0;
   r.plan = std::move(plan);
 }
 

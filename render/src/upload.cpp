@@ -520,7 +520,7 @@ uint64_t commit_encoded(detail::RendererImpl& r, const EncodedFrameView& frame, 
   }
   if (r.scene.coding != io::PositionCoding::Quantized16) throw Error("commit_encoded: a float32 scene");
   const uint64_t staged = plan.staged_bytes();
-  const bool attribute = frame.color_attribute >= 0 && chunks > 0 && plan.chunks[0].with_attribute != 0;
+  const bool attribute = frame.color_attribute >= 0 && chunks > 0 && (plan.chunks[0].flags & io::kGpuWithAttribute) != 0;
   const StagingAllocator::Memory* block = from ? &staging_memory(*frame.buffers) : nullptr;
   const ResidentArea* resident = block && block->resident() ? block->area.get() : nullptr;
   if (resident && resident->device.size < staged) throw Error("commit_encoded: the resident area is too small");

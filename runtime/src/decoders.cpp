@@ -147,7 +147,7 @@ void Decoders::decode_chunk(Slot& slot, size_t c) noexcept {
     return;
   }
   const auto ns = std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - t0).count();
-  const uint64_t bytes = slot.layout.encoded_bytes > 0 ? chunk.compressed_size
+  const uint64_t bytes = slot.layout.encoded_bytes > 0 ? uint64_t(chunk.compressed_size) + (chunk.fine.read() ? chunk.fine.size : 0)
                          : world()                      ? uint64_t(chunk.particle_count) * stride
                                                         : uint64_t(chunk.particle_count) * (stride + 2 * uint64_t(parts_.attribute_of_stream.size()));
   const int worker = tbb::this_task_arena::current_thread_index();

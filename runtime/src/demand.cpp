@@ -157,17 +157,97 @@ uint32_t tiers_needed(const ViewDemand& demand, const Prepared& prepared, const 
   return std::max<uint32_t>(1, io::tiers_for_keep(keep));
 }
 
+// The longest a world displacement of at most `shift[a]` along each axis
+// can be in eye space: the view matrix's columns may scale (an XR world
+// scale), so each axis counts with its column's length.
+double eye_shift(const DemandView& v, const std::array<double, 3>& shift) {
+  double out = 0;
+  for (int a = 0; a < 3; ++a) {
+    const double x = at(v.view, 0, a), y = at(v.view, 1, a), z = at(v.view, 2, a);
+    out += shift[size_t(a)] * std::sqrt(x * x + y * y + z * z);
+  }
+  return out;
+}
+
+// How far, in eye space, the coarse fill may put a particle of `box` from
+// its full-precision position: io::kCoarseSteps quantization steps on each
+// axis, plus the float rounding of two dequantizations.
+double coarse_shift(const DemandView& v, const io::Aabb& box) {
+  std::array<double, 3> shift{};
+  for (int a = 0; a < 3; ++a) {
+    const double lo = box.min[size_t(a)], hi = box.max[size_t(a)];
+    const double ulp = 2.0 * std::numeric_limits<float>::epsilon() * std::max(std::abs(lo), std::abs(hi));
+    shift[size_t(a)] = double(io::kCoarseSteps[size_t(a)]) * (hi - lo) / 65535.0 + 2 * ulp;
+  }
+  return eye_shift(v, shift);
+}
+
 }  // namespace
+
+double coarse_error_pixels(const DemandView& v, const io::Aabb& box, float margin) {
+  constexpr double kInfinity = std::numeric_limits<double>::infinity();
+  if (v.width == 0 || v.height == 0) return kInfinity;
+  const double moved = coarse_shift(v, box);
+  // ndc = clip.xy / clip.w. An eye-space shift d moves it by
+  // (row_k . d) / w - ndc (row_3 . d) / w: at most
+  // moved (|row_k| + |ndc| |row_3|) / w, for w at its smallest over the
+  // box (grown by the margin) and particles within half a screen of the
+  // viewport (|ndc| <= 1.5: farther ones are not drawn).
+  const Box b = grown(box, margin);
+  double w_least = kInfinity;
+  for (int corner = 0; corner < 8; ++corner) {
+    const double p[3] = {(corner & 1) ? b.hi[0] : b.lo[0], (corner & 2) ? b.hi[1] : b.lo[1], (corner & 4) ? b.hi[2] : b.lo[2]};
+    double e[4] = {0, 0, 0, 1};
+    for (int r = 0; r < 3; ++r) e[r] = at(v.view, r, 0) * p[0] + at(v.view, r, 1) * p[1] + at(v.view, r, 2) * p[2] + at(v.view, r, 3);
+    double w = 0;
+    for (int k = 0; k < 4; ++k) w += at(v.projection, 3, k) * e[k];
+    w_least = std::min(w_least, w);
+  }
+  if (!(w_least > 1e-9)) return kInfinity;  // the eye may reach the box
+  auto row_length = [&](int r) {
+    return std::sqrt(double(at(v.projection, r, 0)) * at(v.projection, r, 0) + double(at(v.projection, r, 1)) * at(v.projection, r, 1) +
+                     double(at(v.projection, r, 2)) * at(v.projection, r, 2));
+  };
+  constexpr double kNdcReach = 1.5;
+  const double w_row = row_length(3);
+  const double x = 0.5 * v.width * moved * (row_length(0) + kNdcReach * w_row) / w_least;
+  const double y = 0.5 * v.height * moved * (row_length(1) + kNdcReach * w_row) / w_least;
+  return std::hypot(x, y);
+}
+
+bool coarse_enough(const ViewDemand& demand, const io::Aabb& box) {
+  if (!(demand.position_error_pixels > 0) || demand.views.size() == 0) return false;
+  for (size_t i = 0; i < demand.views.size(); ++i) {
+    const DemandView& v = demand.views[i];
+    // Against the splat too: a shift that is a fraction of a pixel can
+    // still be a large share of a particle drawn smaller than a pixel, and
+    // moves the fluid's depth (and so its normals) by that share.
+    if (!(coarse_shift(v, box) <= double(kCoarseSplatShare) * demand.particle_radius)) return false;
+    if (!(coarse_error_pixels(v, box, demand.margin) <= demand.position_error_pixels)) return false;
+  }
+  return true;
+}
 
 uint32_t tiers_needed(const ViewDemand& demand, const io::Aabb& box, io::Layer layer, float blob_voxel) {
   return tiers_needed(demand, prepare(demand), box, layer, blob_voxel);
 }
+
+namespace {
+
+// Marks the fine parts of `frame`'s records coarse_enough() leaves out.
+void drop_fine_parts(const ViewDemand& demand, io::FrameHeader& frame) {
+  if (!frame.split_positions) return;
+  for (io::ChunkDesc& c : frame.chunks) c.fine.dropped = c.fine.split() && coarse_enough(demand, c.bounds);
+}
+
+}  // namespace
 
 void apply_demand(const ViewDemand& demand, io::FrameHeader& frame) {
   if (demand.everything()) return;
   const float voxel = frame.blob_voxel;
   const Prepared prepared = prepare(demand);
   io::keep_tiers(frame, [&](const io::ChunkDesc& c) { return tiers_needed(demand, prepared, c.bounds, c.layer, voxel); });
+  drop_fine_parts(demand, frame);
 }
 
 void apply_demand(const ViewDemand& demand, io::FrameHeader& frame, std::vector<CellRead>& out) {
@@ -181,6 +261,8 @@ void apply_demand(const ViewDemand& demand, io::FrameHeader& frame, std::vector<
     cell.layer = chunks[first].layer;
     for (size_t c = first; c < end; ++c) cell.tiers_in_file |= uint16_t(1u << chunks[c].tier);
     cell.tiers_read = static_cast<uint8_t>(tiers_needed(demand, prepared, cell.box, cell.layer, frame.blob_voxel));
+    cell.coarse = chunks[first].fine.split() && cell.tiers_read > 0 && coarse_enough(demand, cell.box);
+    for (size_t c = first; c < end; ++c) frame.chunks[c].fine.dropped = cell.coarse;
     out.push_back(cell);
     first = end;
   }
@@ -192,6 +274,10 @@ void apply_demand(const ViewDemand& demand, io::FrameHeader& frame, std::vector<
 bool short_of(const ViewDemand& demand, const std::vector<CellRead>& read, float blob_voxel) {
   const Prepared prepared = prepare(demand);
   for (const CellRead& cell : read) {
+    if (cell.coarse && !coarse_enough(demand, cell.box) &&
+        tiers_needed(demand, prepared, cell.box, cell.layer, blob_voxel) > 0) {
+      return true;  // read coarse, now needed at full precision
+    }
     if (cell.tiers_read >= io::kLodTiers) continue;
     const uint32_t need = tiers_needed(demand, prepared, cell.box, cell.layer, blob_voxel);
     if (need <= cell.tiers_read) continue;

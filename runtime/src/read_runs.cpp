@@ -21,7 +21,7 @@ void add_pieces(uint64_t from, uint64_t to, uint64_t need, uint64_t align, uint6
 
 }  // namespace
 
-size_t plan_runs(std::span<const io::ChunkDesc> records, uint64_t record_at, uint64_t size, uint64_t need,
+size_t plan_runs(std::span<const io::RecordPart> records, uint64_t record_at, uint64_t size, uint64_t need,
                  uint64_t skip, const RunLimits& limits, std::vector<ByteRun>& out) {
   out.clear();
   const uint64_t align = std::max<uint64_t>(limits.align, 1);
@@ -34,8 +34,8 @@ size_t plan_runs(std::span<const io::ChunkDesc> records, uint64_t record_at, uin
     add_pieces(begin, end, need, align, limits.piece, out);
     ++runs;
   };
-  for (const io::ChunkDesc& c : records) {
-    const uint64_t begin = record_at + c.offset, end = begin + c.compressed_size;
+  for (const io::RecordPart& c : records) {
+    const uint64_t begin = record_at + c.offset, end = begin + c.size;
     if (to > from && joins_run(from, to, begin, limits.gap)) {
       to = std::max(to, end);
       continue;

@@ -47,7 +47,7 @@ struct RunLimits {
 // runs before splitting into pieces; `out` gets the pieces, in order.
 // Bytes below `skip` (already read: the table; a multiple of `align`) are
 // left out.
-size_t plan_runs(std::span<const io::ChunkDesc> records, uint64_t record_at, uint64_t size, uint64_t need,
+size_t plan_runs(std::span<const io::RecordPart> records, uint64_t record_at, uint64_t size, uint64_t need,
                  uint64_t skip, const RunLimits& limits, std::vector<ByteRun>& out);
 
 }  // namespace sluice::runtime::detail

@@ -31,21 +31,21 @@ bool PipelineCore::reads_in_place() const {
   return (options_.decode.mode == DecodeMode::KeepEncoded) && reads_->source().alignment() <= 1;
 }
 
-// The kernel is asked for every wanted chunk at once, runs less than
+// The kernel is asked for every wanted part at once, runs less than
 // kHintGap apart joined, so that storage has them all queued (the read
 // threads then copy pages already on their way) and reads nothing else.
 void PipelineCore::hint_chunks(const Slot& slot) {
   constexpr uint64_t kHintGap = 128 << 10;
   const uint64_t base = reader_.index().frames[slot.frame].offset;
   uint64_t from = 0, to = 0;
-  for (const io::ChunkDesc& c : slot.header.chunks) {
+  for (const io::RecordPart& c : slot.parts) {
     if (to > from && c.offset <= to + kHintGap && c.offset >= from) {
-      to = std::max(to, c.offset + c.compressed_size);
+      to = std::max(to, c.offset + c.size);
       continue;
     }
     if (to > from) reads_->source().will_need(base + from, to - from);
     from = c.offset;
-    to = c.offset + c.compressed_size;
+    to = c.offset + c.size;
   }
   if (to > from) reads_->source().will_need(base + from, to - from);
 }
@@ -130,19 +130,20 @@ PipelineCore::ReadTarget PipelineCore::chunks_to_read(Slot& slot, std::span<std:
                                                       uint64_t table) {
   io::keep_layers(slot.header, options_.layers);
   demand_.apply(slot);
-  const std::vector<io::ChunkDesc>& chunks = slot.header.chunks;
+  io::record_parts(slot.header, slot.parts);
+  const std::vector<io::RecordPart>& parts = slot.parts;
   uint64_t total = 0;
-  for (size_t c = 0; c < chunks.size(); ++c) {
+  for (const io::RecordPart& part : parts) {
     // The payload is written where the table says: inside the record, past the table.
-    if (chunks[c].offset < table || chunks[c].offset > record_bytes || chunks[c].compressed_size > record_bytes - chunks[c].offset) {
+    if (part.offset < table || part.offset > record_bytes || part.size > record_bytes - part.offset) {
       io::ErrorLocation at = reader_.location(slot.frame);
-      at.chunk = c;
-      throw io::Error(at, "the chunk's payload (bytes " + std::to_string(chunks[c].offset) + " to " +
-                              std::to_string(chunks[c].offset + chunks[c].compressed_size) +
+      at.chunk = part.chunk;
+      throw io::Error(at, std::string(part.fine ? "the chunk's fine part" : "the chunk's payload") + " (bytes " +
+                              std::to_string(part.offset) + " to " + std::to_string(part.offset + part.size) +
                               ") lies outside the frame record's payloads (bytes " + std::to_string(table) + " to " +
                               std::to_string(record_bytes) + ")");
     }
-    total += chunks[c].compressed_size;
+    total += part.size;
   }
   hint_chunks(slot);
   if (slot.relayed) {
@@ -156,13 +157,13 @@ PipelineCore::ReadTarget PipelineCore::chunks_to_read(Slot& slot, std::span<std:
   if (slot.relayed) most = std::min(most, std::max<uint64_t>(reads_->relay()->piece_bytes(), 1));
   const uint64_t threads = uint64_t(reads_->helpers()) + 1;
   const uint64_t at_most = (total + most - 1) / most;
-  const uint64_t pieces = std::min<uint64_t>(chunks.size(), (at_most + threads - 1) / threads * threads);
+  const uint64_t pieces = std::min<uint64_t>(parts.size(), (at_most + threads - 1) / threads * threads);
   slot.piece_cuts.clear();
   slot.piece_cuts.push_back(0);
   uint64_t sum = 0;
-  for (size_t c = 0; c < chunks.size(); ++c) {
-    sum += chunks[c].compressed_size;
-    if (c + 1 == chunks.size() || sum * pieces >= slot.piece_cuts.size() * total) slot.piece_cuts.push_back(static_cast<uint32_t>(c + 1));
+  for (size_t c = 0; c < parts.size(); ++c) {
+    sum += parts[c].size;
+    if (c + 1 == parts.size() || sum * pieces >= slot.piece_cuts.size() * total) slot.piece_cuts.push_back(static_cast<uint32_t>(c + 1));
   }
   ReadTarget target;
   target.record = record;
@@ -178,7 +179,7 @@ PipelineCore::ReadTarget PipelineCore::runs_to_read(Slot& slot, const ReadTarget
   const RunLimits limits{.align = std::max<uint64_t>(1, reads_->source().alignment()),
                          .gap = kRunGap,
                          .piece = std::max<uint64_t>(options_.read.piece_bytes, 1)};
-  slot.run_count = static_cast<uint32_t>(plan_runs(slot.header.chunks, into, whole.dst.size(), whole.need, skip, limits, slot.runs));
+  slot.run_count = static_cast<uint32_t>(plan_runs(slot.parts, into, whole.dst.size(), whole.need, skip, limits, slot.runs));
   slot.checked_on_read = false;  // the workers check the chunks (read once, checked once)
   uint64_t asked = 0;
   for (const ByteRun& r : slot.runs) asked += r.length;

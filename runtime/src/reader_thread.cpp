@@ -159,6 +159,7 @@ PipelineCore::Start PipelineCore::start_entry(ReaderState& rs, uint64_t k, uint6
     if (slot.header.chunks.capacity() < most_chunks_) {  // a slot's first use: room for any frame of the file
       slot.header.chunks.reserve(most_chunks_);
       slot.chunk_first.reserve(most_chunks_);
+      slot.parts.reserve(size_t(most_chunks_));  // a fine part is a table record too: most_chunks_ counts both
       slot.piece_cuts.reserve(size_t(most_chunks_) + 1);
       slot.runs.reserve(2 * size_t(most_chunks_) + 8);
       slot.attribute_targets.reserve(reader_.header().attributes.size());
@@ -358,7 +359,7 @@ void PipelineCore::read_again_on_host(ReaderState& rs, Slot& slot) {
   const uint64_t table = std::min<uint64_t>(whole.need, io::frame_table_bytes(reader_.index().frames[slot.frame].chunk_count,
                                                                              reader_.header().attributes.size()));
   reads_->read_piece(whole.dst.first(table), whole.offset, table, slot.frame, whole.offset + whole.need, true);
-  plan_runs(slot.header.chunks, 0, whole.dst.size(), whole.need, table,
+  plan_runs(slot.parts, 0, whole.dst.size(), whole.need, table,
             {.align = 1, .gap = kRunGap, .piece = std::max<uint64_t>(options_.read.piece_bytes, 1)}, slot.runs);
   for (const ByteRun& run : slot.runs) {
     reads_->read_piece(whole.dst.subspan(run.at, run.length), whole.offset + run.at, run.required, slot.frame,

@@ -99,7 +99,7 @@ void RecordReads::begin_bytes(PieceRound& round, std::span<std::byte> dst, uint6
   round.generation = generation;
   round.piece = std::max(align, round_up((dst.size() + even - 1) / std::max<uint64_t>(even, 1), align));
   round.count = (dst.size() + round.piece - 1) / round.piece;
-  round.chunks = {};
+  round.parts = {};
   round.cuts = {};  // byte pieces (the round may have held a checked read before)
   round.runs = {};
   round.relayed = nullptr;
@@ -114,7 +114,7 @@ void RecordReads::begin_runs(PieceRound& round, Slot& slot, std::span<std::byte>
   round.need = need;
   round.frame = slot.frame;
   round.generation = generation;
-  round.chunks = {};
+  round.parts = {};
   round.cuts = {};
   round.runs = slot.runs;
   round.count = slot.runs.size();
@@ -137,7 +137,7 @@ void RecordReads::begin_chunks(PieceRound& round, Slot& slot, std::span<std::byt
   round.need = record.size();
   round.frame = slot.frame;
   round.generation = generation;
-  round.chunks = slot.header.chunks;
+  round.parts = slot.parts;
   round.cuts = slot.piece_cuts;
   round.runs = {};
   round.count = slot.piece_cuts.size() - 1;
@@ -188,12 +188,12 @@ void PieceRound::operator()(uint64_t p) const {
   }
   if (by_chunks()) {
     for (uint32_t c = cuts[p]; c < cuts[p + 1]; ++c) {
-      const io::ChunkDesc& chunk = chunks[c];
-      const std::span<std::byte> into = dst.subspan(chunk.offset, chunk.compressed_size);
+      const io::RecordPart& part = parts[c];
+      const std::span<std::byte> into = dst.subspan(part.offset, part.size);
       if (check) {
-        reads->read_chunk(into, offset + chunk.offset, frame, c, chunk.checksum);
+        reads->read_chunk(into, offset + part.offset, frame, part.chunk, part.checksum);
       } else {  // decode_chunk checks it: hashing it here too would read it twice
-        const uint64_t at = offset + chunk.offset;
+        const uint64_t at = offset + part.offset;
         reads->read_piece(into, at, into.size(), frame, at + into.size());
       }
     }
@@ -206,7 +206,7 @@ void PieceRound::operator()(uint64_t p) const {
 
 namespace {
 
-// One run of a demand in a ring slot: chunks [first, last), whose bytes
+// One run of a demand in a ring slot: parts [first, last), whose bytes
 // [from, from + bytes) of the record (gaps read through included) lie at
 // `at` in the slot.
 struct SlotRun {
@@ -214,23 +214,23 @@ struct SlotRun {
   uint64_t from = 0, bytes = 0, at = 0;
 };
 
-// The runs of a demand (as plan_runs() joins chunks) from chunk `c` on that
+// The runs of a demand (as plan_runs() joins parts) from part `c` on that
 // fit one after another into a ring slot of `most` bytes, at most `end`;
-// none when chunk `c` alone is larger (the caller relays such a chunk
-// apart). Returns the chunk after the last.
-uint32_t gather_runs(std::span<const io::ChunkDesc> chunks, uint32_t c, uint32_t end, uint64_t most,
+// none when part `c` alone is larger (the caller relays such a part
+// apart). Returns the part after the last.
+uint32_t gather_runs(std::span<const io::RecordPart> parts, uint32_t c, uint32_t end, uint64_t most,
                      std::vector<SlotRun>& runs) {
   runs.clear();
   uint64_t used = 0;
-  while (c < end && chunks[c].compressed_size <= most - used) {
-    const uint64_t from = chunks[c].offset;
+  while (c < end && parts[c].size <= most - used) {
+    const uint64_t from = parts[c].offset;
     uint64_t bytes = 0;
     uint32_t last = c;
     while (last < end) {
-      const io::ChunkDesc& next = chunks[last];
+      const io::RecordPart& next = parts[last];
       if (last > c && !joins_run(from, from + bytes, next.offset, kRunGap)) break;
-      if (next.offset < from || next.offset + next.compressed_size - from > most - used) break;
-      bytes = std::max(bytes, next.offset + next.compressed_size - from);
+      if (next.offset < from || next.offset + next.size - from > most - used) break;
+      bytes = std::max(bytes, next.offset + next.size - from);
       ++last;
     }
     runs.push_back({c, last, from, bytes, used});
@@ -242,13 +242,13 @@ uint32_t gather_runs(std::span<const io::ChunkDesc> chunks, uint32_t c, uint32_t
 
 }  // namespace
 
-// A relayed piece: its chunks, packed one after another into ring slots
-// (as many as fit each), read out of the page cache with plain stores,
-// checked and planned while the cache holds them, then sent to their place
-// in the frame's resident area, a slot in one send (each send is a queue
-// submission on the GPU's side). Runs of chunks that follow each other in
-// the record go as one range. By demand, a slot holds as many of the
-// demand's runs as fit, each read with one read of its own.
+// A relayed piece: its parts (records and fine parts), packed one after
+// another into ring slots (as many as fit each), read out of the page
+// cache with plain stores, checked and planned while the cache holds them,
+// then sent to their place in the frame's resident area, a slot in one
+// send (each send is a queue submission on the GPU's side). Parts that
+// follow each other in the record go as one range. By demand, a slot holds
+// as many of the demand's runs as fit, each read with one read of its own.
 void RecordReads::relay_chunks(const PieceRound& round, uint64_t p) {
   Slot& slot = *round.relayed;
   const uint64_t most = parts_.relay->piece_bytes();
@@ -259,8 +259,8 @@ void RecordReads::relay_chunks(const PieceRound& round, uint64_t p) {
   uint32_t c = round.cuts[p];
   const uint32_t end = round.cuts[p + 1];
   while (c < end && !slot.relay_refused.load(kRelaxed)) {
-    if (round.chunks[c].compressed_size > most) {
-      relay_large_chunk(slot, c, round.offset, laps);
+    if (round.parts[c].size > most) {
+      relay_large_part(slot, round.parts[c], round.offset, laps);
       ++c;
       continue;
     }
@@ -268,10 +268,10 @@ void RecordReads::relay_chunks(const PieceRound& round, uint64_t p) {
     uint64_t bytes = 0;
     uint32_t last = c;
     if (together) {
-      last = gather_runs(round.chunks, c, end, most, runs);
+      last = gather_runs(round.parts, c, end, most, runs);
       bytes = runs.back().at + runs.back().bytes;
     } else {
-      while (last < end && bytes + round.chunks[last].compressed_size <= most) bytes += round.chunks[last++].compressed_size;
+      while (last < end && bytes + round.parts[last].size <= most) bytes += round.parts[last++].size;
     }
     const std::span<std::byte> piece = parts_.relay->claim(bytes);
     laps.lap(RelayLaps::Claim);
@@ -287,22 +287,24 @@ void RecordReads::relay_chunks(const PieceRound& round, uint64_t p) {
         laps.lap(RelayLaps::Copy);
       }
       uint64_t at = 0;
-      size_t r = 0;  // by demand: the run chunk k lies in
+      size_t r = 0;  // by demand: the run part k lies in
       for (uint32_t k = c; k < last; ++k) {
-        const io::ChunkDesc& chunk = round.chunks[k];
+        const io::RecordPart& part = round.parts[k];
         if (together) {
           while (k >= runs[r].last) ++r;
-          at = runs[r].at + (chunk.offset - runs[r].from);
+          at = runs[r].at + (part.offset - runs[r].from);
         }
-        const std::span<std::byte> dst = piece.subspan(at, chunk.compressed_size);
+        const std::span<std::byte> dst = piece.subspan(at, part.size);
         if (together) {
-          check_chunk(dst, round.frame, k, chunk.checksum);
+          check_chunk(dst, round.frame, part.chunk, part.checksum);
           laps.lap(RelayLaps::Check);
         } else {  // copied and checked in one pass
-          read_chunk(dst, round.offset + chunk.offset, round.frame, k, chunk.checksum, Stores::Cached);
+          read_chunk(dst, round.offset + part.offset, round.frame, part.chunk, part.checksum, Stores::Cached);
           laps.lap(RelayLaps::Copy);
         }
-        const bool planned = io::plan_gpu_chunk(dst, slot.header, parts_.reader->header(), plan_options, k, slot.plan, slot.where);
+        const bool planned =
+            part.fine ? io::plan_gpu_fine(dst, slot.header, part.chunk, slot.plan, slot.where)
+                      : io::plan_gpu_chunk(dst, slot.header, parts_.reader->header(), plan_options, part.chunk, slot.plan, slot.where);
         laps.lap(RelayLaps::Plan);
         if (!planned) {
           slot.relay_refused.store(true, kRelaxed);  // zstd planes: the frame is read again on the host
@@ -310,12 +312,12 @@ void RecordReads::relay_chunks(const PieceRound& round, uint64_t p) {
           return;
         }
         PieceRelay::Range* run = ranges.empty() ? nullptr : &ranges.back();
-        if (run && run->from + run->bytes == at && run->to + run->bytes == chunk.offset) {
-          run->bytes += chunk.compressed_size;
+        if (run && run->from + run->bytes == at && run->to + run->bytes == part.offset) {
+          run->bytes += part.size;
         } else {
-          ranges.push_back({at, chunk.offset, chunk.compressed_size});
+          ranges.push_back({at, part.offset, part.size});
         }
-        at += chunk.compressed_size;
+        at += part.size;
       }
     } catch (...) {
       parts_.relay->give_back(piece);
@@ -327,25 +329,26 @@ void RecordReads::relay_chunks(const PieceRound& round, uint64_t p) {
   }
 }
 
-// A chunk larger than a ring slot: read and checked whole into this
+// A part larger than a ring slot: read and checked whole into this
 // thread's own buffer (kept for the next), then sent in slot-sized parts.
-void RecordReads::relay_large_chunk(Slot& slot, size_t c, uint64_t offset, RelayLaps& laps) {
-  const io::ChunkDesc& chunk = slot.header.chunks[c];
+void RecordReads::relay_large_part(Slot& slot, const io::RecordPart& part, uint64_t offset, RelayLaps& laps) {
   thread_local std::vector<std::byte> whole;
-  whole.resize(chunk.compressed_size);
+  whole.resize(part.size);
   if (slot.by_demand) {  // no mapping (read_runs.h)
-    read_piece(whole, offset + chunk.offset, whole.size(), slot.frame, offset + chunk.offset + whole.size(), true);
+    read_piece(whole, offset + part.offset, whole.size(), slot.frame, offset + part.offset + whole.size(), true);
     laps.lap(RelayLaps::Copy);
-    check_chunk(whole, slot.frame, c, chunk.checksum);
+    check_chunk(whole, slot.frame, part.chunk, part.checksum);
     laps.lap(RelayLaps::Check);
     parts_.counters->runs_read.fetch_add(1, kRelaxed);
     parts_.counters->run_bytes_asked.fetch_add(whole.size(), kRelaxed);
   } else {
-    read_chunk(whole, offset + chunk.offset, slot.frame, c, chunk.checksum);
+    read_chunk(whole, offset + part.offset, slot.frame, part.chunk, part.checksum);
     laps.lap(RelayLaps::Copy);
   }
-  const bool planned = io::plan_gpu_chunk(whole, slot.header, parts_.reader->header(),
-                                          {.color_attribute = parts_.options->decode.color_attribute}, c, slot.plan, slot.where);
+  const bool planned = part.fine ? io::plan_gpu_fine(whole, slot.header, part.chunk, slot.plan, slot.where)
+                                  : io::plan_gpu_chunk(whole, slot.header, parts_.reader->header(),
+                                                       {.color_attribute = parts_.options->decode.color_attribute},
+                                                       part.chunk, slot.plan, slot.where);
   laps.lap(RelayLaps::Plan);
   if (!planned) {
     slot.relay_refused.store(true, kRelaxed);
@@ -358,7 +361,7 @@ void RecordReads::relay_large_chunk(Slot& slot, size_t c, uint64_t offset, Relay
     laps.lap(RelayLaps::Claim);
     std::memcpy(piece.data(), whole.data() + at, n);
     laps.lap(RelayLaps::Copy);
-    const PieceRelay::Range range{0, chunk.offset + at, n};
+    const PieceRelay::Range range{0, part.offset + at, n};
     parts_.relay->send(piece, slot.buffers, {&range, 1});
     laps.lap(RelayLaps::Send);
   }

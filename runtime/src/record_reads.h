@@ -42,9 +42,10 @@ struct PieceRound {
   RecordReads* reads = nullptr;
   std::span<std::byte> dst;  // [0, need) comes from the file at `offset`; the rest is alignment padding
   uint64_t offset = 0, need = 0, piece = 0, count = 0, frame = 0, generation = 0;
-  // A checked read: piece p reads chunks [cuts[p], cuts[p + 1]) to their
-  // offsets in dst (the record, at `offset` in the file) and checks them.
-  std::span<const io::ChunkDesc> chunks;
+  // A checked read: piece p reads the record parts [cuts[p], cuts[p + 1])
+  // (Slot::parts: records and fine parts) to their offsets in dst (the
+  // record, at `offset` in the file) and checks them.
+  std::span<const io::RecordPart> parts;
   std::span<const uint32_t> cuts;  // empty: byte pieces
   bool by_chunks() const { return !cuts.empty(); }
   // Reads by demand (read_runs.h): piece p reads runs[p] of dst, with no
@@ -116,7 +117,7 @@ class RecordReads {
   // io::Error naming the chunk.
   void check_chunk(std::span<const std::byte> bytes, uint64_t frame, size_t c, uint64_t checksum);
   void relay_chunks(const PieceRound& round, uint64_t p);
-  void relay_large_chunk(Slot& slot, size_t c, uint64_t offset, RelayLaps& laps);
+  void relay_large_part(Slot& slot, const io::RecordPart& part, uint64_t offset, RelayLaps& laps);
 
   Parts parts_;
   ReadCrew crew_;

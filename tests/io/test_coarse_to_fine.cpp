@@ -67,9 +67,9 @@ std::vector<std::vector<uint16_t>> values_by_record(const io::EncodedFrame& e, c
 
 }  // namespace
 
-TEST(CoarseToFine, WritersWrite2_0AndOrderEveryFrameLayerTierCurve) {
+TEST(CoarseToFine, WritersWrite3_0AndOrderEveryFrameLayerTierCurve) {
   const io::FileHeader h = test::test_header(io::PositionCoding::Quantized16);
-  EXPECT_EQ(h.version_major, 2);
+  EXPECT_EQ(h.version_major, 3);
   const io::EncodedFrame e = encode(test::scattered_frame(200000, 4), h, true);
   const io::FrameHeader& fh = e.header;
   EXPECT_TRUE(fh.coarse_to_fine);

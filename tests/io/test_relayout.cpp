@@ -63,7 +63,7 @@ void expect_same_particles(const io::ParticleArrays& a, const io::ParticleArrays
 
 }  // namespace
 
-TEST(Relayout, A1_5FileRewrittenAs2_0HoldsTheSameParticles) {
+TEST(Relayout, A1_5FileRewrittenAs3_0HoldsTheSameParticles) {
   test::TempDir dir;
   const io::FileHeader h = header_for(1, io::PositionCoding::Quantized16);
   const auto old_path = write_scattered(dir / "old.sluice", h, true);
@@ -76,7 +76,7 @@ TEST(Relayout, A1_5FileRewrittenAs2_0HoldsTheSameParticles) {
   EXPECT_TRUE(report.encode.lod_tiers);
 
   const io::ContainerReader before(old_path), after(dir / "new.sluice");
-  EXPECT_EQ(after.header().version_major, 2);
+  EXPECT_EQ(after.header().version_major, 3);
   EXPECT_EQ(after.header().particle_spacing, h.particle_spacing);
   EXPECT_EQ(after.header().precision_bits, h.precision_bits);
   ASSERT_EQ(after.header().attributes.size(), 1u);

@@ -7,6 +7,8 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <cmath>
+#include <cstdio>
 #include <filesystem>
 
 #include "render_test_util.h"
@@ -77,6 +79,9 @@ std::vector<Case> cases(const SceneInfo& scene) {
   Camera side = overview;
   side.target = Vec3{scene.bounds.max.x, scene.bounds.center().y, scene.bounds.center().z};
   LodOptions clod, density, full;
+  // Positions at full precision: these cases draw exactly what the full
+  // read draws (precision by distance is PrecisionByDistance's, below).
+  for (LodOptions* o : {&clod, &density, &full}) o->position_error_pixels = 0;
   clod.mode = LodMode::Clod;
   clod.level = 0.3f;
   density.mode = LodMode::DensityPreserving;
@@ -172,6 +177,39 @@ TEST(DemandRender, ReadingByTheViewDrawsWhatTheFullReadDraws) {
     }
   }
   EXPECT_LT(read, whole);
+}
+
+// Precision by distance (format 3.0): records far enough away are read
+// without their fine parts, for fewer bytes, and the picture stays within
+// 40 dB PSNR of the full read's (the renderer's default error, and a
+// coarser one to show what the rule trades).
+TEST(DemandRender, PrecisionByDistanceKeepsThePicture) {
+  ValidationGuard guard;
+  const io::ContainerReader reader(pool_file());
+  const SceneInfo scene = scene_info(reader);
+  const float stated = LodOptions{}.position_error_pixels;
+  ASSERT_GT(stated, 0.f) << "on by default";
+  for (Case c : cases(scene)) {
+    const Shot want = reference(reader, scene, 1, c);
+    runtime::PipelineStats exact_stats;
+    by_demand(reader, scene, 1, c, Path::Gpu, exact_stats);
+    for (const float error : {stated, 4 * stated}) {
+      c.lod.position_error_pixels = error;
+      for (const Path path : {Path::Cpu, Path::Relayed}) {
+        runtime::PipelineStats stats;
+        const Shot got = by_demand(reader, scene, 1, c, path, stats);
+        const double db = psnr({kW, kH, got.rgba}, {kW, kH, want.rgba});
+        std::printf("%s, %.2f px, %s: PSNR %.1f dB, %llu of %llu bytes (at full precision %llu), drawn %llu of %llu\n",
+                    c.name, error, path == Path::Cpu ? "CPU decode" : "relayed", db, (unsigned long long)stats.bytes_read,
+                    (unsigned long long)stats.record_bytes, (unsigned long long)exact_stats.bytes_read,
+                    (unsigned long long)got.drawn, (unsigned long long)want.drawn);
+        EXPECT_LE(stats.bytes_read, exact_stats.bytes_read) << c.name;
+        if (error == stated) {
+          EXPECT_TRUE(std::isinf(db) || db >= 40.0) << c.name << ": PSNR " << db;
+        }
+      }
+    }
+  }
 }
 
 // Paused on the overview at level 0.3, then level 1: the player reads the

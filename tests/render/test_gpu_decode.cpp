@@ -177,6 +177,26 @@ TEST(GpuDecode, OddLengthsAndTheEncodersWidths) {
   for (uint32_t w = 1; w <= 4; ++w) EXPECT_TRUE(widths.count(w)) << "no plane of width " << w << " was decoded";
 }
 
+// Format 3.0: split positions decode on the GPU as on the CPU, with each
+// record's fine part and without it (the coarse fill), whatever codes the
+// fine part (stored on scattered data, zstd or packed on a lattice).
+TEST(GpuDecode, SplitPositionsWithAndWithoutTheirFineParts) {
+  ValidationGuard guard;
+  const io::FileHeader h = test::test_header(io::PositionCoding::Quantized16);
+  ASSERT_EQ(h.version_major, 3);
+  for (const bool gpu_mode : {false, true}) {
+    const io::ParticleFrame frame = uniform_frame(30000, 11);
+    io::EncodeOptions o{.chunk_particles = 4099};
+    o.planes = gpu_mode ? io::PlaneCoding::GpuDecodable : io::PlaneCoding::Packed;
+    io::EncodedFrame f = encode(frame, h, o);
+    ASSERT_TRUE(f.header.split_positions);
+    expect_same_decode(f, h, 0, gpu_mode ? "split, GPU-decodable, fine parts read" : "split, fine parts read");
+    // Every other record without its fine part.
+    for (size_t c = 0; c < f.header.chunks.size(); c += 2) f.header.chunks[c].fine.dropped = true;
+    expect_same_decode(f, h, 0, gpu_mode ? "split, GPU-decodable, some coarse" : "split, some coarse");
+  }
+}
+
 TEST(GpuDecode, TheSyntheticPoolMatches) {
   ValidationGuard guard;
   bench::SynthOptions so;
@@ -295,7 +315,8 @@ TEST(GpuDecode, CorruptPlanesAreCaughtAndNamed) {
   const io::ParticleFrame frame = uniform_frame(5000, 7);
   io::EncodedFrame f = encode(frame, h, {.chunk_particles = 5000, .planes = io::PlaneCoding::GpuDecodable});
   uint64_t at = 0;
-  ASSERT_TRUE(first_packed_plane(f, 10, at));
+  // A split record (format 3.0) holds two planes fewer: its fine part has them.
+  ASSERT_TRUE(first_packed_plane(f, f.header.chunks[0].fine.split() ? 8 : 10, at));
 
   // A flipped bit in the packed values: the checksum names the chunk.
   io::EncodedFrame bad = f;

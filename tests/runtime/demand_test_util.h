@@ -60,9 +60,14 @@ inline Mat perspective(float aspect, float near_plane, float far_plane) {
   return m;
 }
 
-inline ViewDemand demand_of(std::array<float, 3> eye, std::array<float, 3> target, float level, bool lod = true) {
+// `error_pixels` > 0: drawn at 1920 x 1080, records whose coarse
+// positions lie within that many pixels are read without their fine parts.
+inline ViewDemand demand_of(std::array<float, 3> eye, std::array<float, 3> target, float level, bool lod = true,
+                            float error_pixels = 0) {
   ViewDemand d;
-  d.views.push_back({look_at(eye, target), perspective(16.0f / 9.0f, 0.01f, 100.0f)});
+  d.views.push_back({look_at(eye, target), perspective(16.0f / 9.0f, 0.01f, 100.0f), error_pixels > 0 ? 1920u : 0u,
+                     error_pixels > 0 ? 1080u : 0u});
+  d.position_error_pixels = error_pixels;
   d.lod = lod;
   d.level = level;
   d.reference_distance = 1.5f;  // about the data's diagonal

@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <cstdio>
 #include <map>
 #include <random>
 #include <thread>
@@ -142,13 +143,28 @@ Streamed stream(const io::ContainerReader& reader, const ViewDemand& demand, boo
     if (h.failed()) break;
     out.headers.push_back(h.header());
     if (!encoded) {
-      // The decoded particles are those of the records kept, in their order.
+      // The decoded particles are those of the records kept, in their
+      // order: bit for bit, or (read without the fine part) each axis within
+      // io::kCoarseSteps quantization steps and the LOD value the same.
       const io::DecodedFrame whole = io::decode_frame(reader, h.frame());
+      std::map<uint32_t, size_t> position;  // table record -> place in the whole frame's chunks
+      for (size_t c = 0; c < whole.header.chunks.size(); ++c) position[whole.header.chunks[c].index] = c;
       for (size_t c = 0; c < h.header().chunks.size(); ++c) {
         const io::ChunkDesc& chunk = h.header().chunks[c];
-        const uint64_t from = whole.chunk_first[chunk.index];
-        EXPECT_EQ(0, std::memcmp(h.buffers().particles.data() + h.chunk_first()[c] * 8,
-                                 whole.particles.data() + from * 8, size_t(chunk.particle_count) * 8));
+        const uint64_t from = whole.chunk_first[position.at(chunk.index)];
+        const std::byte* got = h.buffers().particles.data() + h.chunk_first()[c] * 8;
+        const std::byte* want = whole.particles.data() + from * 8;
+        if (!chunk.fine.dropped) {
+          EXPECT_EQ(0, std::memcmp(got, want, size_t(chunk.particle_count) * 8));
+          continue;
+        }
+        for (uint32_t i = 0; i < chunk.particle_count; ++i) {
+          uint16_t g[4], w[4];
+          std::memcpy(g, got + 8 * i, 8);
+          std::memcpy(w, want + 8 * i, 8);
+          for (int a = 0; a < 3; ++a) EXPECT_LE(std::abs(int(g[a]) - int(w[a])), int(io::kCoarseSteps[size_t(a)]));
+          EXPECT_EQ(g[3], w[3]);
+        }
       }
     }
   }
@@ -180,7 +196,8 @@ TEST_F(DemandTest, ThePipelineReadsOnlyTheDemandedTiers) {
 }
 
 // The layer spans a frame holds (a run of records of one layer): a demand
-// of every cell's first tiers is one prefix of each (format 2.0).
+// of every cell's first tiers is one prefix of each (format 2.0), and of
+// the layer's fine parts (3.0).
 size_t layer_spans(const io::FrameHeader& h) {
   size_t spans = 0;
   for (size_t c = 0; c < h.chunks.size(); ++c) spans += c == 0 || h.chunks[c].layer != h.chunks[c - 1].layer;
@@ -189,22 +206,28 @@ size_t layer_spans(const io::FrameHeader& h) {
 
 TEST_F(DemandTest, ACoarseToFineOverviewIsARunALayerAndNoByteIsReadTwice) {
   const io::ContainerReader reader(path_);
-  ASSERT_EQ(reader.header().version_major, 2);
-  uint64_t tables = 0, most_runs = 0;
+  ASSERT_EQ(reader.header().version_major, 3);
+  uint64_t tables = 0, layers = 0;
   for (uint64_t f = 0; f < reader.frame_count(); ++f) {
     const io::FrameIndexEntry& e = reader.index().frames[f];
     tables += io::frame_table_bytes(e.chunk_count, reader.header().attributes.size());
-    most_runs += layer_spans(reader.read_table(f));
+    layers += layer_spans(reader.read_table(f));
   }
-  // An overview (every cell, its first tiers), and a close view at full
-  // detail (the cells it sees, every tier).
+  // An overview (every cell, its first tiers) at full precision and from
+  // far enough that every record is read coarse (1 pixel), and a close
+  // view at full detail (the cells it sees, every tier).
   const ViewDemand overview = ViewDemand::uniform(0.3f), close = demand_of(kNearEye, kCentre, 1.0f);
+  const ViewDemand coarse = demand_of({0.5f, -6.0f, 2.5f}, kCentre, 0.3f, true, 1.0f);
   for (const bool encoded : {false, true}) {
     SCOPED_TRACE(encoded ? "kept encoded" : "decoded on the CPU");
     const PipelineStats o = stream(reader, overview, encoded).stats;
     EXPECT_EQ(o.frames_by_demand, reader.frame_count());
-    EXPECT_LE(o.runs_read, most_runs) << "at most one run a layer a frame";
+    EXPECT_LE(o.runs_read, 2 * layers) << "at most two runs a layer a frame: its records' prefix and their fine parts'";
     EXPECT_GE(o.runs_read, reader.frame_count());
+    EXPECT_EQ(o.bytes_read, tables + o.run_bytes);
+    const PipelineStats far = stream(reader, coarse, encoded).stats;
+    EXPECT_EQ(far.runs_read, layers) << "one run a layer a frame: no fine part";
+    EXPECT_LT(far.run_bytes, o.run_bytes);
     // Every byte read once: the tables, then the runs (which hold the
     // wanted records and the short gaps between them).
     EXPECT_EQ(o.bytes_read, tables + o.run_bytes);
@@ -212,6 +235,102 @@ TEST_F(DemandTest, ACoarseToFineOverviewIsARunALayerAndNoByteIsReadTwice) {
     EXPECT_EQ(c.bytes_read, tables + c.run_bytes);
     EXPECT_LE(c.runs_read, reader.frame_count() * 4 * io::kLodTiers) << "a close view's runs are few";
   }
+}
+
+// Precision by distance (format 3.0): every particle of a record the rule
+// reads without its fine part is drawn within the stated error of where
+// its full precision puts it, in every view, from close to far; the rule
+// reads coarse from far and whole from close.
+TEST_F(DemandTest, ACoarseRecordsParticlesStayWithinTheStatedScreenError) {
+  const io::ContainerReader reader(path_);
+  const io::FileHeader& file = reader.header();
+  const std::vector<std::byte> record = reader.read_record(1);
+  const io::FrameHeader whole = reader.parse_record(1, record);
+  io::FrameHeader coarse = whole;
+  for (io::ChunkDesc& c : coarse.chunks) {
+    ASSERT_TRUE(c.fine.split());
+    c.fine.dropped = true;
+  }
+  std::vector<uint64_t> starts(whole.chunks.size());
+  const uint64_t n = io::chunk_starts(whole, starts);
+  std::vector<uint64_t> exact(n), rough(n);
+  io::decode_record(record, whole, file, starts, std::as_writable_bytes(std::span(exact)), {}, {});
+  io::decode_record(record, coarse, file, starts, std::as_writable_bytes(std::span(rough)), {}, {});
+
+  uint64_t coarse_records = 0, whole_records = 0, checked = 0;
+  double worst = 0;  // the largest error seen, as a share of the stated one
+  for (const float error : {0.25f, 1.0f}) {
+    for (const float distance : {0.6f, 1.5f, 3.0f, 6.0f, 12.0f}) {
+      const std::array<float, 3> eye{0.5f, 0.3f - distance, 0.15f + 0.4f * distance};
+      const ViewDemand d = demand_of(eye, kCentre, 0.3f, true, error);
+      const DemandView& v = d.views[0];
+      // Where a world point lands, in pixels; false when it is not drawn
+      // (behind the eye, or more than half a screen outside the viewport).
+      const auto pixel = [&](const std::array<double, 3>& p, double& x, double& y) {
+        double eye_space[4] = {0, 0, 0, 1}, clip[4] = {0, 0, 0, 0};
+        for (int r = 0; r < 3; ++r) {
+          eye_space[r] = v.view[size_t(12 + r)];
+          for (int c = 0; c < 3; ++c) eye_space[r] += double(v.view[size_t(4 * c + r)]) * p[size_t(c)];
+        }
+        for (int r = 0; r < 4; ++r) {
+          for (int k = 0; k < 4; ++k) clip[r] += double(v.projection[size_t(4 * k + r)]) * eye_space[k];
+        }
+        if (clip[3] <= 0) return false;
+        const double nx = clip[0] / clip[3], ny = clip[1] / clip[3];
+        x = (nx + 1) * 0.5 * v.width;
+        y = (ny + 1) * 0.5 * v.height;
+        return std::abs(nx) <= 1.5 && std::abs(ny) <= 1.5;
+      };
+      for (size_t c = 0; c < whole.chunks.size(); ++c) {
+        const io::ChunkDesc& chunk = whole.chunks[c];
+        if (!coarse_enough(d, chunk.bounds)) {
+          ++whole_records;
+          continue;
+        }
+        ++coarse_records;
+        for (uint64_t i = starts[c]; i < starts[c] + chunk.particle_count; ++i) {
+          std::array<double, 3> p{}, q{};
+          for (int a = 0; a < 3; ++a) {
+            const float lo = chunk.bounds.min[size_t(a)], hi = chunk.bounds.max[size_t(a)];
+            p[size_t(a)] = io::dequantize(uint16_t(exact[i] >> (16 * a)), lo, hi);
+            q[size_t(a)] = io::dequantize(uint16_t(rough[i] >> (16 * a)), lo, hi);
+          }
+          double px = 0, py = 0, qx = 0, qy = 0;
+          if (!pixel(p, px, py)) continue;  // not drawn
+          pixel(q, qx, qy);
+          const double moved = std::hypot(px - qx, py - qy);
+          ++checked;
+          worst = std::max(worst, moved / error);
+          ASSERT_LE(moved, error) << "record " << c << ", particle " << i << ", from " << distance << " m";
+        }
+      }
+    }
+  }
+  std::printf("coarse records %llu, whole %llu; %llu particles checked, the worst at %.2f of the stated error\n",
+              (unsigned long long)coarse_records, (unsigned long long)whole_records, (unsigned long long)checked, worst);
+  EXPECT_GT(coarse_records, 0u) << "far views read records coarse";
+  EXPECT_GT(whole_records, 0u) << "close views read records whole";
+  EXPECT_GT(checked, 10000u);
+  EXPECT_GT(worst, 0.02) << "the rule is not vacuous: coarse particles do move";
+}
+
+// A frame read coarse for a far view falls short of a close one (its
+// records are wanted whole), not of another far one.
+TEST_F(DemandTest, AFrameReadCoarseFallsShortOfACloseView) {
+  const io::ContainerReader reader(path_);
+  io::FrameHeader h = reader.read_table(0);
+  const ViewDemand far = demand_of({0.5f, -6.0f, 2.5f}, kCentre, 1.0f, true, 1.0f);
+  const ViewDemand close = demand_of(kNearEye, kCentre, 1.0f, true, 1.0f);
+  std::vector<CellRead> cells;
+  apply_demand(far, h, cells);
+  uint64_t dropped = 0;
+  for (const io::ChunkDesc& c : h.chunks) dropped += c.fine.dropped;
+  EXPECT_EQ(dropped, h.chunks.size()) << "from far every record is read coarse";
+  EXPECT_FALSE(short_of(far, cells, h.blob_voxel));
+  EXPECT_TRUE(short_of(close, cells, h.blob_voxel));
+  ViewDemand exact = far;
+  exact.position_error_pixels = 0;  // precision by distance off: every record whole
+  EXPECT_TRUE(short_of(exact, cells, h.blob_voxel));
 }
 
 TEST_F(DemandTest, APausedPlayerReadsWhatTheLargerDemandLacks) {

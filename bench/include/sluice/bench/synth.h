@@ -36,7 +36,7 @@ struct SynthOptions {
   int zstd_level = 1;
   io::PlaneCoding planes = io::PlaneCoding::Packed;  // EncodeOptions::planes
   bool lod_tiers = true;               // chunks written as LOD tiers (EncodeOptions::lod_tiers)
-  uint16_t format_major = io::kFormatMajor;  // 2: coarse to fine; 1: format 1.5 (io::set_format_version)
+  uint16_t format_major = io::kFormatMajor;  // 3: coarse to fine, positions in two parts; 2: coarse to fine; 1: format 1.5 (io::set_format_version)
   // The file's position bound, spacing x 2^-precision_bits (io::FileHeader).
   uint8_t precision_bits = io::kDefaultPrecisionBits;
   bool layers = true;                  // narrow band: surface, blob and interior chunks (EncodeOptions::layers)

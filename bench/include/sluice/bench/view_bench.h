@@ -20,6 +20,8 @@
 #include <cstdint>
 #include <string>
 
+#include "sluice/render/options.h"
+
 namespace sluice::bench {
 
 struct ViewBenchOptions {
@@ -28,6 +30,9 @@ struct ViewBenchOptions {
   bool stereo = false;                   // both eyes in one pass (a headset-sized view: --size 2064x2208)
   std::string lod = "clod";              // clod | density
   float level = 0.3f;
+  // Precision by distance (render::LodOptions::position_error_pixels; 0:
+  // positions always at full precision).
+  float position_error = render::LodOptions{}.position_error_pixels;
   uint64_t memory = 0;                   // the pipeline's memory cap; 0: 4 GiB
   uint32_t steps = 48;                   // frames of the orbit and of the fly-in each
   // The same from the page cache, where the file may loop (more frames than

@@ -57,7 +57,8 @@ struct ConvertOptions {
   int level = 3;                 // zstd level
   io::PlaneCoding planes = io::PlaneCoding::Packed;
   bool lod_tiers = true;  // chunks as LOD tiers (io::EncodeOptions::lod_tiers)
-  // The container's major version: 2 (frames ordered coarse to fine) or 1
+  // The container's major version: 3 (frames ordered coarse to fine,
+  // positions in two parts), 2 (coarse to fine, positions whole) or 1
   // (format 1.5: each cell's tiers together, for readers older than 2.0).
   uint16_t format_major = io::kFormatMajor;
   // Classify the narrow band: surface, interior and blob layers (format

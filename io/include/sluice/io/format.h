@@ -17,8 +17,10 @@
 namespace sluice::io {
 
 // Format 2.0 orders each frame coarse to fine (docs/format.md, "Layout of a
-// frame"); readers of this build read 1.x files too.
-inline constexpr uint16_t kFormatMajor = 2;  // what writers write; readers reject majors above it
+// frame"); 3.0 also stores each record's positions in two parts, the fine
+// part apart ("Precision parts"). Readers of this build read 1.x and 2.0
+// files too.
+inline constexpr uint16_t kFormatMajor = 3;  // what writers write; readers reject majors above it
 inline constexpr uint16_t kFormatMinor = 0;  // readers accept any minor of a major they read
 inline constexpr uint16_t kOldestMajor = 1;  // the oldest major readers still read
 // The last 1.x minor (what `--format 1.5` writes: each cell's tiers together).
@@ -78,6 +80,16 @@ enum class ChunkCodec : uint8_t {
   Stored = 1,  // planes concatenated, no table
   Packed = 2,  // planes, each stored, zstd or bit-packed (format 1.1)
 };
+
+// Format 3.0 (frame flags bit 1): a quantized record's 48-bit Morton codes
+// are stored in two parts. The record holds the deltas of their high 32
+// bits; its fine part, apart, the low kFineCodeBits: 6 bits of x, 5 of y,
+// 5 of z. A reader without the fine part decodes each code with
+// kCoarseFill as its low bits (every dropped axis bit pattern at its
+// middle): off by at most kCoarseSteps quantization steps on each axis.
+inline constexpr uint32_t kFineCodeBits = 16;
+inline constexpr uint64_t kCoarseFill = 0xE000;  // x bit 5, y bit 4, z bit 4 of the low 16 bits
+inline constexpr std::array<uint32_t, 3> kCoarseSteps = {32, 16, 16};
 
 // Where a file's frame times come from (format 1.2).
 enum class TimeSource : uint8_t {
@@ -161,6 +173,22 @@ struct ChunkDesc {
   // (parse_frame_table sets it), kept when keep_layers or keep_tiers drop
   // records, so errors name the chunk the file holds.
   uint32_t index = 0;
+  // Format 3.0: the record's fine part (the low kFineCodeBits of its
+  // Morton codes: 2 planes of particle_count bytes, coded as any payload),
+  // written apart: after every record of its layer, in the records' order.
+  // size 0: the record's positions are whole (older formats, float32).
+  struct Fine {
+    uint64_t offset = 0;    // from the start of the frame record
+    uint32_t size = 0;      // bytes; 0: none
+    ChunkCodec codec = ChunkCodec::Stored;
+    uint64_t checksum = 0;  // XXH3-64 of its bytes
+    uint32_t index = 0;     // its place in the chunk table as written (errors name it)
+    // Left out by a reader (runtime's demand: a view far enough away): the
+    // record then decodes at the coarse precision (kCoarseFill).
+    bool dropped = false;
+    bool split() const { return size > 0; }
+    bool read() const { return size > 0 && !dropped; }
+  } fine;
   Aabb bounds;                   // every particle of the chunk lies inside (inclusive); the cell's box
   uint64_t checksum = 0;         // XXH3-64 of the compressed bytes
   // Per attribute: the range its 16-bit values are quantized against (held
@@ -184,7 +212,17 @@ struct FrameHeader {
   // layer (as written), then by tier, then along the Morton curve; every
   // record its own cell. 1.x frames: each cell's tiers together.
   bool coarse_to_fine = false;
+  // Format 3.0 (frame flags bit 1): every record's positions in two parts
+  // (ChunkDesc::fine); the chunk table lists the fine parts as records too
+  // (descriptor byte 18 bit 7), which parse_frame_table folds into `chunks`.
+  bool split_positions = false;
   std::vector<ChunkDesc> chunks;
+  // Records of the chunk table as written: chunks, and their fine parts.
+  uint32_t table_records() const {
+    uint32_t n = 0;
+    for (const ChunkDesc& c : chunks) n += c.fine.split() ? 2 : 1;
+    return n;
+  }
 };
 
 // Chunk records (particles, and blobs if `set` has them) of `set`'s layers.
@@ -196,6 +234,20 @@ void keep_layers(FrameHeader& frame, LayerSet set);
 // Bytes from the start of the record that hold its table and every payload
 // of `set`'s chunks: a reader that wants only those reads this many.
 uint64_t layers_end(const FrameHeader& frame, LayerSet set, size_t attribute_count);
+
+// One byte range a reader of a frame reads: a record's payload, or its fine
+// part (format 3.0).
+struct RecordPart {
+  uint64_t offset = 0;    // from the start of the frame record
+  uint32_t size = 0;
+  uint64_t checksum = 0;  // XXH3-64 of the bytes
+  uint32_t chunk = 0;     // the record's place in FrameHeader::chunks
+  bool fine = false;      // the record's fine part
+};
+// The parts of `frame`'s records a reader reads, in table order (each
+// layer's records, then the fine parts they read): `out` is cleared first
+// and allocates nothing once it has held as many.
+void record_parts(const FrameHeader& frame, std::vector<RecordPart>& out);
 
 // The records of the cell whose first record is chunks[first]: returns the
 // index one past its last record.

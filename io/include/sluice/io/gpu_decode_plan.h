@@ -30,8 +30,14 @@
 namespace sluice::io {
 
 // Planes the GPU decodes per chunk: the 6 bytes of the Morton deltas, the
-// LOD value's 2 bytes, the colour attribute's 2 delta bytes.
+// LOD value's 2 bytes, the colour attribute's 2 delta bytes. Split
+// positions (format 3.0): planes 0-1 the fine part's (the codes' low 16
+// bits), 2-5 bytes 0-3 of the deltas of their high 32 bits.
 inline constexpr int kGpuPlanes = 10;
+// GpuChunkPlan::flags.
+inline constexpr uint32_t kGpuWithAttribute = 1;  // planes 8 and 9 hold the colour attribute
+inline constexpr uint32_t kGpuSplit = 2;          // positions split (format 3.0)
+inline constexpr uint32_t kGpuFine = 4;           // ... and planes 0-1 hold the fine part; without: kCoarseFill
 inline constexpr uint64_t kGpuReadPadding = 16;
 // Particles per workgroup of the decoder (its tiles: 256 threads x 8).
 inline constexpr uint32_t kGpuTile = 2048;
@@ -48,7 +54,7 @@ struct GpuPlane {
 struct GpuChunkPlan {
   uint32_t first = 0;      // index of the chunk's first particle in the frame
   uint32_t count = 0;      // particles
-  uint32_t with_attribute = 0;  // 1: planes 8 and 9 hold the colour attribute; 0: none is written
+  uint32_t flags = 0;      // kGpuWithAttribute, kGpuSplit, kGpuFine
   uint32_t first_tile = 0;      // the chunk's tiles (kGpuTile particles each) are first_tile, first_tile + 1, ...
   GpuPlane planes[kGpuPlanes];
 };
@@ -125,6 +131,11 @@ void plan_gpu_frame(const FrameHeader& header, const FileHeader& file, const Gpu
                     const ErrorLocation& where);
 bool plan_gpu_chunk(std::span<const std::byte> payload, const FrameHeader& header, const FileHeader& file,
                     const GpuPlanOptions& options, size_t c, GpuDecodePlan& plan, const ErrorLocation& where);
+// The same for chunk c's fine part (format 3.0; GPU planes 0-1), from its
+// `payload` (fine.size bytes); a chunk's record and fine part may be
+// planned from different threads at once.
+bool plan_gpu_fine(std::span<const std::byte> payload, const FrameHeader& header, size_t c, GpuDecodePlan& plan,
+                   const ErrorLocation& where);
 void finish_gpu_plan(GpuDecodePlan& plan);
 
 // The CPU's share of chunk `c`: checks its checksum (when `verify`), copies

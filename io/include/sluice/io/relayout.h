@@ -32,7 +32,7 @@
 namespace sluice::io {
 
 struct RelayoutOptions {
-  uint16_t format_major = kFormatMajor;  // 2, or 1 (format 1.5)
+  uint16_t format_major = kFormatMajor;  // 3, 2, or 1 (format 1.5)
   // How planes are coded; unset: as the input's first frame (GpuDecodable
   // when every chunk of it decodes on the GPU, else Packed).
   std::optional<PlaneCoding> planes;

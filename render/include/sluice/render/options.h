@@ -121,6 +121,11 @@ struct LodOptions {
   float max_splat_pixels = 0.0f;
   // Largest growth factor of a kept splat in DensityPreserving mode.
   float max_splat_scale = 4.0f;
+  // Precision by distance (format 3.0 files): a record far enough away is
+  // read without the low bits of its positions when that moves none of its
+  // particles more than this many pixels on screen (runtime::coarse_enough).
+  // 0: positions always read at full precision. Applies with or without LOD.
+  float position_error_pixels = 0.25f;
 };
 
 // Names used on the command line and in camera/option strings.

@@ -28,6 +28,9 @@ namespace sluice::runtime {
 struct DemandView {
   std::array<float, 16> view{};        // world -> eye space (right-handed, looking down -z)
   std::array<float, 16> projection{};  // eye -> Vulkan clip space: perspective, any depth convention
+  // The viewport's size in pixels (precision by distance measures in
+  // them); 0: unknown, and records are read at full precision.
+  uint32_t width = 0, height = 0;
 };
 
 struct ViewDemand {
@@ -48,6 +51,11 @@ struct ViewDemand {
   // How far (world units) the views may move before a frame read now is
   // drawn: boxes grow by it for the frustum and the distance tests.
   float margin = 0;
+  // Precision by distance (format 3.0, io::ChunkDesc::fine): a record is
+  // read without its fine part when that moves none of its particles more
+  // than this many pixels in any view (coarse_enough()). 0: always read
+  // whole.
+  float position_error_pixels = 0;
 
   // Without views, a demand with `lod` and a level below 1 keeps that
   // fraction of every cell at importance 1 (io/particles.h's rule: scripts,
@@ -69,7 +77,26 @@ struct ViewDemand {
 // (io::FrameHeader::blob_voxel), for the blobs' reach.
 uint32_t tiers_needed(const ViewDemand& demand, const io::Aabb& box, io::Layer layer, float blob_voxel);
 
-// Keeps, of each cell of `frame`, the tiers the demand needs (io::keep_tiers).
+// The most the coarse precision may move a particle, as a share of its
+// radius (ViewDemand::particle_radius): what is left out never changes the
+// fluid's depth by more than this share of a splat.
+inline constexpr float kCoarseSplatShare = 0.25f;
+// Whether a record of box `box` may be drawn at the coarse precision
+// (format 3.0: its fine part left out) for every view of the demand: its
+// particles then lie within demand.position_error_pixels of where the
+// full precision puts them on every view's screen, for any view the margin
+// allows, and within kCoarseSplatShare of a particle's radius. Conservative:
+// false without views, for views of unknown pixel size, and for a box the
+// eye may reach.
+bool coarse_enough(const ViewDemand& demand, const io::Aabb& box);
+// The largest distance, in pixels, the coarse precision can move a
+// particle of box `box` on `view`'s screen (within half a screen of its
+// viewport: farther ones are not drawn), for views up to `margin` away
+// (infinity where it cannot be bounded): what coarse_enough() compares.
+double coarse_error_pixels(const DemandView& view, const io::Aabb& box, float margin);
+
+// Keeps, of each cell of `frame`, the tiers the demand needs (io::keep_tiers),
+// and marks the fine parts coarse_enough() leaves out (ChunkDesc::fine.dropped).
 void apply_demand(const ViewDemand& demand, io::FrameHeader& frame);
 
 // What a frame read under a demand holds of each of its cells, so that a
@@ -80,12 +107,14 @@ struct CellRead {
   io::Layer layer = io::Layer::All;
   uint16_t tiers_in_file = 0;  // bit t: the file has a record of tier t for this cell
   uint8_t tiers_read = 0;     // the demand's tier count when read (tiers below it are present)
+  bool coarse = false;        // read without its fine parts (the file has them: format 3.0)
 };
 // Records `frame`'s cells (before the demand drops any) with the tiers the
 // demand reads of each into `out` (cleared first; no allocation once it
 // has held as many cells), then applies the demand to `frame`.
 void apply_demand(const ViewDemand& demand, io::FrameHeader& frame, std::vector<CellRead>& out);
-// Whether `demand` needs a tier of some cell that `read` lacks.
+// Whether `demand` needs a tier of some cell that `read` lacks, or the
+// full precision of a cell read coarse.
 bool short_of(const ViewDemand& demand, const std::vector<CellRead>& read, float blob_voxel);
 
 }  // namespace sluice::runtime
