@@ -215,7 +215,12 @@ double coarse_error_pixels(const DemandView& v, const io::Aabb& box, float margi
   return std::hypot(x, y);
 }
 
-bool coarse_enough(const ViewDemand& demand, const io::Aabb& box) {
+bool coarse_enough(const ViewDemand& demand, const io::Aabb& box, io::Layer layer) {
+  // A blob's random term hashes the voxel its decoded centroid lies in
+  // (io::blob_lod_uniform), which the writer keeps 1e-3 of a side from any
+  // face; the coarse fill moves a centroid up to 0.05 of a side (32 steps of
+  // a box 100 sides wide): other blobs would be kept. Blobs are read whole.
+  if (layer == io::Layer::Blobs) return false;
   if (!(demand.position_error_pixels > 0) || demand.views.size() == 0) return false;
   for (size_t i = 0; i < demand.views.size(); ++i) {
     const DemandView& v = demand.views[i];
@@ -237,7 +242,7 @@ namespace {
 // Marks the fine parts of `frame`'s records coarse_enough() leaves out.
 void drop_fine_parts(const ViewDemand& demand, io::FrameHeader& frame) {
   if (!frame.split_positions) return;
-  for (io::ChunkDesc& c : frame.chunks) c.fine.dropped = c.fine.split() && coarse_enough(demand, c.bounds);
+  for (io::ChunkDesc& c : frame.chunks) c.fine.dropped = c.fine.split() && coarse_enough(demand, c.bounds, c.layer);
 }
 
 }  // namespace
@@ -261,7 +266,7 @@ void apply_demand(const ViewDemand& demand, io::FrameHeader& frame, std::vector<
     cell.layer = chunks[first].layer;
     for (size_t c = first; c < end; ++c) cell.tiers_in_file |= uint16_t(1u << chunks[c].tier);
     cell.tiers_read = static_cast<uint8_t>(tiers_needed(demand, prepared, cell.box, cell.layer, frame.blob_voxel));
-    cell.coarse = chunks[first].fine.split() && cell.tiers_read > 0 && coarse_enough(demand, cell.box);
+    cell.coarse = chunks[first].fine.split() && cell.tiers_read > 0 && coarse_enough(demand, cell.box, cell.layer);
     for (size_t c = first; c < end; ++c) frame.chunks[c].fine.dropped = cell.coarse;
     out.push_back(cell);
     first = end;
@@ -274,7 +279,7 @@ void apply_demand(const ViewDemand& demand, io::FrameHeader& frame, std::vector<
 bool short_of(const ViewDemand& demand, const std::vector<CellRead>& read, float blob_voxel) {
   const Prepared prepared = prepare(demand);
   for (const CellRead& cell : read) {
-    if (cell.coarse && !coarse_enough(demand, cell.box) &&
+    if (cell.coarse && !coarse_enough(demand, cell.box, cell.layer) &&
         tiers_needed(demand, prepared, cell.box, cell.layer, blob_voxel) > 0) {
       return true;  // read coarse, now needed at full precision
     }

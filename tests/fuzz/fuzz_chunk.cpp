@@ -21,22 +21,32 @@ using namespace sluice;
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   if (size < fuzz::kChunkSetupBytes) return 0;
-  const fuzz::ChunkSetup setup = fuzz::chunk_setup(data);
+  const fuzz::ChunkSetup setup = fuzz::chunk_setup(data, size);
   io::FileHeader header;
   header.position_coding = io::PositionCoding::Quantized16;
   for (size_t a = 0; a < setup.attributes; ++a) header.attributes.push_back({"a" + std::to_string(a)});
   // The payload in a buffer of its own size, so reading past it is caught.
-  const std::vector<std::byte> record(reinterpret_cast<const std::byte*>(data) + fuzz::kChunkSetupBytes,
+  const std::vector<std::byte> record(reinterpret_cast<const std::byte*>(data) + setup.bytes,
                                       reinterpret_cast<const std::byte*>(data) + size);
   io::ChunkDesc chunk;
   chunk.offset = 0;
   chunk.compressed_size = static_cast<uint32_t>(record.size());
+  if (setup.split) {  // format 3.0: the payload's tail is the record's fine part
+    const uint32_t fine = setup.fine_bytes;
+    chunk.compressed_size -= fine;
+    chunk.fine.offset = chunk.compressed_size;
+    chunk.fine.size = fine;
+    chunk.fine.codec = static_cast<io::ChunkCodec>(setup.fine_codec);
+    chunk.fine.checksum = io::checksum(std::span(record).subspan(chunk.compressed_size));
+    chunk.fine.index = 1;
+    chunk.fine.dropped = setup.coarse;
+  }
   chunk.particle_count = setup.particles;
   chunk.codec = static_cast<io::ChunkCodec>(setup.codec);
   chunk.bounds.extend(0, 0, 0);
   chunk.bounds.extend(1, 1, 1);
   chunk.attribute_ranges.assign(setup.attributes, {0.f, 1.f});
-  chunk.checksum = io::checksum(record);
+  chunk.checksum = io::checksum(std::span(record).first(chunk.compressed_size));
   std::vector<std::byte> particles(size_t(setup.particles) * 8);
   std::vector<std::vector<uint16_t>> attributes(setup.attributes, std::vector<uint16_t>(setup.particles));
   std::vector<uint16_t*> attribute_ptrs;
@@ -78,7 +88,11 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     const io::ChunkDesc& c = frame.chunks[0];
     if (c.offset > record.size() || c.compressed_size > record.size() - c.offset) return 0;
     const std::vector<std::byte> payload(record.begin() + long(c.offset), record.begin() + long(c.offset + c.compressed_size));
-    const bool planned = io::plan_gpu_chunk(payload, frame, header, {.color_attribute = color}, 0, steps, {"fuzz.sluice", 0, 0});
+    bool planned = io::plan_gpu_chunk(payload, frame, header, {.color_attribute = color}, 0, steps, {"fuzz.sluice", 0, 0});
+    if (planned && c.fine.read()) {
+      const std::vector<std::byte> fine(record.begin() + long(c.fine.offset), record.begin() + long(c.fine.offset + c.fine.size));
+      planned = io::plan_gpu_fine(fine, frame, 0, steps, {"fuzz.sluice", 0, 0});
+    }
     if (planned && (!whole_planned || plan.chunks.size() != 1 || plan.zstd_planes != 0 ||
                     std::memcmp(&plan.chunks[0], &steps.chunks[0], sizeof(io::GpuChunkPlan)) != 0)) {
       std::abort();

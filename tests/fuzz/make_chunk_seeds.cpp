@@ -42,12 +42,31 @@ int main(int argc, char** argv) {
       io::EncodeOptions options;
       options.chunk_particles = 4096;
       const io::EncodedFrame frame = io::encode_frame(in, header, options);
+      // Split (format 3.0, the writers' default): the record, then its
+      // fine part; read whole and read coarse.
       for (const io::ChunkDesc& c : frame.header.chunks) {
+        const uint32_t count = c.particle_count - 1;
+        for (const bool coarse : {false, true}) {
+          const uint8_t flags = uint8_t(c.codec) | uint8_t(uint8_t(c.fine.codec) << 2) | fuzz::kSplitSetup |
+                                (coarse ? fuzz::kCoarseSetup : 0);
+          const uint8_t setup[fuzz::kChunkSetupBytes + 2] = {uint8_t(attributes), flags, uint8_t(count), uint8_t(count >> 8),
+                                                             uint8_t(c.fine.size), uint8_t(c.fine.size >> 8)};
+          std::ofstream out(std::string(argv[1]) + "/chunk_" + std::to_string(written++), std::ios::binary);
+          out.write(reinterpret_cast<const char*>(setup), sizeof setup);
+          out.write(reinterpret_cast<const char*>(frame.record.data() + c.offset), c.compressed_size);
+          out.write(reinterpret_cast<const char*>(frame.record.data() + c.fine.offset), c.fine.size);
+        }
+      }
+      // Whole positions (format 2.0).
+      io::FileHeader whole = header;
+      io::set_format_version(whole, 2);
+      const io::EncodedFrame old = io::encode_frame(in, whole, options);
+      for (const io::ChunkDesc& c : old.header.chunks) {
         const uint32_t count = c.particle_count - 1;
         const uint8_t setup[fuzz::kChunkSetupBytes] = {uint8_t(attributes), uint8_t(c.codec), uint8_t(count), uint8_t(count >> 8)};
         std::ofstream out(std::string(argv[1]) + "/chunk_" + std::to_string(written++), std::ios::binary);
         out.write(reinterpret_cast<const char*>(setup), sizeof setup);
-        out.write(reinterpret_cast<const char*>(frame.record.data() + c.offset), c.compressed_size);
+        out.write(reinterpret_cast<const char*>(old.record.data() + c.offset), c.compressed_size);
       }
     }
   }

@@ -180,9 +180,10 @@ TEST(DemandRender, ReadingByTheViewDrawsWhatTheFullReadDraws) {
 }
 
 // Precision by distance (format 3.0): records far enough away are read
-// without their fine parts, for fewer bytes, and the picture stays within
-// 40 dB PSNR of the full read's (the renderer's default error, and a
-// coarser one to show what the rule trades).
+// without their fine parts, for fewer bytes, and at the renderer's default
+// error the picture stays within 40 dB PSNR of the full read's; a coarser
+// error (4x) shows what the rule trades (printed; at 200 x 120 the default
+// leaves every record whole, its particles being a fraction of a pixel).
 TEST(DemandRender, PrecisionByDistanceKeepsThePicture) {
   ValidationGuard guard;
   const io::ContainerReader reader(pool_file());
@@ -206,6 +207,10 @@ TEST(DemandRender, PrecisionByDistanceKeepsThePicture) {
         EXPECT_LE(stats.bytes_read, exact_stats.bytes_read) << c.name;
         if (error == stated) {
           EXPECT_TRUE(std::isinf(db) || db >= 40.0) << c.name << ": PSNR " << db;
+        }
+        // A coarser error reads the overview's far records coarse: fewer bytes, through the whole path.
+        if (error > stated && std::string(c.name) == "overview, cLOD 0.3") {
+          EXPECT_LT(stats.bytes_read, exact_stats.bytes_read);
         }
       }
     }

@@ -283,7 +283,7 @@ TEST_F(DemandTest, ACoarseRecordsParticlesStayWithinTheStatedScreenError) {
       };
       for (size_t c = 0; c < whole.chunks.size(); ++c) {
         const io::ChunkDesc& chunk = whole.chunks[c];
-        if (!coarse_enough(d, chunk.bounds)) {
+        if (!coarse_enough(d, chunk.bounds, chunk.layer)) {
           ++whole_records;
           continue;
         }

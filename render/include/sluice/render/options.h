@@ -125,7 +125,7 @@ struct LodOptions {
   // read without the low bits of its positions when that moves none of its
   // particles more than this many pixels on screen (runtime::coarse_enough).
   // 0: positions always read at full precision. Applies with or without LOD.
-  float position_error_pixels = 0.25f;
+  float position_error_pixels = 0.1f;
 };
 
 // Names used on the command line and in camera/option strings.

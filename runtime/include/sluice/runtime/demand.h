@@ -87,8 +87,9 @@ inline constexpr float kCoarseSplatShare = 0.25f;
 // full precision puts them on every view's screen, for any view the margin
 // allows, and within kCoarseSplatShare of a particle's radius. Conservative:
 // false without views, for views of unknown pixel size, and for a box the
-// eye may reach.
-bool coarse_enough(const ViewDemand& demand, const io::Aabb& box);
+// eye may reach. Blobs (`layer`) are always read whole: their random term
+// hashes the voxel their centroid lies in, which the coarse fill may change.
+bool coarse_enough(const ViewDemand& demand, const io::Aabb& box, io::Layer layer);
 // The largest distance, in pixels, the coarse precision can move a
 // particle of box `box` on `view`'s screen (within half a screen of its
 // viewport: farther ones are not drawn), for views up to `margin` away
