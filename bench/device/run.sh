@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Runs on the GPU machine (see bench/device/README.md): every benchmark the
 # issues ask GPU-machine figures for, in one call. Results go to $OUT.
-#   bash bench/device/run.sh [mpi] [io] [import] [layers] [band] [render] [stream] [split] [codec] [huge] [embed] [compare] [live] [stereo] [aniso] [xrsize] [firsthour] [streamcmp] [gpudecode] [gpuquick] [gpupair] [gpuab] [gpu100] [egl] [vtkpeer] [readpath] [importprobe] [relayprobe] [storeab] [gpusplit] [gpuplay] [gpuflight] [covered] [gpu100ab] [damf2] [gpusweep] [gpuvar] [relay] [relaytests] [relay100] [gpuplayall] [view] [viewall] [viewio] [tiersize] [tiergpu] [viewfull] [precision] [precision2] [sendthreads]   (default: io render stream)
+#   bash bench/device/run.sh [mpi] [io] [import] [layers] [band] [render] [stream] [split] [codec] [huge] [embed] [compare] [live] [stereo] [aniso] [xrsize] [firsthour] [streamcmp] [gpudecode] [gpuquick] [gpupair] [gpuab] [gpu100] [egl] [vtkpeer] [readpath] [importprobe] [relayprobe] [storeab] [gpusplit] [gpuplay] [gpuflight] [covered] [gpu100ab] [damf2] [gpusweep] [gpuvar] [relay] [relaytests] [relay100] [gpuplayall] [view] [viewall] [viewio] [tiersize] [tiergpu] [viewfull] [precision] [precision2] [precision3] [sendthreads]   (default: io render stream)
 set -uo pipefail
 # Folders on the GPU machine (it starts bare each session): SLUICE_SCRATCH holds
 # the unpacked libraries and the files stages write; OUT what comes back.
@@ -512,6 +512,12 @@ for stage in $stages; do
       run $S synth -n 100M --frames ${VIEW_FRAMES:-12} -o $T/v30.sluice --force -q --gpu-decodable
       run $S bench view $T/v30.sluice --steps ${VIEW_STEPS:-12} --cache-steps ${CACHE_STEPS:-60} --memory 24G --position-error 0 --no-psnr
       run $S bench view $T/v30.sluice --steps ${VIEW_STEPS:-12} --memory 24G --position-error 0.1 --no-storage
+      ;;
+    precision3)  # issue 45: pictures only (page cache), blobs read whole, at 0.25 and 0.1 px
+      run $S synth -n 100M --frames ${VIEW_FRAMES:-12} -o $T/v30.sluice --force -q --gpu-decodable
+      for e in 0.25 0.1; do
+        run $S bench view $T/v30.sluice --steps ${VIEW_STEPS:-12} --memory 24G --position-error $e --no-storage
+      done
       ;;
     sendthreads)  # issue 45: the relay's sends in bench view by read threads (13 default, 8, 6), page cache, alternated twice
       run $S bench render --sizes 10M --repeats 3 >/dev/null  # warm-up
