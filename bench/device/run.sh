@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Runs on the GPU machine (see bench/device/README.md): every benchmark the
 # issues ask GPU-machine figures for, in one call. Results go to $OUT.
-#   bash bench/device/run.sh [mpi] [io] [import] [layers] [band] [render] [stream] [split] [codec] [huge] [embed] [compare] [live] [stereo] [aniso] [xrsize] [firsthour] [streamcmp] [gpudecode] [gpuquick] [gpupair] [gpuab] [gpu100] [egl] [vtkpeer] [readpath] [importprobe] [relayprobe] [storeab] [gpusplit] [gpuplay] [gpuflight] [covered] [gpu100ab] [damf2] [gpusweep] [gpuvar] [relay] [relaytests] [relay100] [gpuplayall] [view] [viewall] [viewio] [tiersize] [tiergpu] [viewfull] [precision] [precision2] [precision3] [sendthreads]   (default: io render stream)
+#   bash bench/device/run.sh [mpi] [io] [import] [layers] [band] [render] [stream] [split] [codec] [huge] [embed] [compare] [live] [stereo] [aniso] [xrsize] [firsthour] [streamcmp] [gpudecode] [gpuquick] [gpupair] [gpuab] [gpu100] [egl] [vtkpeer] [readpath] [importprobe] [relayprobe] [storeab] [gpusplit] [gpuplay] [gpuflight] [covered] [gpu100ab] [damf2] [gpusweep] [gpuvar] [relay] [relaytests] [relay100] [gpuplayall] [view] [viewall] [viewio] [tiersize] [tiergpu] [viewfull] [precision] [precision2] [precision3] [sendlite] [sendthreads]   (default: io render stream)
 set -uo pipefail
 # Folders on the GPU machine (it starts bare each session): SLUICE_SCRATCH holds
 # the unpacked libraries and the files stages write; OUT what comes back.
@@ -517,6 +517,12 @@ for stage in $stages; do
       run $S synth -n 100M --frames ${VIEW_FRAMES:-12} -o $T/v30.sluice --force -q --gpu-decodable
       for e in 0.25 0.1; do
         run $S bench view $T/v30.sluice --steps ${VIEW_STEPS:-12} --memory 24G --position-error $e --no-storage
+      done
+      ;;
+    sendlite)  # issue 45: sendthreads in little device time: one run of 13 read threads, one of 6
+      run $S synth -n 100M --frames 6 -o $T/v6.sluice --force -q --gpu-decodable
+      for t in 13 6; do
+        run $S bench view $T/v6.sluice --steps 6 --cache-steps 40 --memory 24G --no-storage --no-psnr --read-threads $t
       done
       ;;
     sendthreads)  # issue 45: the relay's sends in bench view by read threads (13 default, 8, 6), page cache, alternated twice
