@@ -307,8 +307,8 @@ FrameHeader parse_frame_table(std::span<const std::byte> record, size_t attribut
 
 namespace {
 
-// A fine part's record must describe its record (format 3.0): the same
-// particles, layer, tiers, box and ranges; 2 bytes a particle.
+// A fine part's descriptor must describe its record (format 3.0): the
+// same particles, layer, tiers, box and ranges.
 void check_fine(ByteReader& r, const ChunkDesc& record, const ChunkDesc& fine) {
   const auto which = [&] {  // only on failure: it allocates, and tables are parsed every frame
     return "fine part (table record " + std::to_string(fine.index) + ") of record " + std::to_string(record.index);
@@ -324,8 +324,8 @@ void check_fine(ByteReader& r, const ChunkDesc& record, const ChunkDesc& fine) {
 
 // Format 3.0: each layer's records are followed by their fine parts, one
 // per record, in the same order. Folds each into its record's
-// ChunkDesc::fine and leaves only the records in `chunks`. `fine[k]`: table
-// record k is a fine part.
+// ChunkDesc::fine and leaves only the records in `chunks`. `fine_part[k]`:
+// table record k is a fine part (descriptor byte 18 bit 7).
 void fold_fine_parts(ByteReader& r, std::vector<ChunkDesc>& chunks, const std::vector<bool>& fine_part) {
   size_t out = 0;
   for (size_t first = 0; first < chunks.size();) {

@@ -169,18 +169,21 @@ double eye_shift(const DemandView& v, const std::array<double, 3>& shift) {
   return out;
 }
 
-// How far, in eye space, the coarse fill may put a particle of `box` from
-// its full-precision position: io::kCoarseSteps quantization steps on each
-// axis, plus the float rounding of two dequantizations.
-double coarse_shift(const DemandView& v, const io::Aabb& box) {
+// How far, along each world axis, the coarse fill may put a particle of
+// `box` from its full-precision position: io::kCoarseSteps quantization
+// steps, plus the float rounding of two dequantizations.
+std::array<double, 3> coarse_steps(const io::Aabb& box) {
   std::array<double, 3> shift{};
   for (int a = 0; a < 3; ++a) {
     const double lo = box.min[size_t(a)], hi = box.max[size_t(a)];
     const double ulp = 2.0 * std::numeric_limits<float>::epsilon() * std::max(std::abs(lo), std::abs(hi));
     shift[size_t(a)] = double(io::kCoarseSteps[size_t(a)]) * (hi - lo) / 65535.0 + 2 * ulp;
   }
-  return eye_shift(v, shift);
+  return shift;
 }
+
+// ... and in eye space.
+double coarse_shift(const DemandView& v, const io::Aabb& box) { return eye_shift(v, coarse_steps(box)); }
 
 }  // namespace
 
@@ -222,13 +225,14 @@ bool coarse_enough(const ViewDemand& demand, const io::Aabb& box, io::Layer laye
   // a box 100 sides wide): other blobs would be kept. Blobs are read whole.
   if (layer == io::Layer::Blobs) return false;
   if (!(demand.position_error_pixels > 0) || demand.views.size() == 0) return false;
+  // Against the splat too (world units, whatever the view): a shift that is
+  // a fraction of a pixel can still be a large share of a particle drawn
+  // smaller than a pixel, and moves the fluid's depth (and so its normals)
+  // by that share.
+  const std::array<double, 3> steps = coarse_steps(box);
+  if (!(steps[0] + steps[1] + steps[2] <= double(kCoarseSplatShare) * demand.particle_radius)) return false;
   for (size_t i = 0; i < demand.views.size(); ++i) {
-    const DemandView& v = demand.views[i];
-    // Against the splat too: a shift that is a fraction of a pixel can
-    // still be a large share of a particle drawn smaller than a pixel, and
-    // moves the fluid's depth (and so its normals) by that share.
-    if (!(coarse_shift(v, box) <= double(kCoarseSplatShare) * demand.particle_radius)) return false;
-    if (!(coarse_error_pixels(v, box, demand.margin) <= demand.position_error_pixels)) return false;
+    if (!(coarse_error_pixels(demand.views[i], box, demand.margin) <= demand.position_error_pixels)) return false;
   }
   return true;
 }
