@@ -84,6 +84,18 @@ uint64_t round16(uint64_t v) { return (v + 15) & ~uint64_t(15); }
 // (the caller cannot inflate it).
 using PlaneSink = std::function<bool(GpuPlane& out, const PlaneSource& s, size_t p)>;
 
+// GPU plane `out` for plane p, as located (`s`); false if a zstd plane
+// was refused by `zstd`.
+bool gpu_plane(std::span<const std::byte> bytes, uint64_t base, const PlaneSource& s, uint64_t n, size_t p,
+               const PlaneSink& zstd, GpuPlane& out, const ErrorLocation& at) {
+  switch (s.kind) {
+    case PlaneSource::Stored: out = {uint32_t(s.at), 0, 0, 0}; return true;
+    case PlaneSource::Packed: out = packed_plane(bytes, base, s, n, p, at); return true;
+    case PlaneSource::Zstd: return zstd(out, s, p);
+  }
+  return true;
+}
+
 // The GPU planes of chunk `chunk` from its plane table, in GpuChunkPlan
 // order; `bytes` holds the record from byte `base` on, the chunk's payload
 // included. False if a zstd plane was refused by `zstd`.
@@ -104,15 +116,7 @@ bool plan_planes(std::span<const std::byte> bytes, uint64_t base, const ChunkDes
   for (int k = int(fine); k < kGpuPlanes; ++k) {
     if (k >= 8 && !attribute) break;
     const size_t p = k < 8 ? size_t(k) - fine : colour + size_t(k - 8);
-    const PlaneSource& s = sources[p];
-    GpuPlane& out = g.planes[k];
-    switch (s.kind) {
-      case PlaneSource::Stored: out = {uint32_t(s.at), 0, 0, 0}; break;
-      case PlaneSource::Packed: out = packed_plane(bytes, base, s, n, p, at); break;
-      case PlaneSource::Zstd:
-        if (!zstd(out, s, p)) return false;
-        break;
-    }
+    if (!gpu_plane(bytes, base, sources[p], n, p, zstd, g.planes[k], at)) return false;
   }
   return true;
 }
@@ -130,15 +134,7 @@ bool plan_fine(std::span<const std::byte> bytes, uint64_t base, const ChunkDesc&
   }
   locate(bytes.subspan(fine.offset - base, fine.size), fine.offset, fine.codec, n, 2, sources, at);
   for (size_t p = 0; p < 2; ++p) {
-    const PlaneSource& s = sources[p];
-    GpuPlane& out = g.planes[p];
-    switch (s.kind) {
-      case PlaneSource::Stored: out = {uint32_t(s.at), 0, 0, 0}; break;
-      case PlaneSource::Packed: out = packed_plane(bytes, base, s, n, p, at); break;
-      case PlaneSource::Zstd:
-        if (!zstd(out, s, p)) return false;
-        break;
-    }
+    if (!gpu_plane(bytes, base, sources[p], n, p, zstd, g.planes[p], at)) return false;
   }
   return true;
 }

@@ -185,8 +185,10 @@ std::array<double, 3> coarse_steps(const io::Aabb& box) {
 // ... and in eye space.
 double coarse_shift(const DemandView& v, const io::Aabb& box) { return eye_shift(v, coarse_steps(box)); }
 
-}  // namespace
-
+// The largest distance, in pixels, the coarse precision can move a
+// particle of box `box` on `view`'s screen (within half a screen of its
+// viewport: farther ones are not drawn), for views up to `margin` away
+// (infinity where it cannot be bounded): what coarse_enough() compares.
 double coarse_error_pixels(const DemandView& v, const io::Aabb& box, float margin) {
   constexpr double kInfinity = std::numeric_limits<double>::infinity();
   if (v.width == 0 || v.height == 0) return kInfinity;
@@ -217,6 +219,8 @@ double coarse_error_pixels(const DemandView& v, const io::Aabb& box, float margi
   const double y = 0.5 * v.height * moved * (row_length(1) + kNdcReach * w_row) / w_least;
   return std::hypot(x, y);
 }
+
+}  // namespace
 
 bool coarse_enough(const ViewDemand& demand, const io::Aabb& box, io::Layer layer) {
   // A blob's random term hashes the voxel its decoded centroid lies in

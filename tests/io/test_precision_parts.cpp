@@ -13,23 +13,15 @@
 #include "records.h"
 #include "sluice/io/checksum.h"
 #include "sluice/io/codec.h"
-#include "sluice/io/lod.h"
 #include "test_util.h"
 
 using namespace sluice;
 
 namespace {
 
+// The records of `f`, chunks of at most 8,192 particles.
 io::EncodedFrame encode(const io::ParticleFrame& f, const io::FileHeader& h, bool layers = false) {
-  const std::vector<uint16_t> lod = io::lod_values(f.ids, f.count());
-  io::FrameInput in;
-  in.positions = f.positions;
-  in.lod = lod;
-  for (const auto& a : f.attributes) in.attributes.push_back(a);
-  io::EncodeOptions o;
-  o.chunk_particles = 8192;
-  o.layers = layers;
-  return io::encode_frame(in, h, o);
+  return test::encode(f, h, 8192, layers);
 }
 
 io::FileHeader header_of(uint16_t major) {

@@ -90,11 +90,6 @@ inline constexpr float kCoarseSplatShare = 0.25f;
 // eye may reach. Blobs (`layer`) are always read whole: their random term
 // hashes the voxel their centroid lies in, which the coarse fill may change.
 bool coarse_enough(const ViewDemand& demand, const io::Aabb& box, io::Layer layer);
-// The largest distance, in pixels, the coarse precision can move a
-// particle of box `box` on `view`'s screen (within half a screen of its
-// viewport: farther ones are not drawn), for views up to `margin` away
-// (infinity where it cannot be bounded): what coarse_enough() compares.
-double coarse_error_pixels(const DemandView& view, const io::Aabb& box, float margin);
 
 // Keeps, of each cell of `frame`, the tiers the demand needs (io::keep_tiers),
 // and marks the fine parts coarse_enough() leaves out (ChunkDesc::fine.dropped).
