@@ -1,5 +1,5 @@
 # The installed package: `find_package(sluice)` gives sluice::io,
-# sluice::runtime, sluice::render and (where built) sluice::desktop and sluice::xr, with
+# sluice::runtime, sluice::render, sluice::stream and (where built) sluice::desktop and sluice::xr, with
 # headers under include/sluice and the shaders embedded in the libraries.
 # sluice::import (simulation output -> .sluice; links VTK where built with
 # it) is a component too, with its worker executable in libexec/sluice.
@@ -8,7 +8,7 @@ include(CMakePackageConfigHelpers)
 
 # Position-independent code: a host may link the static libraries into a
 # shared object (the Python module, the ParaView plugin, a host's plugin).
-foreach(t sluice_io sluice_runtime sluice_render sluice_desktop sluice_xr sluice_import)
+foreach(t sluice_io sluice_runtime sluice_render sluice_stream sluice_desktop sluice_xr sluice_import)
   if(TARGET ${t})
     set_target_properties(${t} PROPERTIES POSITION_INDEPENDENT_CODE ON)
   endif()
@@ -31,7 +31,7 @@ install(EXPORT sluiceTargets NAMESPACE sluice:: DESTINATION ${CMAKE_INSTALL_LIBD
 # render (Vulkan), desktop (GLFW), xr (OpenXR) and import are components
 # with export sets of their own: a host that asks only for io needs no
 # Vulkan, one that asks only for render neither GLFW nor OpenXR.
-foreach(component render desktop xr import)
+foreach(component render stream desktop xr import)
   string(TOUPPER ${component} upper)
   set(SLUICE_PACKAGE_${upper} OFF)
   if(TARGET sluice_${component})
@@ -60,4 +60,5 @@ install(FILES ${CMAKE_CURRENT_BINARY_DIR}/sluiceConfig.cmake ${CMAKE_CURRENT_BIN
 export(EXPORT sluiceTargets NAMESPACE sluice:: FILE ${PROJECT_BINARY_DIR}/sluiceTargets.cmake)
 if(TARGET sluice_render)
   export(EXPORT sluice_renderTargets NAMESPACE sluice:: FILE ${PROJECT_BINARY_DIR}/sluice_renderTargets.cmake)
+  export(EXPORT sluice_streamTargets NAMESPACE sluice:: FILE ${PROJECT_BINARY_DIR}/sluice_streamTargets.cmake)
 endif()

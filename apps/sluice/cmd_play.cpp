@@ -223,8 +223,8 @@ void add_play(CLI::App& app) {
 }
 
 #if SLUICE_WITH_RENDER
-render::StreamOptions stream_options(const PlayOptions& o, const ViewSettings& v, bool window) {
-  render::StreamOptions so;
+stream::StreamOptions stream_options(const PlayOptions& o, const ViewSettings& v, bool window) {
+  stream::StreamOptions so;
   so.player = player_options(o, window);
   so.layers = layer_set(o.layers);
   so.decode = decode_site(o.decode);

@@ -16,7 +16,7 @@
 #include "play.h"
 #include "reads_text.h"
 #include "sluice/render/offscreen.h"
-#include "sluice/render/stream.h"
+#include "sluice/stream/stream.h"
 #include "view_options.h"
 
 namespace sluice::app {
@@ -67,10 +67,10 @@ void run_play_gpu(const PlayOptions& o, const WindowPlayOptions& w) {
   const ViewSettings& v = w.view;
   render::Context context(v.context_options());
   constexpr uint32_t kInFlight = 2;
-  render::StreamOptions so = stream_options(o, v, false);
+  stream::StreamOptions so = stream_options(o, v, false);
   so.renderer.frames_in_flight = kInFlight;
-  so.motion = render::ViewMotion::Fixed;  // the camera stays where it is: frames hold what it draws
-  render::Stream stream(context, o.file, so);
+  so.motion = stream::ViewMotion::Fixed;  // the camera stays where it is: frames hold what it draws
+  stream::Stream stream(context, o.file, so);
   const io::ContainerReader& reader = stream.reader();
   v.apply_environment(stream.renderer());
   stream.set_look(v.fluid_options(stream.scene()), v.lod_options());
@@ -105,7 +105,7 @@ void run_play_gpu(const PlayOptions& o, const WindowPlayOptions& w) {
   double next_stats = o.stats_every;
   player.play();
   while (true) {
-    const render::FeedUpdate fed = stream.update();
+    const stream::FeedUpdate fed = stream.update();
     errors.drain(player);
     const render::FrameStats stats = target.render(stream.renderer(), camera, stream.fluid(), stream.lod());
     ++ticks;

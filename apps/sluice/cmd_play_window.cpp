@@ -19,7 +19,7 @@
 #include "play.h"
 #include "sluice/desktop/window.h"
 #include "sluice/render/image_io.h"
-#include "sluice/render/stream.h"
+#include "sluice/stream/stream.h"
 #include "reads_text.h"
 #include "view_options.h"
 
@@ -296,7 +296,7 @@ double display_refresh_hz() {
 namespace {
 
 // What the window shows at the start: the file, the look, the first frame.
-Player initial_state(const io::ContainerReader& reader, const render::StreamOptions& so, const PlayOptions& o,
+Player initial_state(const io::ContainerReader& reader, const stream::StreamOptions& so, const PlayOptions& o,
                      const WindowPlayOptions& wo, const render::SceneInfo& scene, const render::Context& context) {
   const ViewSettings& v = wo.view;
   Player p;
@@ -371,9 +371,9 @@ void run_play_window(const PlayOptions& o, const WindowPlayOptions& wo) {
   // window's view draws, with a margin for the camera's moves) and decoded
   // into staging memory the GPU copies from. The window takes the context's
   // queue lock (desktop/window.h).
-  render::StreamOptions so = stream_options(o, v, true);
+  stream::StreamOptions so = stream_options(o, v, true);
   so.player.display_rate = o.display_hz > 0 ? o.display_hz : display_refresh_hz();
-  render::Stream stream(context, o.file, so);
+  stream::Stream stream(context, o.file, so);
   const io::ContainerReader& reader = stream.reader();
   const render::SceneInfo& scene = stream.scene();
 
@@ -419,7 +419,7 @@ void run_play_window(const PlayOptions& o, const WindowPlayOptions& wo) {
     const render::View view = window_view();
     stream.set_look(p.fluid, p.lod);
     stream.set_views({&view, 1});
-    const render::FeedUpdate fed = stream.update();
+    const stream::FeedUpdate fed = stream.update();
     if (fed.changed) {
       p.upload_wall_ms = fed.commit_wall_ms;
       p.frame = fed.frame;

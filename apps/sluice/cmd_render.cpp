@@ -19,7 +19,7 @@
 #include "sluice/render/image_io.h"
 #include "sluice/bench/live_bench.h"
 #include "sluice/render/offscreen.h"
-#include "sluice/render/stream.h"
+#include "sluice/stream/stream.h"
 
 namespace sluice::app {
 namespace {
@@ -57,15 +57,15 @@ std::string frame_path(const std::string& out, uint64_t frame, bool single) {
 // into staging) like playback: every frame due at once, none skipped
 // (hold), the first bad frame stops the render with its error; the one
 // fixed camera reads the tiers it draws (the same pixels as a full read).
-render::StreamOptions stream_options(const RenderCommand& o, const ViewSettings& v) {
-  render::StreamOptions so;
+stream::StreamOptions stream_options(const RenderCommand& o, const ViewSettings& v) {
+  stream::StreamOptions so;
   so.player.frame_rate = 1e9;
   so.player.end = runtime::EndMode::Stop;
   so.player.policy = runtime::RealTimePolicy::HoldLastFrame;
   so.player.on_error = runtime::ErrorPolicy::Stop;
   so.layers = layer_set(o.layers);
   so.decode = decode_site(o.decode);
-  so.motion = render::ViewMotion::Fixed;
+  so.motion = stream::ViewMotion::Fixed;
   so.up = v.up_override();
   render::apply_particles(v.particles, so.renderer);
   return so;
@@ -92,9 +92,9 @@ void run_render(const RenderCommand& o, const ViewSettings& v) {
   // draws those listed; nothing past the last is read.
   const std::vector<uint64_t> frames = parse_frame_list(o.frames, io::ContainerReader(input.path()).frame_count());
   const uint64_t first = frames.front(), last = frames.back();
-  render::StreamOptions so = stream_options(o, v);
+  stream::StreamOptions so = stream_options(o, v);
   so.player.frames = last + 1;
-  render::Stream stream(context, input.path(), so);
+  stream::Stream stream(context, input.path(), so);
   const io::ContainerReader& reader = stream.reader();
   const auto [width, height] = parse_size(o.size);
   const bool video = fs::path(o.out).extension() == ".mp4";
@@ -132,7 +132,7 @@ void run_render(const RenderCommand& o, const ViewSettings& v) {
   size_t drawn = 0;  // of `frames`
   for (uint64_t f = first; f <= last;) {
     player.wait_for_due();
-    const render::FeedUpdate fed = stream.update();
+    const stream::FeedUpdate fed = stream.update();
     if (const auto error = player.pop_error()) throw std::runtime_error(error->text());
     if (!fed.changed || fed.frame != f) {
       if (player.state() == runtime::PlayerState::Ended || player.state() == runtime::PlayerState::Stopped) {
@@ -294,7 +294,7 @@ void add_bench_render(CLI::App& bench) {
   auto live_size = std::make_shared<std::string>("1920x1080");
   CLI::App* lc = bench.add_subcommand("live", "Frames pushed from memory (a host's running simulation): encode, decode, copy, render");
   lc->footer("Synthetic frames (the `sluice synth` slosh) are generated first, then pushed through\n"
-             "render::LiveSource as a host would, and drawn.\n\n"
+             "stream::LiveSource as a host would, and drawn.\n\n"
              "Example: sluice bench live --sizes 1M,10M --record /tmp/live.sluice\n");
   lc->add_option("--sizes", *live_sizes, "Particles per frame (k, M suffixes)")->capture_default_str();
   lc->add_option("--frames", live->frames, "Distinct frames pushed (each 3 times after a warm-up)")->capture_default_str();

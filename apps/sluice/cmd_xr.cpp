@@ -1,6 +1,6 @@
 // `sluice xr FILE`: the sequence in a headset through OpenXR. A client of the
 // public API like any host: xr::Session (the runtime's Vulkan device, its
-// swapchains and frame loop), render::Stream driven by the predicted display
+// swapchains and frame loop), stream::Stream driven by the predicted display
 // time drawing both eyes, and
 // xr::Controls turning the controllers into playback and placement.
 #include <algorithm>
@@ -16,7 +16,7 @@
 #include "reads_text.h"
 #include "play.h"
 #include "playable.h"
-#include "sluice/render/stream.h"
+#include "sluice/stream/stream.h"
 #include "sluice/xr/controls.h"
 #include "sluice/xr/placement.h"
 #include "sluice/xr/session.h"
@@ -78,7 +78,7 @@ void apply_commands(const xr::Commands& c, runtime::Player& player, render::LodO
 
 // Both eyes recorded into the frame's command buffer: in one pass into an
 // array swapchain, else one record() per eye.
-render::FrameSync record_eyes(render::Stream& stream, const xr::Frame& frame, const std::array<render::View, 2>& views) {
+render::FrameSync record_eyes(stream::Stream& stream, const xr::Frame& frame, const std::array<render::View, 2>& views) {
   if (frame.stereo) return stream.record(frame.command_buffer, frame.stereo_target, views);
   render::FrameSync sync;
   for (size_t e = 0; e < 2; ++e) sync = stream.record(frame.command_buffer, frame.eyes[e].target, std::span(&views[e], 1));
@@ -117,11 +117,11 @@ void run_xr(const XrOptions& o) {
   // The session submits without the context's queue lock: frames are
   // relayed only where the relay has a queue of its own.
   DisplayClock clock;
-  render::StreamOptions sopts = stream_options(p, o.view, true);
+  stream::StreamOptions sopts = stream_options(p, o.view, true);
   sopts.renderer.frames_in_flight = xr::Session::kRecordsInFlight;  // one record() per eye
-  sopts.queue_lock = render::QueueLock::HostDoesNot;
+  sopts.queue_lock = stream::QueueLock::HostDoesNot;
   sopts.clock = &clock;
-  render::Stream stream(session.context(), p.file, sopts);
+  stream::Stream stream(session.context(), p.file, sopts);
   const render::SceneInfo& scene = stream.scene();
   if (!p.quiet) {
     std::fprintf(stderr, "xr: particles as %s\n", particles_text(sopts.renderer, stream.reader(), 0).c_str());

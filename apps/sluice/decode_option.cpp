@@ -12,10 +12,10 @@ void add_decode_option(CLI::App& cmd, std::string& value) {
       ->check(CLI::IsMember({"auto", "cpu", "gpu"}));
 }
 
-render::DecodeSite decode_site(const std::string& value) {
-  if (value == "cpu") return render::DecodeSite::Cpu;
-  if (value == "gpu") return render::DecodeSite::Gpu;
-  return render::DecodeSite::Auto;
+stream::DecodeSite decode_site(const std::string& value) {
+  if (value == "cpu") return stream::DecodeSite::Cpu;
+  if (value == "gpu") return stream::DecodeSite::Gpu;
+  return stream::DecodeSite::Auto;
 }
 
 }  // namespace sluice::app

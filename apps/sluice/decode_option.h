@@ -5,12 +5,12 @@
 
 #include <string>
 
-#include "sluice/render/frame_feed.h"
+#include "sluice/stream/frame_feed.h"
 
 namespace sluice::app {
 
 // Adds the option to `cmd`, writing "auto", "cpu" or "gpu" into `value`.
 void add_decode_option(CLI::App& cmd, std::string& value);
-render::DecodeSite decode_site(const std::string& value);
+stream::DecodeSite decode_site(const std::string& value);
 
 }  // namespace sluice::app

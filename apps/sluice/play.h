@@ -10,7 +10,7 @@
 
 #include "sluice/runtime/player.h"
 #if SLUICE_WITH_RENDER
-#include "sluice/render/stream.h"
+#include "sluice/stream/stream.h"
 #include "view_options.h"
 #endif
 
@@ -38,7 +38,7 @@ runtime::PlayerOptions player_options(const PlayOptions& o, bool window);
 #if SLUICE_WITH_RENDER
 // What a player through the renderer streams: player_options(), --layers,
 // --decode and --up. Throws std::runtime_error as those do.
-render::StreamOptions stream_options(const PlayOptions& o, const ViewSettings& v, bool window);
+stream::StreamOptions stream_options(const PlayOptions& o, const ViewSettings& v, bool window);
 #endif
 
 #if SLUICE_WITH_WINDOW

@@ -41,7 +41,7 @@ struct ViewSettings {
   render::Camera camera(const render::SceneInfo& scene, float aspect, render::ScreenRect free = {}) const;
   // --up, else the file's.
   render::Vec3 up_direction(const render::SceneInfo& scene) const;
-  // --up if given (render::StreamOptions::up).
+  // --up if given (stream::StreamOptions::up).
   std::optional<render::Vec3> up_override() const;
   // Loads --environment into the renderer, if given. Throws with the file named.
   void apply_environment(render::Renderer& renderer) const;

@@ -7,7 +7,7 @@
 
 #include "machine.h"
 #include "sluice/bench/synth.h"
-#include "sluice/render/live_source.h"
+#include "sluice/stream/live_source.h"
 #include "sluice/render/offscreen.h"
 #include "table.h"
 
@@ -36,12 +36,12 @@ void run_live_bench(const LiveBenchOptions& o) {
         }
       }
     }
-    render::LiveOptions lo;
+    stream::LiveOptions lo;
     lo.particle_spacing = so.spacing;
     lo.frame_rate = so.frame_rate;
     lo.record = o.record;
-    render::Renderer renderer(context, render::live_scene(bounds, lo, {}, n));
-    render::LiveSource live(renderer, lo);
+    render::Renderer renderer(context, stream::live_scene(bounds, lo, {}, n));
+    stream::LiveSource live(renderer, lo);
     render::OffscreenTarget target(context, o.width, o.height, {1, false, false});
     const render::Camera camera = render::Camera::framing(bounds, render::Vec3{0, 0, 1}, float(o.width) / float(o.height));
     render::FluidOptions fluid;
@@ -65,7 +65,7 @@ void run_live_bench(const LiveBenchOptions& o) {
     table.row({count_name(n), num(e, 1), num(double(n) / (e * 1e3), 1), num(median(decode), 1), num(median(upload), 2),
                num(median(draw), 2), num(t, 1), num(1e3 / t, 1)});
   }
-  std::printf("sluice bench live: frames pushed from memory through render::LiveSource (encode on %u cores, decode into "
+  std::printf("sluice bench live: frames pushed from memory through stream::LiveSource (encode on %u cores, decode into "
               "staging, copy), medians of %d pushes after a warm-up; %s\ndevice: %s (%s); host: %s\n\n",
               unsigned(core_count()), 3 * o.frames, o.record.empty() ? "not recorded" : ("recorded to " + o.record).c_str(),
               context.device().name.c_str(), context.device().driver.c_str(), cpu_model().c_str());

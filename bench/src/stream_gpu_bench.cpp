@@ -114,7 +114,7 @@ DevicePass stream_to_device(const io::ContainerReader& reader, const Slice& slic
       if (end) break;
       runtime::FrameHandle h = pipeline.take();
       if (h.failed()) throw io::Error(h.error()->where, h.error()->message);
-      const uint64_t ticket = renderer.commit(h, setup.color, &staging);
+      const uint64_t ticket = renderer.commit(render::frame_upload(h, setup.color, &staging));
       const io::GpuDecodePlan* plan = h.gpu_plan();
       staged += plan ? plan->staged_bytes() : h.header().particle_count * (8 + (setup.color >= 0 ? 2 : 0));
       flight.emplace_back(std::move(h), ticket);

@@ -17,8 +17,8 @@
 #include "machine.h"
 #include "sluice/io/particles.h"
 #include "sluice/io/reader.h"
-#include "sluice/render/demand.h"
-#include "sluice/render/frame_feed.h"
+#include "sluice/stream/demand.h"
+#include "sluice/stream/frame_feed.h"
 #include "sluice/render/image_io.h"
 #include "sluice/render/offscreen.h"
 #include "sluice/render/renderer.h"
@@ -122,10 +122,10 @@ render::LodOptions lod_options(const ViewBenchOptions& o, float level) {
   return lod;
 }
 
-render::DecodeSite decode_site(const std::string& s) {
-  if (s == "cpu") return render::DecodeSite::Cpu;
-  if (s == "gpu") return render::DecodeSite::Gpu;
-  return render::DecodeSite::Auto;
+stream::DecodeSite decode_site(const std::string& s) {
+  if (s == "cpu") return stream::DecodeSite::Cpu;
+  if (s == "gpu") return stream::DecodeSite::Gpu;
+  return stream::DecodeSite::Auto;
 }
 
 struct StepTimes {
@@ -212,7 +212,7 @@ class Bench {
     for (const Step& step : steps) {
       p.player.set_demand(demand(step.views, lod, by_view));
       StepTimes times;
-      const render::FeedUpdate fed = p.next_frame(times);
+      const stream::FeedUpdate fed = p.next_frame(times);
       const auto rendering = Clock::now();
       if (&step == &steps.front()) first_seconds = std::chrono::duration<double>(rendering - t0).count();
       target.render(renderer_, step.views, fluid_, lod);
@@ -287,21 +287,21 @@ class Bench {
     render::StagingAllocator staging;
     runtime::SteadyClock clock;
     runtime::Player player;
-    render::FrameFeed feed;
+    stream::FrameFeed feed;
     render::Renderer& renderer;
 
     Player(Bench& b, uint64_t first, const runtime::ViewDemand& demand)
-        : staging(b.context_, render::FrameFeed::staging_options(b.context_, b.reader_.header(), decode_site(b.o_.decode), true)),
+        : staging(b.context_, stream::FrameFeed::staging_options(b.context_, b.reader_.header(), decode_site(b.o_.decode), true)),
           player(b.reader_, staging, clock, b.player_options(first, staging, demand)),
           feed(b.renderer_, player, &staging, -1),
           renderer(b.renderer_) {}
 
-    render::FeedUpdate next_frame(StepTimes& times) {
+    stream::FeedUpdate next_frame(StepTimes& times) {
       const auto t0 = Clock::now();
       const auto deadline = t0 + std::chrono::seconds(120);
       while (true) {
         player.wait_for_due();
-        const render::FeedUpdate fed = feed.update();
+        const stream::FeedUpdate fed = feed.update();
         if (const auto error = player.pop_error()) throw std::runtime_error(error->text());
         if (fed.changed) {
           const auto committed = Clock::now();
@@ -326,7 +326,7 @@ class Bench {
     po.on_error = runtime::ErrorPolicy::Stop;
     po.pipeline.layers = io::LayerSet::surface();
     po.pipeline.window.budget.memory_cap = o_.memory > 0 ? o_.memory : (uint64_t(4) << 30);
-    render::FrameFeed::configure(po, staging, -1, reader_.header(), decode_site(o_.decode));
+    stream::FrameFeed::configure(po, staging, -1, reader_.header(), decode_site(o_.decode));
     po.pipeline.demand = demand;
     if (o_.read_threads > 0) po.pipeline.read.threads = o_.read_threads;
     po.pipeline.read.mapped = o_.mapped_reads;
@@ -336,7 +336,7 @@ class Bench {
 
   runtime::ViewDemand demand(const std::vector<render::View>& views, const render::LodOptions& lod, bool by_view) const {
     if (!by_view) return {};
-    return render::view_demand(views, scene_, fluid_, lod, render::view_margin(scene_.bounds.diagonal(), 0, 0));
+    return stream::view_demand(views, scene_, fluid_, lod, stream::view_margin(scene_.bounds.diagonal(), 0, 0));
   }
 
   float extent() const {

@@ -36,7 +36,7 @@
 
 #include "sluice/render/context.h"
 #include "sluice/render/image_io.h"
-#include "sluice/render/stream.h"
+#include "sluice/stream/stream.h"
 
 namespace {
 
@@ -267,7 +267,7 @@ class HostScene {
   // One frame: the host clears and draws its geometry (or not), then the
   // stream records the fluid into the same images (occluded by the host's
   // depth, writing its own), or not; submitted, not waited for.
-  void draw(bool host_geometry, sluice::render::Stream* fluid) {
+  void draw(bool host_geometry, sluice::stream::Stream* fluid) {
     Slot& slot = slots_[next_++ % slots_.size()];
     wait_for(slot);  // the frames-in-flight contract: this slot's previous frame is done
     vk::CommandBuffer cmd = *slot.cmd;
@@ -452,7 +452,7 @@ class HostScene {
 // 6. --check: the host's geometry alone and the fluid alone, against both
 // drawn together. Where both drew, the nearer one must show: the box in
 // front hides the fluid, the fluid in front of the box hides it.
-bool check_occlusion(HostScene& scene, sluice::render::Stream& stream, const std::vector<uint32_t>& both,
+bool check_occlusion(HostScene& scene, sluice::stream::Stream& stream, const std::vector<uint32_t>& both,
                      const std::vector<float>& both_z) {
   std::vector<uint32_t> host_only, fluid_only;
   std::vector<float> host_z, fluid_z;
@@ -498,17 +498,17 @@ int main(int argc, char** argv) try {
   // The host submits under context.queue_lock() (HostScene::submit), so
   // frames the GPU decodes may be relayed to device memory as they are read
   // even where the relay shares the host's one queue (relay_queue_shared()).
-  const sluice::render::StreamOptions options{.renderer = {.frames_in_flight = kFramesInFlight},
-                                               .queue_lock = sluice::render::QueueLock::HostTakesIt,
-                                               .motion = sluice::render::ViewMotion::Fixed};  // the host's camera stays put
-  sluice::render::LiveOptions live;
+  const sluice::stream::StreamOptions options{.renderer = {.frames_in_flight = kFramesInFlight},
+                                               .queue_lock = sluice::stream::QueueLock::HostTakesIt,
+                                               .motion = sluice::stream::ViewMotion::Fixed};  // the host's camera stays put
+  sluice::stream::LiveOptions live;
   live.particle_spacing = 0.02f;
   live.frame_rate = 30;
   live.record = args->record;
   live.ids = false;  // the host keeps its particle order: LOD values follow the index
-  std::unique_ptr<sluice::render::Stream> stream =
-      args->live ? std::make_unique<sluice::render::Stream>(context, sluice::render::Bounds{{0, 0, 0}, {2, 1, 1}}, live, options)
-                 : std::make_unique<sluice::render::Stream>(context, args->file, options);
+  std::unique_ptr<sluice::stream::Stream> stream =
+      args->live ? std::make_unique<sluice::stream::Stream>(context, sluice::render::Bounds{{0, 0, 0}, {2, 1, 1}}, live, options)
+                 : std::make_unique<sluice::stream::Stream>(context, args->file, options);
   sluice::render::FluidOptions look = stream->fluid();
   look.ground = false;  // the host draws its own floor
   stream->set_look(look, {});

@@ -22,7 +22,7 @@
 #include "sluice/render/camera.h"
 #include "sluice/render/context.h"
 #include "sluice/render/offscreen.h"
-#include "sluice/render/stream.h"
+#include "sluice/stream/stream.h"
 #ifdef SLUICE_PYTHON_WINDOW
 #include "sluice/desktop/window.h"
 #endif
@@ -37,7 +37,7 @@ struct LiveViewOptions {
   bool window = true;
   uint32_t width = 960, height = 540;
   std::string title = "sluice live";
-  render::LiveOptions live;
+  stream::LiveOptions live;
   bool keep_all = false;
 };
 
@@ -149,15 +149,15 @@ class LiveView {
     changed_.notify_all();
   }
 
-  render::StreamOptions stream_options() const {
-    render::StreamOptions so;
+  stream::StreamOptions stream_options() const {
+    stream::StreamOptions so;
     so.layers = io::LayerSet::particles();  // a pushed frame has no layers: every particle, classified on the GPU
-    so.motion = render::ViewMotion::Fixed;
+    so.motion = stream::ViewMotion::Fixed;
     return so;
   }
 
   // Takes the waiting frame, if any, into the stream; true if one came.
-  bool take(render::Stream& stream) {
+  bool take(stream::Stream& stream) {
     std::optional<OwnedFrame> frame;
     {
       std::lock_guard lock(mutex_);
@@ -165,7 +165,7 @@ class LiveView {
       changed_.notify_all();
     }
     if (!frame) return false;
-    render::LiveFrame live{frame->positions, frame->ids, {}, frame->time};
+    stream::LiveFrame live{frame->positions, frame->ids, {}, frame->time};
     for (const auto& a : frame->attributes) live.attributes.emplace_back(a);
     stream.push(live);
     std::lock_guard lock(mutex_);
@@ -188,7 +188,7 @@ class LiveView {
 
   void run_offscreen() {
     render::Context context(render::ContextOptions{});
-    render::Stream stream(context, o_.bounds, o_.live, stream_options());
+    stream::Stream stream(context, o_.bounds, o_.live, stream_options());
     render::OffscreenTarget target(context, o_.width, o_.height);
     const render::Camera camera = render::Camera::framing(o_.bounds, stream.fluid().up, float(o_.width) / float(o_.height));
     mark_ready();
@@ -210,7 +210,7 @@ class LiveView {
     co.instance_extensions = desktop::window_instance_extensions();
     co.presentation = true;
     render::Context context(co);
-    render::Stream stream(context, o_.bounds, o_.live, stream_options());
+    stream::Stream stream(context, o_.bounds, o_.live, stream_options());
     desktop::WindowOptions wo;
     wo.width = o_.width;
     wo.height = o_.height;

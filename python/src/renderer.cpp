@@ -17,7 +17,7 @@
 #include "sluice/error.h"
 #include "sluice/render/error.h"
 #include "sluice/render/offscreen.h"
-#include "sluice/render/stream.h"
+#include "sluice/stream/stream.h"
 
 namespace py = pybind11;
 
@@ -53,19 +53,19 @@ class Renderer {
       PyErr_SetString(PyExc_FileNotFoundError, (path.string() + ": no such file").c_str());
       throw py::error_already_set();
     }
-    render::StreamOptions so;
+    stream::StreamOptions so;
     so.player.frame_rate = 1e9;  // every frame due at once: a render waits for its frame, not the clock
     so.player.end = runtime::EndMode::Stop;
     so.player.policy = runtime::RealTimePolicy::HoldLastFrame;
     so.player.on_error = runtime::ErrorPolicy::Stop;
     so.layers = layer_set(layers);
-    so.motion = render::ViewMotion::Fixed;
+    so.motion = stream::ViewMotion::Fixed;
     try {
       render::apply_particles(particles, so.renderer);
     } catch (const sluice::Error& e) {
       throw py::value_error(std::string("particles: ") + e.what());
     }
-    stream_ = std::make_unique<render::Stream>(*context_, path, so);
+    stream_ = std::make_unique<stream::Stream>(*context_, path, so);
     target_ = std::make_unique<render::OffscreenTarget>(*context_, size.first, size.second);
     if (color_) {
       const auto& names = stream_->scene().attribute_names;
@@ -156,7 +156,7 @@ class Renderer {
     const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
     for (;;) {
       player.wait_for_due();
-      const render::FeedUpdate fed = stream_->update();
+      const stream::FeedUpdate fed = stream_->update();
       if (const auto error = player.pop_error()) throw io::Error(error->where, error->message);
       if (fed.has_frame && fed.frame == frame) {
         stream_->renderer().wait_upload(fed.ticket);
@@ -168,7 +168,7 @@ class Renderer {
   }
 
   std::shared_ptr<render::Context> context_;
-  std::unique_ptr<render::Stream> stream_;
+  std::unique_ptr<stream::Stream> stream_;
   std::unique_ptr<render::OffscreenTarget> target_;
   std::optional<std::string> color_;
   int color_attribute_ = 0;

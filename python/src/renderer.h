@@ -1,5 +1,5 @@
 // sluice.Renderer: a sequence's frames drawn offscreen into RGBA numpy
-// images (a GPU, or lavapipe), through the same render::Stream a host uses.
+// images (a GPU, or lavapipe), through the same stream::Stream a host uses.
 #pragma once
 
 #include <pybind11/pybind11.h>

@@ -159,4 +159,46 @@ void StagingAllocator::release(runtime::FrameBuffers& buffers) {
   buffers = {};
 }
 
+FrameUpload frame_upload(const runtime::FrameHandle& frame, int color_attribute, const StagingAllocator* from) {
+  if (frame.empty() || frame.failed()) throw Error("commit: an empty or failed frame handle");
+  if (frame.content() == runtime::FrameContent::World) {
+    throw Error("commit: a frame converted to world units (DecodeMode::World) is for array consumers, not the renderer");
+  }
+  const runtime::FrameBuffers& buffers = frame.buffers();
+  const StagingAllocator::Memory* block = from ? &staging_memory(buffers) : nullptr;
+  const bool vulkan = block && !block->host;  // else a host fallback: copied through the renderer's staging
+  FrameUpload u;
+  u.header = &frame.header();
+  u.chunk_first = frame.chunk_first();
+  u.particles.host = buffers.particles;
+  if (vulkan && !block->resident()) u.particles.buffer = *block->staging.buffer;
+  if (const io::GpuDecodePlan* plan = frame.gpu_plan()) {
+    u.plan = plan;
+    u.color_attribute = color_attribute;
+    if (vulkan && block->resident()) {
+      const ResidentArea& area = *block->area;
+      u.particles = {};
+      u.resident = {*area.device.buffer, area.device.size, from->relay_semaphore(), area.relayed.load(std::memory_order_relaxed)};
+    }
+    return u;
+  }
+  // The streams hold every attribute (stream k is attribute k) or only the colour one.
+  const size_t streams = buffers.attributes.size();
+  const int stream = color_attribute < 0 ? -1 : streams == 1 ? 0 : color_attribute;
+  if (stream >= 0 && size_t(stream) >= streams) {
+    throw Error("commit: the frame holds " + std::to_string(streams) + " attribute streams, none of them attribute " +
+                std::to_string(color_attribute));
+  }
+  if (stream >= 0) {
+    const auto& values = buffers.attributes[size_t(stream)];
+    u.color.host = std::as_bytes(std::span(values.data(), values.size()));
+    u.color_attribute = color_attribute;
+    if (vulkan) {
+      u.color.buffer = *block->staging.buffer;
+      u.color.offset = block->attribute_offset + uint64_t(stream) * block->attribute_stride;
+    }
+  }
+  return u;
+}
+
 }  // namespace sluice::render

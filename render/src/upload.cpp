@@ -14,37 +14,13 @@
 
 #include "renderer_impl.h"
 #include "sluice/render/load.h"
-#include "sluice/runtime/pipeline.h"
 #include "sluice/io/codec.h"
 #include "sluice/io/lod.h"
 #include "sluice/io/reader.h"
-#include "staging_block.h"
 #include "sluice/render/error.h"
 
 namespace sluice::render {
 namespace {
-
-// A decoded frame as the runtime hands it over (FrameHandle has every
-// field). Borrowed for the call.
-struct DecodedFrameView {
-  const io::FrameHeader* header = nullptr;       // chunk table: counts, AABBs, attribute ranges
-  std::span<const uint64_t> chunk_first;         // first particle of each chunk
-  const runtime::FrameBuffers* buffers = nullptr;
-  int color_stream = -1;     // index into buffers->attributes of the colour attribute; -1: none
-  int color_attribute = -1;  // that attribute's index in the file header (for the chunk ranges)
-};
-
-// A frame the runtime kept encoded for the GPU decoder
-// (runtime::DecodeMode::KeepEncoded; runtime::FrameHandle has every
-// field). Borrowed for the call.
-struct EncodedFrameView {
-  const io::FrameHeader* header = nullptr;        // chunk table: counts, AABBs, attribute ranges
-  std::span<const uint64_t> chunk_first;          // first particle of each chunk
-  const runtime::FrameBuffers* buffers = nullptr; // particles: the staged area (io/gpu_decode_plan.h)
-  const io::GpuDecodePlan* plan = nullptr;
-  int color_attribute = -1;  // the attribute the plan decodes (file header index); -1: none
-};
-
 
 constexpr auto kDeviceUsage = vk::BufferUsageFlagBits::eStorageBuffer | vk::BufferUsageFlagBits::eShaderDeviceAddress |
                               vk::BufferUsageFlagBits::eTransferDst;
@@ -189,13 +165,15 @@ struct UploadSource {  // where upload_frame() copies a part of a frame from
 };
 
 // A frame committed encoded: its staged area, decoded on the GPU after the
-// copy. A resident one (relay_ring.h) is in device memory already: only its
-// tables are copied (from `area`, table_block_bytes() of them), into it.
+// copy. A resident one (FrameUpload::Resident) is in device memory already:
+// only its tables are copied (from `area`, table_block_bytes() of them), into it.
 struct EncodedSource {
   UploadSource area;
   const io::GpuDecodePlan* plan = nullptr;
-  const ResidentArea* resident = nullptr;
-  vk::Semaphore relayed;  // the relay's timeline, when resident
+  vk::Buffer resident;                // the resident area, when set
+  vk::DeviceAddress resident_address = 0;
+  vk::Semaphore relayed;              // what fills it, and the value the decode waits for
+  uint64_t relayed_value = 0;
 };
 
 // Records the decode of `set`'s staged area into its particle and
@@ -248,7 +226,7 @@ uint64_t submit_decode(detail::RendererImpl& r, FrameSet& set, uint64_t copy_val
   using Stage = vk::PipelineStageFlagBits2;
   const vk::CommandBufferSubmitInfo cb(*set.decode);
   // Every stage waits (the first timestamp too, so decode_ms is the decode's).
-  const uint64_t relayed = source.resident ? source.resident->relayed.load(std::memory_order_relaxed) : 0;
+  const uint64_t relayed = source.resident && source.relayed ? source.relayed_value : 0;
   const std::array waits{vk::SemaphoreSubmitInfo(*r.copy_done, copy_value, Stage::eAllCommands),
                          vk::SemaphoreSubmitInfo(source.relayed, relayed, Stage::eAllCommands)};
   const uint32_t wait_count = relayed > 0 ? 2 : 1;
@@ -356,7 +334,7 @@ uint64_t upload_frame(detail::RendererImpl& r, FrameSet& set, UploadSource parti
     if (!encoded->resident) r.ensure(set.encoded, encoded->plan->staged_bytes(), kDeviceUsage, MemoryKind::DeviceLocal);
     r.ensure(set.decode_errors, std::max<uint64_t>(uint64_t(chunks) * 4, 16),
              vk::BufferUsageFlagBits::eStorageBuffer | vk::BufferUsageFlagBits::eShaderDeviceAddress, MemoryKind::Readback);
-    record_decode(r, set, *encoded->plan, encoded->resident ? encoded->resident->device.address : set.encoded.address);
+    record_decode(r, set, *encoded->plan, encoded->resident ? encoded->resident_address : set.encoded.address);
   }
 
   (*r.ctx.device).resetQueryPool(*set.stamps, 0, 2);
@@ -365,7 +343,7 @@ uint64_t upload_frame(detail::RendererImpl& r, FrameSet& set, UploadSource parti
   cmd.begin(vk::CommandBufferBeginInfo(vk::CommandBufferUsageFlagBits::eOneTimeSubmit));
   cmd.writeTimestamp2(vk::PipelineStageFlagBits2::eAllCommands, *set.stamps, 0);
   if (encoded && encoded->resident) {
-    cmd.copyBuffer(encoded->area.buffer, *encoded->resident->device.buffer,
+    cmd.copyBuffer(encoded->area.buffer, encoded->resident,
                    vk::BufferCopy(encoded->area.offset, encoded->plan->plans_offset(), io::table_block_bytes(*encoded->plan)));
   } else if (encoded) {
     cmd.copyBuffer(encoded->area.buffer, *set.encoded.buffer,
@@ -462,18 +440,16 @@ uint64_t Renderer::commit_frame() {
 
 namespace {
 
-uint64_t commit_decoded(Renderer& renderer, detail::RendererImpl& r, const DecodedFrameView& frame,
-                        const StagingAllocator* from) {
+uint64_t commit_decoded(Renderer& renderer, detail::RendererImpl& r, const FrameUpload& frame) {
   const io::FrameHeader& header = *frame.header;
   const uint64_t n = header.particle_count;
   const uint32_t chunks = uint32_t(header.chunks.size());
-  if (frame.chunk_first.size() != chunks) throw Error("commit_decoded: one first index per chunk");
-  const bool attribute = frame.color_stream >= 0 && size_t(frame.color_stream) < frame.buffers->attributes.size();
+  const bool attribute = frame.color_attribute >= 0 && !frame.color.host.empty();
   const size_t stride = io::decoded_particle_bytes(r.scene.coding);
-  if (frame.buffers->particles.size() < n * stride) throw Error("commit_decoded: particle buffer too small");
-  const StagingAllocator::Memory* block = from ? &staging_memory(*frame.buffers) : nullptr;
+  if (frame.particles.host.size() < n * stride) throw Error("commit: the particle bytes are fewer than the frame's particles");
+  if (attribute && frame.color.host.size() < n * 2) throw Error("commit: fewer colour values than particles");
 
-  if (!block || block->host) {
+  if (!frame.particles.buffer || (attribute && !frame.color.buffer)) {
     // Not in Vulkan memory: through the renderer's own staging.
     FrameStaging s = renderer.stage_frame(n, chunks);
     FrameSet& set = r.sets[size_t(r.staged)];
@@ -483,16 +459,13 @@ uint64_t commit_decoded(Renderer& renderer, detail::RendererImpl& r, const Decod
     const bool copy_attribute = attribute && !s.color_attribute.empty();
     tbb::parallel_for(tbb::blocked_range<uint64_t>(0, n, 1 << 18), [&](const tbb::blocked_range<uint64_t>& range) {
       const size_t begin = range.begin(), count = range.size();
-      std::memcpy(s.particles.data() + begin * stride, frame.buffers->particles.data() + begin * stride, count * stride);
-      if (copy_attribute) {
-        std::memcpy(s.color_attribute.data() + begin,
-                    frame.buffers->attributes[size_t(frame.color_stream)].data() + begin, count * 2);
-      }
+      std::memcpy(s.particles.data() + begin * stride, frame.particles.host.data() + begin * stride, count * stride);
+      if (copy_attribute) std::memcpy(s.color_attribute.data() + begin, frame.color.host.data() + begin * 2, count * 2);
     });
     set.has_attribute = copy_attribute;
     return renderer.commit_frame();
   }
-  // Straight from the allocator's staging: only the chunk table is written here.
+  // Straight from the caller's buffers: only the chunk table is written here.
   const int index = r.free_set();
   FrameSet& set = r.sets[size_t(index)];
   r.stride = stride;
@@ -505,29 +478,22 @@ uint64_t commit_decoded(Renderer& renderer, detail::RendererImpl& r, const Decod
   set.particle_count = n;
   set.chunk_count = chunks;
   set.has_attribute = attribute;
-  const vk::Buffer src = *block->staging.buffer;
-  const uint64_t attribute_offset =
-      block->attribute_offset + uint64_t(std::max(frame.color_stream, 0)) * block->attribute_stride;
-  return upload_frame(r, set, {src, 0}, 0, {src, attribute ? attribute_offset : 0});
+  return upload_frame(r, set, {frame.particles.buffer, frame.particles.offset}, 0,
+                      {attribute ? vk::Buffer(frame.color.buffer) : vk::Buffer(), attribute ? frame.color.offset : 0});
 }
 
-uint64_t commit_encoded(detail::RendererImpl& r, const EncodedFrameView& frame, const StagingAllocator* from) {
+uint64_t commit_encoded(detail::RendererImpl& r, const FrameUpload& frame) {
   const io::FrameHeader& header = *frame.header;
   const io::GpuDecodePlan& plan = *frame.plan;
   const uint32_t chunks = uint32_t(header.chunks.size());
-  if (frame.chunk_first.size() != chunks || plan.chunks.size() != chunks) {
-    throw Error("commit_encoded: one first index and one plan per chunk");
-  }
-  if (r.scene.coding != io::PositionCoding::Quantized16) throw Error("commit_encoded: a float32 scene");
+  if (plan.chunks.size() != chunks) throw Error("commit: one plan per chunk");
+  if (r.scene.coding != io::PositionCoding::Quantized16) throw Error("commit: a float32 scene");
   const uint64_t staged = plan.staged_bytes();
   const bool attribute = frame.color_attribute >= 0 && chunks > 0 && (plan.chunks[0].flags & io::kGpuWithAttribute) != 0;
-  const StagingAllocator::Memory* block = from ? &staging_memory(*frame.buffers) : nullptr;
-  const ResidentArea* resident = block && block->resident() ? block->area.get() : nullptr;
-  if (resident && resident->device.size < staged) throw Error("commit_encoded: the resident area is too small");
-  if (!resident && frame.buffers->particles.size() < staged) {
-    throw Error("commit_encoded: the staged area is too small");
-  }
-  const bool own = !resident && (!block || block->host);  // not in Vulkan memory: through the renderer's staging
+  const bool resident = frame.resident.buffer != VK_NULL_HANDLE;
+  if (resident && frame.resident.bytes < staged) throw Error("commit: the resident area is too small");
+  if (!resident && frame.particles.host.size() < staged) throw Error("commit: the staged area is too small");
+  const bool own = !resident && !frame.particles.buffer;  // not in Vulkan memory: through the renderer's staging
   // A resident frame's tables go through the renderer's staging too.
   const uint64_t extra = own ? staged : resident ? io::table_block_bytes(plan) : 0;
 
@@ -540,41 +506,33 @@ uint64_t commit_encoded(detail::RendererImpl& r, const EncodedFrameView& frame, 
   auto* base = static_cast<std::byte*>(set.staging.mapped);
   fill_chunk_table(header, frame.chunk_first, attribute ? frame.color_attribute : -1,
                    {reinterpret_cast<GpuChunk*>(base), chunks}, io::ErrorLocation{{}, header.frame_number, {}});
-  if (own) std::memcpy(base + table, frame.buffers->particles.data(), staged);
+  if (own) std::memcpy(base + table, frame.particles.host.data(), staged);
   if (resident) io::write_table_block(plan, {base + table, size_t(extra)});
   mark_layers(set, header);
   set.particle_count = header.particle_count;
   set.chunk_count = chunks;
   set.has_attribute = attribute;
   EncodedSource source;
-  source.area = own || resident ? UploadSource{*set.staging.buffer, table} : UploadSource{*block->staging.buffer, 0};
+  source.area = own || resident ? UploadSource{*set.staging.buffer, table}
+                                : UploadSource{frame.particles.buffer, frame.particles.offset};
   source.plan = &plan;
   if (resident) {
-    source.resident = resident;
-    source.relayed = static_cast<vk::Semaphore>(from->relay_semaphore());
+    source.resident = frame.resident.buffer;
+    source.resident_address = (*r.ctx.device).getBufferAddress(vk::BufferDeviceAddressInfo(source.resident));
+    source.relayed = frame.resident.semaphore;
+    source.relayed_value = frame.resident.value;
   }
   return upload_frame(r, set, {}, 0, {}, &source);
 }
 
 }  // namespace
 
-uint64_t Renderer::commit(const runtime::FrameHandle& frame, int color_attribute, const StagingAllocator* from) {
-  if (frame.empty() || frame.failed()) throw Error("commit: an empty or failed frame handle");
-  if (frame.content() == runtime::FrameContent::World) {
-    throw Error("commit: a frame converted to world units (DecodeMode::World) is for array consumers, not the renderer");
+uint64_t Renderer::commit(const FrameUpload& frame) {
+  if (frame.header == nullptr) throw Error("commit: a frame without its header");
+  if (!frame.chunk_first.empty() && frame.chunk_first.size() != frame.header->chunks.size()) {
+    throw Error("commit: one first index per chunk");
   }
-  if (const io::GpuDecodePlan* plan = frame.gpu_plan()) {
-    return commit_encoded(*impl_, {&frame.header(), frame.chunk_first(), &frame.buffers(), plan, color_attribute}, from);
-  }
-  // The streams hold every attribute (stream k is attribute k) or only the colour one.
-  const size_t streams = frame.buffers().attributes.size();
-  const int stream = color_attribute < 0 ? -1 : streams == 1 ? 0 : color_attribute;
-  if (stream >= 0 && size_t(stream) >= streams) {
-    throw Error("commit: the frame holds " + std::to_string(streams) + " attribute streams, none of them attribute " +
-                std::to_string(color_attribute));
-  }
-  return commit_decoded(*this, *impl_, {&frame.header(), frame.chunk_first(), &frame.buffers(), stream, color_attribute},
-                        from);
+  return frame.plan ? commit_encoded(*impl_, frame) : commit_decoded(*this, *impl_, frame);
 }
 
 uint64_t commit_record(Renderer& renderer, std::span<const std::byte> record, const io::FrameHeader& header,

@@ -37,8 +37,8 @@ mkdir -p "$scratch/components"
 cat > "$scratch/components/CMakeLists.txt" <<'CMAKE'
 cmake_minimum_required(VERSION 3.25)
 project(components LANGUAGES CXX)
-find_package(sluice REQUIRED COMPONENTS render desktop xr)
-foreach(t sluice::render sluice::desktop sluice::xr)
+find_package(sluice REQUIRED COMPONENTS render stream desktop xr)
+foreach(t sluice::render sluice::stream sluice::desktop sluice::xr)
   if(NOT TARGET ${t})
     message(FATAL_ERROR "${t} missing")
   endif()
@@ -132,9 +132,9 @@ cat > "$scratch/docs_host/CMakeLists.txt" <<'CMAKE'
 cmake_minimum_required(VERSION 3.25)
 project(docs_host LANGUAGES CXX)
 set(CMAKE_CXX_STANDARD 20)
-find_package(sluice REQUIRED COMPONENTS render)
+find_package(sluice REQUIRED COMPONENTS stream)
 add_executable(docs_host docs_host.cpp)
-target_link_libraries(docs_host PRIVATE sluice::render)
+target_link_libraries(docs_host PRIVATE sluice::stream)
 CMAKE
 cmake -S "$scratch/docs_host" -B "$scratch/docs_host/build" -DCMAKE_PREFIX_PATH="$scratch/prefix" "${hidden[@]}" >/dev/null
 cmake --build "$scratch/docs_host/build" -j 2 >/dev/null
@@ -143,7 +143,7 @@ VK_INSTANCE_LAYERS=VK_LAYER_KHRONOS_validation "$scratch/docs_host/build/docs_ho
 if grep -q -i "validation\|VUID" "$scratch/docs_host/run.log"; then echo "docs_host: validation messages"; exit 1; fi
 test "$(ls "$scratch"/docs_host/frame_*.png | wc -l)" -eq "$("$build/apps/sluice/sluice" info --json "$scratch/dam.sluice" |
   /usr/bin/python3 -c 'import json, sys; print(len(json.load(sys.stdin)["frames"]))')"
-# The same host pushing frames of its own simulation (render::LiveSource), recorded as it goes.
+# The same host pushing frames of its own simulation (stream::LiveSource), recorded as it goes.
 "$scratch/build/host_vulkan" --live --check --frames 6 --record "$scratch/live.sluice" --out "$scratch/host_live.png"
 test -s "$scratch/live.sluice"
 # The Python module as installed (where built): importable from the prefix's

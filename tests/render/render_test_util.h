@@ -16,6 +16,7 @@
 #include "sluice/render/offscreen.h"
 #include "sluice/render/load.h"
 #include "sluice/render/renderer.h"
+#include "sluice/render/staging_allocator.h"
 #include "sluice/runtime/pipeline.h"
 
 namespace sluice::render::testing {
@@ -109,7 +110,7 @@ class OffscreenRenderer {
     sluice::render::load_frame(renderer, reader, frame, color_attribute);
   }
   void commit(const runtime::FrameHandle& frame, int color_attribute, const StagingAllocator* from) {
-    renderer.wait_upload(renderer.commit(frame, color_attribute, from));
+    renderer.wait_upload(renderer.commit(render::frame_upload(frame, color_attribute, from)));
   }
   FrameStaging stage_frame(uint64_t particles, uint32_t chunks) { return renderer.stage_frame(particles, chunks); }
   void commit_frame() { renderer.wait_upload(renderer.commit_frame()); }

@@ -12,9 +12,10 @@
 #include "sluice/render/image_io.h"
 #include "sluice/render/load.h"
 #include "sluice/render/offscreen.h"
-#include "sluice/render/stream.h"
+#include "sluice/stream/stream.h"
 
 namespace sluice::render {
+using namespace sluice::stream;  // the stream module under test
 namespace {
 
 using testing::context;

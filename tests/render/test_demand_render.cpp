@@ -14,18 +14,19 @@
 #include "render_test_util.h"
 #include "sluice/bench/synth.h"
 #include "sluice/io/reader.h"
-#include "sluice/render/demand.h"
+#include "sluice/stream/demand.h"
 #include "sluice/render/inspection.h"
-#include "sluice/render/frame_feed.h"
+#include "sluice/stream/frame_feed.h"
 #include "sluice/render/image_io.h"
 #include "sluice/render/offscreen.h"
 #include "sluice/render/staging_allocator.h"
-#include "sluice/render/stream.h"
+#include "sluice/stream/stream.h"
 #include "sluice/render/load.h"
 #include "sluice/runtime/clock.h"
 #include "sluice/runtime/player.h"
 
 namespace sluice::render {
+using namespace sluice::stream;  // the stream module under test
 namespace {
 
 namespace fs = std::filesystem;
@@ -257,7 +258,7 @@ TEST(DemandRender, APausedFrameConvergesToTheFullReadsPicture) {
   expect_same(got, reference(reader, scene, 1, high), "refined");
 }
 
-// render::Stream reads for the views and look it is given: the overview at
+// stream::Stream reads for the views and look it is given: the overview at
 // cLOD 0.3 reads a fraction of the records from its first frame on; the
 // look alone raised to level 1 reads the paused frame again; LayerSet
 // particles() reads whole.

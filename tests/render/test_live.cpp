@@ -14,10 +14,11 @@
 #include "sluice/render/inspection.h"
 #include "sluice/io/lod.h"
 #include "sluice/io/reader.h"
-#include "sluice/render/live_source.h"
+#include "sluice/stream/live_source.h"
 #include "sluice/render/offscreen.h"
 
 namespace sluice::render {
+using namespace sluice::stream;  // the stream module under test
 namespace {
 
 using testing::context;

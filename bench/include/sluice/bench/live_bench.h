@@ -1,5 +1,5 @@
 // sluice/bench/live_bench.h: `sluice bench live`, frames pushed from memory
-// (render::LiveSource) at 1M..10M particles: CPU time to chunk, quantize and
+// (stream::LiveSource) at 1M..10M particles: CPU time to chunk, quantize and
 // encode them (TBB workers), to decode them into staging, the GPU copy and the
 // render, per frame; optionally with the recording written.
 #pragma once

@@ -1,5 +1,7 @@
 // sluice/render/frame.h: what the renderer needs to know about the data, and
-// the staging interface through which a frame's particles reach the GPU.
+// the two ways a frame's particles reach the GPU: a frame read from a file
+// (FrameUpload, plain data: decoded particles or a plan to decode them on the
+// GPU) and staging that a host fills (FrameStaging: live frames).
 //
 // Particles stay in the container's decoded form on the GPU (8 bytes each for
 // Quantized16: u16 x,y,z relative to the chunk AABB and the u16 LOD value;
@@ -14,7 +16,10 @@
 #include <string>
 #include <vector>
 
+#include <vulkan/vulkan_core.h>
+
 #include "sluice/io/format.h"
+#include "sluice/io/gpu_decode_plan.h"
 #include "sluice/render/camera.h"
 
 namespace sluice::io {
@@ -68,6 +73,45 @@ struct FrameStaging {
   std::span<uint16_t> color_attribute;    // particle_count values, or empty
   std::span<GpuChunk> chunks;             // chunk_count rows
   size_t stride = 8;
+};
+
+// Bytes of a frame the renderer copies to the GPU: always readable at `host`;
+// when `buffer` is set, the same bytes also lie in that Vulkan buffer (of the
+// renderer's Context, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, host-coherent) at
+// `offset`, and the GPU copies them from there with no copy on the CPU.
+// Either way they must stay untouched until Renderer::upload_complete().
+struct UploadBytes {
+  std::span<const std::byte> host;
+  VkBuffer buffer = VK_NULL_HANDLE;
+  uint64_t offset = 0;
+};
+
+// A frame read from a file, as Renderer::commit() takes it: plain data,
+// borrowed for the call (what a FrameHandle of the streaming runtime holds:
+// render::frame_upload() in staging_allocator.h makes one of it).
+struct FrameUpload {
+  const io::FrameHeader* header = nullptr;  // the chunk table: counts, boxes, layers, attribute ranges
+  std::span<const uint64_t> chunk_first;    // first particle of each chunk (the running sum of the counts)
+  // Decoded (plan == nullptr): particle_count * io::decoded_particle_bytes()
+  // of the scene's coding. Encoded: the staged area plan->staged_bytes()
+  // long (io/gpu_decode_plan.h), decoded on the GPU; empty when `resident`.
+  UploadBytes particles;
+  // Decoded frames: the colour attribute, one 16-bit value a particle, padded
+  // to 4 bytes; empty for none. Encoded frames decode it with the plan.
+  UploadBytes color;
+  int color_attribute = -1;  // its index in the file header (the chunks' ranges); -1: no colour
+  const io::GpuDecodePlan* plan = nullptr;
+  // An encoded frame already in device memory (a relay filled it): its staged
+  // area is this buffer (VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT and
+  // TRANSFER_DST, at least staged_bytes() long; the renderer writes the
+  // plan's tables into it), and the decode waits until `semaphore` (a
+  // timeline) reaches `value` (0: nothing to wait for).
+  struct Resident {
+    VkBuffer buffer = VK_NULL_HANDLE;
+    uint64_t bytes = 0;
+    VkSemaphore semaphore = VK_NULL_HANDLE;
+    uint64_t value = 0;
+  } resident;
 };
 
 }  // namespace sluice::render

@@ -9,12 +9,13 @@
 // drawn into the caller's colour image, depth-tested against and written to
 // the caller's depth image. Every pass has a GPU timestamp.
 //
-// The frame loop (docs/embedding.md has the whole host loop; render::Stream
+// The frame loop (docs/embedding.md has the whole host loop; stream::Stream
 // does all of it for a file or pushed frames):
 //   a frame in, two ways, when a new one is due:
-//     stage_frame() + commit_frame()   particles the caller writes
-//     commit(frame_handle, ...)        a frame the streaming runtime delivered
-//   (render/load.h adds a container record, decoded on the CPU, for tools)
+//     stage_frame() + commit_frame()   particles the caller writes (live frames)
+//     commit(FrameUpload)              a frame read from a file (render/frame.h;
+//                                      frame_upload() makes one of a frame the
+//                                      streaming runtime delivered)
 //   record(cmd, target, views, ...)                       once per displayed frame
 //   the caller submits cmd, waiting on record()'s FrameSync semaphore
 //
@@ -52,11 +53,7 @@
 #include "sluice/render/frame.h"
 #include "sluice/render/image_io.h"
 #include "sluice/render/options.h"
-#include "sluice/render/staging_allocator.h"
 
-namespace sluice::runtime {
-class FrameHandle;
-}  // namespace sluice::runtime
 
 namespace sluice::render {
 
@@ -280,25 +277,20 @@ class Renderer {
   // Submits the copy of the staged frame to device memory; returns its
   // upload ticket (see upload_complete()).
   uint64_t commit_frame();
-  // Submits a frame the streaming runtime delivered (FrameHandle, not
-  // FrameContent::World (render::Error), neither
-  // empty nor failed; borrowed for the call). A decoded frame: its copy, and
-  // the colour from its attribute streams, which hold every attribute or only
-  // `color_attribute` (PipelineOptions::decode.attributes; -1: no colour).
-  // A frame kept encoded (FrameHandle::gpu_plan()): its copy and its decode
-  // on the GPU (shaders/decode.comp), a compute submission to the graphics
-  // queue that waits for the copy, with the attribute the plan decodes; a
-  // frame relayed into a resident area (StagingOptions::resident) is already
-  // in device memory: only its tables are copied, and the decode waits for
-  // the relay's copies too. That is the one queue submission the renderer
-  // makes per frame on its own: the host must not use the graphics queue from
-  // another thread meanwhile. With `from` (the StagingAllocator that handed
-  // out the frame's buffers, of this renderer's Context) the GPU copies
-  // straight from those buffers, which must then stay untouched until
-  // upload_complete(ticket); otherwise they are copied through the
-  // renderer's staging and may be reused when this returns. Returns the
-  // ticket (the decode's, for an encoded frame).
-  uint64_t commit(const runtime::FrameHandle& frame, int color_attribute, const StagingAllocator* from);
+  // Submits a frame read from a file (FrameUpload: borrowed for the call;
+  // its bytes stay untouched until upload_complete() of the ticket). A
+  // decoded frame: its copy, and its colour when it has one. An encoded
+  // frame (FrameUpload::plan): its copy and its decode on the GPU
+  // (shaders/decode.comp), a compute submission to the graphics queue that
+  // waits for the copy; a resident one (FrameUpload::Resident) is already in
+  // device memory: only its tables are copied, and the decode waits for its
+  // semaphore too. That is the one queue submission the renderer makes per
+  // frame on its own: the host must not use the graphics queue from another
+  // thread meanwhile. Bytes in one of the Context's Vulkan buffers
+  // (UploadBytes::buffer) are copied by the GPU from there; others through
+  // the renderer's staging. Returns the ticket (the decode's, for an
+  // encoded frame). Throws render::Error for a frame the scene cannot take.
+  uint64_t commit(const FrameUpload& frame);
   // Whether the copy with this ticket has finished (no wait).
   bool upload_complete(uint64_t ticket) const;
   // Waits for the copy with this ticket (the transfer queue only).

@@ -29,8 +29,13 @@
 #include <vector>
 
 #include "sluice/render/context.h"
+#include "sluice/render/frame.h"
 #include "sluice/runtime/budget.h"
 #include "sluice/runtime/frame_allocator.h"
+
+namespace sluice::runtime {
+class FrameHandle;
+}  // namespace sluice::runtime
 
 namespace sluice::render {
 
@@ -110,5 +115,17 @@ class StagingAllocator final : public runtime::FrameAllocator {
   std::unique_ptr<HeapBudget> budget_;
   std::atomic<uint64_t> fallbacks_{0};
 };
+
+// A frame the streaming runtime delivered, as Renderer::commit() takes it:
+// its header, chunk starts and bytes (decoded, or kept encoded with its GPU
+// plan), with the Vulkan buffers they lie in when `from` (this allocator, of
+// the renderer's Context) handed out the frame's buffers; null: the frame's
+// buffers are in host memory. The colour is the frame's attribute
+// `color_attribute` (file header index; -1: none), from attribute streams
+// that hold every attribute or only that one (PipelineOptions::decode).
+// The handle must outlive the upload (Renderer::upload_complete()). Throws
+// render::Error for an empty or failed handle, a frame in world units
+// (DecodeMode::World: for array consumers) or a colour it does not hold.
+FrameUpload frame_upload(const runtime::FrameHandle& frame, int color_attribute, const StagingAllocator* from);
 
 }  // namespace sluice::render

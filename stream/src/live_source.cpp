@@ -1,4 +1,4 @@
-#include "sluice/render/live_source.h"
+#include "sluice/stream/live_source.h"
 
 #include <chrono>
 #include <cmath>
@@ -10,7 +10,7 @@
 #include "sluice/render/error.h"
 #include "sluice/render/load.h"
 
-namespace sluice::render {
+namespace sluice::stream {
 namespace {
 
 double ms_since(std::chrono::steady_clock::time_point t0) {
@@ -19,9 +19,9 @@ double ms_since(std::chrono::steady_clock::time_point t0) {
 
 }  // namespace
 
-SceneInfo live_scene(const Bounds& bounds, const LiveOptions& options, std::vector<std::array<float, 2>> attribute_ranges,
+render::SceneInfo live_scene(const render::Bounds& bounds, const LiveOptions& options, std::vector<std::array<float, 2>> attribute_ranges,
                      uint64_t max_particles) {
-  SceneInfo s;
+  render::SceneInfo s;
   s.bounds = bounds;
   s.particle_spacing = options.particle_spacing;
   s.particle_radius = options.particle_radius;
@@ -35,12 +35,12 @@ SceneInfo live_scene(const Bounds& bounds, const LiveOptions& options, std::vect
   return s;
 }
 
-LiveSource::LiveSource(Renderer& renderer, const LiveOptions& options) : renderer_(renderer), options_(options) {
+LiveSource::LiveSource(render::Renderer& renderer, const LiveOptions& options) : renderer_(renderer), options_(options) {
   if (renderer.scene().coding != io::PositionCoding::Quantized16) {
-    throw Error("live frames are quantized: make the renderer with live_scene()");
+    throw render::Error("live frames are quantized: make the renderer with live_scene()");
   }
   if (renderer.scene().attribute_names != options.attributes) {
-    throw Error("live source: the renderer's scene has other attributes than the options");
+    throw render::Error("live source: the renderer's scene has other attributes than the options");
   }
   header_.particle_spacing = options.particle_spacing;
   header_.particle_radius = options.particle_radius;
@@ -52,7 +52,7 @@ LiveSource::LiveSource(Renderer& renderer, const LiveOptions& options) : rendere
   header_.lod_source = options.ids ? io::LodSource::IdHash : io::LodSource::ParticleOrder;
   if (options.ids) header_.lod_id_array = "ids pushed with each frame";
   for (const std::string& name : options.attributes) header_.attributes.push_back({name});
-  header_.source = "live frames pushed through sluice::render::LiveSource";
+  header_.source = "live frames pushed through sluice::stream::LiveSource";
   if (!options.record.empty()) writer_ = std::make_unique<io::ContainerWriter>(options.record, header_);
   // Frames that are only decoded, not kept, need no compression.
   if (!writer_) options_.encode.planes = io::PlaneCoding::Stored;
@@ -62,28 +62,28 @@ LiveSource::~LiveSource() = default;
 
 uint64_t LiveSource::push(const LiveFrame& frame) {
   const std::string what = "live frame " + std::to_string(pushed_) + ": ";
-  if (frame.positions.size() % 3 != 0) throw Error(what + "positions are not x,y,z triples");
+  if (frame.positions.size() % 3 != 0) throw render::Error(what + "positions are not x,y,z triples");
   const uint64_t n = frame.positions.size() / 3;
   if (options_.ids && frame.ids.size() != n) {
-    throw Error(what + std::to_string(frame.ids.size()) + " ids for " + std::to_string(n) +
+    throw render::Error(what + std::to_string(frame.ids.size()) + " ids for " + std::to_string(n) +
                                 " particles (the source was declared with ids: LiveOptions::ids)");
   }
   if (!options_.ids && !frame.ids.empty()) {
-    throw Error(what + "ids given to a source declared without them (LiveOptions::ids = false)");
+    throw render::Error(what + "ids given to a source declared without them (LiveOptions::ids = false)");
   }
   if (!frame.attributes.empty() && frame.attributes.size() != header_.attributes.size()) {
-    throw Error(what + std::to_string(frame.attributes.size()) + " attributes for the " +
+    throw render::Error(what + std::to_string(frame.attributes.size()) + " attributes for the " +
                                 std::to_string(header_.attributes.size()) + " declared");
   }
   for (size_t a = 0; a < frame.attributes.size(); ++a) {
     if (frame.attributes[a].size() != n) {
-      throw Error(what + "attribute " + header_.attributes[a].name + " has " +
+      throw render::Error(what + "attribute " + header_.attributes[a].name + " has " +
                                   std::to_string(frame.attributes[a].size()) + " values for " + std::to_string(n) + " particles");
     }
   }
   for (uint64_t i = 0; i < frame.positions.size(); ++i) {
     if (!std::isfinite(frame.positions[i])) {
-      throw Error(what + "particle " + std::to_string(i / 3) + " has a non-finite position");
+      throw render::Error(what + "particle " + std::to_string(i / 3) + " has a non-finite position");
     }
   }
   const auto t0 = std::chrono::steady_clock::now();
@@ -102,7 +102,7 @@ uint64_t LiveSource::push(const LiveFrame& frame) {
   io::set_frame_number(encoded, uint32_t(pushed_), header_.attributes.size());
   encode_ms_ = ms_since(t0);
   const auto t1 = std::chrono::steady_clock::now();
-  const uint64_t ticket = commit_record(renderer_, encoded.record, encoded.header, header_, options_.color_attribute,
+  const uint64_t ticket = render::commit_record(renderer_, encoded.record, encoded.header, header_, options_.color_attribute,
                                                   io::ErrorLocation{"live", pushed_, {}});
   decode_ms_ = ms_since(t1);
   if (writer_) writer_->append(std::move(encoded));
@@ -115,4 +115,4 @@ void LiveSource::finish() {
   writer_.reset();
 }
 
-}  // namespace sluice::render
+}  // namespace sluice::stream

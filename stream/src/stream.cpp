@@ -1,4 +1,4 @@
-#include "sluice/render/stream.h"
+#include "sluice/stream/stream.h"
 
 #include <algorithm>
 #include <chrono>
@@ -7,54 +7,54 @@
 #include <string>
 #include <thread>
 
-#include "sluice/render/demand.h"
+#include "sluice/stream/demand.h"
 #include "sluice/render/error.h"
 
-namespace sluice::render {
+namespace sluice::stream {
 namespace {
 
-int decoded_attribute(const FluidOptions& fluid) { return fluid.scalar_visibility ? fluid.color_attribute : -1; }
+int decoded_attribute(const render::FluidOptions& fluid) { return fluid.scalar_visibility ? fluid.color_attribute : -1; }
 
 double steady_seconds() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
 
 // The eye of `view` in world space.
-Vec3 eye_of(const View& view) {
-  const Vec4 eye = inverse(view.view) * Vec4{0, 0, 0, 1};
+render::Vec3 eye_of(const render::View& view) {
+  const render::Vec4 eye = inverse(view.view) * render::Vec4{0, 0, 0, 1};
   return {eye.x, eye.y, eye.z};
 }
 
 }  // namespace
 
-Stream::Stream(Context& context, const std::filesystem::path& file, StreamOptions options)
+Stream::Stream(render::Context& context, const std::filesystem::path& file, StreamOptions options)
     : context_(context), options_(std::move(options)) {
   reader_ = std::make_unique<io::ContainerReader>(file);
-  if (reader_->frame_count() == 0) throw Error(file.string() + ": the file has no frames to play");
-  SceneInfo scene = scene_info(*reader_);
+  if (reader_->frame_count() == 0) throw render::Error(file.string() + ": the file has no frames to play");
+  render::SceneInfo scene = render::scene_info(*reader_);
   if (options_.up) scene.up = *options_.up;
-  RendererOptions ro = options_.renderer;
+  render::RendererOptions ro = options_.renderer;
   ro.classify_unlayered = options_.layers == io::LayerSet::surface();
-  renderer_ = std::make_unique<Renderer>(context_, scene, ro);
+  renderer_ = std::make_unique<render::Renderer>(context_, scene, ro);
   fluid_.up = scene.up;
   const io::FileHeader& header = reader_->header();
   const bool host_locks = options_.queue_lock == QueueLock::HostTakesIt;
-  staging_ = std::make_unique<StagingAllocator>(context_, FrameFeed::staging_options(context_, header, options_.decode, host_locks));
+  staging_ = std::make_unique<render::StagingAllocator>(context_, FrameFeed::staging_options(context_, header, options_.decode, host_locks));
   const bool layered = reader_->frame_count() > 0 && reader_->index().frames[0].layered();
   by_view_ = layered && options_.layers == io::LayerSet::surface();
   if (options_.decode == DecodeSite::Gpu && !io::gpu_decodable(header)) {
-    throw Error(file.string() + ": frames with float32 positions are decoded on the CPU only");
+    throw render::Error(file.string() + ": frames with float32 positions are decoded on the CPU only");
   }
   gpu_decode_ = options_.decode != DecodeSite::Cpu && io::gpu_decodable(header);
 }
 
-Stream::Stream(Context& context, const Bounds& bounds, const LiveOptions& live, StreamOptions options)
+Stream::Stream(render::Context& context, const render::Bounds& bounds, const LiveOptions& live, StreamOptions options)
     : context_(context), options_(std::move(options)) {
-  SceneInfo scene = live_scene(bounds, live);
+  render::SceneInfo scene = live_scene(bounds, live);
   if (options_.up) scene.up = *options_.up;
-  RendererOptions ro = options_.renderer;
+  render::RendererOptions ro = options_.renderer;
   ro.classify_unlayered = options_.layers == io::LayerSet::surface();
-  renderer_ = std::make_unique<Renderer>(context_, scene, ro);
+  renderer_ = std::make_unique<render::Renderer>(context_, scene, ro);
   fluid_.up = scene.up;
   fluid_.color_attribute = live.color_attribute;
   fluid_.scalar_visibility = live.color_attribute >= 0;
@@ -63,10 +63,10 @@ Stream::Stream(Context& context, const Bounds& bounds, const LiveOptions& live, 
 
 Stream::~Stream() = default;
 
-const SceneInfo& Stream::scene() const { return renderer_->scene(); }
+const render::SceneInfo& Stream::scene() const { return renderer_->scene(); }
 
 void Stream::require_file(const char* what) const {
-  if (!reader_) throw Error(std::string("Stream::") + what + ": a live stream has no file");
+  if (!reader_) throw render::Error(std::string("Stream::") + what + ": a live stream has no file");
 }
 
 const io::ContainerReader& Stream::reader() const {
@@ -74,7 +74,7 @@ const io::ContainerReader& Stream::reader() const {
   return *reader_;
 }
 
-const StagingAllocator& Stream::staging() const {
+const render::StagingAllocator& Stream::staging() const {
   require_file("staging");
   return *staging_;
 }
@@ -85,21 +85,21 @@ runtime::Player& Stream::player() {
   return *player_;
 }
 
-void Stream::set_look(const FluidOptions& fluid, const LodOptions& lod) {
+void Stream::set_look(const render::FluidOptions& fluid, const render::LodOptions& lod) {
   if (player_ && decoded_attribute(fluid) != decoded_attribute(fluid_)) {
-    throw Error("Stream::set_look: the colour attribute is fixed once the player started");
+    throw render::Error("Stream::set_look: the colour attribute is fixed once the player started");
   }
   fluid_ = fluid;
   lod_ = lod;
   demand_stale_ = true;
 }
 
-void Stream::set_views(std::span<const View> views) {
+void Stream::set_views(std::span<const render::View> views) {
   views_.assign(views.begin(), views.end());
   if (views_.empty()) return;
   // The fastest recent move of the (first) eye, decaying by half every 0.25 s.
   const double now = steady_seconds();
-  const Vec3 eye = eye_of(views_.front());
+  const render::Vec3 eye = eye_of(views_.front());
   if (eye_seconds_ >= 0 && now > eye_seconds_) {
     const float moved = length(eye - eye_) / float(now - eye_seconds_);
     speed_ = std::max(moved, speed_ * float(std::exp2(-(now - eye_seconds_) / 0.25)));
@@ -140,7 +140,7 @@ void Stream::start_player() {
 FeedUpdate Stream::show(uint64_t frame, std::chrono::milliseconds timeout) {
   require_file("show");
   if (frame >= reader_->frame_count()) {
-    throw Error("Stream::show: no frame " + std::to_string(frame) + " (the file has " +
+    throw render::Error("Stream::show: no frame " + std::to_string(frame) + " (the file has " +
                 std::to_string(reader_->frame_count()) + ")");
   }
   runtime::Player& p = player();
@@ -156,7 +156,7 @@ FeedUpdate Stream::show(uint64_t frame, std::chrono::milliseconds timeout) {
       return u;
     }
     if (std::chrono::steady_clock::now() > deadline) {
-      throw Error("Stream::show: frame " + std::to_string(frame) + " was not ready within " +
+      throw render::Error("Stream::show: frame " + std::to_string(frame) + " was not ready within " +
                   std::to_string(timeout.count()) + " ms");
     }
     std::this_thread::yield();
@@ -176,12 +176,12 @@ FeedUpdate Stream::update() {
   return feed_->update();
 }
 
-FrameSync Stream::record(VkCommandBuffer cmd, const RenderTarget& target, std::span<const View> views) {
+render::FrameSync Stream::record(VkCommandBuffer cmd, const render::RenderTarget& target, std::span<const render::View> views) {
   return renderer_->record(cmd, target, views, fluid_, lod_);
 }
 
 uint64_t Stream::push(const LiveFrame& frame) {
-  if (!live_) throw Error("Stream::push: a file stream takes no pushed frames");
+  if (!live_) throw render::Error("Stream::push: a file stream takes no pushed frames");
   const uint64_t ticket = live_->push(frame);
   last_push_.changed = true;
   last_push_.has_frame = true;
@@ -195,4 +195,4 @@ void Stream::finish() {
   if (live_) live_->finish();
 }
 
-}  // namespace sluice::render
+}  // namespace sluice::stream

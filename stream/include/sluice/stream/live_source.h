@@ -1,4 +1,4 @@
-// sluice/render/live_source.h: frames a host pushes from its own memory (a
+// sluice/stream/live_source.h: frames a host pushes from its own memory (a
 // simulation running beside the viewer) instead of reading them from a file.
 //
 // push() takes positions as float32 x,y,z in any order, optional stable ids
@@ -28,7 +28,7 @@ namespace sluice::io {
 class ContainerWriter;
 }
 
-namespace sluice::render {
+namespace sluice::stream {
 
 struct LiveFrame {
   std::span<const float> positions;                // x,y,z interleaved, finite
@@ -42,7 +42,7 @@ struct LiveOptions {
   // (0: unknown), nominal frame rate, and the attributes' names.
   float particle_spacing = 0, particle_radius = 0, frame_rate = 0;
   // Which world direction points up (the scene's up and the recording's;
-  // a host drawing its own ground passes FluidOptions::ground = false).
+  // a host drawing its own ground passes render::FluidOptions::ground = false).
   io::UpAxis up = io::UpAxis::PosZ;
   std::vector<std::string> attributes;
   int color_attribute = -1;             // which attribute the renderer colours by (-1: none)
@@ -53,21 +53,21 @@ struct LiveOptions {
   io::EncodeOptions encode{.chunk_particles = 65536, .zstd_level = 1};
 };
 
-// The SceneInfo to make the Renderer with for live frames inside `bounds`.
-SceneInfo live_scene(const Bounds& bounds, const LiveOptions& options,
+// The render::SceneInfo to make the render::Renderer with for live frames inside `bounds`.
+render::SceneInfo live_scene(const render::Bounds& bounds, const LiveOptions& options,
                      std::vector<std::array<float, 2>> attribute_ranges = {}, uint64_t max_particles = 0);
 
 class LiveSource {
  public:
   // Throws render::Error when the renderer's scene and the options
   // disagree (attributes), io::Error when the recording cannot be created.
-  LiveSource(Renderer& renderer, const LiveOptions& options);
+  LiveSource(render::Renderer& renderer, const LiveOptions& options);
   ~LiveSource();  // without finish(), a recording is left without its index: `sluice recover` completes it
   LiveSource(const LiveSource&) = delete;
   LiveSource& operator=(const LiveSource&) = delete;
 
   // Encodes, decodes into staging and commits one frame; returns its upload
-  // ticket (Renderer::upload_complete). Throws render::Error naming
+  // ticket (render::Renderer::upload_complete). Throws render::Error naming
   // the first bad value (sizes, a non-finite position) before anything is
   // committed or recorded.
   uint64_t push(const LiveFrame& frame);
@@ -81,7 +81,7 @@ class LiveSource {
   double last_decode_ms() const { return decode_ms_; }
 
  private:
-  Renderer& renderer_;
+  render::Renderer& renderer_;
   LiveOptions options_;
   io::FileHeader header_;
   std::unique_ptr<io::ContainerWriter> writer_;
@@ -89,4 +89,4 @@ class LiveSource {
   double encode_ms_ = 0, decode_ms_ = 0;
 };
 
-}  // namespace sluice::render
+}  // namespace sluice::stream

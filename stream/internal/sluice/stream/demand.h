@@ -1,4 +1,4 @@
-// sluice/render/demand.h: the demand (runtime/demand.h) of views drawn with
+// sluice/stream/demand.h: the demand (runtime/demand.h) of views drawn with
 // the renderer's options: the same frusta, the same reach of a splat, the
 // same cLOD rule and reference distance the cull passes use, so that a frame
 // read for it holds every particle the renderer keeps for those views.
@@ -11,13 +11,13 @@
 #include "sluice/render/renderer.h"
 #include "sluice/runtime/demand.h"
 
-namespace sluice::render {
+namespace sluice::stream {
 
-// `views` as Renderer::record() takes them (1 to 4). `margin`: how far, in
+// `views` as render::Renderer::record() takes them (1 to 4). `margin`: how far, in
 // world units, the views may move before frames read now are drawn (head
 // motion in XR, orbiting on the desktop); boxes grow by it.
-runtime::ViewDemand view_demand(std::span<const View> views, const SceneInfo& scene, const FluidOptions& fluid,
-                                const LodOptions& lod, float margin = 0);
+runtime::ViewDemand view_demand(std::span<const render::View> views, const render::SceneInfo& scene, const render::FluidOptions& fluid,
+                                const render::LodOptions& lod, float margin = 0);
 
 // A margin for a camera that moves at most `speed` (world units per
 // second) over `seconds` of prefetch, at least a twentieth of `diagonal`
@@ -25,4 +25,4 @@ runtime::ViewDemand view_demand(std::span<const View> views, const SceneInfo& sc
 // the picture and the bytes read).
 float view_margin(float diagonal, float speed, float seconds);
 
-}  // namespace sluice::render
+}  // namespace sluice::stream

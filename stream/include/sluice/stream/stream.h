@@ -1,4 +1,4 @@
-// sluice/render/stream.h: one object that streams a sequence into a host's
+// sluice/stream/stream.h: one object that streams a sequence into a host's
 // frames. It owns what playing takes: the file's reader, the renderer, the
 // staging the runtime decodes into, the runtime::Player and the FrameFeed
 // between them (or, for frames a host computes, a LiveSource). A host makes
@@ -6,8 +6,8 @@
 //
 //   stream.set_views(views);          // what the next frames are drawn with
 //   stream.update();                  // commits the frame due, if it changed
-//   FrameSync s = stream.record(cmd, target, views);
-//   submit cmd, waiting on s          // as Renderer::record says
+//   render::FrameSync s = stream.record(cmd, target, views);
+//   submit cmd, waiting on s          // as render::Renderer::record says
 //
 // A batch client (a frame at a time, each drawn once) calls show(frame)
 // instead of update(): it returns once that frame is the one record() draws.
@@ -19,7 +19,7 @@
 // particles() and LOD off are read whole.
 //
 // Queues: with StreamOptions::queue_lock HostTakesIt the host submits to
-// the context's queues under Context::queue_lock() (desktop::Window does),
+// the context's queues under render::Context::queue_lock() (desktop::Window does),
 // and frames the GPU decodes are relayed to device memory as they are read
 // (runtime/relay.h); with HostDoesNot they are relayed only where the relay
 // has a queue of its own. Each update() that commits a frame submits a copy
@@ -41,17 +41,17 @@
 
 #include "sluice/io/reader.h"
 #include "sluice/render/context.h"
-#include "sluice/render/frame_feed.h"
-#include "sluice/render/live_source.h"
+#include "sluice/stream/frame_feed.h"
+#include "sluice/stream/live_source.h"
 #include "sluice/render/options.h"
 #include "sluice/render/renderer.h"
 #include "sluice/render/staging_allocator.h"
 #include "sluice/runtime/clock.h"
 #include "sluice/runtime/player.h"
 
-namespace sluice::render {
+namespace sluice::stream {
 
-// Whether the host submits to the context's queues under Context::queue_lock().
+// Whether the host submits to the context's queues under render::Context::queue_lock().
 enum class QueueLock { HostTakesIt, HostDoesNot };
 // Whether the views may move before a frame read now is drawn (a window, a
 // headset) or stay where they are (a fixed camera: no margin is read).
@@ -63,7 +63,7 @@ struct StreamOptions {
   // the attribute decoded, the decode site, the device budget, the demand.
   runtime::PlayerOptions player;
   // frames_in_flight; classify_unlayered is set from `layers`.
-  RendererOptions renderer;
+  render::RendererOptions renderer;
   // Which layers are read and drawn: the narrow band and blobs (frames of
   // a file without layers are classified on the GPU), or every particle.
   io::LayerSet layers = io::LayerSet::surface();
@@ -71,7 +71,7 @@ struct StreamOptions {
   QueueLock queue_lock = QueueLock::HostTakesIt;
   ViewMotion motion = ViewMotion::Moving;
   // The scene's up direction instead of the file's (an --up the user gave).
-  std::optional<Vec3> up;
+  std::optional<render::Vec3> up;
   // Whose time the player follows (XR: the predicted display time);
   // nullptr: a steady clock of the stream's own. Borrowed; outlives the stream.
   const runtime::Clock* clock = nullptr;
@@ -84,10 +84,10 @@ class Stream {
   // Throws io::Error for a file that cannot be read, render::Error
   // for a file without frames or options it cannot honour (DecodeSite::Gpu
   // for float32 positions).
-  Stream(Context& context, const std::filesystem::path& file, StreamOptions options = {});
+  Stream(render::Context& context, const std::filesystem::path& file, StreamOptions options = {});
   // Frames the host pushes (push()) inside `bounds`, optionally recorded
   // (LiveOptions::record). Throws as LiveSource does.
-  Stream(Context& context, const Bounds& bounds, const LiveOptions& live, StreamOptions options = {});
+  Stream(render::Context& context, const render::Bounds& bounds, const LiveOptions& live, StreamOptions options = {});
   ~Stream();
   Stream(const Stream&) = delete;
   Stream& operator=(const Stream&) = delete;
@@ -95,14 +95,14 @@ class Stream {
   // How the frames are drawn: the attribute coloured by (decoded only if
   // fluid.scalar_visibility; fixed once the player started: a change
   // throws render::Error), the splat reach and cLOD the view's
-  // demand assumes (taken at the next update()). Defaults: FluidOptions{}
-  // with the scene's up, LodOptions{}.
-  void set_look(const FluidOptions& fluid, const LodOptions& lod);
+  // demand assumes (taken at the next update()). Defaults: render::FluidOptions{}
+  // with the scene's up, render::LodOptions{}.
+  void set_look(const render::FluidOptions& fluid, const render::LodOptions& lod);
   // The views (1..4) the next frames are drawn with: frames are read for
   // them (with a margin for their motion, ViewMotion::Moving), and a paused
   // frame is read again when they need more. Once per displayed frame is
   // fine: the player takes the look and views as one demand at update().
-  void set_views(std::span<const View> views);
+  void set_views(std::span<const render::View> views);
 
   // Once per displayed frame, before record(): commits the frame due when
   // it changed (a file), or reports the last push (live).
@@ -116,25 +116,25 @@ class Stream {
   // stream, for a frame past the end, or when `timeout` passes first.
   FeedUpdate show(uint64_t frame, std::chrono::milliseconds timeout = std::chrono::seconds(60));
   // Records the newest committed frame for `views` with the look
-  // (Renderer::record: the caller submits `cmd`, waiting on the result).
-  FrameSync record(VkCommandBuffer cmd, const RenderTarget& target, std::span<const View> views);
+  // (render::Renderer::record: the caller submits `cmd`, waiting on the result).
+  render::FrameSync record(VkCommandBuffer cmd, const render::RenderTarget& target, std::span<const render::View> views);
   // A frame the host computed (live streams only; render::Error otherwise).
   uint64_t push(const LiveFrame& frame);
   // Closes a live recording (index and footer written); no-op otherwise.
   void finish();
 
   bool live() const { return live_ != nullptr; }
-  const SceneInfo& scene() const;
-  const FluidOptions& fluid() const { return fluid_; }
-  const LodOptions& lod() const { return lod_; }
-  Renderer& renderer() { return *renderer_; }
+  const render::SceneInfo& scene() const;
+  const render::FluidOptions& fluid() const { return fluid_; }
+  const render::LodOptions& lod() const { return lod_; }
+  render::Renderer& renderer() { return *renderer_; }
   // A file's reader, player and staging (render::Error on a live stream).
   const io::ContainerReader& reader() const;
   runtime::Player& player();
-  const StagingAllocator& staging() const;
+  const render::StagingAllocator& staging() const;
   // Whether frames are read by the view (a file with layers, layers
   // surface(), LOD on); otherwise every tier.
-  bool reads_by_view() const { return by_view_ && lod_.mode != LodMode::Off; }
+  bool reads_by_view() const { return by_view_ && lod_.mode != render::LodMode::Off; }
   // Whether a file's frames stay encoded until the GPU decodes them
   // (DecodeSite::Auto and 16-bit positions, or DecodeSite::Gpu).
   bool decodes_on_gpu() const { return gpu_decode_; }
@@ -144,26 +144,26 @@ class Stream {
   runtime::ViewDemand demand() const;
   void require_file(const char* what) const;
 
-  Context& context_;
+  render::Context& context_;
   StreamOptions options_;
   std::unique_ptr<io::ContainerReader> reader_;
-  std::unique_ptr<Renderer> renderer_;
-  std::unique_ptr<StagingAllocator> staging_;
+  std::unique_ptr<render::Renderer> renderer_;
+  std::unique_ptr<render::StagingAllocator> staging_;
   std::unique_ptr<runtime::Clock> own_clock_;
   std::unique_ptr<runtime::Player> player_;
   std::unique_ptr<FrameFeed> feed_;
   std::unique_ptr<LiveSource> live_;
-  FluidOptions fluid_;
-  LodOptions lod_;
-  std::vector<View> views_;
+  render::FluidOptions fluid_;
+  render::LodOptions lod_;
+  std::vector<render::View> views_;
   bool by_view_ = false;
   bool gpu_decode_ = false;
   // The views' speed (world units per second) for the margin of a moving view.
   float speed_ = 0;
   bool demand_stale_ = false;  // the look or views changed since the player last took the demand
-  Vec3 eye_{};
+  render::Vec3 eye_{};
   double eye_seconds_ = -1;
   FeedUpdate last_push_;
 };
 
-}  // namespace sluice::render
+}  // namespace sluice::stream
