@@ -202,4 +202,12 @@ void Camera::apply(const std::string& text) {
   *this = next;
 }
 
+View camera_view(const Camera& camera, const Viewport& viewport) {
+  View v;
+  v.view = camera.view();
+  v.projection = camera.projection(float(viewport.width) / float(std::max(viewport.height, 1u)));
+  v.viewport = viewport;
+  return v;
+}
+
 }  // namespace sluice::render

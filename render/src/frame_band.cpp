@@ -5,7 +5,7 @@
 #include <bit>
 #include <limits>
 
-#include "renderer_impl.h"
+#include "frame_set.h"
 #include "shaders.h"
 
 namespace sluice::render {

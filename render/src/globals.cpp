@@ -5,7 +5,8 @@
 #include <cmath>
 
 #include "sluice/render/lod.h"
-#include "sluice/render/renderer.h"
+#include "sluice/render/draw.h"
+#include "sluice/render/options.h"
 
 namespace sluice::render {
 namespace {

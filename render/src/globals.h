@@ -6,7 +6,8 @@
 #include "sluice/render/camera.h"
 #include "sluice/render/frame.h"
 #include "sluice/render/options.h"
-#include "sluice/render/renderer.h"
+#include "sluice/render/draw.h"
+#include "sluice/render/options.h"
 
 namespace sluice::render {
 

@@ -6,7 +6,8 @@
 #include <cstring>
 
 #include "half.h"
-#include "renderer_impl.h"
+#include "renderer_state.h"
+#include "sluice/render/renderer.h"
 #include "sluice/render/error.h"
 
 namespace sluice::render {

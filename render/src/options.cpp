@@ -1,7 +1,7 @@
 // Option names (see options.h).
 #include "sluice/render/options.h"
 
-#include "sluice/render/renderer.h"
+#include "sluice/render/options.h"
 
 #include "sluice/io/up_axis.h"
 #include "sluice/render/error.h"

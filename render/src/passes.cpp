@@ -478,7 +478,7 @@ void PassRecorder::end_frame(const RenderTarget& target, Output output) {
   cmd_.copyBuffer(*r_.args.buffer, *slot_.readback.buffer, vk::BufferCopy(0, 0, sizeof(GpuArgs)));
   if (r_.timestamps_valid) {
     // The timestamps beside the counters, with availability: the host reads
-    // them from mapped memory without asking the driver (renderer_impl.h).
+    // them from mapped memory without asking the driver (renderer_state.h).
     const uint32_t count = uint32_t(slot_.stamp_names.size()) + 1;
     cmd_.copyQueryPoolResults(*r_.timestamps, first_stamp_, count, *slot_.readback.buffer, kStampsOffset, 16,
                               vk::QueryResultFlagBits::e64 | vk::QueryResultFlagBits::eWait |

@@ -5,7 +5,7 @@
 
 #include <vector>
 
-#include "renderer_impl.h"
+#include "renderer_state.h"
 
 namespace sluice::render {
 

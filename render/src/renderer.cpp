@@ -6,7 +6,8 @@
 #include <stdexcept>
 
 #include "globals.h"
-#include "renderer_impl.h"
+#include "renderer_state.h"
+#include "sluice/render/renderer.h"
 #include "passes.h"
 #include "shaders.h"
 #include "sluice/render/error.h"
@@ -400,23 +401,6 @@ void detail::RendererImpl::collect_slot(FrameSlot& slot, bool finished) {
   if (stats.passes.empty() || s.record_index >= stats.record_index) stats = std::move(s);
 }
 
-std::string describe(const FrameStats::Classification& c) {
-  if (!c.ran) return "";
-  const auto count = [](uint64_t v) {
-    std::string digits = std::to_string(v), out;
-    for (size_t i = 0; i < digits.size(); ++i) {
-      if (i > 0 && (digits.size() - i) % 3 == 0) out += ',';
-      out += digits[i];
-    }
-    return out;
-  };
-  if (!c.grid_fits) {
-    return "drawn whole: its voxel grid (" + std::to_string(c.cells[0]) + " x " + std::to_string(c.cells[1]) + " x " +
-           std::to_string(c.cells[2]) + ") has 2^32 cells or more";
-  }
-  if (!c.narrowed) return "drawn whole: " + count(c.blobs) + " blobs, room for " + count(c.blob_room);
-  return "classified on the GPU: " + count(c.surface) + " surface + " + count(c.blobs) + " blobs";
-}
 
 FrameStats Renderer::last_stats() {
   Impl& r = *impl_;
@@ -568,13 +552,6 @@ FrameSync Renderer::record(VkCommandBuffer command_buffer, const RenderTarget& t
 // For render/src only: the free functions of load.h and inspection.h.
 detail::RendererImpl& renderer_impl(Renderer& renderer) { return *renderer.impl_; }
 
-View camera_view(const Camera& camera, const Viewport& viewport) {
-  View v;
-  v.view = camera.view();
-  v.projection = camera.projection(float(viewport.width) / float(std::max(viewport.height, 1u)));
-  v.viewport = viewport;
-  return v;
-}
 
 }  // namespace sluice::render
 
@@ -628,22 +605,5 @@ void Renderer::set_environment(const Image& equirect) {
   r.has_environment = has_image;
 }
 
-RenderTarget render_target(uint32_t width, uint32_t height, const TargetImage& color, const TargetImage& depth) {
-  RenderTarget t;
-  t.width = width;
-  t.height = height;
-  t.color_image = color.image;
-  t.color_view = color.view;
-  t.color_format = color.format;
-  t.color_layout_before = color.before;
-  t.color_layout_after = color.after;
-  if (depth.image == VK_NULL_HANDLE) return t;
-  t.depth_image = depth.image;
-  t.depth_view = depth.view;
-  t.depth_format = depth.format;
-  t.depth_layout_before = depth.before;
-  t.depth_layout_after = depth.after;
-  return t;
-}
 
 }  // namespace sluice::render

@@ -1,7 +1,7 @@
 // The screen-space targets of one view size. Re-creating them never waits:
 // the old ones are retired until the frames in flight that use them are done,
 // and the new ones are initialized by the next frame's commands.
-#include "renderer_impl.h"
+#include "renderer_state.h"
 
 namespace sluice::render {
 

@@ -12,8 +12,9 @@
 #include <cstring>
 #include <stdexcept>
 
-#include "renderer_impl.h"
-#include "sluice/render/load.h"
+#include "renderer_state.h"
+#include "upload.h"
+#include "sluice/render/renderer.h"
 #include "sluice/io/codec.h"
 #include "sluice/io/lod.h"
 #include "sluice/io/reader.h"
@@ -41,28 +42,6 @@ StagingLayout staging_layout(uint64_t particles, uint32_t chunks, size_t stride,
 
 }  // namespace
 
-SceneInfo scene_info(const io::ContainerReader& reader) {
-  SceneInfo s;
-  const io::FileHeader& h = reader.header();
-  const io::FrameIndex& index = reader.index();
-  s.bounds = {{index.bounds.min[0], index.bounds.min[1], index.bounds.min[2]},
-              {index.bounds.max[0], index.bounds.max[1], index.bounds.max[2]}};
-  if (index.bounds.empty()) s.bounds = {{0, 0, 0}, {1, 1, 1}};
-  const std::array<float, 3> up = io::up_vector(h.up);
-  s.up = {up[0], up[1], up[2]};
-  s.particle_spacing = h.particle_spacing;
-  s.particle_radius = h.particle_radius;
-  s.coding = h.position_coding;
-  for (size_t a = 0; a < h.attributes.size(); ++a) {
-    s.attribute_names.push_back(h.attributes[a].name);
-    s.attribute_ranges.push_back(a < index.attribute_ranges.size() ? index.attribute_ranges[a] : std::array<float, 2>{0, 1});
-  }
-  for (const io::FrameIndexEntry& f : index.frames) {
-    s.max_particles = std::max(s.max_particles, f.particle_count);
-    s.max_chunks = std::max<uint64_t>(s.max_chunks, f.chunk_count);
-  }
-  return s;
-}
 
 bool Renderer::upload_complete(uint64_t ticket) const {
   return ticket == 0 || impl_->upload_done.getCounterValue() >= ticket;
@@ -376,12 +355,15 @@ uint64_t upload_frame(detail::RendererImpl& r, FrameSet& set, UploadSource parti
   return set.ticket;
 }
 
-// Whether the frame's chunks carry layers (for RendererOptions::classify_unlayered).
+}  // namespace
+
 void mark_layers(FrameSet& set, const io::FrameHeader& header) {
   set.unlayered = std::all_of(header.chunks.begin(), header.chunks.end(),
                               [](const io::ChunkDesc& c) { return c.layer == io::Layer::All; });
   set.layering_known = true;
 }
+
+namespace {
 
 // What a record's LOD tier says of its values (GpuChunk::lod_lo, lod_hi).
 // Blobs are written by a bound of their random term: only the top holds.
@@ -391,9 +373,8 @@ void lod_bounds(const std::vector<io::ChunkDesc>& chunks, size_t c, GpuChunk& g)
   g.lod_lo = chunks[c].layer == io::Layer::Blobs ? 0 : b.lo;
 }
 
-// The chunk table rows of a frame: AABBs, first particle, count and the
-// colour attribute's range (`color_attribute` < 0: none). `first`, when given
-// (the runtime's chunk_first), must agree with the running sum of the counts.
+}  // namespace
+
 void fill_chunk_table(const io::FrameHeader& header, std::span<const uint64_t> first, int color_attribute,
                       std::span<GpuChunk> out, const io::ErrorLocation& where) {
   uint64_t total = 0;
@@ -425,8 +406,6 @@ void fill_chunk_table(const io::FrameHeader& header, std::span<const uint64_t> f
     throw io::Error(where, "chunk particle counts do not add up to the frame's (or exceed 2^32)");
   }
 }
-
-}  // namespace
 
 uint64_t Renderer::commit_frame() {
   Impl& r = *impl_;
@@ -533,32 +512,6 @@ uint64_t Renderer::commit(const FrameUpload& frame) {
     throw Error("commit: one first index per chunk");
   }
   return frame.plan ? commit_encoded(*impl_, frame) : commit_decoded(*this, *impl_, frame);
-}
-
-uint64_t commit_record(Renderer& renderer, std::span<const std::byte> record, const io::FrameHeader& header,
-                       const io::FileHeader& file, int color_attribute, const io::ErrorLocation& where) {
-  detail::RendererImpl& r = renderer_impl(renderer);
-  if (file.position_coding != r.scene.coding) throw io::Error(where, "frame coding differs from the scene's");
-  const uint32_t chunks = uint32_t(header.chunks.size());
-  FrameStaging s = renderer.stage_frame(header.particle_count, chunks);
-  const bool attr = color_attribute >= 0 && size_t(color_attribute) < file.attributes.size() && !s.color_attribute.empty();
-  fill_chunk_table(header, {}, attr ? color_attribute : -1, s.chunks, where);
-  mark_layers(r.sets[size_t(r.staged)], header);
-  std::vector<uint64_t> starts(chunks);
-  io::chunk_starts(header, starts);
-  std::vector<uint16_t*> attributes(file.attributes.size(), nullptr);
-  if (attr) attributes[size_t(color_attribute)] = s.color_attribute.data();
-  // Every chunk straight into the mapped staging memory.
-  io::decode_record(record, header, file, starts, s.particles, attributes, where);
-  return renderer.commit_frame();
-}
-
-void load_frame(Renderer& renderer, const io::ContainerReader& reader, uint64_t frame, int color_attribute,
-                io::LayerSet layers) {
-  const std::vector<std::byte> record = reader.read_record(frame);
-  io::FrameHeader header = reader.parse_record(frame, record);
-  io::keep_layers(header, layers);
-  renderer.wait_upload(commit_record(renderer, record, header, reader.header(), color_attribute, reader.location(frame)));
 }
 
 }  // namespace sluice::render

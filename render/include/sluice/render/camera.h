@@ -73,4 +73,25 @@ class Camera {
   void fit_corners(const Bounds& box, float tan_half_v, float aspect);
 };
 
+// A rectangle of the target in pixels (origin top left).
+struct Viewport {
+  uint32_t x = 0, y = 0;
+  uint32_t width = 0, height = 0;
+};
+
+// One eye or camera. Matrices are column-major (math.h).
+//  - view: world -> eye space (right-handed, looking down -z, +y up).
+//  - projection: eye -> Vulkan clip space (x right, y down, depth 0..1) as
+//    the host's own rasterizer uses it; asymmetric frusta (OpenXR's per-eye
+//    fov) and reversed or standard depth, finite or infinite far plane, are
+//    all accepted. The fluid's depth is written with this projection, and the
+//    depth test follows its direction (greater-or-equal for reversed depth).
+struct View {
+  Mat4 view = Mat4::identity();
+  Mat4 projection = Mat4::identity();
+  Viewport viewport;
+};
+// The view of `camera` over `viewport` (aspect from the viewport).
+View camera_view(const Camera& camera, const Viewport& viewport);
+
 }  // namespace sluice::render

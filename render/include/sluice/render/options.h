@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "sluice/render/frame.h"
 #include "sluice/render/math.h"
 
 namespace sluice::render {
@@ -148,5 +149,52 @@ Vec3 parse_up(const std::string& s);
 // Two unit vectors across `up` completing a right-handed frame (a, b, up):
 // for +z they are x and y.
 void frame_across(Vec3 up, Vec3& a, Vec3& b);
+
+// The largest frame the apps' `--particles auto` (their default) draws as
+// ellipsoids (RendererOptions::anisotropic_limit): their once-a-frame pass
+// takes about 3 ms per million particles on an H100 (docs/render.md), so a
+// new frame of this size costs one stereo frame's time at 90 Hz at most.
+inline constexpr uint64_t kAutoAnisotropicLimit = 2'000'000;
+
+struct RendererOptions {
+  uint32_t frames_in_flight = 2;  // see the contract above; 1..8
+  // Keep each view's eye normals and depth for read_surface() (render/internal: inspection.h; costs
+  // 16 bytes per pixel per frame).
+  bool debug_surfaces = false;
+  // Frames that arrive without layers (files converted with --no-layers,
+  // frames a host pushes live: every chunk io::Layer::All, or staged rows
+  // with no blob chunk) are classified on the GPU when first drawn (the
+  // narrow band of io/narrow_band.h, voxel 2h, h = the scene's particle
+  // spacing, else twice its radius) and drawn from their surface and voxel
+  // blobs, as a layered file's surface set is. Costs the classification once
+  // per uploaded frame (a pass "classify" in FrameStats), a bit per particle,
+  // and room for n/4 blobs after the particles; a frame with more blobs, or
+  // whose grid is too large, is drawn whole.
+  bool classify_unlayered = false;
+  // Anisotropic particles (Yu & Turk 2013): each particle drawn as an
+  // ellipsoid from the covariance of its neighbours within 2h (h = the
+  // scene's particle spacing, else twice its radius), flat where the fluid
+  // is flat, so a resting surface shades smooth instead of showing the
+  // particles' lattice. Computed on the GPU when a frame is first drawn (a
+  // pass "ellipsoids" in FrameStats, or part of "classify"), 12 bytes per
+  // particle and the classifier's scratch; each radius at most 4 times
+  // another, volume kept; a particle with fewer than 6 others near it stays
+  // a sphere, as do blobs. Needs a known particle size; otherwise, and for
+  // a frame of more than 2^28 particles, particles stay spheres.
+  bool anisotropic = false;
+  // With `anisotropic`: a frame of more particles than this is drawn as
+  // spheres, so the once-a-frame pass stays short (0: no limit but 2^28).
+  // The apps' `--particles auto` sets kAutoAnisotropicLimit.
+  uint64_t anisotropic_limit = 0;
+};
+
+// The particle look by name, as `--particles` and the Python module take
+// it, into `options`' anisotropic and anisotropic_limit: "spheres",
+// "ellipsoids", or "auto" (ellipsoids up to kAutoAnisotropicLimit particles
+// a frame). Throws render::Error listing the choices.
+void apply_particles(const std::string& name, RendererOptions& options);
+
+// Effective sphere radius for `options` in `scene`.
+float effective_radius(const FluidOptions& options, const SceneInfo& scene);
 
 }  // namespace sluice::render
