@@ -14,7 +14,7 @@
 #include "conversion_mpi.h"
 #endif
 #include "progress.h"
-#include "sluice/io/relayout.h"
+#include "sluice/io/maintenance.h"
 #include "sluice/io/up_axis.h"
 
 namespace sluice::app {
@@ -60,7 +60,7 @@ constexpr const char* kSolverOnly[] = {"--attribute", "--id-array", "--no-ids", 
                                        "--no-tiers", "--no-layers", "--band-voxel", "--band-f2", "--skip-bad",
                                        "--read-timeout", "--in-process", "--mpi"};
 
-// A .sluice input rewritten in the layout --format names (io/relayout.h).
+// A .sluice input rewritten in the layout --format names (io/maintenance.h).
 void run_relayout(const ConvertCommand& c, const CLI::App& cmd) {
   for (const char* flag : kSolverOnly) {
     if (cmd.count(flag) > 0) {

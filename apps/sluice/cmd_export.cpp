@@ -7,7 +7,7 @@
 #include "frame_range.h"
 #include "human.h"
 #include "progress.h"
-#include "sluice/io/export_series.h"
+#include "sluice/io/export.h"
 #include "sluice/io/reader.h"
 
 namespace sluice::app {

@@ -164,9 +164,7 @@ void add_play(CLI::App& app) {
               "Frames stream through the prefetch pipeline (read ahead, decoded on every core) at the file's frame\n"
               "rate; a late frame is held (--policy hold) or skipped (--policy skip). Headless playback feeds a null\n"
               "sink and reports stalls, drops and throughput.");
-  cmd->add_option("file", o->file,
-                  ".sluice file, or anything `convert` reads (converted once into a cache beside it)")->required();
-  cmd->add_flag("--no-cache", o->no_cache, "Input that is not .sluice: convert into a temporary file, not the cache");
+  add_input_options(*cmd, "file", o->file, o->no_cache);
   cmd->add_flag("--headless", o->headless, "No window: play into a null sink");
   cmd->add_flag("--stats", o->stats, "Print stream stats every second");
   cmd->add_option("--fps", o->fps, "Media frame rate (default: the file's, else 30)");

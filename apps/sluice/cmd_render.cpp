@@ -185,9 +185,7 @@ void add_render(CLI::App& app) {
       "  sluice render dam.sluice --frames 12 --out dam.png --size 1920x1080\n"
       "  sluice render dam.sluice --out dam.mp4 --color-by rho --colormap coolwarm\n"
       "  sluice render big.sluice --lod density --lod-level 0.3 --camera \"eye=4,-3,2;target=1,0,0.3\"\n");
-  cmd->add_option("input", o->input,
-                  ".sluice file, or anything `convert` reads (converted once into a cache beside it)")->required();
-  cmd->add_flag("--no-cache", o->no_cache, "Input that is not .sluice: convert into a temporary file, not the cache");
+  add_input_options(*cmd, "input", o->input, o->no_cache);
   cmd->add_option("--frames", o->frames, "Frames A:B (inclusive), A, A: or :B, or a list of them: 0,25,50 (default: all)");
   cmd->add_option("-o,--out", o->out, "Output directory, .png, pattern or .mp4")->capture_default_str();
   cmd->add_option("--size", o->size, "Image size WIDTHxHEIGHT")->capture_default_str();

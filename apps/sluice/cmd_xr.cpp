@@ -206,8 +206,7 @@ void add_xr(CLI::App& app) {
               "turns the fluid, two hands also scale it; A/X (menu) plays and pauses; the stick or trackpad\n"
               "scrubs left/right and changes the level of detail up/down. The OpenXR runtime picks the GPU and\n"
               "the views; the look options are `render`'s.");
-  cmd->add_option("file", o->play.file, ".sluice file, or anything `convert` reads (converted once into a cache)")->required();
-  cmd->add_flag("--no-cache", o->play.no_cache, "Input that is not .sluice: convert into a temporary file, not the cache");
+  add_input_options(*cmd, "file", o->play.file, o->play.no_cache);
   cmd->add_option("--frames", o->frames, "End the session after this many frames (scripted runs)");
   cmd->add_option("--size", o->size, "Metres the data's largest extent spans at first")->capture_default_str();
   cmd->add_flag("--local", o->local, "Use the LOCAL space (seated) even where STAGE exists");

@@ -7,7 +7,7 @@
 
 #include "commands.h"
 #include "sluice/import/isolation.h"
-#include "sluice/io/error.h"
+#include "sluice/error.h"
 #include "sluice/io/format.h"
 
 int main(int argc, char** argv) {

@@ -16,7 +16,7 @@
 #include "sluice/import/source.h"
 #include "sluice/io/narrow_band.h"
 #include "sluice/bench/synth.h"
-#include "sluice/io/spacing.h"
+#include "sluice/io/point_set.h"
 #if SLUICE_WITH_RENDER
 #include "sluice/render/band_classifier.h"
 #include "sluice/render/context.h"

@@ -14,7 +14,7 @@
 #include <thread>
 #include <vector>
 
-#include "sluice/io/error.h"
+#include "sluice/error.h"
 #include "sluice/runtime/record_source.h"
 
 namespace sluice::bench {

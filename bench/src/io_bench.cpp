@@ -18,7 +18,7 @@
 #include "sluice/import/vtk.h"
 #include "sluice/io/lod.h"
 #include "sluice/io/reader.h"
-#include "sluice/io/spacing.h"
+#include "sluice/io/point_set.h"
 #include "table.h"
 #include "timing.h"
 

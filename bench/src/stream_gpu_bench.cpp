@@ -387,7 +387,7 @@ void run_stream_gpu_bench(const StreamBenchOptions& o) {
 
   // 2. The pipeline into device memory, GPU decode and CPU decode.
   // The relayed row: the window in device memory, filled through a ring
-  // as read (runtime/relay.h); the others stage the window on the host.
+  // as read (runtime/frame_allocator.h); the others stage the window on the host.
   DeviceSetup relayed_setup = setup;
   relayed_setup.staging.resident = true;
   if (o.ring_slots > 0) relayed_setup.staging.ring_slots = o.ring_slots;

@@ -21,7 +21,7 @@ namespace vk = ::sluice_vk;
 #include <stdexcept>
 
 #include "sluice/desktop/window.h"
-#include "sluice/desktop/error.h"
+#include "sluice/error.h"
 
 namespace sluice::desktop {
 namespace {

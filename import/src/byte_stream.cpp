@@ -9,7 +9,7 @@
 #include <cerrno>
 #include <cstring>
 
-#include "sluice/io/error.h"
+#include "sluice/error.h"
 
 namespace sluice::import::detail {
 

@@ -2,6 +2,7 @@
 // and what they tell the observer are convert_steps.cpp's; the frames go
 // through convert_frames (frames.cpp).
 #include "sluice/import/convert.h"
+#include "sluice/import/frames.h"
 
 #include <tbb/global_control.h>
 #include <tbb/info.h>
@@ -15,7 +16,6 @@
 #include "frame_work.h"
 #include "read_ahead.h"
 #include "sluice/import/freed_memory.h"
-#include "sluice/io/output_lock.h"
 #include "sluice/io/writer.h"
 
 namespace sluice::import {

@@ -21,8 +21,7 @@
 #include "mpi_timeline.h"
 #include "read_ahead.h"
 #include "sluice/import/freed_memory.h"
-#include "sluice/io/assembly.h"
-#include "sluice/io/output_lock.h"
+#include "sluice/io/writer.h"
 
 namespace sluice::import {
 

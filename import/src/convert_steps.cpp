@@ -10,8 +10,7 @@
 #include <cstdio>
 #include <limits>
 
-#include "sluice/io/outliers.h"
-#include "sluice/io/spacing.h"
+#include "sluice/io/point_set.h"
 #include "sluice/io/up_axis.h"
 
 namespace sluice::import {

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "sluice/import/convert.h"
+#include "sluice/import/frames.h"
 
 namespace sluice::import {
 

@@ -9,7 +9,7 @@
 #include <map>
 
 #include "sluice/io/lod.h"
-#include "sluice/io/outliers.h"
+#include "sluice/io/point_set.h"
 #include "frame_work.h"
 
 namespace sluice::import {

@@ -19,7 +19,7 @@
 #include <string>
 #include <vector>
 
-#include "sluice/io/error.h"
+#include "sluice/error.h"
 #include "sluice/io/types.h"
 
 namespace sluice::import::detail {

@@ -1,6 +1,6 @@
 #include "mpi_messages.h"
 
-#include "sluice/io/assembly.h"
+#include "sluice/io/writer.h"
 
 namespace sluice::import {
 namespace {

@@ -6,7 +6,7 @@
 #include <algorithm>
 #include <string_view>
 
-#include "sluice/io/error.h"
+#include "sluice/error.h"
 #include "sluice/import/source.h"
 
 namespace sluice::import {

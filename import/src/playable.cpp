@@ -10,10 +10,10 @@
 #include <sstream>
 #include <string_view>
 
-#include "sluice/io/error.h"
+#include "sluice/error.h"
 #include "sluice/io/format.h"
 #include "sluice/import/source.h"
-#include "sluice/io/output_lock.h"
+#include "sluice/io/writer.h"
 #include "sluice/io/reader.h"
 
 namespace sluice::import {

@@ -20,7 +20,7 @@
 #include "text_reader.h"
 #include "xml_check.h"
 #include "xml_tags.h"
-#include "sluice/io/error.h"
+#include "sluice/error.h"
 #include "sluice/import/source.h"
 #include "sluice/import/vtk.h"
 #ifdef SLUICE_WITH_VTK

@@ -12,7 +12,7 @@
 #include <optional>
 #include <string_view>
 
-#include "sluice/io/error.h"
+#include "sluice/error.h"
 
 namespace sluice::import::detail {
 

@@ -1,6 +1,6 @@
 // VTK used as the peer in comparisons: its writer (sizes) and its readers as
 // a user runs them (speed).
-#include "sluice/io/error.h"
+#include "sluice/error.h"
 #include "sluice/import/source.h"
 #include "sluice/import/vtk.h"
 

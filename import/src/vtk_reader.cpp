@@ -35,7 +35,7 @@
 
 #include "cell_types.h"
 #include "values.h"
-#include "sluice/io/error.h"
+#include "sluice/error.h"
 
 namespace sluice::import::detail {
 

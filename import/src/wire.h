@@ -12,7 +12,7 @@
 #include <type_traits>
 #include <vector>
 
-#include "sluice/io/error.h"
+#include "sluice/error.h"
 
 namespace sluice::import {
 

@@ -21,7 +21,7 @@
 
 #include "cell_types.h"
 #include "xml_tags.h"
-#include "sluice/io/error.h"
+#include "sluice/error.h"
 
 namespace sluice::import::detail {
 

@@ -5,7 +5,7 @@
 #include <cctype>
 #include <charconv>
 
-#include "sluice/io/error.h"
+#include "sluice/error.h"
 
 namespace sluice::import::detail {
 

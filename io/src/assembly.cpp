@@ -1,4 +1,4 @@
-#include "sluice/io/assembly.h"
+#include "sluice/io/writer.h"
 
 #include <algorithm>
 

@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "sluice/io/error.h"
+#include "sluice/error.h"
 
 namespace sluice::io {
 

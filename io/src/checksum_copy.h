@@ -4,7 +4,7 @@
 
 #include <algorithm>
 
-#include "sluice/io/checksum.h"
+#include "sluice/io/reader.h"
 
 namespace sluice::io::detail {
 

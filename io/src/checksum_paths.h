@@ -5,7 +5,7 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "sluice/io/checksum.h"
+#include "sluice/io/reader.h"
 
 namespace sluice::io::detail {
 
@@ -13,7 +13,7 @@ uint64_t xxh3_baseline(const void* data, size_t n);  // SSE2: every x86-64
 uint64_t xxh3_avx2(const void* data, size_t n);      // built with -mavx2
 uint64_t xxh3_avx512(const void* data, size_t n);    // built with -mavx512f -mavx512bw
 
-// copy_and_checksum() (sluice/io/checksum.h) on each path: XXH3's streaming
+// copy_and_checksum() (sluice/io/reader.h) on each path: XXH3's streaming
 // state fed block by block.
 uint64_t xxh3_copy_baseline(std::byte* dst, const std::byte* src, size_t n, BlockCopy copy, void* context);
 uint64_t xxh3_copy_avx2(std::byte* dst, const std::byte* src, size_t n, BlockCopy copy, void* context);

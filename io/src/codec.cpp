@@ -22,10 +22,11 @@
 #include "layering.h"
 #include "morton.h"
 #include "packed_plane.h"
+#include "plane_table.h"
 #include "quantized_unpack.h"
 #include "records.h"
 #include "sluice/io/lod.h"
-#include "sluice/io/outliers.h"
+#include "sluice/io/point_set.h"
 
 namespace sluice::io {
 
@@ -88,7 +89,7 @@ ZSTD_CCtx* thread_compressor() {
 
 // Chunk payload (codecs Zstd and Packed): a table of one u32 per plane, then
 // the planes. An entry equal to n: the plane is stored as is (read in place,
-// no copy). Codec Packed only: an entry with kPackedFlag set is a packed
+// no copy). Codec Packed only: an entry with kPackedPlaneFlag set is a packed
 // plane (packed_plane.h) of the remaining size. Any other entry is the size
 // of the zstd frame holding the plane.
 //
@@ -100,7 +101,6 @@ ZSTD_CCtx* thread_compressor() {
 // per byte to decode and unpacking 0.1-0.2).
 constexpr double kMinPlaneGain = 0.15;
 constexpr double kZstdGainOverPacked = 1.0 / 3.0;
-constexpr uint32_t kPackedFlag = kPackedPlaneFlag;
 constexpr uint32_t kLeastTierRecord = 1024;
 
 void entry_stored(std::vector<std::byte>& payload, const std::byte* plane, size_t n, size_t p) {
@@ -147,7 +147,7 @@ void compress_planes(std::vector<std::byte>& raw, size_t n, const EncodeOptions&
       payload.insert(payload.end(), frame.data(), frame.data() + zstd_size);
     } else {
       pack_plane(values, packed.width, payload);
-      entry |= kPackedFlag;
+      entry |= kPackedPlaneFlag;
       any_packed = true;
     }
     std::memcpy(payload.data() + 4 * p, &entry, 4);
@@ -162,41 +162,30 @@ void compress_planes(std::vector<std::byte>& raw, size_t n, const EncodeOptions&
 // Finds (and decompresses where needed, into `raw`) every plane of a chunk payload.
 void locate_planes(std::span<const std::byte> payload, ChunkCodec codec, size_t n, size_t planes, ZSTD_DCtx* zstd,
                    std::vector<std::byte>& raw, std::vector<const uint8_t*>& out, const ErrorLocation& where) {
+  thread_local std::vector<PlaneSource> sources;
+  read_plane_table(payload, 0, codec, n, planes, sources, where);
   out.resize(planes);
-  if (codec == ChunkCodec::Stored) {
-    if (payload.size() != n * planes) throw Error(where, "stored chunk has the wrong size");
-    for (size_t p = 0; p < planes; ++p) out[p] = reinterpret_cast<const uint8_t*>(payload.data()) + p * n;
-    return;
-  }
-  if (payload.size() < 4 * planes) throw Error(where, "chunk payload is smaller than its plane table");
-  if (raw.size() < n * planes) raw.resize(n * planes);
-  size_t at = 4 * planes;
+  if (codec != ChunkCodec::Stored && raw.size() < n * planes) raw.resize(n * planes);
   for (size_t p = 0; p < planes; ++p) {
-    uint32_t entry;
-    std::memcpy(&entry, payload.data() + 4 * p, 4);
-    const bool packed = codec == ChunkCodec::Packed && (entry & kPackedFlag) != 0;
-    const uint32_t size = packed ? entry & ~kPackedFlag : entry;
-    const std::string what = "plane " + std::to_string(p);
-    if (size > payload.size() - at) throw Error(where, what + " runs past the chunk payload");
-    const std::byte* src = payload.data() + at;
-    if (packed) {
-      auto* dst = reinterpret_cast<uint8_t*>(raw.data() + p * n);
-      unpack_plane({src, size}, n, dst, where, what);
-      out[p] = dst;
-    } else if (size == n) {
+    const PlaneSource& s = sources[p];
+    const std::byte* src = payload.data() + s.at;
+    if (s.kind == PlaneSource::Stored) {
       out[p] = reinterpret_cast<const uint8_t*>(src);
+      continue;
+    }
+    const std::string what = "plane " + std::to_string(p);
+    std::byte* dst = raw.data() + p * n;
+    if (s.kind == PlaneSource::Packed) {
+      unpack_plane({src, s.size}, n, reinterpret_cast<uint8_t*>(dst), where, what);
     } else {
-      std::byte* dst = raw.data() + p * n;
-      const size_t got = ZSTD_decompressDCtx(zstd, dst, n, src, size);
+      const size_t got = ZSTD_decompressDCtx(zstd, dst, n, src, s.size);
       if (ZSTD_isError(got)) throw Error(where, what + ": zstd: " + ZSTD_getErrorName(got));
       if (got != n) {
         throw Error(where, what + " decompressed to " + std::to_string(got) + " bytes, expected " + std::to_string(n));
       }
-      out[p] = reinterpret_cast<const uint8_t*>(dst);
     }
-    at += size;
+    out[p] = reinterpret_cast<const uint8_t*>(dst);
   }
-  if (at != payload.size()) throw Error(where, "chunk payload has trailing bytes");
 }
 
 // The box of `members`' positions, its top widened until the decoder's
@@ -778,7 +767,7 @@ EncodedFrame encode_frame(const FrameInput& in, const FileHeader& header, const 
   EncodedFrame frame;
   FrameHeader& fh = frame.header;
   fh.time = in.time;
-  // Far particles (outliers.h) are chunked, and kept out of the frame's
+  // Far particles (point_set.h) are chunked, and kept out of the frame's
   // display bounds and of the narrow band's grid, on their own: among the
   // rest they would widen a chunk's box, and so its quantization step.
   const FarParticles far = find_far_particles(in.positions, header.particle_spacing);

@@ -1,4 +1,4 @@
-#include "sluice/io/error.h"
+#include "sluice/error.h"
 
 namespace sluice::io {
 

@@ -13,7 +13,7 @@
 #include <cstring>
 
 #include "sluice/io/codec.h"
-#include "sluice/io/error.h"
+#include "sluice/error.h"
 
 namespace sluice::io {
 namespace {

@@ -1,4 +1,4 @@
-#include "sluice/io/export_series.h"
+#include "sluice/io/export.h"
 
 #include <tbb/info.h>
 #include <tbb/parallel_pipeline.h>

@@ -5,7 +5,7 @@
 #include <span>
 #include <string>
 
-#include "sluice/io/error.h"
+#include "sluice/error.h"
 
 namespace sluice::io {
 

@@ -1,6 +1,7 @@
 // Plans for the GPU decoder: the chunk payloads' plane tables read and
 // checked on the CPU (a few bytes per plane), zstd planes inflated here.
 #include "sluice/io/gpu_decode_plan.h"
+#include "sluice/io/gpu_decode_reference.h"
 
 #include <tbb/parallel_for.h>
 #include <zstd.h>
@@ -13,6 +14,7 @@
 #include "bytes.h"
 #include "morton.h"
 #include "packed_plane.h"
+#include "plane_table.h"
 
 namespace sluice::io {
 
@@ -23,38 +25,6 @@ namespace {
 constexpr uint64_t kMax32 = UINT32_MAX;
 
 uint64_t groups_of(uint64_t n) { return (n + 7) / 8; }
-
-// Planes of the chunk's payload, in file order, as positions in the record.
-struct PlaneSource {
-  uint64_t at = 0;
-  uint32_t size = 0;
-  enum Kind : uint8_t { Stored, Packed, Zstd } kind = Stored;
-};
-
-// Reads a chunk's plane table (codecs Zstd and Packed) or lays out its
-// concatenated planes (Stored) into `out`, checking sizes against the payload.
-void locate(std::span<const std::byte> payload, uint64_t payload_at, ChunkCodec codec, uint64_t n, size_t planes,
-            std::vector<PlaneSource>& out, const ErrorLocation& where) {
-  out.resize(planes);
-  if (codec == ChunkCodec::Stored) {
-    if (payload.size() != n * planes) throw Error(where, "stored chunk has the wrong size");
-    for (size_t p = 0; p < planes; ++p) out[p] = {payload_at + p * n, uint32_t(n), PlaneSource::Stored};
-    return;
-  }
-  if (payload.size() < 4 * planes) throw Error(where, "chunk payload is smaller than its plane table");
-  uint64_t at = 4 * planes;
-  for (size_t p = 0; p < planes; ++p) {
-    uint32_t entry;
-    std::memcpy(&entry, payload.data() + 4 * p, 4);
-    const bool packed = codec == ChunkCodec::Packed && (entry & kPackedPlaneFlag) != 0;
-    const uint32_t size = packed ? entry & ~kPackedPlaneFlag : entry;
-    if (size > payload.size() - at) throw Error(where, "plane " + std::to_string(p) + " runs past the chunk payload");
-    const auto kind = packed ? PlaneSource::Packed : size == n ? PlaneSource::Stored : PlaneSource::Zstd;
-    out[p] = {payload_at + at, size, kind};
-    at += size;
-  }
-  if (at != payload.size()) throw Error(where, "chunk payload has trailing bytes");
-}
 
 // A packed plane's width, values and escapes, checked as unpack_plane does.
 // `bytes` holds the record's bytes from `base` on (the whole record, or one
@@ -111,7 +81,7 @@ bool plan_planes(std::span<const std::byte> bytes, uint64_t base, const ChunkDes
   if (chunk.offset < base || chunk.offset - base > bytes.size() || chunk.compressed_size > bytes.size() - (chunk.offset - base)) {
     throw Error(at, "a chunk payload lies outside the frame record");
   }
-  locate(bytes.subspan(chunk.offset - base, chunk.compressed_size), chunk.offset, chunk.codec, n, planes, sources, at);
+  read_plane_table(bytes.subspan(chunk.offset - base, chunk.compressed_size), chunk.offset, chunk.codec, n, planes, sources, at);
   const size_t colour = 8 - fine + 2 * size_t(attribute ? options.color_attribute : 0);
   for (int k = int(fine); k < kGpuPlanes; ++k) {
     if (k >= 8 && !attribute) break;
@@ -132,7 +102,7 @@ bool plan_fine(std::span<const std::byte> bytes, uint64_t base, const ChunkDesc&
   if (fine.offset < base || fine.offset - base > bytes.size() || fine.size > bytes.size() - (fine.offset - base)) {
     throw Error(at, "a fine part lies outside the frame record");
   }
-  locate(bytes.subspan(fine.offset - base, fine.size), fine.offset, fine.codec, n, 2, sources, at);
+  read_plane_table(bytes.subspan(fine.offset - base, fine.size), fine.offset, fine.codec, n, 2, sources, at);
   for (size_t p = 0; p < 2; ++p) {
     if (!gpu_plane(bytes, base, sources[p], n, p, zstd, g.planes[p], at)) return false;
   }

@@ -4,7 +4,7 @@
 // table) every voxel from its neighbours' lookups, in parallel.
 #include "sluice/io/narrow_band.h"
 
-#include "sluice/io/error.h"
+#include "sluice/error.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>

@@ -1,4 +1,4 @@
-#include "sluice/io/outliers.h"
+#include "sluice/io/point_set.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_reduce.h>

@@ -1,4 +1,4 @@
-#include "sluice/io/output_lock.h"
+#include "sluice/io/writer.h"
 
 #include <fcntl.h>
 #include <sys/file.h>
@@ -9,7 +9,7 @@
 #include <cstring>
 #include <string>
 
-#include "sluice/io/error.h"
+#include "sluice/error.h"
 
 namespace sluice::io {
 namespace {

@@ -10,7 +10,7 @@
 #include <span>
 #include <vector>
 
-#include "sluice/io/error.h"
+#include "sluice/error.h"
 
 namespace sluice::io {
 

@@ -12,7 +12,7 @@
 #include "dequantize.h"
 #include "file.h"
 #include "sluice/io/codec.h"
-#include "sluice/io/error.h"
+#include "sluice/error.h"
 #include "sluice/io/export.h"
 #include "sluice/io/lod.h"
 
@@ -193,32 +193,6 @@ uint64_t thin(const ParticleSpans& out, float level, float blob_voxel) {
   }
   return kept;
 }
-
-void particles_into(const FrameHeader& header, std::span<const uint64_t> chunk_first, std::span<const std::byte> particles,
-                    std::span<const std::span<const uint16_t>> attribute_streams, const FileHeader& file,
-                    const ParticleQuery& query, ParticleArrays& out) {
-  check_query(query, file, {});
-  const uint64_t n = header.particle_count;
-  if (chunk_first.size() != header.chunks.size() || particles.size() < n * decoded_particle_bytes(file.position_coding) ||
-      attribute_streams.size() != query.attributes.size()) {
-    throw Error({}, "particles_into: the decoded buffers do not match the frame");
-  }
-  for (const auto& s : attribute_streams) {
-    if (s.size() < n) throw Error({}, "particles_into: an attribute stream is shorter than the frame");
-  }
-  size_arrays(header, query, out);
-  const ParticleSpans spans = spans_of(out);
-  const size_t stride = decoded_particle_bytes(file.position_coding);
-  tbb::parallel_for(size_t(0), header.chunks.size(), [&](size_t c) {
-    thread_local std::vector<const uint16_t*> streams;
-    streams.clear();
-    for (const auto& s : attribute_streams) streams.push_back(s.data() + chunk_first[c]);
-    convert_chunk(header.chunks[c], particles.subspan(chunk_first[c] * stride), streams, file.position_coding,
-                  query.attributes, n, chunk_first[c], spans);
-  });
-  if (query.lod_level < 1) thin_arrays(out, query.lod_level, header.blob_voxel);
-}
-
 
 namespace {
 

@@ -5,7 +5,7 @@
 #include <span>
 #include <vector>
 
-#include "sluice/io/error.h"
+#include "sluice/error.h"
 #include "sluice/io/format.h"
 
 namespace sluice::io {

@@ -1,6 +1,6 @@
 // relayout_container(): a .sluice file decoded frame by frame and encoded
-// again in another layout (relayout.h).
-#include "sluice/io/relayout.h"
+// again in another layout (maintenance.h).
+#include "sluice/io/maintenance.h"
 
 #include <tbb/parallel_pipeline.h>
 
@@ -9,10 +9,9 @@
 #include <numeric>
 
 #include "sluice/io/gpu_decode_plan.h"
-#include "sluice/io/output_lock.h"
+#include "sluice/io/writer.h"
 #include "sluice/io/particles.h"
 #include "sluice/io/reader.h"
-#include "sluice/io/writer.h"
 
 namespace sluice::io {
 namespace {

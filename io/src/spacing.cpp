@@ -1,4 +1,4 @@
-#include "sluice/io/spacing.h"
+#include "sluice/io/point_set.h"
 
 #include <algorithm>
 #include <array>

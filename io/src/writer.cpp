@@ -6,7 +6,6 @@
 #include <algorithm>
 
 #include "file.h"
-#include "sluice/io/assembly.h"
 
 namespace sluice::io {
 

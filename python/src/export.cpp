@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "callback.h"
-#include "sluice/io/export_series.h"
+#include "sluice/io/export.h"
 #include "sluice/io/reader.h"
 
 namespace py = pybind11;

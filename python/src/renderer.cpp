@@ -15,7 +15,6 @@
 #include "sluice/render/camera.h"
 #include "sluice/render/context.h"
 #include "sluice/error.h"
-#include "sluice/render/error.h"
 #include "sluice/render/offscreen.h"
 #include "sluice/stream/stream.h"
 

@@ -17,7 +17,7 @@
 #include "convert.h"
 #include "frame.h"
 #include "sluice/import/playable.h"
-#include "sluice/io/error.h"
+#include "sluice/error.h"
 #include "sluice/io/particles.h"
 #include "sluice/io/reader.h"
 #include "sluice/io/up_axis.h"

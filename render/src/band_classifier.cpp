@@ -8,7 +8,7 @@
 
 #include "band_passes.h"
 #include "half.h"
-#include "sluice/render/error.h"
+#include "sluice/error.h"
 
 namespace sluice::render {
 namespace {

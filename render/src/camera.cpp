@@ -1,7 +1,7 @@
 // Camera interactions and its text form (see camera.h).
 #include "sluice/render/camera.h"
 #include "sluice/render/options.h"
-#include "sluice/render/error.h"
+#include "sluice/error.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,6 +1,6 @@
 // PNG files, an ffmpeg pipe, and PSNR (see image_io.h).
 #include "sluice/render/image_io.h"
-#include "sluice/render/error.h"
+#include "sluice/error.h"
 
 #include <png.h>
 #include <sys/wait.h>

@@ -8,7 +8,7 @@
 #include "half.h"
 #include "renderer_state.h"
 #include "sluice/render/renderer.h"
-#include "sluice/render/error.h"
+#include "sluice/error.h"
 
 namespace sluice::render {
 

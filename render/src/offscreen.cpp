@@ -6,7 +6,7 @@
 #include <stdexcept>
 
 #include "vk_common.h"
-#include "sluice/render/error.h"
+#include "sluice/error.h"
 
 namespace sluice::render {
 

@@ -4,7 +4,7 @@
 #include "sluice/render/options.h"
 
 #include "sluice/io/up_axis.h"
-#include "sluice/render/error.h"
+#include "sluice/error.h"
 
 #include <array>
 #include <cctype>

@@ -5,7 +5,7 @@
 #include <stdexcept>
 
 #include "staging_block.h"
-#include "sluice/render/error.h"
+#include "sluice/error.h"
 
 namespace sluice::render {
 

@@ -1,5 +1,5 @@
 // Internal: the ring a StagingAllocator with a resident window relays
-// frames' pieces through (runtime/relay.h): slots of cached host-visible
+// frames' pieces through (runtime/frame_allocator.h): slots of cached host-visible
 // memory the read threads write with plain stores, each copied by the GPU
 // into a frame's resident area on the context's relay queue right after.
 // Every copy signals the ring's timeline semaphore with the next value; a
@@ -15,7 +15,7 @@
 #include <mutex>
 #include <vector>
 
-#include "sluice/runtime/relay.h"
+#include "sluice/runtime/frame_allocator.h"
 #include "vk_common.h"
 
 namespace sluice::render {

@@ -10,7 +10,7 @@
 #include "sluice/render/renderer.h"
 #include "passes.h"
 #include "shaders.h"
-#include "sluice/render/error.h"
+#include "sluice/error.h"
 
 namespace sluice::render {
 namespace {

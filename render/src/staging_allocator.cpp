@@ -9,7 +9,7 @@
 #include "sluice/runtime/pipeline.h"
 
 #include "staging_block.h"
-#include "sluice/render/error.h"
+#include "sluice/error.h"
 
 namespace sluice::render {
 namespace {

@@ -8,7 +8,7 @@
 
 #include "relay_ring.h"
 #include "sluice/render/staging_allocator.h"
-#include "sluice/runtime/block_pool.h"
+#include "sluice/runtime/frame_allocator.h"
 #include "vk_common.h"
 
 namespace sluice::render {

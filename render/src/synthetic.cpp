@@ -1,6 +1,6 @@
 // Particles from code rather than files (see synthetic.h).
 #include "sluice/render/synthetic.h"
-#include "sluice/render/error.h"
+#include "sluice/error.h"
 #include "sluice/io/lod.h"
 
 #include <tbb/parallel_for.h>

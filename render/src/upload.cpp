@@ -18,7 +18,7 @@
 #include "sluice/io/codec.h"
 #include "sluice/io/lod.h"
 #include "sluice/io/reader.h"
-#include "sluice/render/error.h"
+#include "sluice/error.h"
 
 namespace sluice::render {
 namespace {

@@ -5,7 +5,7 @@
 #include <span>
 
 #include "frame_set.h"
-#include "sluice/io/error.h"
+#include "sluice/error.h"
 #include "sluice/io/format.h"
 #include "sluice/render/frame.h"
 

@@ -38,7 +38,7 @@ struct detail::ContextImpl {
   vk::raii::Queue graphics_queue{nullptr};
   vk::raii::Queue transfer_queue{nullptr};  // the graphics queue when there is no separate one
   // Where a StagingAllocator's relay copies frames' pieces from the
-  // pipeline's read threads (runtime/relay.h): a second queue of the
+  // pipeline's read threads (runtime/frame_allocator.h): a second queue of the
   // transfer family where the device has one (devices sluice creates),
   // else the transfer queue, shared: then every submission to it holds
   // queue_mutex (sluice's own through submit(); the host's by

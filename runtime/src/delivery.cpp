@@ -4,7 +4,7 @@
 #include <string>
 
 #include "slot_window.h"
-#include "sluice/runtime/error.h"
+#include "sluice/error.h"
 
 namespace sluice::runtime::detail {
 namespace {

@@ -8,8 +8,8 @@
 #include <cstring>
 
 #include "mapped_copy.h"
-#include "sluice/io/checksum.h"
-#include "sluice/io/error.h"
+#include "sluice/io/reader.h"
+#include "sluice/error.h"
 #include "sluice/runtime/record_source.h"
 
 namespace sluice::runtime {

@@ -1,4 +1,4 @@
-#include "sluice/runtime/frame_error.h"
+#include "sluice/runtime/pipeline.h"
 
 namespace sluice::runtime {
 

@@ -2,7 +2,6 @@
 #include <cstdlib>
 #include <new>
 
-#include "sluice/runtime/block_pool.h"
 #include "sluice/runtime/frame_allocator.h"
 
 namespace sluice::runtime {

@@ -6,7 +6,7 @@
 #include <cstring>
 #include <mutex>
 
-#include "sluice/io/checksum.h"
+#include "sluice/io/reader.h"
 
 #if defined(__x86_64__) || defined(_M_X64)
 #include <emmintrin.h>

@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <vector>
 
-#include "sluice/io/error.h"
+#include "sluice/error.h"
 
 namespace sluice::runtime {
 namespace {

@@ -8,7 +8,7 @@
 #include <utility>
 
 #include "pipeline_core.h"
-#include "sluice/runtime/error.h"
+#include "sluice/error.h"
 
 namespace sluice::runtime {
 

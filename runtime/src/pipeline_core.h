@@ -34,7 +34,7 @@
 #include "spsc_ring.h"
 #include "wake.h"
 #include "sluice/runtime/pipeline.h"
-#include "sluice/runtime/relay.h"
+#include "sluice/runtime/frame_allocator.h"
 
 namespace sluice::runtime::detail {
 

@@ -98,11 +98,6 @@ uint64_t Player::current_frame() {
   return static_cast<uint64_t>(std::clamp<int64_t>(shown_position_, 0, int64_t(frame_count_ ? frame_count_ - 1 : 0)));
 }
 
-std::optional<uint64_t> Player::shown_frame() const {
-  if (shown_.empty()) return std::nullopt;
-  return shown_.frame();
-}
-
 void Player::show(FrameHandle frame, double now) {
   const uint64_t sequence = frame.sequence();
   shown_ = std::move(frame);  // gives the previous frame back

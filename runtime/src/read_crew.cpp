@@ -1,5 +1,5 @@
 #include "read_crew.h"
-#include "sluice/runtime/error.h"
+#include "sluice/error.h"
 
 #include <chrono>
 #include <stdexcept>

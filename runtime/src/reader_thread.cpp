@@ -167,7 +167,7 @@ PipelineCore::Start PipelineCore::start_entry(ReaderState& rs, uint64_t k, uint6
     }
     // Frames kept encoded and read in place are checked as they are read,
     // chunk by chunk, so their tables come first; relayed, their chunks are
-    // planned as they are read too (relay.h).
+    // planned as they are read too (frame_allocator.h).
     slot.relayed = relays();
     slot.relay_refused.store(false, kRelaxed);
     slot.where.frame = frame;

@@ -6,7 +6,7 @@
 #include <cstring>
 #include <vector>
 
-#include "sluice/io/checksum.h"
+#include "sluice/io/reader.h"
 #include "sluice/io/gpu_decode_plan.h"
 
 namespace sluice::runtime::detail {

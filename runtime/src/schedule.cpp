@@ -1,4 +1,4 @@
-#include "sluice/runtime/schedule.h"
+#include "sluice/runtime/clock.h"
 
 #include "wrap.h"
 

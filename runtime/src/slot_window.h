@@ -22,7 +22,7 @@
 #include "slot.h"
 #include "sluice/runtime/frame_allocator.h"
 #include "sluice/runtime/pipeline.h"
-#include "sluice/runtime/window.h"
+#include "sluice/runtime/budget.h"
 
 namespace sluice::runtime::detail {
 

@@ -1,4 +1,4 @@
-#include "sluice/runtime/window.h"
+#include "sluice/runtime/budget.h"
 
 #include <algorithm>
 #include <limits>

@@ -1,5 +1,5 @@
 #include "sluice/stream/frame_feed.h"
-#include "sluice/render/error.h"
+#include "sluice/error.h"
 #include "sluice/stream/demand.h"
 
 #include <chrono>

@@ -7,7 +7,7 @@
 
 #include "sluice/io/lod.h"
 #include "sluice/io/writer.h"
-#include "sluice/render/error.h"
+#include "sluice/error.h"
 #include "sluice/render/load.h"
 
 namespace sluice::stream {

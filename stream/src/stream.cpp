@@ -8,7 +8,8 @@
 #include <thread>
 
 #include "sluice/stream/demand.h"
-#include "sluice/render/error.h"
+#include "sluice/stream/live_source.h"
+#include "sluice/error.h"
 
 namespace sluice::stream {
 namespace {

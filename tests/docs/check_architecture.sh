@@ -19,5 +19,9 @@ while read -r named; do
   for h in "${headers[@]}"; do [[ "$h" == "$named" ]] && found=1; done
   [[ $found == 1 ]] || { echo "docs/architecture.md lists $named, which is no public header"; status=1; }
 done < <(grep -oE '`sluice/[a-z_]+(/[a-z_]+)?\.h`' "$page" | tr -d '`' | sort -u)
-[[ $status == 0 ]] && echo "docs/architecture.md lists the ${#headers[@]} public headers"
+# A host reads the public API in an hour (issue 46): at most 45 headers
+# outside bench; a new one goes in beside its kin or under internal/.
+outside=$(printf '%s\n' "${headers[@]}" | grep -vc '^sluice/bench/')
+if (( outside > 45 )); then echo "$outside public headers outside bench, more than 45"; status=1; fi
+[[ $status == 0 ]] && echo "docs/architecture.md lists the ${#headers[@]} public headers ($outside outside bench)"
 exit $status

@@ -14,8 +14,9 @@
 #include "bytes.h"
 #include "fuzz_chunk.h"
 #include "sluice/io/codec.h"
-#include "sluice/io/error.h"
+#include "sluice/error.h"
 #include "sluice/io/gpu_decode_plan.h"
+#include "sluice/io/gpu_decode_reference.h"
 
 using namespace sluice;
 

@@ -8,7 +8,7 @@
 #include <cstdint>
 #include <string>
 
-#include "sluice/io/error.h"
+#include "sluice/error.h"
 #include "sluice/io/maintenance.h"
 
 namespace {

@@ -7,7 +7,7 @@
 #include <fstream>
 #include <string>
 
-#include "sluice/io/error.h"
+#include "sluice/error.h"
 #include "sluice/import/source.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {

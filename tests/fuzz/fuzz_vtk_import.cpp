@@ -18,10 +18,10 @@
 #include <cstdio>
 
 #include "sluice/io/codec.h"
-#include "sluice/io/error.h"
+#include "sluice/error.h"
 #include "sluice/import/source.h"
 #include "sluice/io/lod.h"
-#include "sluice/io/spacing.h"
+#include "sluice/io/point_set.h"
 
 namespace {
 

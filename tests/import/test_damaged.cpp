@@ -29,7 +29,7 @@
 #include <string>
 #include <vector>
 
-#include "sluice/io/error.h"
+#include "sluice/error.h"
 #include "sluice/import/source.h"
 
 namespace fs = std::filesystem;

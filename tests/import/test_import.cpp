@@ -18,7 +18,7 @@
 #include <thread>
 #include <vector>
 
-#include "sluice/io/error.h"
+#include "sluice/error.h"
 #include "sluice/import/source.h"
 
 namespace fs = std::filesystem;

@@ -14,7 +14,7 @@
 #include "sluice/import/frames.h"
 #include "sluice/import/source.h"
 #include "sluice/io/maintenance.h"
-#include "sluice/io/outliers.h"
+#include "sluice/io/point_set.h"
 #include "sluice/io/reader.h"
 
 namespace test = sluice::test;

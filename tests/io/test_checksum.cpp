@@ -10,7 +10,7 @@
 #include <random>
 #include <vector>
 
-#include "sluice/io/checksum.h"
+#include "sluice/io/reader.h"
 
 #include "bytes.h"
 #include "checksum_paths.h"

@@ -9,7 +9,7 @@
 #include <map>
 
 #include "records.h"
-#include "sluice/io/checksum.h"
+#include "sluice/io/reader.h"
 #include "sluice/io/codec.h"
 #include "sluice/io/lod.h"
 #include "test_util.h"

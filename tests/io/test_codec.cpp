@@ -85,7 +85,7 @@ TEST(Dequantize, EndpointsAreExact) {
   EXPECT_NEAR(dequantize(65535, -2.5f, 7.f), 7.f, 1e-6f);
 }
 
-#include "sluice/io/spacing.h"
+#include "sluice/io/point_set.h"
 
 TEST(Spacing, LatticeSpacingIsFound) {
   std::vector<float> xyz;

@@ -28,7 +28,7 @@
 
 #include "frame_range.h"
 #include "sluice/import/frames.h"
-#include "sluice/io/error.h"
+#include "sluice/error.h"
 #include "sluice/io/export.h"
 #include "sluice/import/source.h"
 #include "sluice/import/vtk.h"

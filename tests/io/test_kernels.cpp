@@ -10,7 +10,7 @@
 #include "packed_plane.h"
 #include "quantized_unpack.h"
 #include "sluice/io/codec.h"
-#include "sluice/io/error.h"
+#include "sluice/error.h"
 
 using namespace sluice::io;
 

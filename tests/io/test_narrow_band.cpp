@@ -8,7 +8,7 @@
 #include <random>
 #include <vector>
 
-#include "sluice/io/error.h"
+#include "sluice/error.h"
 #include "sluice/io/narrow_band.h"
 
 namespace {

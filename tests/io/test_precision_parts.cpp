@@ -11,7 +11,7 @@
 #include <string>
 
 #include "records.h"
-#include "sluice/io/checksum.h"
+#include "sluice/io/reader.h"
 #include "sluice/io/codec.h"
 #include "test_util.h"
 

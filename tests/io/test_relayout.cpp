@@ -1,4 +1,4 @@
-// A .sluice file rewritten in another layout (io/relayout.h): the same
+// A .sluice file rewritten in another layout (io/maintenance.h): the same
 // particles, LOD values and attributes (positions within the stated bound,
 // float32 ones bit for bit), the header kept, damage a named error that
 // leaves no output.
@@ -9,7 +9,7 @@
 #include <map>
 
 #include "sluice/io/particles.h"
-#include "sluice/io/relayout.h"
+#include "sluice/io/maintenance.h"
 #include "test_util.h"
 
 using namespace sluice;

@@ -12,10 +12,9 @@
 #include <tuple>
 
 #include "records.h"
-#include "sluice/io/checksum.h"
+#include "sluice/io/reader.h"
 #include "sluice/io/codec.h"
 #include "sluice/io/lod.h"
-#include "sluice/io/reader.h"
 #include "sluice/io/writer.h"
 #include "test_util.h"
 

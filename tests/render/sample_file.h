@@ -10,7 +10,7 @@
 #include <string>
 
 #include "sluice/import/frames.h"
-#include "sluice/io/spacing.h"
+#include "sluice/io/point_set.h"
 #include "sluice/io/writer.h"
 
 namespace sluice::render::testing {

@@ -13,11 +13,11 @@
 #include <vector>
 
 #include "render_test_util.h"
-#include "sluice/render/error.h"
+#include "sluice/error.h"
 #include "sluice/bench/synth.h"
 #include "sluice/import/source.h"
 #include "sluice/io/narrow_band.h"
-#include "sluice/io/spacing.h"
+#include "sluice/io/point_set.h"
 #include "sluice/render/band_classifier.h"
 
 namespace sluice::render {

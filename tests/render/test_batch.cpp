@@ -8,7 +8,7 @@
 
 #include "render_test_util.h"
 #include "sample_file.h"
-#include "sluice/render/error.h"
+#include "sluice/error.h"
 #include "sluice/render/image_io.h"
 #include "sluice/render/load.h"
 #include "sluice/render/offscreen.h"

@@ -3,7 +3,7 @@
 
 #include <cmath>
 
-#include "sluice/render/error.h"
+#include "sluice/error.h"
 #include "sluice/render/camera.h"
 #include "sluice/render/lod.h"
 #include "sluice/render/options.h"

@@ -9,7 +9,7 @@
 #include <cmath>
 
 #include "render_test_util.h"
-#include "sluice/render/error.h"
+#include "sluice/error.h"
 #include "sluice/render/offscreen.h"
 #include "sluice/render/renderer.h"
 #include "sluice/render/staging_allocator.h"

@@ -11,7 +11,7 @@
 #include <fstream>
 
 #include "render_test_util.h"
-#include "sluice/render/error.h"
+#include "sluice/error.h"
 #include "sluice/render/image_io.h"
 #include "sluice/render/renderer.h"
 #include "sluice/render/synthetic.h"

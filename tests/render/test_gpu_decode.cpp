@@ -26,6 +26,7 @@
 #include "sluice/bench/synth.h"
 #include "sluice/io/codec.h"
 #include "sluice/io/gpu_decode_plan.h"
+#include "sluice/io/gpu_decode_reference.h"
 #include "sluice/import/source.h"
 #include "sluice/io/lod.h"
 #include "sluice/render/gpu_decoder.h"

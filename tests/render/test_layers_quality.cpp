@@ -17,7 +17,7 @@
 #include "sluice/bench/layers_bench.h"
 #include "sluice/import/frames.h"
 #include "sluice/import/source.h"
-#include "sluice/io/spacing.h"
+#include "sluice/io/point_set.h"
 #include "sluice/io/writer.h"
 
 namespace sluice {

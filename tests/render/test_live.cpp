@@ -10,7 +10,7 @@
 #include <random>
 
 #include "render_test_util.h"
-#include "sluice/render/error.h"
+#include "sluice/error.h"
 #include "sluice/render/inspection.h"
 #include "sluice/io/lod.h"
 #include "sluice/io/reader.h"

@@ -189,7 +189,7 @@ TEST_F(StreamedUpload, EncodedFromHostMemoryMatchesLoadFrame) {
   expect_same(streamed(reader, host, nullptr, true), expected);
 }
 
-// A resident window (relay.h): the frames' pieces go through the ring
+// A resident window (frame_allocator.h): the frames' pieces go through the ring
 // into device memory as they are read, planned chunk by chunk, and the
 // GPU decodes them there. The same pictures, every frame relayed.
 TEST_F(StreamedUpload, RelayedIntoDeviceMemoryMatchesLoadFrame) {

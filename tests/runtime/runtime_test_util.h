@@ -18,7 +18,7 @@
 #include <vector>
 
 #include "sluice/io/codec.h"
-#include "sluice/io/error.h"
+#include "sluice/error.h"
 #include "sluice/io/writer.h"
 #include "sluice/runtime/pipeline.h"
 

@@ -10,7 +10,6 @@
 
 #include "runtime_test_util.h"
 #include "sluice/runtime/budget.h"
-#include "sluice/runtime/window.h"
 
 using namespace sluice;
 using namespace sluice::runtime;

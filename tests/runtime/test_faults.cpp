@@ -15,7 +15,7 @@
 
 #include "failing_allocation.h"
 #include "runtime_test_util.h"
-#include "sluice/io/checksum.h"
+#include "sluice/io/reader.h"
 #include "sluice/runtime/player.h"
 
 using namespace sluice;

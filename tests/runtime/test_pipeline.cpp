@@ -12,8 +12,9 @@
 #include <thread>
 
 #include "runtime_test_util.h"
-#include "sluice/runtime/error.h"
+#include "sluice/error.h"
 #include "sluice/io/gpu_decode_plan.h"
+#include "sluice/io/gpu_decode_reference.h"
 #include "sluice/io/lod.h"
 #include "sluice/io/writer.h"
 #include "sluice/runtime/pipeline.h"

@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "read_crew.h"
-#include "sluice/runtime/error.h"
+#include "sluice/error.h"
 
 using sluice::runtime::detail::ReadCrew;
 

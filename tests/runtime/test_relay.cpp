@@ -1,4 +1,4 @@
-// The pipeline's relayed reads (runtime/relay.h) with the relay in host
+// The pipeline's relayed reads (runtime/frame_allocator.h) with the relay in host
 // memory: areas that stand where device memory would, filled by memcpy from
 // a ring of slots, several read threads at once. What the pipeline hands
 // over (the areas as filled, the plans made chunk by chunk as read) must
@@ -17,8 +17,9 @@
 #include "demand_test_util.h"
 #include "runtime_test_util.h"
 #include "sluice/io/gpu_decode_plan.h"
+#include "sluice/io/gpu_decode_reference.h"
 #include "sluice/runtime/pipeline.h"
-#include "sluice/runtime/relay.h"
+#include "sluice/runtime/frame_allocator.h"
 
 namespace sluice::runtime {
 namespace {

@@ -3,7 +3,7 @@
 
 #include <vector>
 
-#include "sluice/runtime/schedule.h"
+#include "sluice/runtime/clock.h"
 
 using namespace sluice::runtime;
 

@@ -6,7 +6,6 @@
 
 #include "sluice/xr/controls.h"
 #include "sluice/xr/placement.h"
-#include "sluice/xr/pose.h"
 
 namespace sluice::xr {
 namespace {

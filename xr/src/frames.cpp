@@ -4,7 +4,7 @@
 #include <stdexcept>
 
 #include "session_impl.h"
-#include "sluice/xr/error.h"
+#include "sluice/error.h"
 
 namespace sluice::xr {
 namespace {

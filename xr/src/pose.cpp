@@ -1,5 +1,5 @@
-// Quaternion and pose arithmetic (see pose.h).
-#include "sluice/xr/pose.h"
+// Quaternion and pose arithmetic (see placement.h).
+#include "sluice/xr/placement.h"
 
 #include <cmath>
 

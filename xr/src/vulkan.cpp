@@ -7,7 +7,7 @@
 #include <stdexcept>
 
 #include "session_impl.h"
-#include "sluice/xr/error.h"
+#include "sluice/error.h"
 
 namespace sluice::xr {
 namespace {

@@ -10,7 +10,7 @@
 //
 // Output: written to `output + ".partial"` and renamed to `output` when
 // complete, so a run cut off never leaves a file that looks whole. One
-// writer per output (io/output_lock.h): a second conversion into the same
+// writer per output (io/writer.h): a second conversion into the same
 // file stops with an error naming the first.
 //
 // Threads: convert() blocks its caller; the observer's functions run on one
@@ -27,13 +27,22 @@
 #include <string>
 #include <vector>
 
-#include "sluice/import/frames.h"
+#include "sluice/import/source.h"
+#include "sluice/io/codec.h"
 #include "sluice/import/isolation.h"
-#include "sluice/io/error.h"
+#include "sluice/error.h"
 #include "sluice/io/format.h"
 #include "sluice/io/narrow_band.h"
 
 namespace sluice::import {
+
+// A frame convert_frames() left out (ConvertOptions::skip_bad), and why.
+struct SkippedFrame {
+  uint64_t frame = 0;  // in the source
+  std::string name;    // the source's name of the frame (its files)
+  std::string error;   // the io::Error's full text
+};
+
 
 struct ConvertOptions {
   std::string input;  // file, glob, .pvd or directory

@@ -8,7 +8,7 @@
 // has a `.key` beside it listing the input files, sizes, times and the
 // conversion settings; a different key converts again. One process fills an
 // entry; another opening the same input meanwhile waits for it
-// (io/output_lock.h), then reuses it.
+// (io/writer.h), then reuses it.
 //
 // Threads: one call per input at a time in a process. Errors: io::Error and
 // ConvertStopped as convert() throws them, naming the input.

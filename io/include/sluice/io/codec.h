@@ -9,10 +9,10 @@
 #include <span>
 #include <vector>
 
-#include "sluice/io/error.h"
+#include "sluice/error.h"
 #include "sluice/io/format.h"
 #include "sluice/io/narrow_band.h"
-#include "sluice/io/outliers.h"
+#include "sluice/io/point_set.h"
 
 namespace sluice::io {
 
@@ -70,7 +70,7 @@ struct EncodedFrame {
   FrameHeader header;             // frame_number is patched by the writer
   std::vector<std::byte> record;  // header, chunk table, payloads
   uint64_t raw_bytes = 0;         // filtered size before zstd, for statistics
-  // Particles far outside the rest (outliers.h): in chunks of their own,
+  // Particles far outside the rest (point_set.h): in chunks of their own,
   // outside header.bounds.
   FarReport far;
 };

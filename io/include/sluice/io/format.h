@@ -1,4 +1,4 @@
-// sluice/io/format.h: the `.sluice` container, version 1 (docs/format.md).
+// sluice/io/format.h: the `.sluice` container, (docs/format.md).
 //
 // These are the in-memory forms of the on-disk records. They are parsed from
 // and written to bytes explicitly (little-endian), never memcpy'd, so every
@@ -6,15 +6,59 @@
 #pragma once
 
 #include <array>
+#include <cstddef>
 #include <cstdint>
 #include <string>
 #include <vector>
 
-#include "sluice/io/inline_vector.h"
+#include "sluice/error.h"
 #include "sluice/io/types.h"
 #include "sluice/io/up_axis.h"
 
 namespace sluice::io {
+
+// InlineVector: a vector of at most N elements held inline, for
+// the per-chunk and per-frame lists whose size a format limit bounds
+// (attributes: 32), so that filling them again never allocates.
+
+template <class T, size_t N>
+class InlineVector {
+ public:
+  size_t size() const { return count_; }
+  bool empty() const { return count_ == 0; }
+  static constexpr size_t capacity() { return N; }
+  // Throws io::Error beyond N.
+  void resize(size_t n, const T& value = T{}) {
+    if (n > N) throw io::Error({}, "InlineVector: more than its capacity");
+    for (size_t i = count_; i < n; ++i) items_[i] = value;
+    count_ = n;
+  }
+  void assign(size_t n, const T& value) {
+    count_ = 0;
+    resize(n, value);
+  }
+  void clear() { count_ = 0; }
+  template <class... Args>
+  T& emplace_back(Args&&... args) {
+    if (count_ == N) throw io::Error({}, "InlineVector: more than its capacity");
+    items_[count_] = T(static_cast<Args&&>(args)...);
+    return items_[count_++];
+  }
+  void push_back(const T& value) { emplace_back(value); }
+  T& operator[](size_t i) { return items_[i]; }
+  const T& operator[](size_t i) const { return items_[i]; }
+  T* begin() { return items_.data(); }
+  T* end() { return items_.data() + count_; }
+  const T* begin() const { return items_.data(); }
+  const T* end() const { return items_.data() + count_; }
+  T* data() { return items_.data(); }
+  const T* data() const { return items_.data(); }
+
+ private:
+  std::array<T, N> items_{};
+  size_t count_ = 0;
+};
+
 
 // Format 2.0 orders each frame coarse to fine (docs/format.md, "Layout of a
 // frame"); 3.0 also stores each record's positions in two parts, the fine
@@ -202,7 +246,7 @@ struct FrameHeader {
   double time = 0.0;             // simulation time, seconds
   uint64_t particle_count = 0;
   // The frame's display bounds: every particle's box but for far particles
-  // (format 1.5, outliers.h), which lie in chunks of their own outside it.
+  // (format 1.5, point_set.h), which lie in chunks of their own outside it.
   // Cameras frame it; chunk boxes, not this, bound what is drawn.
   Aabb bounds;
   // Format 1.3: side of the voxels whose blobs the Blobs chunks hold (world

@@ -24,7 +24,7 @@
 #include <vector>
 
 #include "sluice/io/codec.h"
-#include "sluice/io/error.h"
+#include "sluice/error.h"
 #include "sluice/io/format.h"
 
 namespace sluice::io {
@@ -162,11 +162,5 @@ inline uint64_t table_block_bytes(const GpuDecodePlan& plan) {
   return plan.chunks.size() * sizeof(GpuChunkPlan) + plan.tile_chunk.size() * 4;
 }
 void write_table_block(const GpuDecodePlan& plan, std::span<std::byte> out);
-
-// The CPU's reference for what the GPU decodes from a plan: particles
-// (8 bytes each) and the colour attribute, bit for bit what decode_chunk
-// writes. For tests of the plan and the kernels.
-void decode_plan_on_cpu(std::span<const std::byte> encoded, const GpuDecodePlan& plan, std::span<uint64_t> particles,
-                        std::span<uint16_t> attribute);
 
 }  // namespace sluice::io

@@ -63,23 +63,11 @@ struct ParticleScratch {
   uint64_t decoded_bytes = 0;
   std::vector<std::vector<uint16_t>> streams;
 };
-// The same into `out` (its memory reused, as particles_into()) with
-// `scratch`.
+// The same into `out`, reusing its vectors' memory (a caller reading frame
+// after frame hands back the last frame's arrays, so no page is faulted in
+// or cleared again while sizes stay alike), with `scratch`.
 void read_particles(const ContainerReader& reader, uint64_t frame, const ParticleQuery& query, ParticleArrays& out,
                     ParticleScratch& scratch);
-
-// A frame already decoded (a pipeline's buffers, a DecodedFrame), converted
-// into `out`, reusing its vectors' memory (a caller converting frame after
-// frame hands back the last frame's arrays, so no page is faulted in or
-// cleared again while sizes stay alike): `header` holds the chunks that
-// were decoded, `chunk_first` their first particles, `particles`
-// decoded_particle_bytes(file coding) per particle, and
-// `attribute_streams[i]` the quantized values of query.attributes[i] (one
-// per particle). Applies the query's LOD level; its layers are not applied
-// again.
-void particles_into(const FrameHeader& header, std::span<const uint64_t> chunk_first, std::span<const std::byte> particles,
-                    std::span<const std::span<const uint16_t>> attribute_streams, const FileHeader& file,
-                    const ParticleQuery& query, ParticleArrays& out);
 
 // A frame's particles in world units in memory someone else owns (a
 // pipeline's frame buffer, the vectors of a ParticleArrays): `count`

@@ -1,4 +1,5 @@
-// sluice/io/reader.h: random access to a `.sluice` file.
+// sluice/io/reader.h: random access to a `.sluice` file, and the chunk
+// checksum for readers that check chunks themselves.
 //
 // Opening reads the header and the frame index (found through the footer), so
 // seeking to any frame costs one read. Every size in the file is checked
@@ -8,6 +9,8 @@
 // (reads use pread on a shared descriptor).
 #pragma once
 
+#include <cstddef>
+#include <cstdint>
 #include <filesystem>
 #include <span>
 #include <string>
@@ -91,5 +94,26 @@ DecodedFrame decode_frame(const ContainerReader& reader, uint64_t frame, LayerSe
 std::vector<float> world_positions(const DecodedFrame& frame, PositionCoding coding);
 // LOD value of every particle of a decoded frame.
 std::vector<uint16_t> lod_values_of(const DecodedFrame& frame, PositionCoding coding);
+
+// Checksums: the chunk checksum (XXH3-64 of a chunk's payload,
+// the value ChunkDesc::checksum holds), for readers that check chunks
+// themselves as they bring them in.
+
+// XXH3-64 of `payload`, with the widest vectors the CPU has. Any thread.
+uint64_t chunk_checksum(std::span<const std::byte> payload);
+
+// Copies one block: `n` bytes from src to dst (the caller's copy: streaming
+// stores, a copy that catches SIGBUS, ...).
+using BlockCopy = void (*)(std::byte* dst, const std::byte* src, size_t n, void* context);
+
+// chunk_checksum() of the n bytes at src, computed while they are copied to
+// dst: `copy` is called for consecutive blocks of at most kChecksumBlock
+// bytes, in order, and each block of src is hashed right after its copy,
+// while the cache still holds it, so that the bytes come from memory once.
+// The value is that of the bytes hashed (src as read after each block's
+// copy). Any thread; no allocation. `copy` may leave by longjmp (nothing
+// here needs unwinding).
+inline constexpr size_t kChecksumBlock = 32 << 10;
+uint64_t copy_and_checksum(std::byte* dst, const std::byte* src, size_t n, BlockCopy copy, void* context);
 
 }  // namespace sluice::io

@@ -1,4 +1,6 @@
-// sluice/io/writer.h: writes a `.sluice` file frame by frame.
+// sluice/io/writer.h: writes a `.sluice` file frame by frame; the parts of
+// one that several writers lay out at once (MPI: assembly below); one
+// writer per output (OutputLock).
 //
 // Memory: the writer holds one index entry per frame (96 bytes) and nothing
 // else; frames are written as they are appended. A writer destroyed without
@@ -9,8 +11,14 @@
 // encode_frame(), then append them here in order.
 #pragma once
 
+#include <cstddef>
 #include <filesystem>
+#include <functional>
+#include <span>
+#include <string>
+#include <vector>
 
+#include "sluice/error.h"
 #include "sluice/io/codec.h"
 #include "sluice/io/format.h"
 
@@ -51,6 +59,55 @@ class ContainerWriter {
   IndexBuilder index_;
   int fd_ = -1;
   uint64_t offset_ = 0;
+};
+
+// Assembly: a `.sluice` file laid out by several writers at once
+// (an MPI conversion: each process writes its own frames' records where an
+// exclusive scan of the record sizes puts them). These are the bytes of each
+// part, exactly those ContainerWriter writes, so a file assembled from them
+// is byte for byte the one ContainerWriter would have written.
+//
+// Layout: head at offset 0; records one after another from head's size, in
+// frame order, each numbered with set_frame_number (codec.h); tail right
+// after the last record. Threads: plain functions, thread-safe.
+
+// The file header and its copy: the file's first bytes.
+std::vector<std::byte> container_head(const FileHeader& header);
+// The header back from container_head's bytes (or a file's first bytes).
+// Throws io::Error naming `where` when they do not hold one.
+FileHeader parse_container_head(std::span<const std::byte> head, const ErrorLocation& where = {});
+
+// The frame index and footer, written at `at`: the end of the last record.
+std::vector<std::byte> container_tail(const FrameIndex& index, size_t attribute_count, uint64_t at);
+
+// OutputLock: one writer per output.
+//
+// Two `sluice convert`s to one file, or two players filling one cache
+// entry, would otherwise write the same `.partial` and rename each other's
+// half-written bytes. A writer holds an OutputLock on its output for as
+// long as it writes (until the rename): an exclusive flock(2) on
+// `OUTPUT.lock`, which holds the holder's process id for the error message
+// and is removed on release. The lock is advisory (other programs are not
+// stopped) and dies with its process, so a crash never leaves it held.
+
+class OutputLock {
+ public:
+  enum class Wait { No, Yes };
+  // Takes the lock on `output`. Wait::No: throws io::Error naming `output`
+  // and the holder's process id when another holds it. Wait::Yes: blocks
+  // until the holder releases it, calling `on_wait(pid)` once first (pid 0
+  // when unknown). Throws io::Error when the lock file cannot be created.
+  explicit OutputLock(const std::filesystem::path& output, Wait wait = Wait::No,
+                      const std::function<void(const std::filesystem::path& output, long pid)>& on_wait = {});
+  ~OutputLock();  // removes the lock file and releases the lock
+  OutputLock(const OutputLock&) = delete;
+  OutputLock& operator=(const OutputLock&) = delete;
+
+  const std::filesystem::path& path() const { return path_; }  // OUTPUT.lock
+
+ private:
+  std::filesystem::path path_;
+  int fd_ = -1;
 };
 
 }  // namespace sluice::io

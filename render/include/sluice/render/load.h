@@ -11,7 +11,7 @@
 #include <cstdint>
 #include <span>
 
-#include "sluice/io/error.h"
+#include "sluice/error.h"
 #include "sluice/io/format.h"
 #include "sluice/render/renderer.h"
 

@@ -11,7 +11,7 @@
 //
 // With a resident window (StagingOptions::resident), frames kept encoded
 // live in device memory instead, filled through a small ring of staging
-// slots as they are read (runtime/relay.h): relay() offers the ring, and a
+// slots as they are read (runtime/frame_allocator.h): relay() offers the ring, and a
 // pipeline kept encoded uses it for every frame it reads in place. The
 // window then costs device memory (device_budget() plans it), and the host
 // holds the ring only.
@@ -19,7 +19,7 @@
 // Ownership: borrows the Context, which must outlive it (and every frame it
 // handed out). Threads: allocate()/release() as runtime::FrameAllocator says
 // (one thread at a time); the counters and device_budget() from any thread;
-// the relay as relay.h says (it submits on the context's relay queue: see
+// the relay as frame_allocator.h says (it submits on the context's relay queue: see
 // context.h, "Queues").
 #pragma once
 

@@ -18,7 +18,7 @@
 #include <span>
 #include <vector>
 
-#include "sluice/io/error.h"
+#include "sluice/error.h"
 #include "sluice/io/format.h"
 #include "sluice/io/gpu_decode_plan.h"
 #include "sluice/render/context.h"

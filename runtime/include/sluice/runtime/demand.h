@@ -11,7 +11,7 @@
 // per-particle test can keep from it, for any view the margin allows.
 //
 // A plain value type and pure functions: the renderer builds a demand from
-// its views and options (render/demand.h), the pipeline applies it to every
+// its views and options (stream/src/demand.cpp), the pipeline applies it to every
 // frame it reads (Pipeline::set_demand), tests compare both with the cull.
 #pragma once
 
@@ -20,7 +20,6 @@
 #include <vector>
 
 #include "sluice/io/format.h"
-#include "sluice/io/inline_vector.h"
 
 namespace sluice::runtime {
 

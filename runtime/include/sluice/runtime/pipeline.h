@@ -11,7 +11,7 @@
 //        └──────────── return ring (SPSC) <───────┘ release
 //
 // The reader fetches the entries of a PlaybackSchedule in order, as far
-// ahead as the prefetch window allows (window.h); it blocks, never spins,
+// ahead as the prefetch window allows (budget.h); it blocks, never spins,
 // when the window is full. Frames the consumer released stay decoded behind
 // the playhead (a quarter of the window is kept for them) so reversing and
 // scrubbing back find them at once. restart() starts a new schedule under a
@@ -31,20 +31,35 @@
 #include <memory>
 #include <optional>
 #include <span>
+#include <string>
 #include <vector>
 
+#include "sluice/error.h"
 #include "sluice/io/gpu_decode_plan.h"
 #include "sluice/io/reader.h"
 #include "sluice/runtime/budget.h"
+#include "sluice/runtime/clock.h"
 #include "sluice/runtime/demand.h"
 #include "sluice/runtime/frame_allocator.h"
-#include "sluice/runtime/frame_error.h"
 #include "sluice/runtime/record_source.h"
-#include "sluice/runtime/schedule.h"
 #include "sluice/runtime/stats.h"
-#include "sluice/runtime/window.h"
 
 namespace sluice::runtime {
+
+// FrameError: a frame that could not be delivered.
+
+// Why a frame failed: a read error or a file that ends early, a corrupt frame
+// header, a corrupt chunk, or no memory for its buffers. `where` names the
+// file and frame, and the chunk when one chunk was bad.
+struct FrameError {
+  io::ErrorLocation where;
+  std::string message;  // what went wrong, without the location
+
+  // "FILE: frame F, chunk C: message"
+  std::string text() const;
+  static FrameError from(const io::Error& e) { return {e.where(), e.message()}; }
+};
+
 
 struct WindowChange {
   uint32_t previous_frames = 0;  // 0 for the first plan
@@ -79,7 +94,7 @@ enum class DecodeMode : uint8_t {
   // copy its payload into the frame's buffer and inflate its zstd planes
   // there (nothing for files written for the GPU); the buffer ends with the
   // chunk plans. Needs io::gpu_decodable(file) (the constructor throws
-  // io::Error otherwise). When the allocator offers a relay (relay.h) and
+  // io::Error otherwise). When the allocator offers a relay (frame_allocator.h) and
   // reads are buffered, frames are relayed instead: their areas are
   // resident (device memory), filled as the read threads read, checked and
   // planned chunk by chunk, with no worker pass; FrameHandle::layout().resident

@@ -119,7 +119,6 @@ class Player {
   EndMode end_mode() const { return end_; }
   uint64_t frame_count() const { return frame_count_; }
   double frame_rate() const { return clock_state_.frames_per_second(); }
-  std::optional<uint64_t> shown_frame() const;
   const FrameHandle* shown() const { return shown_.empty() ? nullptr : &shown_; }  // the frame on screen, if any
   const PlaybackSchedule& schedule() const { return schedule_; }
   Pipeline& pipeline() { return pipeline_; }

@@ -22,7 +22,7 @@ enum class AccessPattern : uint8_t { Sequential, Random };
 // How a copy out of the page cache writes its destination. Streaming: past
 // the CPU's caches (the destination is read much later: a window of frames
 // in staging). Cached: plain stores that leave it in the cache (the GPU
-// copies it soon after: a small ring, runtime/relay.h).
+// copies it soon after: a small ring, runtime/frame_allocator.h).
 enum class Stores : uint8_t { Streaming, Cached };
 
 // Threads: read_at() may be called from several of the pipeline's read

@@ -43,7 +43,7 @@ struct PipelineStats {
   // Kept-encoded frames read straight into their staged area and staged
   // there (no copy on the CPU; DecodeMode::KeepEncoded).
   uint64_t frames_in_place = 0;
-  // ... of which relayed to device memory as read (runtime/relay.h).
+  // ... of which relayed to device memory as read (runtime/frame_allocator.h).
   uint64_t frames_relayed = 0;
   // Where the read threads' time on relayed frames went, summed over the
   // threads: waiting for a ring slot (claim), copying into it, checking the

@@ -13,7 +13,7 @@
 // instead of update(): it returns once that frame is the one record() draws.
 //
 // Reading by the view: a file with layers is read with only the LOD tiers
-// of the cells the views can keep (render/demand.h); set the look and the
+// of the cells the views can keep (stream/src/demand.cpp); set the look and the
 // first views before the first update() (or player()) so that even the
 // first frames are read for them. Files without layers, LayerSet
 // particles() and LOD off are read whole.
@@ -21,7 +21,7 @@
 // Queues: with StreamOptions::queue_lock HostTakesIt the host submits to
 // the context's queues under render::Context::queue_lock() (desktop::Window does),
 // and frames the GPU decodes are relayed to device memory as they are read
-// (runtime/relay.h); with HostDoesNot they are relayed only where the relay
+// (runtime/frame_allocator.h); with HostDoesNot they are relayed only where the relay
 // has a queue of its own. Each update() that commits a frame submits a copy
 // (the transfer queue, the graphics queue without one) and, for frames the
 // GPU decodes, a compute pass on the graphics queue: call update() on the
@@ -39,17 +39,46 @@
 #include <span>
 #include <vector>
 
+#include "sluice/io/codec.h"
 #include "sluice/io/reader.h"
 #include "sluice/render/context.h"
-#include "sluice/stream/frame_feed.h"
-#include "sluice/stream/live_source.h"
 #include "sluice/render/options.h"
 #include "sluice/render/renderer.h"
 #include "sluice/render/staging_allocator.h"
 #include "sluice/runtime/clock.h"
 #include "sluice/runtime/player.h"
+#include "sluice/stream/frame_feed.h"
 
 namespace sluice::stream {
+
+// A frame a host computed (Stream::push): positions and optional stable ids
+// and attributes, turned into exactly what a file frame is (LOD values from
+// the ids, chunks in Morton order, positions quantized per chunk, as `sluice
+// convert` does) and drawn with the same cLOD. Borrowed for the call.
+struct LiveFrame {
+  std::span<const float> positions;                // x,y,z interleaved, finite
+  std::span<const uint64_t> ids;                   // one stable id per particle (LiveOptions::ids), else empty
+  std::vector<std::span<const float>> attributes;  // one per scene attribute (or none), one value per particle
+  double time = 0;                                 // simulation time in seconds
+};
+
+struct LiveOptions {
+  // Written into the recording's header: rest spacing and render radius
+  // (0: unknown), nominal frame rate, and the attributes' names.
+  float particle_spacing = 0, particle_radius = 0, frame_rate = 0;
+  // Which world direction points up (the scene's up and the recording's;
+  // a host drawing its own ground passes render::FluidOptions::ground = false).
+  io::UpAxis up = io::UpAxis::PosZ;
+  std::vector<std::string> attributes;
+  int color_attribute = -1;             // which attribute the renderer colours by (-1: none)
+  bool ids = true;                      // frames carry stable ids; false: LOD values follow the particle index
+  std::filesystem::path record;         // empty: not recorded
+  // Chunk size; zstd level and plane packing of the recording (frames not
+  // recorded are not compressed: only decoded at once).
+  io::EncodeOptions encode{.chunk_particles = 65536, .zstd_level = 1};
+};
+
+class LiveSource;  // frames pushed: stream/src
 
 // Whether the host submits to the context's queues under render::Context::queue_lock().
 enum class QueueLock { HostTakesIt, HostDoesNot };

@@ -19,7 +19,6 @@
 #include <cstdint>
 
 #include "sluice/xr/placement.h"
-#include "sluice/xr/pose.h"
 
 namespace sluice::xr {
 

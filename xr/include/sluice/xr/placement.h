@@ -1,5 +1,6 @@
-// sluice/xr/placement.h: where the data stands in the room, and each eye's
-// view of it as the renderer takes it (render::View). Plain functions.
+// sluice/xr/placement.h: poses as OpenXR gives them, where the data stands in
+// the room, and each eye's view of it as the renderer takes it
+// (render::View). Plain functions.
 //
 // Units: the room (an OpenXR reference space) is in metres, +y up; the data
 // keeps its own units. A Placement maps data to room:
@@ -12,10 +13,45 @@
 #pragma once
 
 #include "sluice/render/frame.h"
+#include "sluice/render/math.h"
 #include "sluice/render/renderer.h"
-#include "sluice/xr/pose.h"
 
 namespace sluice::xr {
+
+// Poses: rigid poses (a rotation and a position) as OpenXR gives
+// them, and the little arithmetic the controls and the eye views need. Plain
+// values; no OpenXR or Vulkan here, so it is cheap to test.
+//
+// Conventions are OpenXR's: right-handed, +y up, a pose maps points of its
+// own frame into its parent's (p_parent = rotate(orientation, p) + position).
+
+using render::Mat4;
+using render::Vec3;
+
+// A unit quaternion (x, y, z vector part, w scalar part), as XrQuaternionf.
+struct Quat {
+  float x = 0, y = 0, z = 0, w = 1;
+};
+
+Quat operator*(Quat a, Quat b);  // a after b
+Quat conjugate(Quat q);
+Quat normalize(Quat q);          // the identity for a zero quaternion
+Vec3 rotate(Quat q, Vec3 v);
+// Rotation by `radians` about `axis` (normalized here; identity for a zero axis).
+Quat axis_angle(Vec3 axis, float radians);
+// The shortest rotation taking direction `from` to direction `to`.
+Quat rotation_between(Vec3 from, Vec3 to);
+
+struct Pose {
+  Quat orientation;
+  Vec3 position;
+};
+
+Pose operator*(const Pose& a, const Pose& b);  // a after b: (a*b)(p) = a(b(p))
+Pose inverse(const Pose& p);
+Vec3 transform(const Pose& pose, Vec3 point);
+Mat4 to_matrix(const Pose& pose);
+
 
 struct Placement {
   Pose pose;

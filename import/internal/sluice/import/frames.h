@@ -10,8 +10,9 @@
 #include <vector>
 
 #include "sluice/io/codec.h"
+#include "sluice/import/convert.h"
 #include "sluice/import/source.h"
-#include "sluice/io/outliers.h"
+#include "sluice/io/point_set.h"
 #include "sluice/io/up_axis.h"
 #include "sluice/io/writer.h"
 
@@ -40,15 +41,9 @@ struct FramesSettings {
   // FramesResult::skipped instead of stopping the conversion.
   bool skip_bad = false;
   // > 0: particles more than this far (world units) outside their frame's
-  // core box (outliers.h) are left out before the frame is measured and
+  // core box (point_set.h) are left out before the frame is measured and
   // encoded, and reported as dropped.
   float drop_far = 0;
-};
-
-struct SkippedFrame {
-  uint64_t frame = 0;  // in the source
-  std::string name;    // the source's name of the frame (its files)
-  std::string error;   // the io::Error's full text
 };
 
 struct FramesResult {

@@ -1,5 +1,6 @@
-// sluice/stream/live_source.h: frames a host pushes from its own memory (a
-// simulation running beside the viewer) instead of reading them from a file.
+// sluice/stream/live_source.h (internal to stream): frames a host pushes
+// from its own memory (a simulation running beside the viewer) instead of
+// reading them from a file; a host pushes them through Stream::push().
 //
 // push() takes positions as float32 x,y,z in any order, optional stable ids
 // and attributes, and turns them into exactly what a file frame is: LOD
@@ -23,35 +24,13 @@
 
 #include "sluice/io/codec.h"
 #include "sluice/render/renderer.h"
+#include "sluice/stream/stream.h"
 
 namespace sluice::io {
 class ContainerWriter;
 }
 
 namespace sluice::stream {
-
-struct LiveFrame {
-  std::span<const float> positions;                // x,y,z interleaved, finite
-  std::span<const uint64_t> ids;                   // one stable id per particle (LiveOptions::ids), else empty
-  std::vector<std::span<const float>> attributes;  // one per scene attribute (or none), one value per particle
-  double time = 0;                                 // simulation time in seconds
-};
-
-struct LiveOptions {
-  // Written into the recording's header: rest spacing and render radius
-  // (0: unknown), nominal frame rate, and the attributes' names.
-  float particle_spacing = 0, particle_radius = 0, frame_rate = 0;
-  // Which world direction points up (the scene's up and the recording's;
-  // a host drawing its own ground passes render::FluidOptions::ground = false).
-  io::UpAxis up = io::UpAxis::PosZ;
-  std::vector<std::string> attributes;
-  int color_attribute = -1;             // which attribute the renderer colours by (-1: none)
-  bool ids = true;                      // frames carry stable ids; false: LOD values follow the particle index
-  std::filesystem::path record;         // empty: not recorded
-  // Chunk size; zstd level and plane packing of the recording (frames not
-  // recorded are not compressed: only decoded at once).
-  io::EncodeOptions encode{.chunk_particles = 65536, .zstd_level = 1};
-};
 
 // The render::SceneInfo to make the render::Renderer with for live frames inside `bounds`.
 render::SceneInfo live_scene(const render::Bounds& bounds, const LiveOptions& options,
