@@ -1,6 +1,5 @@
 // Camera interactions and its text form (see camera.h).
 #include "sluice/render/camera.h"
-#include "sluice/render/options.h"
 #include "sluice/error.h"
 
 #include <algorithm>

@@ -89,4 +89,11 @@ Mat4 perspective_reverse_z(float fov_y, float aspect, float near) {
   return m;
 }
 
+void frame_across(Vec3 up, Vec3& a, Vec3& b) {
+  const Vec3 u = normalize(up);
+  const Vec3 seed = std::abs(u.x) < 0.9f ? Vec3{1, 0, 0} : Vec3{0, 1, 0};
+  a = normalize(seed - u * dot(u, seed));
+  b = cross(u, a);
+}
+
 }  // namespace sluice::render

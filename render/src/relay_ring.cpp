@@ -4,15 +4,14 @@
 
 #include <stdexcept>
 
-#include "staging_block.h"
 #include "sluice/error.h"
 
 namespace sluice::render {
 
 void RelayRing::Unmap::operator()(void* p) const { ::munmap(p, bytes); }
 
-RelayRing::RelayRing(const detail::ContextImpl& ctx, uint32_t slots, uint64_t piece_bytes, bool import)
-    : ctx_(ctx), piece_bytes_(piece_bytes), slots_(slots) {
+RelayRing::RelayRing(const detail::ContextImpl& ctx, uint32_t slots, uint64_t piece_bytes, bool import, AreaOf area_of)
+    : ctx_(ctx), area_of_(area_of), piece_bytes_(piece_bytes), slots_(slots) {
   const uint64_t bytes = uint64_t(slots) * piece_bytes;
   const uint64_t align = import ? host_import_alignment(ctx) : 0;  // 0: the device cannot import
   if (align > 0) {
@@ -105,7 +104,7 @@ void RelayRing::give_back(std::span<std::byte> piece) { put_back(slot_of(piece))
 void RelayRing::send(std::span<std::byte> piece, const runtime::FrameBuffers& frame, std::span<const Range> ranges) {
   const uint32_t s = slot_of(piece);
   Slot& slot = slots_[s];
-  ResidentArea& area = *staging_memory_of(frame).area;
+  ResidentArea& area = area_of_(frame);
   try {
     thread_local std::vector<vk::BufferCopy> regions;
     regions.clear();

@@ -37,10 +37,12 @@ struct ResidentArea {
 
 class RelayRing final : public runtime::PieceRelay {
  public:
+  // The resident area of a frame's buffers (their allocator knows it).
+  using AreaOf = ResidentArea& (*)(const runtime::FrameBuffers& frame);
   // `slots` slots of `piece_bytes` each, in anonymous memory the device
   // imports when `import` and it can (imported()), else in the driver's.
   // Throws vk::SystemError when the memory cannot be had.
-  RelayRing(const detail::ContextImpl& ctx, uint32_t slots, uint64_t piece_bytes, bool import);
+  RelayRing(const detail::ContextImpl& ctx, uint32_t slots, uint64_t piece_bytes, bool import, AreaOf area_of);
   ~RelayRing() override;  // waits for the copies in flight
   RelayRing(const RelayRing&) = delete;
   RelayRing& operator=(const RelayRing&) = delete;
@@ -67,6 +69,7 @@ class RelayRing final : public runtime::PieceRelay {
   void put_back(uint32_t slot);
 
   const detail::ContextImpl& ctx_;
+  AreaOf area_of_;
   uint64_t piece_bytes_;
   // Host memory the ring's buffer imports, unmapped after memory_ is freed
   // (members go in reverse order); null when memory_ is the driver's own.

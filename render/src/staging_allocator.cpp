@@ -35,7 +35,7 @@ class StagingAllocator::HeapBudget final : public runtime::DeviceMemoryBudget {
   uint64_t available_bytes() const override {
     if (!context_impl(context_).memory_budget) return context_.heap_available_bytes(heap_);
     const uint64_t in_heap = resident_ ? owner_.resident_pool_->held_bytes()
-                                       : owner_.pool_->held_where([](const Memory& m) { return !m.host; });
+                                       : owner_.pool_->held_where([](const StagingBlock& m) { return !m.host; });
     return context_.heap_available_bytes(heap_) + in_heap;
   }
 
@@ -47,6 +47,9 @@ class StagingAllocator::HeapBudget final : public runtime::DeviceMemoryBudget {
 };
 
 namespace {
+
+// The resident area of buffers this allocator handed out (the ring's AreaOf).
+ResidentArea& resident_area_of(const runtime::FrameBuffers& frame) { return *staging_memory_of(frame).area; }
 
 uint32_t heap_with(const detail::ContextImpl& c, vk::MemoryPropertyFlags props) {
   for (uint32_t t = 0; t < c.memory.memoryTypeCount; ++t) {
@@ -66,7 +69,7 @@ uint32_t default_ring_slots() {
 }  // namespace
 
 StagingAllocator::StagingAllocator(Context& context, const StagingOptions& options)
-    : context_(context), options_(options), pool_(std::make_unique<Pool>()), resident_pool_(std::make_unique<Pool>()) {
+    : context_(context), options_(options), pool_(std::make_unique<StagingPool>()), resident_pool_(std::make_unique<StagingPool>()) {
   const detail::ContextImpl& c = context_impl(context);
   heap_ = heap_with(c, kStagingProps);
   device_heap_ = bool(c.memory.memoryHeaps[heap_].flags & vk::MemoryHeapFlagBits::eDeviceLocal);
@@ -74,7 +77,7 @@ StagingAllocator::StagingAllocator(Context& context, const StagingOptions& optio
   if (options_.resident) {
     const uint32_t slots = options_.ring_slots > 0 ? options_.ring_slots : default_ring_slots();
     ring_ = std::make_unique<RelayRing>(c, slots, std::max<uint64_t>(options_.ring_piece_bytes, 4096),
-                                        options_.ring_memory == RingMemory::Imported);
+                                        options_.ring_memory == RingMemory::Imported, resident_area_of);
     budget_ = std::make_unique<HeapBudget>(context, *this, device_local_heap_, true);
   } else if (device_heap_) {
     budget_ = std::make_unique<HeapBudget>(context, *this, heap_, false);
@@ -116,8 +119,8 @@ runtime::FrameBuffers StagingAllocator::allocate(const runtime::FrameLayout& lay
   if (layout.resident) {
     if (!ring_) throw Error("StagingAllocator: a resident frame asked of an allocator without a resident window");
     const detail::ContextImpl& c = context_impl(context_);
-    Pool::Block& block = resident_pool_->acquire(resident_bytes(layout), [&](uint64_t need) {
-      Memory m;
+    StagingPool::Block& block = resident_pool_->acquire(resident_bytes(layout), [&](uint64_t need) {
+      StagingBlock m;
       m.area = std::make_unique<ResidentArea>(
           *ring_, create_buffer(c, need,
                                 vk::BufferUsageFlagBits::eStorageBuffer | vk::BufferUsageFlagBits::eShaderDeviceAddress |
@@ -132,8 +135,8 @@ runtime::FrameBuffers StagingAllocator::allocate(const runtime::FrameLayout& lay
     return out;
   }
   const runtime::BlockLayout at = runtime::block_layout(layout, kAlignment);
-  Pool::Block& block = pool_->acquire(at.bytes, [&](uint64_t need) {
-    Memory m;
+  StagingPool::Block& block = pool_->acquire(at.bytes, [&](uint64_t need) {
+    StagingBlock m;
     try {
       // Encoded frames are read into the block and their checksums read back.
       m.staging = create_buffer(context_impl(context_), need, vk::BufferUsageFlagBits::eTransferSrc,
@@ -154,7 +157,7 @@ runtime::FrameBuffers StagingAllocator::allocate(const runtime::FrameLayout& lay
 
 void StagingAllocator::release(runtime::FrameBuffers& buffers) {
   if (!buffers.tag) return;
-  Pool::Block& block = *reinterpret_cast<Pool::Block*>(static_cast<uintptr_t>(buffers.tag));
+  StagingPool::Block& block = *reinterpret_cast<StagingPool::Block*>(static_cast<uintptr_t>(buffers.tag));
   (block.memory.resident() ? *resident_pool_ : *pool_).release(block);
   buffers = {};
 }
@@ -165,7 +168,7 @@ FrameUpload frame_upload(const runtime::FrameHandle& frame, int color_attribute,
     throw Error("commit: a frame converted to world units (DecodeMode::World) is for array consumers, not the renderer");
   }
   const runtime::FrameBuffers& buffers = frame.buffers();
-  const StagingAllocator::Memory* block = from ? &staging_memory(buffers) : nullptr;
+  const StagingBlock* block = from ? &staging_memory(buffers) : nullptr;
   const bool vulkan = block && !block->host;  // else a host fallback: copied through the renderer's staging
   FrameUpload u;
   u.header = &frame.header();

@@ -1,5 +1,5 @@
-// Internal: the memory of one frame block handed out by StagingAllocator,
-// shared with upload.cpp, which copies from it.
+// Internal: the memory of one frame block handed out by StagingAllocator
+// (staging_allocator.cpp), and how to find it from the buffers handed out.
 #pragma once
 
 #include <atomic>
@@ -7,13 +7,12 @@
 #include <memory>
 
 #include "relay_ring.h"
-#include "sluice/render/staging_allocator.h"
 #include "sluice/runtime/frame_allocator.h"
 #include "vk_common.h"
 
 namespace sluice::render {
 
-struct StagingAllocator::Memory {
+struct StagingBlock {
   struct Free {
     void operator()(std::byte* p) const { std::free(p); }
   };
@@ -27,14 +26,14 @@ struct StagingAllocator::Memory {
   std::byte* data() const { return host ? host.get() : static_cast<std::byte*>(staging.mapped); }
 };
 
-class StagingAllocator::Pool : public runtime::BlockPool<Memory> {};
+class StagingPool : public runtime::BlockPool<StagingBlock> {};
 
 // The memory behind buffers a StagingAllocator handed out.
-inline const StagingAllocator::Memory& staging_memory(const runtime::FrameBuffers& buffers) {
-  return reinterpret_cast<const StagingAllocator::Pool::Block*>(static_cast<uintptr_t>(buffers.tag))->memory;
+inline const StagingBlock& staging_memory(const runtime::FrameBuffers& buffers) {
+  return reinterpret_cast<const StagingPool::Block*>(static_cast<uintptr_t>(buffers.tag))->memory;
 }
-inline StagingAllocator::Memory& staging_memory_of(const runtime::FrameBuffers& buffers) {
-  return reinterpret_cast<StagingAllocator::Pool::Block*>(static_cast<uintptr_t>(buffers.tag))->memory;
+inline StagingBlock& staging_memory_of(const runtime::FrameBuffers& buffers) {
+  return reinterpret_cast<StagingPool::Block*>(static_cast<uintptr_t>(buffers.tag))->memory;
 }
 
 }  // namespace sluice::render

@@ -57,4 +57,8 @@ Mat4 look_at(Vec3 eye, Vec3 target, Vec3 up);
 // at the top), as PNG rows are stored. fov_y in radians.
 Mat4 perspective_reverse_z(float fov_y, float aspect, float near);
 
+// Two unit vectors across `up` completing a right-handed frame (a, b, up):
+// for +z they are x and y.
+void frame_across(Vec3 up, Vec3& a, Vec3& b);
+
 }  // namespace sluice::render

@@ -146,9 +146,6 @@ Colormap parse_colormap(const std::string& s);
 std::vector<std::string> display_mode_names();  // short names, in enum order
 // "x" | "y" | "z" | "-x" | "-y" | "-z" (and "+x" ...) -> that unit vector.
 Vec3 parse_up(const std::string& s);
-// Two unit vectors across `up` completing a right-handed frame (a, b, up):
-// for +z they are x and y.
-void frame_across(Vec3 up, Vec3& a, Vec3& b);
 
 // The largest frame the apps' `--particles auto` (their default) draws as
 // ellipsoids (RendererOptions::anisotropic_limit): their once-a-frame pass

@@ -40,6 +40,8 @@ class FrameHandle;
 namespace sluice::render {
 
 class RelayRing;
+struct StagingBlock;  // render/src/staging_block.h: a block's staging buffer (or host fallback)
+class StagingPool;     // render/src/staging_block.h: FrameBuffers::tag points at one of its blocks
 
 // Where the relay's ring lives in host memory.
 enum class RingMemory : uint8_t {
@@ -91,15 +93,11 @@ class StagingAllocator final : public runtime::FrameAllocator {
   // memory, where the host budget already covers it. With a resident
   // window: the device-local heap's free part plus the areas held.
   const runtime::DeviceMemoryBudget* device_budget() const;
-  bool staging_in_device_heap() const { return device_heap_; }
 
   uint64_t held_bytes() const;
   uint64_t peak_held_bytes() const;
   uint64_t fallback_allocations() const { return fallbacks_.load(std::memory_order_relaxed); }
   uint64_t fresh_allocations() const;  // blocks made anew (not reused): each a Vulkan allocation
-
-  struct Memory;  // render/src/staging_block.h: a block's staging buffer (or host fallback)
-  class Pool;     // render/src/staging_block.h: FrameBuffers::tag points at one of its blocks
 
  private:
   class HeapBudget;
@@ -107,8 +105,8 @@ class StagingAllocator final : public runtime::FrameAllocator {
   Context& context_;
   StagingOptions options_;
   std::unique_ptr<RelayRing> ring_;      // before the pools: their resident areas wait on it when destroyed
-  std::unique_ptr<Pool> pool_;
-  std::unique_ptr<Pool> resident_pool_;  // device areas
+  std::unique_ptr<StagingPool> pool_;
+  std::unique_ptr<StagingPool> resident_pool_;  // device areas
   uint32_t device_local_heap_ = 0;
   bool device_heap_ = false;
   uint32_t heap_ = 0;

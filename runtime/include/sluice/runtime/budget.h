@@ -63,16 +63,6 @@ class DeviceMemoryBudget {
   virtual uint64_t available_bytes() const = 0;
 };
 
-// A device budget of a fixed size: for tests, headless runs and benchmarks.
-class FixedDeviceBudget final : public DeviceMemoryBudget {
- public:
-  explicit FixedDeviceBudget(uint64_t bytes) : bytes_(bytes) {}
-  uint64_t available_bytes() const override { return bytes_; }
-
- private:
-  uint64_t bytes_;
-};
-
 // The window: how many frames the pipeline may hold.
 //
 // The prefetch window is the number of decoded frames in memory at once:
