@@ -291,9 +291,10 @@ void add_bench_render(CLI::App& bench) {
   auto live_sizes = std::make_shared<std::string>("1M,10M");
   auto live_size = std::make_shared<std::string>("1920x1080");
   CLI::App* lc = bench.add_subcommand("live", "Frames pushed from memory (a host's running simulation): encode, decode, copy, render");
-  lc->footer("Synthetic frames (the `sluice synth` slosh) are generated first, then pushed through\n"
-             "stream::LiveSource as a host would, and drawn.\n\n"
-             "Example: sluice bench live --sizes 1M,10M --record /tmp/live.sluice\n");
+  lc->footer(
+      "Synthetic frames (the `sluice synth` slosh) are generated first, then pushed through\n"
+      "stream::LiveSource as a host would, and drawn.\n\n"
+      "Example: sluice bench live --sizes 1M,10M --record /tmp/live.sluice\n");
   lc->add_option("--sizes", *live_sizes, "Particles per frame (k, M suffixes)")->capture_default_str();
   lc->add_option("--frames", live->frames, "Distinct frames pushed (each 3 times after a warm-up)")->capture_default_str();
   lc->add_option("--size", *live_size, "Image size WIDTHxHEIGHT")->capture_default_str();

@@ -78,7 +78,8 @@ void apply_commands(const xr::Commands& c, runtime::Player& player, render::LodO
 
 // Both eyes recorded into the frame's command buffer: in one pass into an
 // array swapchain, else one record() per eye.
-render::FrameSync record_eyes(stream::Stream& stream, const xr::Frame& frame, const std::array<render::View, 2>& views) {
+render::FrameSync record_eyes(stream::Stream& stream, const xr::Frame& frame,
+                              const std::array<render::View, 2>& views) {
   if (frame.stereo) return stream.record(frame.command_buffer, frame.stereo_target, views);
   render::FrameSync sync;
   for (size_t e = 0; e < 2; ++e) sync = stream.record(frame.command_buffer, frame.eyes[e].target, std::span(&views[e], 1));

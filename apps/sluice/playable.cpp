@@ -49,7 +49,8 @@ import::PlayableFile open_playable(const std::string& input, const PlayableOptio
 }
 
 void add_input_options(CLI::App& cmd, const char* name, std::string& input, bool& no_cache) {
-  cmd.add_option(name, input, ".sluice file, or anything `convert` reads (converted once into a cache beside it)")->required();
+  cmd.add_option(name, input, ".sluice file, or anything `convert` reads (converted once into a cache beside it)")
+      ->required();
   cmd.add_flag("--no-cache", no_cache, "Input that is not .sluice: convert into a temporary file, not the cache");
 }
 

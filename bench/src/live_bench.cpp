@@ -65,10 +65,11 @@ void run_live_bench(const LiveBenchOptions& o) {
     table.row({count_name(n), num(e, 1), num(double(n) / (e * 1e3), 1), num(median(decode), 1), num(median(upload), 2),
                num(median(draw), 2), num(t, 1), num(1e3 / t, 1)});
   }
-  std::printf("sluice bench live: frames pushed from memory through stream::LiveSource (encode on %u cores, decode into "
-              "staging, copy), medians of %d pushes after a warm-up; %s\ndevice: %s (%s); host: %s\n\n",
-              unsigned(core_count()), 3 * o.frames, o.record.empty() ? "not recorded" : ("recorded to " + o.record).c_str(),
-              context.device().name.c_str(), context.device().driver.c_str(), cpu_model().c_str());
+  std::printf(
+      "sluice bench live: frames pushed from memory through stream::LiveSource (encode on %u cores, decode into "
+      "staging, copy), medians of %d pushes after a warm-up; %s\ndevice: %s (%s); host: %s\n\n",
+      unsigned(core_count()), 3 * o.frames, o.record.empty() ? "not recorded" : ("recorded to " + o.record).c_str(),
+      context.device().name.c_str(), context.device().driver.c_str(), cpu_model().c_str());
   table.print("Per pushed frame ('push to drawn' is the push() call plus waiting for its copy; 'render' is after it)");
 }
 

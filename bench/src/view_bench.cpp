@@ -291,7 +291,8 @@ class Bench {
     render::Renderer& renderer;
 
     Player(Bench& b, uint64_t first, const runtime::ViewDemand& demand)
-        : staging(b.context_, stream::FrameFeed::staging_options(b.context_, b.reader_.header(), decode_site(b.o_.decode), true)),
+        : staging(b.context_,
+                  stream::FrameFeed::staging_options(b.context_, b.reader_.header(), decode_site(b.o_.decode), true)),
           player(b.reader_, staging, clock, b.player_options(first, staging, demand)),
           feed(b.renderer_, player, &staging, -1),
           renderer(b.renderer_) {}

@@ -498,16 +498,18 @@ int main(int argc, char** argv) try {
   // The host submits under context.queue_lock() (HostScene::submit), so
   // frames the GPU decodes may be relayed to device memory as they are read
   // even where the relay shares the host's one queue (relay_queue_shared()).
-  const sluice::stream::StreamOptions options{.renderer = {.frames_in_flight = kFramesInFlight},
-                                               .queue_lock = sluice::stream::QueueLock::HostTakesIt,
-                                               .motion = sluice::stream::ViewMotion::Fixed};  // the host's camera stays put
+  const sluice::stream::StreamOptions options{
+      .renderer = {.frames_in_flight = kFramesInFlight},
+      .queue_lock = sluice::stream::QueueLock::HostTakesIt,
+      .motion = sluice::stream::ViewMotion::Fixed};  // the host's camera stays put
   sluice::stream::LiveOptions live;
   live.particle_spacing = 0.02f;
   live.frame_rate = 30;
   live.record = args->record;
   live.ids = false;  // the host keeps its particle order: LOD values follow the index
   std::unique_ptr<sluice::stream::Stream> stream =
-      args->live ? std::make_unique<sluice::stream::Stream>(context, sluice::render::Bounds{{0, 0, 0}, {2, 1, 1}}, live, options)
+      args->live ? std::make_unique<sluice::stream::Stream>(context, sluice::render::Bounds{{0, 0, 0}, {2, 1, 1}}, live,
+                                                            options)
                  : std::make_unique<sluice::stream::Stream>(context, args->file, options);
   sluice::render::FluidOptions look = stream->fluid();
   look.ground = false;  // the host draws its own floor

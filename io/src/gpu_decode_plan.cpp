@@ -81,7 +81,8 @@ bool plan_planes(std::span<const std::byte> bytes, uint64_t base, const ChunkDes
   if (chunk.offset < base || chunk.offset - base > bytes.size() || chunk.compressed_size > bytes.size() - (chunk.offset - base)) {
     throw Error(at, "a chunk payload lies outside the frame record");
   }
-  read_plane_table(bytes.subspan(chunk.offset - base, chunk.compressed_size), chunk.offset, chunk.codec, n, planes, sources, at);
+  read_plane_table(bytes.subspan(chunk.offset - base, chunk.compressed_size), chunk.offset, chunk.codec, n, planes,
+                   sources, at);
   const size_t colour = 8 - fine + 2 * size_t(attribute ? options.color_attribute : 0);
   for (int k = int(fine); k < kGpuPlanes; ++k) {
     if (k >= 8 && !attribute) break;

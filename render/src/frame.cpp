@@ -21,7 +21,8 @@ SceneInfo scene_info(const io::ContainerReader& reader) {
   s.coding = h.position_coding;
   for (size_t a = 0; a < h.attributes.size(); ++a) {
     s.attribute_names.push_back(h.attributes[a].name);
-    s.attribute_ranges.push_back(a < index.attribute_ranges.size() ? index.attribute_ranges[a] : std::array<float, 2>{0, 1});
+    s.attribute_ranges.push_back(a < index.attribute_ranges.size() ? index.attribute_ranges[a]
+                                                                   : std::array<float, 2>{0, 1});
   }
   for (const io::FrameIndexEntry& f : index.frames) {
     s.max_particles = std::max(s.max_particles, f.particle_count);

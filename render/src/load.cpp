@@ -17,7 +17,8 @@ uint64_t commit_record(Renderer& renderer, std::span<const std::byte> record, co
   if (file.position_coding != r.scene.coding) throw io::Error(where, "frame coding differs from the scene's");
   const uint32_t chunks = uint32_t(header.chunks.size());
   FrameStaging s = renderer.stage_frame(header.particle_count, chunks);
-  const bool attr = color_attribute >= 0 && size_t(color_attribute) < file.attributes.size() && !s.color_attribute.empty();
+  const bool attr =
+      color_attribute >= 0 && size_t(color_attribute) < file.attributes.size() && !s.color_attribute.empty();
   fill_chunk_table(header, {}, attr ? color_attribute : -1, s.chunks, where);
   mark_layers(r.sets[size_t(r.staged)], header);
   std::vector<uint64_t> starts(chunks);
@@ -34,7 +35,8 @@ void load_frame(Renderer& renderer, const io::ContainerReader& reader, uint64_t 
   const std::vector<std::byte> record = reader.read_record(frame);
   io::FrameHeader header = reader.parse_record(frame, record);
   io::keep_layers(header, layers);
-  renderer.wait_upload(commit_record(renderer, record, header, reader.header(), color_attribute, reader.location(frame)));
+  renderer.wait_upload(
+      commit_record(renderer, record, header, reader.header(), color_attribute, reader.location(frame)));
 }
 
 }  // namespace sluice::render

@@ -401,7 +401,6 @@ void detail::RendererImpl::collect_slot(FrameSlot& slot, bool finished) {
   if (stats.passes.empty() || s.record_index >= stats.record_index) stats = std::move(s);
 }
 
-
 FrameStats Renderer::last_stats() {
   Impl& r = *impl_;
   for (FrameSlot& slot : r.slots) r.collect_slot(slot, false);
@@ -552,7 +551,6 @@ FrameSync Renderer::record(VkCommandBuffer command_buffer, const RenderTarget& t
 // For render/src only: the free functions of load.h and inspection.h.
 detail::RendererImpl& renderer_impl(Renderer& renderer) { return *renderer.impl_; }
 
-
 }  // namespace sluice::render
 
 namespace sluice::render {
@@ -604,6 +602,5 @@ void Renderer::set_environment(const Image& equirect) {
   r.upload_environment(equirect);
   r.has_environment = has_image;
 }
-
 
 }  // namespace sluice::render

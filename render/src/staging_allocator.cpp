@@ -69,7 +69,10 @@ uint32_t default_ring_slots() {
 }  // namespace
 
 StagingAllocator::StagingAllocator(Context& context, const StagingOptions& options)
-    : context_(context), options_(options), pool_(std::make_unique<StagingPool>()), resident_pool_(std::make_unique<StagingPool>()) {
+    : context_(context),
+      options_(options),
+      pool_(std::make_unique<StagingPool>()),
+      resident_pool_(std::make_unique<StagingPool>()) {
   const detail::ContextImpl& c = context_impl(context);
   heap_ = heap_with(c, kStagingProps);
   device_heap_ = bool(c.memory.memoryHeaps[heap_].flags & vk::MemoryHeapFlagBits::eDeviceLocal);
@@ -165,7 +168,8 @@ void StagingAllocator::release(runtime::FrameBuffers& buffers) {
 FrameUpload frame_upload(const runtime::FrameHandle& frame, int color_attribute, const StagingAllocator* from) {
   if (frame.empty() || frame.failed()) throw Error("commit: an empty or failed frame handle");
   if (frame.content() == runtime::FrameContent::World) {
-    throw Error("commit: a frame converted to world units (DecodeMode::World) is for array consumers, not the renderer");
+    throw Error(
+        "commit: a frame converted to world units (DecodeMode::World) is for array consumers, not the renderer");
   }
   const runtime::FrameBuffers& buffers = frame.buffers();
   const StagingBlock* block = from ? &staging_memory(buffers) : nullptr;
@@ -181,7 +185,8 @@ FrameUpload frame_upload(const runtime::FrameHandle& frame, int color_attribute,
     if (vulkan && block->resident()) {
       const ResidentArea& area = *block->area;
       u.particles = {};
-      u.resident = {*area.device.buffer, area.device.size, from->relay_semaphore(), area.relayed.load(std::memory_order_relaxed)};
+      u.resident = {*area.device.buffer, area.device.address, area.device.size, from->relay_semaphore(),
+                    area.relayed.load(std::memory_order_relaxed)};
     }
     return u;
   }

@@ -42,7 +42,6 @@ StagingLayout staging_layout(uint64_t particles, uint32_t chunks, size_t stride,
 
 }  // namespace
 
-
 bool Renderer::upload_complete(uint64_t ticket) const {
   return ticket == 0 || impl_->upload_done.getCounterValue() >= ticket;
 }
@@ -149,9 +148,9 @@ struct UploadSource {  // where upload_frame() copies a part of a frame from
 struct EncodedSource {
   UploadSource area;
   const io::GpuDecodePlan* plan = nullptr;
-  vk::Buffer resident;                // the resident area, when set
+  vk::Buffer resident;  // the resident area, when set
   vk::DeviceAddress resident_address = 0;
-  vk::Semaphore relayed;              // what fills it, and the value the decode waits for
+  vk::Semaphore relayed;  // what fills it, and the value the decode waits for
   uint64_t relayed_value = 0;
 };
 
@@ -322,8 +321,9 @@ uint64_t upload_frame(detail::RendererImpl& r, FrameSet& set, UploadSource parti
   cmd.begin(vk::CommandBufferBeginInfo(vk::CommandBufferUsageFlagBits::eOneTimeSubmit));
   cmd.writeTimestamp2(vk::PipelineStageFlagBits2::eAllCommands, *set.stamps, 0);
   if (encoded && encoded->resident) {
-    cmd.copyBuffer(encoded->area.buffer, encoded->resident,
-                   vk::BufferCopy(encoded->area.offset, encoded->plan->plans_offset(), io::table_block_bytes(*encoded->plan)));
+    cmd.copyBuffer(
+        encoded->area.buffer, encoded->resident,
+        vk::BufferCopy(encoded->area.offset, encoded->plan->plans_offset(), io::table_block_bytes(*encoded->plan)));
   } else if (encoded) {
     cmd.copyBuffer(encoded->area.buffer, *set.encoded.buffer,
                    vk::BufferCopy(encoded->area.offset, 0, encoded->plan->staged_bytes()));
@@ -425,7 +425,8 @@ uint64_t commit_decoded(Renderer& renderer, detail::RendererImpl& r, const Frame
   const uint32_t chunks = uint32_t(header.chunks.size());
   const bool attribute = frame.color_attribute >= 0 && !frame.color.host.empty();
   const size_t stride = io::decoded_particle_bytes(r.scene.coding);
-  if (frame.particles.host.size() < n * stride) throw Error("commit: the particle bytes are fewer than the frame's particles");
+  if (frame.particles.host.size() < n * stride)
+    throw Error("commit: the particle bytes are fewer than the frame's particles");
   if (attribute && frame.color.host.size() < n * 2) throw Error("commit: fewer colour values than particles");
 
   if (!frame.particles.buffer || (attribute && !frame.color.buffer)) {
@@ -471,6 +472,7 @@ uint64_t commit_encoded(detail::RendererImpl& r, const FrameUpload& frame) {
   const bool attribute = frame.color_attribute >= 0 && chunks > 0 && (plan.chunks[0].flags & io::kGpuWithAttribute) != 0;
   const bool resident = frame.resident.buffer != VK_NULL_HANDLE;
   if (resident && frame.resident.bytes < staged) throw Error("commit: the resident area is too small");
+  if (resident && frame.resident.address == 0) throw Error("commit: a resident area without its device address");
   if (!resident && frame.particles.host.size() < staged) throw Error("commit: the staged area is too small");
   const bool own = !resident && !frame.particles.buffer;  // not in Vulkan memory: through the renderer's staging
   // A resident frame's tables go through the renderer's staging too.
@@ -497,7 +499,7 @@ uint64_t commit_encoded(detail::RendererImpl& r, const FrameUpload& frame) {
   source.plan = &plan;
   if (resident) {
     source.resident = frame.resident.buffer;
-    source.resident_address = (*r.ctx.device).getBufferAddress(vk::BufferDeviceAddressInfo(source.resident));
+    source.resident_address = frame.resident.address;
     source.relayed = frame.resident.semaphore;
     source.relayed_value = frame.resident.value;
   }

@@ -52,7 +52,8 @@ struct PieceRound {
   // check (the workers check the chunks; relayed frames are read by chunks).
   std::span<const ByteRun> runs;
   bool by_runs() const { return !runs.empty(); }
-  Slot* relayed = nullptr;  // a relayed read (frame_allocator.h): the chunks go through the relay into this slot's area, not dst
+  Slot* relayed =
+      nullptr;  // a relayed read (frame_allocator.h): the chunks go through the relay into this slot's area, not dst
   bool check = true;        // a checked read hashes each chunk as read; false: the decode workers check them
   mutable std::atomic<bool> gave_up{false};  // a newer schedule (or stop) came first: the pieces left are skipped
   void operator()(uint64_t p) const;

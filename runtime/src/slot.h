@@ -74,7 +74,7 @@ struct Slot {
   std::span<const std::byte> record_bytes;       // the frame record inside it (or the prefix the wanted layers need)
   bool table_parsed = false;                     // the table was read first and parsed (`header`) before the payloads
   bool checked_on_read = false;                  // the wanted chunks were checked as they were read (checksums)
-  bool relayed = false;                          // ... and sent to a resident area through the relay (frame_allocator.h)
+  bool relayed = false;  // ... and sent to a resident area through the relay (frame_allocator.h)
   std::vector<io::RecordPart> parts;             // checked reads and reads by demand: the records' parts to read (io::record_parts)
   std::vector<uint32_t> piece_cuts;              // checked reads: piece p reads parts [cuts[p], cuts[p + 1])
   std::vector<detail::ByteRun> runs;             // reads by demand: the pieces of the runs (read_runs.h)

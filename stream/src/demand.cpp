@@ -6,8 +6,8 @@
 
 namespace sluice::stream {
 
-runtime::ViewDemand view_demand(std::span<const render::View> views, const render::SceneInfo& scene, const render::FluidOptions& fluid,
-                                const render::LodOptions& lod, float margin) {
+runtime::ViewDemand view_demand(std::span<const render::View> views, const render::SceneInfo& scene,
+                                const render::FluidOptions& fluid, const render::LodOptions& lod, float margin) {
   runtime::ViewDemand d;
   for (const render::View& v : views) {
     if (d.views.size() == d.views.capacity()) break;

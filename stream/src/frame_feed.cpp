@@ -7,7 +7,8 @@
 
 namespace sluice::stream {
 
-FrameFeed::FrameFeed(render::Renderer& renderer, runtime::Player& player, const render::StagingAllocator* staging, int color_attribute)
+FrameFeed::FrameFeed(render::Renderer& renderer, runtime::Player& player, const render::StagingAllocator* staging,
+                     int color_attribute)
     : renderer_(renderer), player_(player), staging_(staging), color_attribute_(color_attribute) {}
 
 // Without this wait, a stream torn down mid-copy freed the staging memory
@@ -26,17 +27,17 @@ void FrameFeed::configure(runtime::PlayerOptions& options, const render::Staging
   options.pipeline.decode.color_attribute = color_attribute;
 }
 
-render::StagingOptions FrameFeed::staging_options(const render::Context& context, const io::FileHeader& file, DecodeSite decode,
-                                          bool host_takes_queue_lock) {
+render::StagingOptions FrameFeed::staging_options(const render::Context& context, const io::FileHeader& file,
+                                                  DecodeSite decode, bool host_takes_queue_lock) {
   render::StagingOptions o;
   o.resident = decode != DecodeSite::Cpu && io::gpu_decodable(file) && (host_takes_queue_lock || !context.relay_queue_shared());
   return o;
 }
 
-void FrameFeed::set_views(std::span<const render::View> views, const render::FluidOptions& fluid, const render::LodOptions& lod, float margin) {
+void FrameFeed::set_views(std::span<const render::View> views, const render::FluidOptions& fluid,
+                          const render::LodOptions& lod, float margin) {
   player_.set_demand(view_demand(views, renderer_.scene(), fluid, lod, margin));
 }
-
 
 FeedUpdate FrameFeed::update() {
   renderer_.wait_upload(pending_);  // the player may now take those buffers back

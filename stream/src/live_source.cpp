@@ -19,8 +19,8 @@ double ms_since(std::chrono::steady_clock::time_point t0) {
 
 }  // namespace
 
-render::SceneInfo live_scene(const render::Bounds& bounds, const LiveOptions& options, std::vector<std::array<float, 2>> attribute_ranges,
-                     uint64_t max_particles) {
+render::SceneInfo live_scene(const render::Bounds& bounds, const LiveOptions& options,
+                             std::vector<std::array<float, 2>> attribute_ranges, uint64_t max_particles) {
   render::SceneInfo s;
   s.bounds = bounds;
   s.particle_spacing = options.particle_spacing;
@@ -35,7 +35,8 @@ render::SceneInfo live_scene(const render::Bounds& bounds, const LiveOptions& op
   return s;
 }
 
-LiveSource::LiveSource(render::Renderer& renderer, const LiveOptions& options) : renderer_(renderer), options_(options) {
+LiveSource::LiveSource(render::Renderer& renderer, const LiveOptions& options)
+    : renderer_(renderer), options_(options) {
   if (renderer.scene().coding != io::PositionCoding::Quantized16) {
     throw render::Error("live frames are quantized: make the renderer with live_scene()");
   }
@@ -66,19 +67,20 @@ uint64_t LiveSource::push(const LiveFrame& frame) {
   const uint64_t n = frame.positions.size() / 3;
   if (options_.ids && frame.ids.size() != n) {
     throw render::Error(what + std::to_string(frame.ids.size()) + " ids for " + std::to_string(n) +
-                                " particles (the source was declared with ids: LiveOptions::ids)");
+                        " particles (the source was declared with ids: LiveOptions::ids)");
   }
   if (!options_.ids && !frame.ids.empty()) {
     throw render::Error(what + "ids given to a source declared without them (LiveOptions::ids = false)");
   }
   if (!frame.attributes.empty() && frame.attributes.size() != header_.attributes.size()) {
     throw render::Error(what + std::to_string(frame.attributes.size()) + " attributes for the " +
-                                std::to_string(header_.attributes.size()) + " declared");
+                        std::to_string(header_.attributes.size()) + " declared");
   }
   for (size_t a = 0; a < frame.attributes.size(); ++a) {
     if (frame.attributes[a].size() != n) {
       throw render::Error(what + "attribute " + header_.attributes[a].name + " has " +
-                                  std::to_string(frame.attributes[a].size()) + " values for " + std::to_string(n) + " particles");
+                          std::to_string(frame.attributes[a].size()) + " values for " + std::to_string(n) +
+                          " particles");
     }
   }
   for (uint64_t i = 0; i < frame.positions.size(); ++i) {
@@ -102,8 +104,8 @@ uint64_t LiveSource::push(const LiveFrame& frame) {
   io::set_frame_number(encoded, uint32_t(pushed_), header_.attributes.size());
   encode_ms_ = ms_since(t0);
   const auto t1 = std::chrono::steady_clock::now();
-  const uint64_t ticket = render::commit_record(renderer_, encoded.record, encoded.header, header_, options_.color_attribute,
-                                                  io::ErrorLocation{"live", pushed_, {}});
+  const uint64_t ticket = render::commit_record(renderer_, encoded.record, encoded.header, header_,
+                                                options_.color_attribute, io::ErrorLocation{"live", pushed_, {}});
   decode_ms_ = ms_since(t1);
   if (writer_) writer_->append(std::move(encoded));
   ++pushed_;

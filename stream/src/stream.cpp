@@ -14,7 +14,9 @@
 namespace sluice::stream {
 namespace {
 
-int decoded_attribute(const render::FluidOptions& fluid) { return fluid.scalar_visibility ? fluid.color_attribute : -1; }
+int decoded_attribute(const render::FluidOptions& fluid) {
+  return fluid.scalar_visibility ? fluid.color_attribute : -1;
+}
 
 double steady_seconds() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
@@ -40,7 +42,8 @@ Stream::Stream(render::Context& context, const std::filesystem::path& file, Stre
   fluid_.up = scene.up;
   const io::FileHeader& header = reader_->header();
   const bool host_locks = options_.queue_lock == QueueLock::HostTakesIt;
-  staging_ = std::make_unique<render::StagingAllocator>(context_, FrameFeed::staging_options(context_, header, options_.decode, host_locks));
+  staging_ = std::make_unique<render::StagingAllocator>(
+      context_, FrameFeed::staging_options(context_, header, options_.decode, host_locks));
   const bool layered = reader_->frame_count() > 0 && reader_->index().frames[0].layered();
   by_view_ = layered && options_.layers == io::LayerSet::surface();
   if (options_.decode == DecodeSite::Gpu && !io::gpu_decodable(header)) {
@@ -142,7 +145,7 @@ FeedUpdate Stream::show(uint64_t frame, std::chrono::milliseconds timeout) {
   require_file("show");
   if (frame >= reader_->frame_count()) {
     throw render::Error("Stream::show: no frame " + std::to_string(frame) + " (the file has " +
-                std::to_string(reader_->frame_count()) + ")");
+                        std::to_string(reader_->frame_count()) + ")");
   }
   runtime::Player& p = player();
   p.pause();
@@ -158,7 +161,7 @@ FeedUpdate Stream::show(uint64_t frame, std::chrono::milliseconds timeout) {
     }
     if (std::chrono::steady_clock::now() > deadline) {
       throw render::Error("Stream::show: frame " + std::to_string(frame) + " was not ready within " +
-                  std::to_string(timeout.count()) + " ms");
+                          std::to_string(timeout.count()) + " ms");
     }
     std::this_thread::yield();
   }
@@ -177,7 +180,8 @@ FeedUpdate Stream::update() {
   return feed_->update();
 }
 
-render::FrameSync Stream::record(VkCommandBuffer cmd, const render::RenderTarget& target, std::span<const render::View> views) {
+render::FrameSync Stream::record(VkCommandBuffer cmd, const render::RenderTarget& target,
+                                 std::span<const render::View> views) {
   return renderer_->record(cmd, target, views, fluid_, lod_);
 }
 

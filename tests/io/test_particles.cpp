@@ -63,7 +63,6 @@ TEST(ParticlesLargeFrame, StreamingStoresWriteTheExportersValues) {
   EXPECT_EQ(read.positions, expected.positions);
   EXPECT_EQ(read.lod, expected.lod);
   EXPECT_EQ(read.attributes[0], expected.attributes[0]);
-
 }
 
 TEST_F(ParticlesFile, ALevelKeepsTheExportersParticlesAndReadsLess) {

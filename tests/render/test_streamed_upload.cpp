@@ -11,6 +11,7 @@
 
 #include "render_test_util.h"
 #include "sluice/io/codec.h"
+#include "sluice/io/gpu_decode_plan.h"
 #include "sluice/io/reader.h"
 #include "sluice/io/writer.h"
 #include "sluice/render/image_io.h"
@@ -300,6 +301,79 @@ TEST_F(StreamedUpload, RelayedCorruptChunkFailsItsFrameOnly) {
 // Seeking while frames are relayed: reads cut short leave copies in flight
 // into areas the next frames reuse. Every frame that arrives, whatever the
 // seeks, renders as load_frame renders it.
+// A host's own frame as plain data (FrameUpload from host memory: a decoded
+// frame, and the same frame kept encoded with its plan) draws what
+// load_frame draws; uploads that do not add up are refused by name, before
+// anything is submitted, and the renderer goes on drawing.
+TEST_F(StreamedUpload, AHostsPlainFrameMatchesLoadFrameAndBadOnesAreRefused) {
+  ValidationGuard guard;
+  const io::ContainerReader reader(gpu_path_);
+  const std::vector<Rendered> expected = reference(reader);
+  const SceneInfo scene = scene_info(reader);
+  testing::OffscreenRenderer r(context(), scene, 160, 120);
+
+  const io::DecodedFrame decoded = io::decode_frame(reader, 1);  // the layers load_frame draws
+  FrameUpload good;
+  good.header = &decoded.header;
+  good.chunk_first = decoded.chunk_first;
+  good.particles.host = decoded.particles;
+  good.color.host = std::as_bytes(std::span(decoded.attributes[0]));
+  good.color_attribute = 0;
+  r.renderer.wait_upload(r.renderer.commit(good));
+  EXPECT_EQ(draw(r, scene).depth, expected[1].depth) << "decoded, from host memory";
+
+  const std::vector<std::byte> record = reader.read_record(2);
+  io::FrameHeader header = reader.parse_record(2, record);
+  io::keep_layers(header, io::LayerSet::particles());
+  io::GpuDecodePlan plan;
+  io::plan_gpu_decode(record, header, reader.header(), {.color_attribute = 0}, plan, reader.location(2));
+  std::vector<std::byte> staged(plan.staged_bytes());
+  io::stage_frame(record, header, plan, staged, true, reader.location(2));
+  std::vector<uint64_t> first(header.chunks.size());
+  io::chunk_starts(header, first);
+  FrameUpload encoded;
+  encoded.header = &header;
+  encoded.chunk_first = first;
+  encoded.particles.host = staged;
+  encoded.color_attribute = 0;
+  encoded.plan = &plan;
+  r.renderer.wait_upload(r.renderer.commit(encoded));
+  EXPECT_EQ(draw(r, scene).depth, expected[2].depth) << "encoded, from host memory";
+
+  const auto refused = [&](FrameUpload bad, const std::string& what) {
+    try {
+      r.renderer.commit(bad);
+      ADD_FAILURE() << "accepted: " << what;
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
+    }
+  };
+  FrameUpload bad = good;
+  bad.header = nullptr;
+  refused(bad, "without its header");
+  bad = good;
+  bad.chunk_first = std::span(decoded.chunk_first).first(1);
+  refused(bad, "one first index per chunk");
+  bad = good;
+  bad.particles.host = bad.particles.host.first(bad.particles.host.size() / 2);
+  refused(bad, "particle bytes are fewer");
+  bad = good;
+  bad.color.host = bad.color.host.first(8);
+  refused(bad, "fewer colour values");
+  bad = encoded;
+  bad.particles.host = bad.particles.host.first(16);
+  refused(bad, "staged area is too small");
+  bad = encoded;
+  bad.particles = {};
+  bad.resident = {.buffer = reinterpret_cast<VkBuffer>(uintptr_t(1)), .address = 0, .bytes = plan.staged_bytes()};
+  refused(bad, "without its device address");  // checked before the handle is used
+  bad.resident.bytes = 16;
+  refused(bad, "resident area is too small");
+
+  r.renderer.wait_upload(r.renderer.commit(good));
+  EXPECT_EQ(draw(r, scene).depth, expected[1].depth) << "after the refusals";
+}
+
 TEST_F(StreamedUpload, RelayedFramesSurviveSeeks) {
   ValidationGuard guard;
   const io::ContainerReader reader(gpu_path_);

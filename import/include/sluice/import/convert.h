@@ -43,7 +43,6 @@ struct SkippedFrame {
   std::string error;   // the io::Error's full text
 };
 
-
 struct ConvertOptions {
   std::string input;  // file, glob, .pvd or directory
   // Point-data arrays carried for colouring, in this order ("rho", ...).

@@ -59,7 +59,6 @@ class InlineVector {
   size_t count_ = 0;
 };
 
-
 // Format 2.0 orders each frame coarse to fine (docs/format.md, "Layout of a
 // frame"); 3.0 also stores each record's positions in two parts, the fine
 // part apart ("Precision parts"). Readers of this build read 1.x and 2.0

@@ -12,7 +12,6 @@
 #include "sluice/io/codec.h"
 #include "sluice/io/reader.h"
 
-
 namespace sluice::io {
 
 // Called with (frames done, frames total) as work progresses.

@@ -17,25 +17,25 @@ struct PassTime {
 };
 
 struct FrameStats {
-  uint64_t record_index = 0;   // which record() call (0-based) these figures are of (not a frame number)
-  uint64_t particles = 0;      // in the frame drawn
-  uint64_t drawn = 0;          // after frustum, near and LOD culling (the last view)
-  uint64_t visible_chunks = 0; // the last view
+  uint64_t record_index = 0;    // which record() call (0-based) these figures are of (not a frame number)
+  uint64_t particles = 0;       // in the frame drawn
+  uint64_t drawn = 0;           // after frustum, near and LOD culling (the last view)
+  uint64_t visible_chunks = 0;  // the last view
   std::vector<PassTime> passes;
-  double gpu_ms = 0;           // first to last timestamp of the frame
-  double upload_ms = 0;        // GPU time of the copy of the frame drawn
-  bool decoded_on_gpu = false; // the frame drawn was committed encoded (Renderer::commit of a frame kept encoded)
-  double decode_ms = 0;        // GPU time of its decode (0 when not decoded on the GPU, or no timestamps)
-  uint32_t decode_errors = 0;  // its chunks whose packed planes the GPU found inconsistent
+  double gpu_ms = 0;            // first to last timestamp of the frame
+  double upload_ms = 0;         // GPU time of the copy of the frame drawn
+  bool decoded_on_gpu = false;  // the frame drawn was committed encoded (Renderer::commit of a frame kept encoded)
+  double decode_ms = 0;         // GPU time of its decode (0 when not decoded on the GPU, or no timestamps)
+  uint32_t decode_errors = 0;   // its chunks whose packed planes the GPU found inconsistent
   // RendererOptions::classify_unlayered: what the classification this frame
   // ran (if it ran one: the first draw of a frame without layers) made of it.
   struct Classification {
     bool ran = false;
-    bool narrowed = false;       // drawn from surface + blobs; false: drawn whole
-    uint64_t surface = 0;        // particles kept (L1 + L2 + isolated)
-    uint64_t blobs = 0;          // voxel blobs (drawn only when narrowed: at most blob_room)
-    uint64_t blob_room = 0;      // blobs the frame had room for
-    uint32_t cells[3] = {};      // the voxel grid; 2^32 cells or more cannot be classified
+    bool narrowed = false;   // drawn from surface + blobs; false: drawn whole
+    uint64_t surface = 0;    // particles kept (L1 + L2 + isolated)
+    uint64_t blobs = 0;      // voxel blobs (drawn only when narrowed: at most blob_room)
+    uint64_t blob_room = 0;  // blobs the frame had room for
+    uint32_t cells[3] = {};  // the voxel grid; 2^32 cells or more cannot be classified
     bool grid_fits = false;
   } classification;
 };
@@ -66,7 +66,7 @@ struct RenderTarget {
   // Optional: the host's depth (its opaque geometry). The fluid is hidden
   // behind it and writes its own depth into it.
   VkImage depth_image = VK_NULL_HANDLE;
-  VkImageView depth_view = VK_NULL_HANDLE;  // as color_view: 2D, or 2D_ARRAY of layer_count layers
+  VkImageView depth_view = VK_NULL_HANDLE;      // as color_view: 2D, or 2D_ARRAY of layer_count layers
   VkFormat depth_format = VK_FORMAT_UNDEFINED;  // D16, D32, D24S8, D32S8
   // The depth image was created with VK_IMAGE_USAGE_TRANSFER_SRC_BIT and
   // TRANSFER_DST_BIT, and its format is D32, D32S8 or D24S8. Then, with
@@ -85,7 +85,7 @@ struct RenderTarget {
   bool depth_sampled = false;
   VkImageLayout depth_layout_before = VK_IMAGE_LAYOUT_UNDEFINED;
   VkImageLayout depth_layout_after = VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL;
-  uint32_t base_layer = 0;   // the first array layer drawn
+  uint32_t base_layer = 0;  // the first array layer drawn
   // 1: every view into layer base_layer (side by side, each its own pass).
   // 2: stereo in one pass: views[0] into base_layer, views[1] into the next
   // (same viewport), with one cull for both eyes (a particle is kept for

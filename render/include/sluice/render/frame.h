@@ -91,7 +91,8 @@ struct UploadBytes {
 // render::frame_upload() in staging_allocator.h makes one of it).
 struct FrameUpload {
   const io::FrameHeader* header = nullptr;  // the chunk table: counts, boxes, layers, attribute ranges
-  std::span<const uint64_t> chunk_first;    // first particle of each chunk (the running sum of the counts)
+  std::span<const uint64_t>
+      chunk_first;  // first particle of each chunk (the running sum of the counts), checked; empty: from the counts
   // Decoded (plan == nullptr): particle_count * io::decoded_particle_bytes()
   // of the scene's coding. Encoded: the staged area plan->staged_bytes()
   // long (io/gpu_decode_plan.h), decoded on the GPU; empty when `resident`.
@@ -104,10 +105,12 @@ struct FrameUpload {
   // An encoded frame already in device memory (a relay filled it): its staged
   // area is this buffer (VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT and
   // TRANSFER_DST, at least staged_bytes() long; the renderer writes the
-  // plan's tables into it), and the decode waits until `semaphore` (a
-  // timeline) reaches `value` (0: nothing to wait for).
+  // plan's tables into it) at device address `address` (its
+  // vkGetBufferDeviceAddress, taken once by its owner), and the decode waits
+  // until `semaphore` (a timeline) reaches `value` (0: nothing to wait for).
   struct Resident {
     VkBuffer buffer = VK_NULL_HANDLE;
+    VkDeviceAddress address = 0;
     uint64_t bytes = 0;
     VkSemaphore semaphore = VK_NULL_HANDLE;
     uint64_t value = 0;

@@ -120,7 +120,7 @@ class Renderer {
   FrameStats last_stats();
 
  private:
-  using Impl = detail::RendererImpl;  // render/src/renderer_state.h
+  using Impl = detail::RendererImpl;      // render/src/renderer_state.h
   friend Impl& renderer_impl(Renderer&);  // for render/src only (inspection.cpp)
   std::unique_ptr<Impl> impl_;
 };

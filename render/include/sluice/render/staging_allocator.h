@@ -41,7 +41,7 @@ namespace sluice::render {
 
 class RelayRing;
 struct StagingBlock;  // render/src/staging_block.h: a block's staging buffer (or host fallback)
-class StagingPool;     // render/src/staging_block.h: FrameBuffers::tag points at one of its blocks
+class StagingPool;    // render/src/staging_block.h: FrameBuffers::tag points at one of its blocks
 
 // Where the relay's ring lives in host memory.
 enum class RingMemory : uint8_t {

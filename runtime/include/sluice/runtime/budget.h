@@ -5,8 +5,8 @@
 // memory cgroup the process runs in (v2: memory.max - memory.current, v1:
 // memory.limit_in_bytes - memory.usage_in_bytes, at every level up to the
 // root), with the cgroup's reclaimable page cache (memory.stat: active and
-// inactive file pages, less dirty and writeback) counted as available. Device memory comes from whoever owns the GPU, through
-// DeviceMemoryBudget (the renderer reads VK_EXT_memory_budget).
+// inactive file pages, less dirty and writeback) counted as available. Device memory comes from whoever owns the GPU,
+// through DeviceMemoryBudget (the renderer reads VK_EXT_memory_budget).
 //
 // Units: bytes everywhere.
 #pragma once
@@ -95,9 +95,8 @@ struct FrameFootprint {
 // coding; frames converted to world units give io::world_particle_bytes and
 // no attribute streams).
 FrameFootprint largest_frame(const io::ContainerReader& reader, size_t attribute_streams,
-                             const FrameAllocator* allocator = nullptr,
-                             io::LayerSet layers = io::LayerSet::particles(), bool encoded = false,
-                             uint32_t particle_stride = 0);
+                             const FrameAllocator* allocator = nullptr, io::LayerSet layers = io::LayerSet::particles(),
+                             bool encoded = false, uint32_t particle_stride = 0);
 
 struct BudgetOptions {
   uint64_t memory_cap = 0;       // user cap on host bytes (`--memory 8G`); 0: none
@@ -111,8 +110,8 @@ struct BudgetOptions {
 // Everything the window is computed from, read at one moment.
 struct BudgetReading {
   HostMemory host;
-  uint64_t held_bytes = 0;                  // what the pipeline holds now (counted as available to it)
-  std::optional<uint64_t> device_available; // none: no device limit
+  uint64_t held_bytes = 0;                   // what the pipeline holds now (counted as available to it)
+  std::optional<uint64_t> device_available;  // none: no device limit
 };
 
 struct WindowPlan {
@@ -120,8 +119,8 @@ struct WindowPlan {
   uint32_t record_buffers = 1;  // compressed records being read or decoded at once (>= 1)
   uint64_t host_budget = 0;     // bytes the plan may use on the host
   uint64_t device_budget = 0;   // bytes it may use on the device; 0 if there is no device limit
-  std::string limited_by;       // "host memory", "cgroup limit", "--memory", "device memory", "--window", "ring capacity"
-  bool over_budget = false;     // even 2 frames do not fit: the window is 2 anyway
+  std::string limited_by;    // "host memory", "cgroup limit", "--memory", "device memory", "--window", "ring capacity"
+  bool over_budget = false;  // even 2 frames do not fit: the window is 2 anyway
 };
 
 // Pure function of its inputs; `decode_threads` sizes the record buffers.

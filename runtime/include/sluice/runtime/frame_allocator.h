@@ -277,7 +277,7 @@ class BlockPool {
     return bytes;
   }
 
-  uint64_t held_bytes() const { return held_.load(std::memory_order_relaxed); }  // in use + kept
+  uint64_t held_bytes() const { return held_.load(std::memory_order_relaxed); }        // in use + kept
   uint64_t kept_bytes() const { return kept_bytes_.load(std::memory_order_relaxed); }  // released, kept for reuse
   uint64_t peak_held_bytes() const { return peak_.load(std::memory_order_relaxed); }
   uint64_t in_use_blocks() const { return in_use_.load(std::memory_order_relaxed); }
@@ -285,7 +285,8 @@ class BlockPool {
 
  private:
   void account(int64_t delta) {
-    const uint64_t now = held_.fetch_add(static_cast<uint64_t>(delta), std::memory_order_relaxed) + static_cast<uint64_t>(delta);
+    const uint64_t now =
+        held_.fetch_add(static_cast<uint64_t>(delta), std::memory_order_relaxed) + static_cast<uint64_t>(delta);
     uint64_t peak = peak_.load(std::memory_order_relaxed);
     while (now > peak && !peak_.compare_exchange_weak(peak, now, std::memory_order_relaxed)) {
     }

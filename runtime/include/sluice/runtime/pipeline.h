@@ -60,7 +60,6 @@ struct FrameError {
   static FrameError from(const io::Error& e) { return {e.where(), e.message()}; }
 };
 
-
 struct WindowChange {
   uint32_t previous_frames = 0;  // 0 for the first plan
   WindowPlan plan;

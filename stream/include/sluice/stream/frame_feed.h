@@ -49,12 +49,13 @@ class FrameFeed {
   // unless the relay would share a queue the host
   // submits to without render::Context::queue_lock() (`host_takes_queue_lock`
   // false and render::Context::relay_queue_shared()).
-  static render::StagingOptions staging_options(const render::Context& context, const io::FileHeader& file, DecodeSite decode,
-                                        bool host_takes_queue_lock);
+  static render::StagingOptions staging_options(const render::Context& context, const io::FileHeader& file,
+                                                DecodeSite decode, bool host_takes_queue_lock);
 
   // `color_attribute`: the attribute's index in the file header (-1: none);
   // the player must decode only that attribute (PipelineOptions::attributes).
-  FrameFeed(render::Renderer& renderer, runtime::Player& player, const render::StagingAllocator* staging, int color_attribute);
+  FrameFeed(render::Renderer& renderer, runtime::Player& player, const render::StagingAllocator* staging,
+            int color_attribute);
   // Waits for the last commit's copy: the player may free the buffers it
   // copies from as soon as the feed is gone.
   ~FrameFeed();
@@ -70,7 +71,8 @@ class FrameFeed {
   // more for a view moving fast). Call it when the views or options change (once
   // per displayed frame is fine), before update(). Never called: every
   // tier is read.
-  void set_views(std::span<const render::View> views, const render::FluidOptions& fluid, const render::LodOptions& lod, float margin);
+  void set_views(std::span<const render::View> views, const render::FluidOptions& fluid, const render::LodOptions& lod,
+                 float margin);
 
   FeedUpdate update();
   const FeedUpdate& last() const { return last_; }

@@ -70,9 +70,9 @@ struct LiveOptions {
   // a host drawing its own ground passes render::FluidOptions::ground = false).
   io::UpAxis up = io::UpAxis::PosZ;
   std::vector<std::string> attributes;
-  int color_attribute = -1;             // which attribute the renderer colours by (-1: none)
-  bool ids = true;                      // frames carry stable ids; false: LOD values follow the particle index
-  std::filesystem::path record;         // empty: not recorded
+  int color_attribute = -1;      // which attribute the renderer colours by (-1: none)
+  bool ids = true;               // frames carry stable ids; false: LOD values follow the particle index
+  std::filesystem::path record;  // empty: not recorded
   // Chunk size; zstd level and plane packing of the recording (frames not
   // recorded are not compressed: only decoded at once).
   io::EncodeOptions encode{.chunk_particles = 65536, .zstd_level = 1};
@@ -146,7 +146,8 @@ class Stream {
   FeedUpdate show(uint64_t frame, std::chrono::milliseconds timeout = std::chrono::seconds(60));
   // Records the newest committed frame for `views` with the look
   // (render::Renderer::record: the caller submits `cmd`, waiting on the result).
-  render::FrameSync record(VkCommandBuffer cmd, const render::RenderTarget& target, std::span<const render::View> views);
+  render::FrameSync record(VkCommandBuffer cmd, const render::RenderTarget& target,
+                           std::span<const render::View> views);
   // A frame the host computed (live streams only; render::Error otherwise).
   uint64_t push(const LiveFrame& frame);
   // Closes a live recording (index and footer written); no-op otherwise.

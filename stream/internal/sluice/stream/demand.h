@@ -16,8 +16,8 @@ namespace sluice::stream {
 // `views` as render::Renderer::record() takes them (1 to 4). `margin`: how far, in
 // world units, the views may move before frames read now are drawn (head
 // motion in XR, orbiting on the desktop); boxes grow by it.
-runtime::ViewDemand view_demand(std::span<const render::View> views, const render::SceneInfo& scene, const render::FluidOptions& fluid,
-                                const render::LodOptions& lod, float margin = 0);
+runtime::ViewDemand view_demand(std::span<const render::View> views, const render::SceneInfo& scene,
+                                const render::FluidOptions& fluid, const render::LodOptions& lod, float margin = 0);
 
 // A margin for a camera that moves at most `speed` (world units per
 // second) over `seconds` of prefetch, at least a twentieth of `diagonal`

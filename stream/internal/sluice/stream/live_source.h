@@ -34,7 +34,7 @@ namespace sluice::stream {
 
 // The render::SceneInfo to make the render::Renderer with for live frames inside `bounds`.
 render::SceneInfo live_scene(const render::Bounds& bounds, const LiveOptions& options,
-                     std::vector<std::array<float, 2>> attribute_ranges = {}, uint64_t max_particles = 0);
+                             std::vector<std::array<float, 2>> attribute_ranges = {}, uint64_t max_particles = 0);
 
 class LiveSource {
  public:

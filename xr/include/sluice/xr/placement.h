@@ -35,7 +35,7 @@ struct Quat {
 
 Quat operator*(Quat a, Quat b);  // a after b
 Quat conjugate(Quat q);
-Quat normalize(Quat q);          // the identity for a zero quaternion
+Quat normalize(Quat q);  // the identity for a zero quaternion
 Vec3 rotate(Quat q, Vec3 v);
 // Rotation by `radians` about `axis` (normalized here; identity for a zero axis).
 Quat axis_angle(Vec3 axis, float radians);
@@ -51,7 +51,6 @@ Pose operator*(const Pose& a, const Pose& b);  // a after b: (a*b)(p) = a(b(p))
 Pose inverse(const Pose& p);
 Vec3 transform(const Pose& pose, Vec3 point);
 Mat4 to_matrix(const Pose& pose);
-
 
 struct Placement {
   Pose pose;
