@@ -93,7 +93,7 @@ struct PvdEntry {
 uint64_t write_pvd(const std::string& path, std::span<const PvdEntry> entries);
 
 // Series: frames of a .sluice file written out one file
-// each with export.h's writers, and a .pvd collection for a .vtp series:
+// each with the writers above, and a .pvd collection for a .vtp series:
 // what `sluice export` and the Python module's sluice.export() do.
 //
 // Frames are decoded, thinned and written in parallel (TBB), a bounded

@@ -99,7 +99,7 @@ struct RelayoutReport {
 EncodeOptions encoding_of(const ContainerReader& input, const RelayoutOptions& options);
 
 // Rewrites every frame of `input` into `output` (which must differ from it)
-// with options.format_major's layout. See the file comment.
+// with options.format_major's layout. See "Relayout" above.
 RelayoutReport relayout_container(const std::filesystem::path& input, const std::filesystem::path& output,
                                   const RelayoutOptions& options, const ProgressFn& progress = {});
 

@@ -126,7 +126,7 @@ class HostFrameAllocator final : public FrameAllocator {
  private:
   struct Memory;
   using Pool = BlockPool<Memory>;
-  std::unique_ptr<Pool> pool_;  // BlockPool (above)
+  std::unique_ptr<Pool> pool_;  // BlockPool (below)
 };
 
 // Relay: frames kept encoded, sent to device memory piece
