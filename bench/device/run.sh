@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Runs on the GPU machine (see bench/device/README.md): every benchmark the
 # issues ask GPU-machine figures for, in one call. Results go to $OUT.
-#   bash bench/device/run.sh [mpi] [io] [import] [layers] [band] [render] [stream] [split] [codec] [huge] [embed] [compare] [live] [stereo] [aniso] [xrsize] [firsthour] [streamcmp] [gpudecode] [gpuquick] [gpupair] [gpuab] [gpu100] [egl] [vtkpeer] [readpath] [importprobe] [relayprobe] [storeab] [gpusplit] [gpuplay] [gpuflight] [covered] [gpu100ab] [damf2] [gpusweep] [gpuvar] [relay] [relaytests] [relay100] [gpuplayall] [view] [viewall] [viewio] [tiersize] [tiergpu] [viewfull] [precision] [precision2] [precision3] [sendlite] [sendthreads] [houseab]   (default: io render stream)
+#   bash bench/device/run.sh [mpi] [io] [import] [layers] [band] [render] [stream] [split] [codec] [huge] [embed] [compare] [live] [stereo] [aniso] [xrsize] [firsthour] [streamcmp] [gpudecode] [gpuquick] [gpupair] [gpuab] [gpu100] [egl] [vtkpeer] [readpath] [importprobe] [relayprobe] [storeab] [gpusplit] [gpuplay] [gpuflight] [covered] [gpu100ab] [damf2] [gpusweep] [gpuvar] [relay] [relaytests] [relay100] [gpuplayall] [view] [viewall] [viewio] [tiersize] [tiergpu] [viewfull] [precision] [precision2] [precision3] [sendlite] [sendthreads] [sendcpu] [houseab]   (default: io render stream)
 set -uo pipefail
 # Folders on the GPU machine (it starts bare each session): SLUICE_SCRATCH holds
 # the unpacked libraries and the files stages write; OUT what comes back.
@@ -550,6 +550,12 @@ for stage in $stages; do
         for b in ./.gpu/sluice_base $S; do
           run $b bench view $T/v20.sluice --steps ${VIEW_STEPS:-12} --cache-steps ${CACHE_STEPS:-60} --memory 24G --no-psnr
         done
+      done
+      ;;
+    sendcpu)  # issue 45: is the relay's send slow for want of a core? bench view (page cache) under GNU time (.gpu/time, carried): context switches by read threads
+      [[ -f $T/v6.sluice ]] || run $S synth -n 100M --frames 6 -o $T/v6.sluice --force -q --gpu-decodable
+      for t in 13 8; do
+        run ./.gpu/time -v $S bench view $T/v6.sluice --steps 6 --cache-steps 40 --memory 24G --no-storage --no-psnr --read-threads $t
       done
       ;;
     houseab)  # issue 46: render, stream and decode figures of this build against BASE (pack.sh BASE=...), alternated twice

@@ -21,7 +21,7 @@
 #include "sluice/render/band_classifier.h"
 #include "sluice/render/context.h"
 #endif
-#include "table.h"
+#include "sluice/bench/table.h"
 #include "timing.h"
 
 namespace sluice::bench {
@@ -125,15 +125,15 @@ void run_band_bench(const BandBenchOptions& o) {
     const io::NarrowBand band = io::classify_narrow_band(frame.positions, options);
     const double one = timed_classify(frame, options, 1, o.min_seconds);
     const double all = timed_classify(frame, options, cores, o.min_seconds);
-    std::vector<std::string> row{std::to_string(f), std::to_string(n), num(h, 4),
+    std::vector<std::string> row{std::to_string(f), std::to_string(n), fixed(h, 4),
                                  std::to_string(band.counts[1]) + " + " + std::to_string(band.counts[2]) + " + " +
                                      std::to_string(band.counts[3]),
-                                 num(100.0 * double(band.surface()) / double(n), 1) + "%", num(double(n) / one / 1e6, 1),
-                                 num(double(n) / all / 1e6, 1)};
+                                 fixed(100.0 * double(band.surface()) / double(n), 1) + "%", fixed(double(n) / one / 1e6, 1),
+                                 fixed(double(n) / all / 1e6, 1)};
 #if SLUICE_WITH_RENDER
     if (gpu) {
       const GpuTiming t = timed_gpu_classify(*gpu, frame, options, band, o.min_seconds);
-      row.insert(row.end(), {num(t.median_ms, 3), num(double(n) / t.median_ms / 1e3, 1), std::to_string(t.differ)});
+      row.insert(row.end(), {fixed(t.median_ms, 3), fixed(double(n) / t.median_ms / 1e3, 1), std::to_string(t.differ)});
       if (!t.passes.empty()) {
         if (!passes) {
           std::vector<std::string> names{"frame", "particles", "voxels"};
@@ -142,8 +142,8 @@ void run_band_bench(const BandBenchOptions& o) {
           passes.emplace(names);
         }
         std::vector<std::string> cells{std::to_string(f), std::to_string(n), t.hashed ? "hashed" : "by cell"};
-        for (const auto& p : t.passes) cells.push_back(num(p.ms, 3));
-        cells.push_back(num(double(n) * 12 / (t.passes[1].ms * 1e-3) / 1e9, 1));
+        for (const auto& p : t.passes) cells.push_back(fixed(p.ms, 3));
+        cells.push_back(fixed(double(n) * 12 / (t.passes[1].ms * 1e-3) / 1e9, 1));
         passes->row(cells);
       }
     }
@@ -168,7 +168,7 @@ void run_band_bench(const BandBenchOptions& o) {
       std::snprintf(name, sizeof name, l == 5 ? "L%zu+" : "L%zu", l);
       layers.row({std::to_string(f), name, std::to_string(in_layer[l]),
                   std::to_string(exact_in_layer[l]),
-                  num(exact_total ? 100.0 * double(exact_in_layer[l]) / double(exact_total) : 0.0, 2) + "%",
+                  fixed(exact_total ? 100.0 * double(exact_in_layer[l]) / double(exact_total) : 0.0, 2) + "%",
                   std::to_string(lnm_in_layer[l])});
     }
     // Both F2 tests the dissertation compares: every particle of a selected
@@ -181,8 +181,8 @@ void run_band_bench(const BandBenchOptions& o) {
         extra += !exact[i] && io::is_surface(lnm->layer[i]);
       }
       agree.row({std::to_string(f), name, std::to_string(exact_total), std::to_string(lnm->surface()),
-                 num(100.0 * double(lnm->surface()) / double(n), 1) + "%",
-                 num(exact_total ? 100.0 * double(found) / double(exact_total) : 100.0, 2) + "%", std::to_string(extra)});
+                 fixed(100.0 * double(lnm->surface()) / double(n), 1) + "%",
+                 fixed(exact_total ? 100.0 * double(found) / double(exact_total) : 100.0, 2) + "%", std::to_string(extra)});
     }
   }
   speed.print(gpu ? "LNM classification (voxel 2h, F2 = every particle of a selected L2 voxel); GPU: median of its "

@@ -19,7 +19,7 @@
 #include "sluice/io/lod.h"
 #include "sluice/io/reader.h"
 #include "sluice/io/point_set.h"
-#include "table.h"
+#include "sluice/bench/table.h"
 #include "timing.h"
 
 namespace sluice::bench {
@@ -215,8 +215,8 @@ void compare_with_vtk(const IoBenchOptions& o, const import::FrameSource& source
       const std::string what = every_array ? "every array (" + std::to_string(rest.size() + !info.id_array.empty()) + ")"
                                            : std::string(info.id_array.empty() ? "points" : "points + ids") +
                                                  (legacy ? " (VTK: every array)" : "");
-      t.row({fl.name, what, keep_freed ? "kept" : "default", num(n / vtk / 1e6, 2), num(n / import / 1e6, 2),
-             num(vtk / import, 2) + "x", num(100.0 * checks / import, 1) + "%"});
+      t.row({fl.name, what, keep_freed ? "kept" : "default", fixed(n / vtk / 1e6, 2), fixed(n / import / 1e6, 2),
+             fixed(vtk / import, 2) + "x", fixed(100.0 * checks / import, 1) + "%"});
     }
   }
   t.print("The importer against VTK's own reader: same files, same arrays, 1 thread, page cache");
@@ -285,7 +285,7 @@ void run_io_bench(const IoBenchOptions& o) {
   const double z_bytes = double(fs::file_size(smallest));
   Table sizes({"format", "bytes", "bytes/particle", "vs raw float32 xyz"});
   auto size_row = [&](const std::string& name, double bytes) {
-    sizes.row({name, num(bytes, 0), num(bytes / n, 2), num(12.0 * n / bytes, 2) + "x smaller"});
+    sizes.row({name, fixed(bytes, 0), fixed(bytes / n, 2), fixed(12.0 * n / bytes, 2) + "x smaller"});
   };
   size_row("raw float32 xyz (no LOD value)", 12.0 * n);
   size_row("input files (as given)", double(data.input_bytes));
@@ -307,25 +307,25 @@ void run_io_bench(const IoBenchOptions& o) {
   const double rdz_1 = seconds_per_pass(o.min_seconds, [&] { read_and_decode_all(z, 1); });
   Table read({"reader", "threads", "M particles/s", "input MB/s", "output GB/s", "vs VTK (same threads)"});
   if (vtk_full > 0) {
-    read.row({"VTK's own reader, every array (as ParaView), 1 thread", "1", num(n / vtk_full / 1e6, 2),
-              num(double(data.input_bytes) / vtk_full / 1e6, 1), num(n * 12 / vtk_full / 1e9, 3), "-"});
+    read.row({"VTK's own reader, every array (as ParaView), 1 thread", "1", fixed(n / vtk_full / 1e6, 2),
+              fixed(double(data.input_bytes) / vtk_full / 1e6, 1), fixed(n * 12 / vtk_full / 1e9, 3), "-"});
   }
   // Every row names what it measured, once: the reader (from the input's
   // format, e.g. "VTK legacy polydata") and the thread count.
   const std::string format = input_format(source->info().description);
   const auto threads = [](int t) { return t == 1 ? std::string(", 1 thread") : ", " + std::to_string(t) + " threads"; };
-  read.row({"sluice import, " + format + " (points + ids)" + threads(1), "1", num(n / vtk_1 / 1e6, 2),
-            num(double(data.input_bytes) / vtk_1 / 1e6, 1), num(n * 12 / vtk_1 / 1e9, 3), "1.0x"});
-  read.row({"sluice import, " + format + " (points + ids)" + threads(cores), std::to_string(cores), num(n / vtk_n / 1e6, 2),
-            num(double(data.input_bytes) / vtk_n / 1e6, 1), num(n * 12 / vtk_n / 1e9, 3), "1.0x"});
-  read.row({".sluice quantized read+decode" + threads(1), "1", num(n / rd_1 / 1e6, 1), num(q_bytes / rd_1 / 1e6, 1),
-            num(out_bytes / rd_1 / 1e9, 2), num(vtk_1 / rd_1, 0) + "x"});
-  read.row({".sluice quantized --smallest read+decode" + threads(1), "1", num(n / rdz_1 / 1e6, 1), num(z_bytes / rdz_1 / 1e6, 1),
-            num(out_bytes / rdz_1 / 1e9, 2), num(vtk_1 / rdz_1, 0) + "x"});
-  read.row({".sluice quantized read+decode" + threads(cores), std::to_string(cores), num(n / rd_n / 1e6, 1),
-            num(q_bytes / rd_n / 1e6, 1), num(out_bytes / rd_n / 1e9, 2), num(vtk_n / rd_n, 0) + "x"});
-  read.row({".sluice lossless read+decode" + threads(cores), std::to_string(cores), num(n / rdl_n / 1e6, 1),
-            num(l_bytes / rdl_n / 1e6, 1), num(n * 16 / rdl_n / 1e9, 2), num(vtk_n / rdl_n, 0) + "x"});
+  read.row({"sluice import, " + format + " (points + ids)" + threads(1), "1", fixed(n / vtk_1 / 1e6, 2),
+            fixed(double(data.input_bytes) / vtk_1 / 1e6, 1), fixed(n * 12 / vtk_1 / 1e9, 3), "1.0x"});
+  read.row({"sluice import, " + format + " (points + ids)" + threads(cores), std::to_string(cores), fixed(n / vtk_n / 1e6, 2),
+            fixed(double(data.input_bytes) / vtk_n / 1e6, 1), fixed(n * 12 / vtk_n / 1e9, 3), "1.0x"});
+  read.row({".sluice quantized read+decode" + threads(1), "1", fixed(n / rd_1 / 1e6, 1), fixed(q_bytes / rd_1 / 1e6, 1),
+            fixed(out_bytes / rd_1 / 1e9, 2), fixed(vtk_1 / rd_1, 0) + "x"});
+  read.row({".sluice quantized --smallest read+decode" + threads(1), "1", fixed(n / rdz_1 / 1e6, 1), fixed(z_bytes / rdz_1 / 1e6, 1),
+            fixed(out_bytes / rdz_1 / 1e9, 2), fixed(vtk_1 / rdz_1, 0) + "x"});
+  read.row({".sluice quantized read+decode" + threads(cores), std::to_string(cores), fixed(n / rd_n / 1e6, 1),
+            fixed(q_bytes / rd_n / 1e6, 1), fixed(out_bytes / rd_n / 1e9, 2), fixed(vtk_n / rd_n, 0) + "x"});
+  read.row({".sluice lossless read+decode" + threads(cores), std::to_string(cores), fixed(n / rdl_n / 1e6, 1),
+            fixed(l_bytes / rdl_n / 1e6, 1), fixed(n * 16 / rdl_n / 1e9, 2), fixed(vtk_n / rdl_n, 0) + "x"});
   read.print("Read + decode from the page cache (output: 8 B/particle quantized, 16 B lossless; VTK: float32 xyz)");
   std::printf("  'sluice import' reads only the points and the id array (its own reader for legacy and text\n"
               "  files, VTK's XML readers for .vtu/.vtp); .sluice read+decode against VTK reading every\n"
@@ -341,8 +341,8 @@ void run_io_bench(const IoBenchOptions& o) {
     const double s = seconds_per_pass(o.min_seconds, [&] { decode_all(q, loaded, t); });
     const double gbps = double(loaded.particles) * 8 / s / 1e9;
     if (t == 1) base = gbps;
-    scaling.row({std::to_string(t), num(double(loaded.particles) / s / 1e6, 1), num(gbps, 2), num(gbps / t, 2),
-                 num(gbps / base, 2) + "x"});
+    scaling.row({std::to_string(t), fixed(double(loaded.particles) / s / 1e6, 1), fixed(gbps, 2), fixed(gbps / t, 2),
+                 fixed(gbps / base, 2) + "x"});
   }
   scaling.print("Decode scaling, quantized chunks in memory (" + std::to_string(loaded.chunks.size()) +
                 " chunk decodes per pass; the file's chunks repeated so every thread has work)");

@@ -13,7 +13,7 @@
 #include "sluice/render/offscreen.h"
 #include "sluice/render/renderer.h"
 #include "sluice/render/load.h"
-#include "table.h"
+#include "sluice/bench/table.h"
 
 namespace sluice::bench {
 namespace {
@@ -235,13 +235,13 @@ void run_layers_bench(const LayersBenchOptions& o) {
   bool near = false;
   for (const LayersRow& r : rows) {
     const double diff = r.coverage_all > 0 ? (r.coverage_surface - r.coverage_all) / r.coverage_all : 0.0;
-    std::vector<std::string> cells{std::to_string(r.frame), r.view, std::isinf(r.psnr) ? "identical" : num(r.psnr, 1),
-                                   num(100 * r.coverage_all, 2) + "%", num(100 * r.coverage_surface, 2) + "%",
-                                   num(100 * diff, 3) + "%", count_name(r.drawn_all), count_name(r.drawn_surface),
-                                   count_name(r.bytes_all), count_name(r.bytes_surface), num(r.gpu_ms_all, 2),
-                                   num(r.gpu_ms_surface, 2),
-                                   num(r.largest_splat_px, 0) + (r.near_cull() ? " > " + num(r.splat_limit_px, 0) + " *" : "")};
-    if (o.gpu) cells.push_back(r.classify_ms > 0 ? num(r.classify_ms, 3) : "-");
+    std::vector<std::string> cells{std::to_string(r.frame), r.view, std::isinf(r.psnr) ? "identical" : fixed(r.psnr, 1),
+                                   fixed(100 * r.coverage_all, 2) + "%", fixed(100 * r.coverage_surface, 2) + "%",
+                                   fixed(100 * diff, 3) + "%", count_name(r.drawn_all), count_name(r.drawn_surface),
+                                   count_name(r.bytes_all), count_name(r.bytes_surface), fixed(r.gpu_ms_all, 2),
+                                   fixed(r.gpu_ms_surface, 2),
+                                   fixed(r.largest_splat_px, 0) + (r.near_cull() ? " > " + fixed(r.splat_limit_px, 0) + " *" : "")};
+    if (o.gpu) cells.push_back(r.classify_ms > 0 ? fixed(r.classify_ms, 3) : "-");
     t.row(cells);
     near = near || r.near_cull();
   }

@@ -9,7 +9,7 @@
 #include "sluice/bench/synth.h"
 #include "sluice/stream/live_source.h"
 #include "sluice/render/offscreen.h"
-#include "table.h"
+#include "sluice/bench/table.h"
 
 namespace sluice::bench {
 
@@ -62,8 +62,8 @@ void run_live_bench(const LiveBenchOptions& o) {
     }
     live.finish();
     const double e = median(encode), t = median(total);
-    table.row({count_name(n), num(e, 1), num(double(n) / (e * 1e3), 1), num(median(decode), 1), num(median(upload), 2),
-               num(median(draw), 2), num(t, 1), num(1e3 / t, 1)});
+    table.row({count_name(n), fixed(e, 1), fixed(double(n) / (e * 1e3), 1), fixed(median(decode), 1), fixed(median(upload), 2),
+               fixed(median(draw), 2), fixed(t, 1), fixed(1e3 / t, 1)});
   }
   std::printf(
       "sluice bench live: frames pushed from memory through stream::LiveSource (encode on %u cores, decode into "

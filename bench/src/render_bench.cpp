@@ -26,7 +26,7 @@
 #include "sluice/render/load.h"
 #include "sluice/io/codec.h"
 #include "sluice/io/lod.h"
-#include "table.h"
+#include "sluice/bench/table.h"
 
 namespace sluice::bench {
 namespace {
@@ -278,14 +278,14 @@ void print_passes(const std::vector<Case>& cases) {
     std::vector<std::string> row{c.name, count_name(c.particles), c.lod, count_name(c.stats.drawn)};
     double cull = 0;
     for (const render::PassTime& p : c.stats.passes) {
-      row.push_back(num(p.ms, 2));
+      row.push_back(fixed(p.ms, 2));
       if (p.name == "cull") cull = p.ms;
     }
-    row.push_back(num(c.stats.gpu_ms, 2));
-    row.push_back(num(c.wall_ms, 1));
-    row.push_back(cull > 0 ? num(double(c.particles) / 1e6 / cull, 2) : "-");
-    row.push_back(num(c.stats.upload_ms, 2));
-    row.push_back(c.ellipsoids_ms < 0 ? "-" : num(c.ellipsoids_ms, 2));
+    row.push_back(fixed(c.stats.gpu_ms, 2));
+    row.push_back(fixed(c.wall_ms, 1));
+    row.push_back(cull > 0 ? fixed(double(c.particles) / 1e6 / cull, 2) : "-");
+    row.push_back(fixed(c.stats.upload_ms, 2));
+    row.push_back(c.ellipsoids_ms < 0 ? "-" : fixed(c.ellipsoids_ms, 2));
     passes.row(row);
   }
   passes.print("Per-pass time (ms, from timestamps; 'wall' is the render() call, submit to fence)");
@@ -338,8 +338,8 @@ void print_stereo(const RenderBenchOptions& o, const std::vector<Case>& cases) {
     const Case& one = cases[i];
     const Case& two = cases[i + 1];
     const std::string frame = one.name.substr(0, one.name.rfind(", stereo"));
-    stereo.row({frame, one.lod, count_name(one.stats.drawn), num(one.stats.gpu_ms, 2), num(two.stats.gpu_ms, 2),
-                num(two.stats.gpu_ms / std::max(one.stats.gpu_ms, 1e-9), 2) + "x", one.stats.gpu_ms <= 11.1 ? "yes" : "no"});
+    stereo.row({frame, one.lod, count_name(one.stats.drawn), fixed(one.stats.gpu_ms, 2), fixed(two.stats.gpu_ms, 2),
+                fixed(two.stats.gpu_ms / std::max(one.stats.gpu_ms, 1e-9), 2) + "x", one.stats.gpu_ms <= 11.1 ? "yes" : "no"});
   }
   stereo.print("Stereo: both eyes at " + std::to_string(o.width) + "x" + std::to_string(o.height) +
                " each, in one pass (2-layer target) against two mono passes of the same views (GPU ms)");
@@ -352,8 +352,8 @@ void print_peer(const RenderBenchOptions& o, const std::vector<Case>& cases) {
   for (const Case& c : cases) {
     if (c.vtk_ms < 0) continue;
     any_vtk = true;
-    peer.row({c.name, count_name(c.particles), num(c.stats.gpu_ms, 1), num(c.wall_ms, 1), num(c.vtk_ms, c.vtk_ms < 100 ? 1 : 0),
-              num(c.vtk_ms / c.wall_ms, 1) + "x"});
+    peer.row({c.name, count_name(c.particles), fixed(c.stats.gpu_ms, 1), fixed(c.wall_ms, 1), fixed(c.vtk_ms, c.vtk_ms < 100 ? 1 : 0),
+              fixed(c.vtk_ms / c.wall_ms, 1) + "x"});
   }
   if (any_vtk) {
     peer.print("Against VTK 9 vtkOpenGLFluidMapper (same frame, camera, radius and size; NarrowRange, "
@@ -405,7 +405,7 @@ void run_render_bench(const RenderBenchOptions& o) {
         lod.mode = render::LodMode::DensityPreserving;
         lod.level = o.lod_level;
       }
-      const std::string lod_name = lod_on ? "density " + num(o.lod_level, 2) : "off";
+      const std::string lod_name = lod_on ? "density " + fixed(o.lod_level, 2) : "off";
       if (o.stereo) {
         const render::Bounds& b = scene.bounds;
         const float extent = std::max({b.max.x - b.min.x, b.max.y - b.min.y, b.max.z - b.min.z});

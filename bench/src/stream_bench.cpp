@@ -19,7 +19,7 @@
 #include "sluice/io/codec.h"
 #include "sluice/io/reader.h"
 #include "sluice/runtime/pipeline.h"
-#include "table.h"
+#include "sluice/bench/table.h"
 
 namespace sluice::bench {
 
@@ -207,8 +207,8 @@ double chunk_read_decode_fps(const io::ContainerReader& reader, const Slice& sli
   return double(frames) / seconds_since(start);
 }
 
-std::string gbps(double bytes_per_second) { return num(bytes_per_second / 1e9, 2); }
-std::string percent(double share) { return num(100 * share, 0) + "%"; }
+std::string gbps(double bytes_per_second) { return fixed(bytes_per_second / 1e9, 2); }
+std::string percent(double share) { return fixed(100 * share, 0) + "%"; }
 std::string threads_text(int n) { return std::to_string(n) + (n == 1 ? " thread" : " threads"); }
 
 }  // namespace
@@ -231,14 +231,14 @@ void run_stream_bench(const StreamBenchOptions& o) {
   std::printf("sluice bench stream: %s%s\n", o.file.c_str(),
               o.surface ? " (surface and blobs: what a player reads of a file with layers)" : "");
   std::printf("  %llu of %llu frames (%s GB on disk), %.2f M particles/frame, %.1f MB/frame on disk, %.1f MB/frame decoded\n",
-              (unsigned long long)slice.frames, (unsigned long long)reader.frame_count(), num(double(slice.bytes) / 1e9, 2).c_str(),
+              (unsigned long long)slice.frames, (unsigned long long)reader.frame_count(), fixed(double(slice.bytes) / 1e9, 2).c_str(),
               double(slice.particles) / double(slice.frames) / 1e6, in / 1e6, out / 1e6);
   if (slice.read != slice.bytes) {
     std::printf("  the layers read take %.1f MB/frame of %.1f MB/frame of records (%s)\n", in / 1e6,
                 double(slice.bytes) / double(slice.frames) / 1e6, percent(double(slice.read) / double(slice.bytes)).c_str());
   }
   std::printf("machine: %s; pipeline: %d decode workers, %s reading, memory cap %s GB; timings of at least %.1f s\n",
-              cpu_model().c_str(), cores, threads_text(readers).c_str(), num(double(setup.memory) / (1 << 30), 1).c_str(),
+              cpu_model().c_str(), cores, threads_text(readers).c_str(), fixed(double(setup.memory) / (1 << 30), 1).c_str(),
               o.min_seconds);
   if (!o.frames && slice.frames < reader.frame_count()) {
     std::printf("  (only the frames that fit in 40%% of available memory, so the page-cache figures are from the cache)\n");
@@ -249,8 +249,8 @@ void run_stream_bench(const StreamBenchOptions& o) {
   const double copy_1 = memcpy_gbps(std::min(1.0, o.min_seconds)) * 1e9;
   const int all_cores = std::max(cores, core_count());  // the machine's bound, not the pipeline's share
   const double copy_n = parallel_memcpy_gbps(all_cores, std::min(1.0, o.min_seconds)) * 1e9;
-  bounds.row({"memcpy, 1 thread", gbps(copy_1), num(copy_1 / out, 1), "decoded bytes"});
-  bounds.row({"memcpy, " + threads_text(all_cores), gbps(copy_n), num(copy_n / out, 1), "decoded bytes"});
+  bounds.row({"memcpy, 1 thread", gbps(copy_1), fixed(copy_1 / out, 1), "decoded bytes"});
+  bounds.row({"memcpy, " + threads_text(all_cores), gbps(copy_n), fixed(copy_n / out, 1), "decoded bytes"});
   double storage = 0, cold_share = 1;
   std::optional<double> direct;
   if (o.storage) {
@@ -260,26 +260,26 @@ void run_stream_bench(const StreamBenchOptions& o) {
     direct = sequential_read_gbps(o.file, slice.offset, slice.bytes, ReadMode::Direct, 0, readers);
     if (direct) *direct *= 1e9;
     storage = std::max(cold, direct.value_or(0));
-    bounds.row({"pread, storage, cache dropped, " + threads_text(readers), gbps(cold), num(cold / in, 1),
+    bounds.row({"pread, storage, cache dropped, " + threads_text(readers), gbps(cold), fixed(cold / in, 1),
                 "file bytes, kernel readahead"});
-    if (direct) bounds.row({"pread, storage, O_DIRECT, " + threads_text(readers), gbps(*direct), num(*direct / in, 1), "file bytes"});
+    if (direct) bounds.row({"pread, storage, O_DIRECT, " + threads_text(readers), gbps(*direct), fixed(*direct / in, 1), "file bytes"});
     else bounds.row({"pread, storage, O_DIRECT", "-", "-", "refused by the filesystem"});
   }
   (void)sequential_read_gbps(o.file, slice.offset, slice.bytes, ReadMode::PageCache, 0, readers);  // bring it in
   const double warm_share = page_cache_share(o.file, slice.offset, slice.bytes);
   const double cached_1 = *sequential_read_gbps(o.file, slice.offset, slice.bytes, ReadMode::PageCache, o.min_seconds, 1) * 1e9;
-  bounds.row({"pread, page cache, 1 thread", gbps(cached_1), num(cached_1 / in, 1), "file bytes"});
+  bounds.row({"pread, page cache, 1 thread", gbps(cached_1), fixed(cached_1 / in, 1), "file bytes"});
   double cached = cached_1;
   if (readers > 1) {
     cached = *sequential_read_gbps(o.file, slice.offset, slice.bytes, ReadMode::PageCache, o.min_seconds, readers) * 1e9;
-    bounds.row({"pread, page cache, " + threads_text(readers), gbps(cached), num(cached / in, 1), "file bytes"});
+    bounds.row({"pread, page cache, " + threads_text(readers), gbps(cached), fixed(cached / in, 1), "file bytes"});
   }
   const double decode_fps = decode_only_fps(reader, slice, cores, o.min_seconds);
   bounds.row({"decode only, " + std::to_string(cores) + " workers, records in memory", gbps(decode_fps * out),
-              num(decode_fps, 1), "decoded bytes (the work itself, not a bound)"});
+              fixed(decode_fps, 1), "decoded bytes (the work itself, not a bound)"});
   const double chunked_fps = chunk_read_decode_fps(reader, slice, all_cores, o.min_seconds);
   bounds.row({"pread + decode per chunk, " + std::to_string(all_cores) + " workers, page cache", gbps(chunked_fps * out),
-              num(chunked_fps, 1), "decoded bytes (each worker reads its own chunks; not a bound)"});
+              fixed(chunked_fps, 1), "decoded bytes (each worker reads its own chunks; not a bound)"});
   bounds.print("Machine bounds, measured now");
   if (o.storage) std::printf("  page cache held %s of the frames after dropping them\n", percent(cold_share).c_str());
   std::printf("  page cache held %s of the frames for the page-cache passes\n", percent(warm_share).c_str());
@@ -295,11 +295,11 @@ void run_stream_bench(const StreamBenchOptions& o) {
     // about 0 from the page cache.
     const double frames = double(std::max<uint64_t>(p.frames, 1));
     const double asked = double(p.bytes_read) / frames, device = double(p.device_bytes) / frames;
-    passes.row({name, num(fps, 1), num(fps * double(slice.particles) / double(slice.frames) / 1e6, 1),
-                num(p.rates.read_mbps / 1e3, 2), num(asked / 1e6, 1) + " MB",
-                num(device / 1e6, 1) + " MB" + (asked > 0 && device > 0 ? " (" + num(device / asked, 2) + "x)" : ""),
-                num(p.rates.decode_mbps / 1e3, 2), p.window,
-                num(std::min(read_fps, copy_fps), 1), percent(fps / std::min(read_fps, copy_fps)),
+    passes.row({name, fixed(fps, 1), fixed(fps * double(slice.particles) / double(slice.frames) / 1e6, 1),
+                fixed(p.rates.read_mbps / 1e3, 2), fixed(asked / 1e6, 1) + " MB",
+                fixed(device / 1e6, 1) + " MB" + (asked > 0 && device > 0 ? " (" + fixed(device / asked, 2) + "x)" : ""),
+                fixed(p.rates.decode_mbps / 1e3, 2), p.window,
+                fixed(std::min(read_fps, copy_fps), 1), percent(fps / std::min(read_fps, copy_fps)),
                 read_slower ? read_name : "memcpy, " + threads_text(all_cores), percent(fps / decode_fps), p.io_mode});
     if (p.cache_hits) {
       std::printf("  warning: %s: %llu frames came from memory, not through the pipeline\n", name.c_str(),
@@ -336,8 +336,8 @@ void run_stream_bench(const StreamBenchOptions& o) {
       per_worker += p.rates.worker_decode_mbps[w] / active;
       busy += p.rates.worker_busy[w] / active;
     }
-    scaling.row({std::to_string(t), num(fps, 1), num(p.rates.decode_mbps / 1e3, 2), num(per_worker / 1e3, 2),
-                 percent(busy), num(fps / base, 2) + "x"});
+    scaling.row({std::to_string(t), fixed(fps, 1), fixed(p.rates.decode_mbps / 1e3, 2), fixed(per_worker / 1e3, 2),
+                 percent(busy), fixed(fps / base, 2) + "x"});
   }
   scaling.print("Decode scaling through the pipeline, page cache (" + threads_text(readers) + " reading)");
 }

@@ -26,7 +26,7 @@
 #include "sluice/render/transfer_bound.h"
 #include "sluice/runtime/pipeline.h"
 #include "stream_slice.h"
-#include "table.h"
+#include "sluice/bench/table.h"
 
 namespace sluice::bench {
 namespace {
@@ -259,7 +259,7 @@ AtOnce read_and_copy_at_once(render::Context& context, const std::string& path, 
   return out;
 }
 
-std::string percent(double share) { return num(100 * share, 0) + "%"; }
+std::string percent(double share) { return fixed(100 * share, 0) + "%"; }
 
 }  // namespace
 
@@ -331,7 +331,7 @@ void run_stream_gpu_bench(const StreamBenchOptions& o) {
               "decoding), memory cap %s GB\n",
               cpu_model().c_str(), core_count(), context.device().name.c_str(), context.device().driver.c_str(),
               setup.decode_threads, setup.read_threads, cpu_setup.decode_threads, cpu_setup.read_threads,
-              num(double(setup.memory) / (1 << 30), 1).c_str());
+              fixed(double(setup.memory) / (1 << 30), 1).c_str());
 
   // 1. Bounds.
   std::fflush(stdout);
@@ -361,26 +361,26 @@ void run_stream_gpu_bench(const StreamBenchOptions& o) {
   const double staged = double(alone.plan.staged_bytes());  // frame 0's, as the GPU path copies it
   const double decoded = particles * (8 + (setup.color >= 0 ? 2 : 0));
   Table bounds({"bound", "GB/s", "frames/s of this file", "what"});
-  bounds.row({"pread, page cache, " + std::to_string(setup.read_threads) + " threads", num(cached / 1e9, 2),
-              num(cached / in, 1), "file bytes read into one hot 8 MiB buffer per thread"});
+  bounds.row({"pread, page cache, " + std::to_string(setup.read_threads) + " threads", fixed(cached / 1e9, 2),
+              fixed(cached / in, 1), "file bytes read into one hot 8 MiB buffer per thread"});
   // The CPU row's own readers, when they differ: its bound.
   const double cached_cpu = cpu_setup.read_threads == setup.read_threads ? cached : page_cache_read(cpu_setup.read_threads);
   if (cpu_setup.read_threads != setup.read_threads) {
     bounds.row({"pread, page cache, " + std::to_string(cpu_setup.read_threads) + " threads (the CPU row's)",
-                num(cached_cpu / 1e9, 2), num(cached_cpu / in, 1), "file bytes read into one hot 8 MiB buffer per thread"});
+                fixed(cached_cpu / 1e9, 2), fixed(cached_cpu / in, 1), "file bytes read into one hot 8 MiB buffer per thread"});
   }
-  bounds.row({"pread into a window of 12 frame areas", num(window_pread / 1e9, 2), num(window_pread / in, 1),
+  bounds.row({"pread into a window of 12 frame areas", fixed(window_pread / 1e9, 2), fixed(window_pread / in, 1),
               "every destination line cold, as in staging"});
-  bounds.row({"copy from the file's mapping into the window (streaming stores)", num(window_mapped / 1e9, 2),
-              num(window_mapped / in, 1), "the pipeline's default read"});
-  bounds.row({"the mapped read into the window and the copy (2 in flight), at once", num(at_once.read_gbps, 2) + " + " +
-              num(at_once.copy_gbps, 2), num(at_once.read_gbps * 1e9 / in, 1) + " read, " +
-              num(at_once.copy_gbps * 1e9 / staged, 1) + " copied", "both share the host's memory: what the pipeline does"});
-  bounds.row({"host -> device copy (transfer queue, the best shape below)", num(h2d / 1e9, 2),
-              num(h2d / staged, 1) + " encoded, " + num(h2d / decoded, 1) + " decoded",
+  bounds.row({"copy from the file's mapping into the window (streaming stores)", fixed(window_mapped / 1e9, 2),
+              fixed(window_mapped / in, 1), "the pipeline's default read"});
+  bounds.row({"the mapped read into the window and the copy (2 in flight), at once", fixed(at_once.read_gbps, 2) + " + " +
+              fixed(at_once.copy_gbps, 2), fixed(at_once.read_gbps * 1e9 / in, 1) + " read, " +
+              fixed(at_once.copy_gbps * 1e9 / staged, 1) + " copied", "both share the host's memory: what the pipeline does"});
+  bounds.row({"host -> device copy (transfer queue, the best shape below)", fixed(h2d / 1e9, 2),
+              fixed(h2d / staged, 1) + " encoded, " + fixed(h2d / decoded, 1) + " decoded",
               "bytes copied: encoded area, or decoded particles"});
-  bounds.row({"GPU decode alone, frame resident", num((staged / (alone.ms * 1e-3)) / 1e9, 1), num(1e3 / alone.ms, 1),
-              num(double(alone.particles) / (alone.ms * 1e-3) / 1e9, 1) + " G particles/s (" + num(alone.ms, 3) + " ms a frame)"});
+  bounds.row({"GPU decode alone, frame resident", fixed((staged / (alone.ms * 1e-3)) / 1e9, 1), fixed(1e3 / alone.ms, 1),
+              fixed(double(alone.particles) / (alone.ms * 1e-3) / 1e9, 1) + " G particles/s (" + fixed(alone.ms, 3) + " ms a frame)"});
   bounds.print("Bounds, measured now");
   print_bound_details(copy_bytes, copies, alone);
   std::fflush(stdout);
@@ -431,12 +431,12 @@ void run_stream_gpu_bench(const StreamBenchOptions& o) {
     passes.row({std::string(gpu ? "GPU (kept encoded)" : "CPU workers") + (kWays[w].relayed ? ", relayed" : "") +
                     (kWays[w].mapped ? ", mapped" : ", pread") + ", " +
                     std::to_string(used.decode_threads) + " + " + std::to_string(used.read_threads),
-                num(fps, 1), num(fps * particles / 1e6, 1),
-                num(per_frame / 1e6, 1), p.window, num(bound, 1), percent(fps / bound),
+                fixed(fps, 1), fixed(fps * particles / 1e6, 1),
+                fixed(per_frame / 1e6, 1), p.window, fixed(bound, 1), percent(fps / bound),
                 read_fps < copy_fps ? "page-cache read" : "host -> device copy",
                 gpu ? percent(fps / std::min(at_once.read_gbps * 1e9 / in, at_once.copy_gbps * 1e9 / per_frame)) : "-",
-                num(1e3 * p.cpu / double(p.frames), 2),
-                num(p.cpu / p.seconds, 1), gpu ? percent(p.in_place) : "-", gpu ? percent(p.relayed) : "-", percent(p.reading),
+                fixed(1e3 * p.cpu / double(p.frames), 2),
+                fixed(p.cpu / p.seconds, 1), gpu ? percent(p.in_place) : "-", gpu ? percent(p.relayed) : "-", percent(p.reading),
                 percent(p.read_busy), std::to_string(p.fresh_blocks), percent(p.waiting_frames),
                 percent(p.waiting_gpu)});
   }

@@ -1,19 +1,19 @@
-#include "table.h"
+#include "sluice/bench/table.h"
 
 #include <algorithm>
 #include <cstdio>
 
 namespace sluice::bench {
 
-std::string num(double v, int decimals) {
+std::string fixed(double v, int decimals) {
   char buf[64];
   std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
   return buf;
 }
 
 std::string count_name(uint64_t n) {
-  if (n >= 1'000'000 && n % 100'000 == 0) return num(double(n) / 1e6, n % 1'000'000 ? 1 : 0) + "M";
-  if (n >= 1'000) return num(double(n) / 1e3, n % 1000 ? 1 : 0) + "k";
+  if (n >= 1'000'000 && n % 100'000 == 0) return fixed(double(n) / 1e6, n % 1'000'000 ? 1 : 0) + "M";
+  if (n >= 1'000) return fixed(double(n) / 1e3, n % 1000 ? 1 : 0) + "k";
   return std::to_string(n);
 }
 

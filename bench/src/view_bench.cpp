@@ -25,7 +25,7 @@
 #include "sluice/render/staging_allocator.h"
 #include "sluice/render/load.h"
 #include "sluice/runtime/player.h"
-#include "table.h"
+#include "sluice/bench/table.h"
 
 namespace sluice::bench {
 namespace {
@@ -411,7 +411,7 @@ double share_in_view(const io::ContainerReader& reader, uint64_t frame, const st
   return p.count() ? double(inside) / double(p.count()) : 0;
 }
 
-std::string mb(double bytes) { return num(bytes / 1e6, 1) + " MB"; }
+std::string mb(double bytes) { return fixed(bytes / 1e6, 1) + " MB"; }
 
 // The read threads' time on relayed frames by part, ms a frame read summed
 // over the threads ("-" where no frame was relayed).
@@ -419,11 +419,11 @@ std::string relay_parts(const Run& r) {
   const runtime::PipelineStats::RelayTimes& t = r.relay;
   const double total = t.claim_seconds + t.copy_seconds + t.check_seconds + t.plan_seconds + t.send_seconds;
   if (r.frames_read == 0 || total <= 0) return "-";
-  const auto ms = [&](double seconds) { return num(1e3 * seconds / double(r.frames_read), 2); };
+  const auto ms = [&](double seconds) { return fixed(1e3 * seconds / double(r.frames_read), 2); };
   return ms(t.claim_seconds) + "/" + ms(t.copy_seconds) + "/" + ms(t.check_seconds) + "/" + ms(t.plan_seconds) + "/" +
          ms(t.send_seconds);
 }
-std::string db_text(double v) { return std::isinf(v) ? "identical" : num(v, 1) + " dB"; }
+std::string db_text(double v) { return std::isinf(v) ? "identical" : fixed(v, 1) + " dB"; }
 
 // The fly-in's last frame alone, from the page cache, read by its view and
 // whole: the share of the full read's bytes the view read, beside the share
@@ -442,9 +442,9 @@ void print_close_up(Bench& bench, const io::ContainerReader& reader, const ViewB
   std::printf("\nThe close-up (the fly-in's last view), frame %llu: reading by the view read %s of the full read "
               "(%s of %s a frame read); %s of the frame's surface particles and blobs lie in the view\n",
               (unsigned long long)frame,
-              per_frame(whole) > 0 ? (num(100.0 * per_frame(view) / per_frame(whole), 1) + "%").c_str() : "-",
+              per_frame(whole) > 0 ? (fixed(100.0 * per_frame(view) / per_frame(whole), 1) + "%").c_str() : "-",
               mb(per_frame(view)).c_str(), mb(per_frame(whole)).c_str(),
-              (num(100.0 * in_view, 1) + "%").c_str());
+              (fixed(100.0 * in_view, 1) + "%").c_str());
 }
 
 }  // namespace
@@ -479,7 +479,7 @@ void run_view_bench(const ViewBenchOptions& o) {
     disk_gbps = sequential_read_gbps(o.file, 0, probe, ReadMode::Direct, 0, 4);
     if (disk_gbps) {
       std::printf("disk: %s MB/s for sequential O_DIRECT reads of 8 MiB (4 threads, the first %s of this file)\n",
-                  num(*disk_gbps * 1e3, 0).c_str(), mb(double(probe)).c_str());
+                  fixed(*disk_gbps * 1e3, 0).c_str(), mb(double(probe)).c_str());
     } else {
       std::printf("disk: O_DIRECT refused here; no sequential bound measured\n");
     }
@@ -492,9 +492,9 @@ void run_view_bench(const ViewBenchOptions& o) {
     if (s == Segment::Pause || r.wait_ms.empty()) return;
     std::vector<double> step(r.wait_ms.size());
     for (size_t k = 0; k < step.size(); ++k) step[k] = r.wait_ms[k] + r.commit_ms[k] + r.upload_ms[k] + r.render_ms[k];
-    parts.row({segment_name(s), by_view ? "by view" : "full", from, num(median(step), 2), num(median(r.wait_ms), 2),
-               num(median(r.commit_ms), 2), num(median(r.upload_ms), 2), num(median(r.render_ms), 2), num(median(r.ready), 1),
-               r.frames_read ? num(1e3 * r.read_seconds / double(r.frames_read), 2) : "-", relay_parts(r)});
+    parts.row({segment_name(s), by_view ? "by view" : "full", from, fixed(median(step), 2), fixed(median(r.wait_ms), 2),
+               fixed(median(r.commit_ms), 2), fixed(median(r.upload_ms), 2), fixed(median(r.render_ms), 2), fixed(median(r.ready), 1),
+               r.frames_read ? fixed(1e3 * r.read_seconds / double(r.frames_read), 2) : "-", relay_parts(r)});
   };
   Table table({"segment", "read", "from", "frames/s", "first frame (start)", "frames/s after it", "read per frame", "device per frame", "runs per frame",
                "records per frame", "worker us per record", "of the records", "of the disk's bound", "refinements"});
@@ -507,21 +507,21 @@ void run_view_bench(const ViewBenchOptions& o) {
     const double after = r.seconds - r.first_seconds;
     const std::string steady = s == Segment::Pause || r.frames_shown < 2 || after <= 0
                                    ? "-"
-                                   : num(double(r.frames_shown - 1) / after, 1);
+                                   : fixed(double(r.frames_shown - 1) / after, 1);
     // The share of the disk's sequential rate the segment drew from it.
     const bool cold = std::string(from).find("storage") != std::string::npos;
     const std::string bound = cold && disk_gbps && r.seconds > 0
-                                  ? num(100.0 * double(r.device_bytes) / r.seconds / (*disk_gbps * 1e9), 0) + "%"
+                                  ? fixed(100.0 * double(r.device_bytes) / r.seconds / (*disk_gbps * 1e9), 0) + "%"
                                   : "-";
     table.row({segment_name(s), by_view ? "by view" : "full", from,
-               s == Segment::Pause ? num(r.seconds * 1e3, 1) + " ms to converge" : num(fps, 1),
-               s == Segment::Pause ? "-" : num(r.first_seconds * 1e3, 1) + " ms (" + num(r.start_seconds * 1e3, 1) + ")", steady,
+               s == Segment::Pause ? fixed(r.seconds * 1e3, 1) + " ms to converge" : fixed(fps, 1),
+               s == Segment::Pause ? "-" : fixed(r.first_seconds * 1e3, 1) + " ms (" + fixed(r.start_seconds * 1e3, 1) + ")", steady,
                s == Segment::Pause ? mb(double(r.bytes_read)) + " (refinement)" : mb(per),
-               s == Segment::Pause ? mb(double(r.device_bytes)) : mb(device) + (per > 0 && cold ? " (" + num(device / per, 2) + "x)" : ""),
+               s == Segment::Pause ? mb(double(r.device_bytes)) : mb(device) + (per > 0 && cold ? " (" + fixed(device / per, 2) + "x)" : ""),
                // (Relayed frames are checked on the read threads: no worker records.)
-               by_view ? num(double(r.runs) / read, 1) : "-", r.records ? num(double(r.records) / read, 0) : "-",
-               r.records ? num(1e6 * r.worker_seconds / double(r.records), 1) : "-",
-               r.record_bytes ? num(100.0 * double(r.bytes_read) / double(r.record_bytes), 1) + "%" : "-", bound,
+               by_view ? fixed(double(r.runs) / read, 1) : "-", r.records ? fixed(double(r.records) / read, 0) : "-",
+               r.records ? fixed(1e6 * r.worker_seconds / double(r.records), 1) : "-",
+               r.record_bytes ? fixed(100.0 * double(r.bytes_read) / double(r.record_bytes), 1) + "%" : "-", bound,
                std::to_string(r.refinements)});
     add_parts(s, by_view, from, r);
   };

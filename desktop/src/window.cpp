@@ -146,17 +146,17 @@ struct detail::WindowImpl {
   vk::Extent2D captured;
   int captured_slot = -1;
 
+  const render::Context& context;  // its fence waits
   // Held around submits and presents: the context's relay may share the
   // queue (render/context.h, "Queues").
   std::mutex& queue_lock;
 
-  WindowImpl(const render::Context& context, const WindowOptions& o)
-      : ctx(context.vulkan()), options(o), queue_lock(context.queue_lock()) {}
+  WindowImpl(const render::Context& c, const WindowOptions& o)
+      : ctx(c.vulkan()), options(o), context(c), queue_lock(c.queue_lock()) {}
   void create_swapchain();
   void wait(Slot& s) {
     if (!s.submitted) return;
-    while (ctx.device.waitForFences(*s.fence, VK_TRUE, UINT64_MAX) == vk::Result::eTimeout) {
-    }
+    context.wait(*s.fence);
     s.submitted = false;
   }
   // Every frame this window submitted is done (its own work, not the device's).
@@ -192,8 +192,7 @@ void detail::WindowImpl::run_once(const std::function<void(vk::CommandBuffer)>& 
     const std::lock_guard lock(queue_lock);
     ctx.queue.submit2(vk::SubmitInfo2({}, {}, cb), *fence);
   }
-  while (ctx.device.waitForFences(*fence, VK_TRUE, UINT64_MAX) == vk::Result::eTimeout) {
-  }
+  context.wait(*fence);
 }
 
 void detail::WindowImpl::create_swapchain() {

@@ -346,6 +346,7 @@ Context::~Context() = default;
 const VulkanHandles& Context::vulkan() const { return impl_->handles; }
 bool Context::owns_device() const { return impl_->owning; }
 bool Context::relay_queue_shared() const { return impl_->relay_shared; }
+void Context::wait(VkFence fence) const { impl_->wait(fence); }
 std::mutex& Context::queue_lock() const { return impl_->queue_mutex; }
 
 std::vector<const char*> required_instance_extensions() { return {}; }
@@ -450,7 +451,11 @@ void detail::ContextImpl::run_once(const std::function<void(vk::CommandBuffer)>&
   vk::raii::Fence fence(device, vk::FenceCreateInfo());
   vk::CommandBufferSubmitInfo cb(cmd);
   submit(graphics_queue, vk::SubmitInfo2({}, {}, cb), *fence);
-  while (device.waitForFences(*fence, VK_TRUE, UINT64_MAX) == vk::Result::eTimeout) {
+  wait(*fence);
+}
+
+void detail::ContextImpl::wait(vk::Fence fence) const {
+  while (device.waitForFences(fence, VK_TRUE, UINT64_MAX) == vk::Result::eTimeout) {
   }
 }
 

@@ -34,8 +34,7 @@ struct detail::OffscreenTargetImpl {
   OffscreenTargetImpl(detail::ContextImpl& c, const OffscreenOptions& o) : ctx(c), options(o) {}
   void wait(Slot& s) {
     if (!s.submitted) return;
-    while (ctx.device.waitForFences(*s.fence, VK_TRUE, UINT64_MAX) == vk::Result::eTimeout) {
-    }
+    ctx.wait(*s.fence);
     s.submitted = false;
   }
   void wait_all() {

@@ -36,8 +36,7 @@ double sustained_copy_gbps(detail::ContextImpl& ctx, vk::Buffer source, uint64_t
     ctx.submit(ctx.transfer_queue, vk::SubmitInfo2({}, {}, cb), *fences[k]);
   };
   const auto wait = [&](int k) {
-    while (ctx.device.waitForFences(*fences[k], VK_TRUE, UINT64_MAX) == vk::Result::eTimeout) {
-    }
+    ctx.wait(*fences[k]);
     ctx.device.resetFences(*fences[k]);
   };
   for (int k = 0; k < in_flight; ++k) submit(k);  // warm-up: first touches, clocks up

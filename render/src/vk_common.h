@@ -66,6 +66,7 @@ struct detail::ContextImpl {
   // relay shares it: sluice's submissions go through here.
   void submit(const vk::raii::Queue& queue, const vk::SubmitInfo2& submission, vk::Fence fence = {}) const;
   void wait_idle(const vk::raii::Queue& queue) const;
+  void wait(vk::Fence fence) const;  // Context::wait
   // Records `record` into a fresh command buffer on the graphics queue, submits
   // it and waits. For setup work only.
   void run_once(const std::function<void(vk::CommandBuffer)>& record) const;

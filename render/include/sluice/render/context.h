@@ -144,6 +144,9 @@ class Context {
   // See "Queues" above. Any thread.
   bool relay_queue_shared() const;
   std::mutex& queue_lock() const;
+  // Blocks the calling thread until `fence` (made on this context's device)
+  // is signalled; no timeout (a lost device throws vk::SystemError). Any thread.
+  void wait(VkFence fence) const;
   // Bytes still free in one memory heap (budget - usage from
   // VK_EXT_memory_budget where present, else the heap size). Any thread.
   uint64_t heap_available_bytes(uint32_t heap) const;

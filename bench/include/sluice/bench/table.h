@@ -18,7 +18,8 @@ class Table {
   std::vector<std::vector<std::string>> rows_;
 };
 
-std::string num(double v, int decimals);
+// `v` with `decimals` digits after the point: fixed(2.345, 1) -> "2.3" (also the CLI's numbers).
+std::string fixed(double v, int decimals);
 // "1M", "2.5M", "100k", "950": particle counts in table rows.
 std::string count_name(uint64_t n);
 // The median of `v` (0 when empty).
