@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Runs on the GPU machine (see bench/device/README.md): every benchmark the
 # issues ask GPU-machine figures for, in one call. Results go to $OUT.
-#   bash bench/device/run.sh [mpi] [io] [import] [layers] [band] [render] [stream] [split] [codec] [huge] [embed] [compare] [live] [stereo] [aniso] [xrsize] [firsthour] [streamcmp] [gpudecode] [gpuquick] [gpupair] [gpuab] [gpu100] [egl] [vtkpeer] [readpath] [importprobe] [relayprobe] [storeab] [gpusplit] [gpuplay] [gpuflight] [covered] [gpu100ab] [damf2] [gpusweep] [gpuvar] [relay] [relaytests] [relay100] [gpuplayall] [view] [viewall] [viewio] [tiersize] [tiergpu] [viewfull] [precision] [precision2] [precision3] [sendlite] [sendthreads] [sendcpu] [houseab]   (default: io render stream)
+#   bash bench/device/run.sh [mpi] [io] [import] [layers] [band] [render] [stream] [split] [codec] [huge] [embed] [compare] [live] [stereo] [aniso] [xrsize] [firsthour] [streamcmp] [gpudecode] [gpuquick] [gpupair] [gpuab] [gpu100] [egl] [vtkpeer] [readpath] [importprobe] [relayprobe] [storeab] [gpusplit] [gpuplay] [gpuflight] [covered] [gpu100ab] [damf2] [gpusweep] [gpuvar] [relay] [relaytests] [relay100] [gpuplayall] [view] [viewall] [viewio] [tiersize] [tiergpu] [viewfull] [precision] [precision2] [precision3] [sendlite] [sendthreads] [sendcpu] [relaysub] [houseab]   (default: io render stream)
 set -uo pipefail
 # Folders on the GPU machine (it starts bare each session): SLUICE_SCRATCH holds
 # the unpacked libraries and the files stages write; OUT what comes back.
@@ -556,6 +556,15 @@ for stage in $stages; do
       [[ -f $T/v6.sluice ]] || run $S synth -n 100M --frames 6 -o $T/v6.sluice --force -q --gpu-decodable
       for t in 13 8; do
         run ./.gpu/time -v $S bench view $T/v6.sluice --steps 6 --cache-steps 40 --memory 24G --no-storage --no-psnr --read-threads $t
+      done
+      ;;
+    relaysub)  # issue 45: a frame's relay copies in one submission; .gpu/sluice_v1 (the build before, carried) and this build alternated twice, page cache, by view; under GNU time (.gpu/time) for context switches
+      [[ -f $T/v6.sluice ]] || run $S synth -n 100M --frames 6 -o $T/v6.sluice --force -q --gpu-decodable
+      for i in 1 2; do
+        for b in ./.gpu/sluice_v1 $S; do
+          run ./.gpu/time -f "%e s wall, %U s user, %S s system, %c involuntary and %w voluntary context switches" \
+            $b bench view $T/v6.sluice --steps 6 --cache-steps 40 --memory 24G --no-storage --no-psnr
+        done
       done
       ;;
     houseab)  # issue 46: render, stream and decode figures of this build against BASE (pack.sh BASE=...), alternated twice
