@@ -384,13 +384,9 @@ bool RecordReads::join(PieceRound& round) {
     parts_.counters->read_ns.fetch_add(steady_ns() - since, kRelaxed);
   };
   // A relayed frame's copies held back by the relay are submitted once its
-  // pieces are all sent, whether the round ended well or not (counted as
-  // sending: the submission the pieces' sends left to it).
+  // pieces are all sent, whether the round ended well or not.
   const auto flush = [&] {
-    if (!round.relayed) return;
-    const uint64_t t0 = steady_ns();
-    parts_.relay->flush(round.relayed->buffers);
-    parts_.counters->relay_send_ns.fetch_add(steady_ns() - t0, kRelaxed);
+    if (round.relayed) parts_.relay->flush(round.relayed->buffers);
   };
   try {
     crew_.join();

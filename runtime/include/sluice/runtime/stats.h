@@ -48,9 +48,7 @@ struct PipelineStats {
   // Where the read threads' time on relayed frames went, summed over the
   // threads: waiting for a ring slot (claim), copying into it, checking the
   // records' checksums, planning them for the GPU (their plane tables), and
-  // handing the slot on (send: the pieces' sends and the reader's flush of
-  // the frame, which submits the copies the relay held back).
-  // A claim that finds every slot held submits a held batch: claim time.
+  // handing the slot on (send).
   struct RelayTimes {
     double claim_seconds = 0, copy_seconds = 0, check_seconds = 0, plan_seconds = 0, send_seconds = 0;
   } relay;
