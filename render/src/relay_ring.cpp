@@ -2,7 +2,6 @@
 
 #include <sys/mman.h>
 
-#include <algorithm>
 #include <stdexcept>
 
 #include "sluice/error.h"
@@ -43,7 +42,7 @@ RelayRing::RelayRing(const detail::ContextImpl& ctx, uint32_t slots, uint64_t pi
   done_ = vk::raii::Semaphore(ctx.device, vk::SemaphoreCreateInfo({}, &timeline));
 }
 
-ResidentArea::~ResidentArea() { ring.settle(*this); }
+ResidentArea::~ResidentArea() { ring.wait(relayed.load(std::memory_order_relaxed)); }
 
 RelayRing::~RelayRing() {
   wait_all();
@@ -78,69 +77,14 @@ void RelayRing::wait_all() const {
 std::span<std::byte> RelayRing::claim(uint64_t bytes) {
   if (bytes > piece_bytes_) throw Error("RelayRing::claim: a piece larger than a slot");
   uint32_t s = 0;
-  for (;;) {
+  {
     std::unique_lock lock(mutex_);
-    freed_.wait(lock, [&] { return !free_.empty() || !held_.empty(); });
-    if (!free_.empty()) {
-      s = free_.front();
-      free_.pop_front();
-      break;
-    }
-    // Every slot is sent or held back: the oldest held batch goes now.
-    Batch batch = take(*held_.front());
-    lock.unlock();
-    submit(batch);
+    freed_.wait(lock, [&] { return !free_.empty(); });
+    s = free_.front();
+    free_.pop_front();
   }
   wait(slots_[s].ticket);  // its previous copy, if still running
   return {static_cast<std::byte*>(memory_.mapped) + s * piece_bytes_, bytes};
-}
-
-RelayRing::Batch RelayRing::take(ResidentArea& area) {
-  Batch batch;
-  if (area.held_slots.empty()) return batch;
-  batch.area = &area;
-  batch.copies.swap(area.held);
-  batch.slots.swap(area.held_slots);
-  std::erase(held_, &area);
-  ++area.submitting;
-  return batch;
-}
-
-void RelayRing::submit(Batch& batch) {
-  ResidentArea& area = *batch.area;
-  // The batch's first slot lends its command buffer: the submission that
-  // last used it also held that slot, and claim() waited for it.
-  const vk::CommandBuffer cmd = *slots_[batch.slots.front()].cmd;
-  try {
-    cmd.reset();
-    cmd.begin(vk::CommandBufferBeginInfo(vk::CommandBufferUsageFlagBits::eOneTimeSubmit));
-    if (!batch.copies.empty()) cmd.copyBuffer(*memory_.buffer, *area.device.buffer, batch.copies);
-    cmd.end();
-    const vk::CommandBufferSubmitInfo cb(cmd);
-    const std::lock_guard lock(mutex_);
-    const uint64_t value = submitted_ + 1;
-    const vk::SemaphoreSubmitInfo signal(*done_, value, vk::PipelineStageFlagBits2::eAllCommands);
-    // Values must rise in submission order: submitted under mutex_.
-    ctx_.submit(ctx_.relay_queue, vk::SubmitInfo2({}, {}, cb, signal));
-    submitted_ = value;
-    for (const uint32_t s : batch.slots) {
-      slots_[s].ticket = value;
-      free_.push_back(s);
-    }
-    area.relayed.store(std::max(area.relayed.load(std::memory_order_relaxed), value), std::memory_order_relaxed);
-    --area.submitting;
-  } catch (const vk::SystemError& e) {
-    {
-      const std::lock_guard lock(mutex_);
-      for (const uint32_t s : batch.slots) free_.push_back(s);
-      --area.submitting;
-    }
-    freed_.notify_all();
-    submitted_cv_.notify_all();
-    throw Error(std::string("relaying pieces to the GPU failed: ") + e.what());
-  }
-  freed_.notify_all();
-  submitted_cv_.notify_all();
 }
 
 uint32_t RelayRing::slot_of(std::span<std::byte> piece) const {
@@ -159,51 +103,45 @@ void RelayRing::give_back(std::span<std::byte> piece) { put_back(slot_of(piece))
 
 void RelayRing::send(std::span<std::byte> piece, const runtime::FrameBuffers& frame, std::span<const Range> ranges) {
   const uint32_t s = slot_of(piece);
+  Slot& slot = slots_[s];
   ResidentArea& area = area_of_(frame);
-  for (const Range& r : ranges) {
-    if (r.from + r.bytes > piece.size() || r.to + r.bytes > area.device.size) {
-      put_back(s);
-      throw Error("RelayRing::send: a range outside the piece or the frame's area");
-    }
-  }
-  const uint64_t base = uint64_t(s) * piece_bytes_;
-  {
-    const std::lock_guard lock(mutex_);
-    if (area.held_slots.empty()) held_.push_back(&area);
+  try {
+    thread_local std::vector<vk::BufferCopy> regions;
+    regions.clear();
+    const uint64_t base = uint64_t(s) * piece_bytes_;
     for (const Range& r : ranges) {
-      if (r.bytes > 0) area.held.emplace_back(base + r.from, r.to, r.bytes);
+      if (r.from + r.bytes > piece.size() || r.to + r.bytes > area.device.size) {
+        throw Error("RelayRing::send: a range outside the piece or the frame's area");
+      }
+      if (r.bytes > 0) regions.emplace_back(base + r.from, r.to, r.bytes);
     }
-    area.held_slots.push_back(s);
-  }
-  freed_.notify_all();  // a claim waiting for a slot may submit this batch
-}
-
-void RelayRing::flush(const runtime::FrameBuffers& frame) {
-  ResidentArea& area = area_of_(frame);
-  std::unique_lock lock(mutex_);
-  Batch batch = take(area);
-  if (batch.area != nullptr) {
-    lock.unlock();
-    submit(batch);
-    lock.lock();
-  }
-  // A claim on another thread may be submitting an earlier batch of it.
-  submitted_cv_.wait(lock, [&] { return area.submitting == 0; });
-}
-
-void RelayRing::settle(ResidentArea& area) {
-  bool freed = false;
-  {
+    vk::CommandBuffer cmd = *slot.cmd;
+    cmd.reset();
+    cmd.begin(vk::CommandBufferBeginInfo(vk::CommandBufferUsageFlagBits::eOneTimeSubmit));
+    if (!regions.empty()) cmd.copyBuffer(*memory_.buffer, *area.device.buffer, regions);
+    cmd.end();
+    const vk::CommandBufferSubmitInfo cb(cmd);
     std::unique_lock lock(mutex_);
-    freed = !area.held_slots.empty();
-    for (const uint32_t s : area.held_slots) free_.push_back(s);  // their previous copies were waited for in claim()
-    area.held.clear();
-    area.held_slots.clear();
-    std::erase(held_, &area);
-    submitted_cv_.wait(lock, [&] { return area.submitting == 0; });
+    const uint64_t value = submitted_ + 1;
+    const vk::SemaphoreSubmitInfo signal(*done_, value, vk::PipelineStageFlagBits2::eAllCommands);
+    // Values must rise in submission order: submitted under mutex_.
+    ctx_.submit(ctx_.relay_queue, vk::SubmitInfo2({}, {}, cb, signal));
+    submitted_ = value;
+    slot.ticket = value;
+    free_.push_back(s);
+    lock.unlock();
+    freed_.notify_one();
+    // The area's decode waits for its newest copy (several threads send into one area).
+    uint64_t seen = area.relayed.load(std::memory_order_relaxed);
+    while (seen < value && !area.relayed.compare_exchange_weak(seen, value, std::memory_order_relaxed)) {
+    }
+  } catch (const vk::SystemError& e) {
+    put_back(s);
+    throw Error(std::string("relaying a piece to the GPU failed: ") + e.what());
+  } catch (...) {
+    put_back(s);
+    throw;
   }
-  if (freed) freed_.notify_all();
-  wait(area.relayed.load(std::memory_order_relaxed));
 }
 
 }  // namespace sluice::render

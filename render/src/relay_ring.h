@@ -1,19 +1,10 @@
 // Internal: the ring a StagingAllocator with a resident window relays
 // frames' pieces through (runtime/frame_allocator.h): slots of cached host-visible
-// memory the read threads write with plain stores, copied by the GPU into a
-// frame's resident area on the context's relay queue.
-//
-// Sent slots wait in their area's batch: a frame's pieces go in one command
-// buffer and one submission when the frame is flushed, or earlier when a
-// claim finds no free slot (then the oldest batch goes). One submission a
-// frame rather than one a piece: submissions to the one relay queue are
-// made one at a time, and in `bench view` 13 read threads each sending
-// their piece waited for each other most of their sending time
-// (docs/measurements.md, "The relay's sends").
-//
-// Every submission signals the ring's timeline semaphore with the next
-// value; a slot is reused once its copy's value is reached, and the area
-// remembers the largest value copied into it (what its decode waits for).
+// memory the read threads write with plain stores, each copied by the GPU
+// into a frame's resident area on the context's relay queue right after.
+// Every copy signals the ring's timeline semaphore with the next value; a
+// slot is reused once its copy's value is reached, and the area remembers
+// the largest value copied into it (what its decode waits for).
 #pragma once
 
 #include <atomic>
@@ -34,22 +25,14 @@ class RelayRing;
 // A frame's staged area in device memory, filled by the ring's copies.
 // Destroying it waits for the copies into it (a read a newer schedule cut
 // short may leave some in flight).
-// Destroying it drops the copies still held back (their slots go back to
-// the ring unsent) and waits for those submitted (a read a newer schedule
-// cut short may leave some in flight).
 struct ResidentArea {
-  ResidentArea(RelayRing& relay, Buffer buffer) : ring(relay), device(std::move(buffer)) {}
+  ResidentArea(const RelayRing& relay, Buffer buffer) : ring(relay), device(std::move(buffer)) {}
   ~ResidentArea();
   ResidentArea(const ResidentArea&) = delete;
   ResidentArea& operator=(const ResidentArea&) = delete;
-  RelayRing& ring;
+  const RelayRing& ring;
   Buffer device;
   std::atomic<uint64_t> relayed{0};  // the largest ring timeline value copied into it
-  // The ring's mutex guards these: copies sent and not yet submitted, their
-  // slots, and batches being recorded and submitted by some thread.
-  std::vector<vk::BufferCopy> held;
-  std::vector<uint32_t> held_slots;
-  uint32_t submitting = 0;
 };
 
 class RelayRing final : public runtime::PieceRelay {
@@ -67,10 +50,7 @@ class RelayRing final : public runtime::PieceRelay {
   uint64_t piece_bytes() const override { return piece_bytes_; }
   std::span<std::byte> claim(uint64_t bytes) override;
   void send(std::span<std::byte> piece, const runtime::FrameBuffers& frame, std::span<const Range> ranges) override;
-  void flush(const runtime::FrameBuffers& frame) override;
   void give_back(std::span<std::byte> piece) override;
-  // ~ResidentArea and a reused area: its held copies dropped (their slots back in the ring unsent), its submissions waited for.
-  void settle(ResidentArea& area);
 
   // The timeline the copies signal, and waiting on it (any thread).
   vk::Semaphore semaphore() const { return *done_; }
@@ -85,19 +65,8 @@ class RelayRing final : public runtime::PieceRelay {
     vk::raii::CommandBuffer cmd{nullptr};
     uint64_t ticket = 0;  // the value its last copy signals
   };
-  // An area's held copies, taken out under the mutex to be submitted.
-  struct Batch {
-    ResidentArea* area = nullptr;
-    std::vector<vk::BufferCopy> copies;
-    std::vector<uint32_t> slots;
-  };
   uint32_t slot_of(std::span<std::byte> piece) const;
   void put_back(uint32_t slot);
-  // With mutex_ held: the area's held copies as a batch (none when empty).
-  Batch take(ResidentArea& area);
-  // Records and submits a batch taken (mutex_ not held); its slots go back
-  // to the ring behind the submission's value.
-  void submit(Batch& batch);
 
   const detail::ContextImpl& ctx_;
   AreaOf area_of_;
@@ -112,11 +81,9 @@ class RelayRing final : public runtime::PieceRelay {
   Buffer memory_;  // slots() * piece_bytes_, cached host-visible, mapped
   std::vector<Slot> slots_;
   vk::raii::Semaphore done_{nullptr};
-  mutable std::mutex mutex_;  // free_, held_, submitted_ and the areas' held copies
-  std::condition_variable freed_;     // a slot freed, or a batch held
-  std::condition_variable submitted_cv_;  // an area's submission made
+  mutable std::mutex mutex_;  // free_ and submitted_
+  std::condition_variable freed_;
   std::deque<uint32_t> free_;  // oldest copy first
-  std::deque<ResidentArea*> held_;  // areas with copies held back, oldest first
   uint64_t submitted_ = 0;     // the value the newest copy signals
 };
 

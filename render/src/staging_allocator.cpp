@@ -131,8 +131,8 @@ runtime::FrameBuffers StagingAllocator::allocate(const runtime::FrameLayout& lay
                                 MemoryKind::DeviceLocal));
       return m;
     });
-    // A read cut short may have left copies into it held back or in flight.
-    ring_->settle(*block.memory.area);
+    // A read cut short may have left copies into it in flight.
+    ring_->wait(block.memory.area->relayed.load(std::memory_order_relaxed));
     runtime::FrameBuffers out;
     out.tag = reinterpret_cast<uintptr_t>(&block);
     return out;

@@ -383,20 +383,13 @@ bool RecordReads::join(PieceRound& round) {
     const uint64_t since = reading_since_ns_.exchange(0, kRelaxed);
     parts_.counters->read_ns.fetch_add(steady_ns() - since, kRelaxed);
   };
-  // A relayed frame's copies held back by the relay are submitted once its
-  // pieces are all sent, whether the round ended well or not.
-  const auto flush = [&] {
-    if (round.relayed) parts_.relay->flush(round.relayed->buffers);
-  };
   try {
     crew_.join();
   } catch (...) {
     count_time();
-    flush();
     throw;
   }
   count_time();
-  flush();
   return !round.gave_up.load(kRelaxed);
 }
 

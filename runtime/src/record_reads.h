@@ -91,7 +91,6 @@ class RecordReads {
   // The runs of a read by demand (slot.runs) into `dst`, unchecked.
   void begin_runs(PieceRound& round, Slot& slot, std::span<std::byte> dst, uint64_t offset, uint64_t need,
                   uint64_t generation);
-  // Also flushes a relayed round's copies (PieceRelay::flush), however it ended.
   bool join(PieceRound& round);
   // Joins every round still in flight, their errors dropped (the reader
   // stopping: their frames go with the pipeline).

@@ -145,11 +145,9 @@ class HostFrameAllocator final : public FrameAllocator {
 // hand out resident frames (FrameLayout::resident). The pipeline then uses
 // it for frames kept encoded and checked as they are read.
 
-// Threads: claim(), send(), give_back() and flush() are called from the
-// pipeline's read threads, several at once. Every claimed piece is followed
-// by exactly one send() or give_back() of it, on the thread that claimed it;
-// every frame sent into is flush()ed once its pieces are all sent, before
-// its consumer sees it.
+// Threads: claim(), send() and give_back() are called from the pipeline's
+// read threads, several at once. Every claimed piece is followed by
+// exactly one send() or give_back() of it, on the thread that claimed it.
 class PieceRelay {
  public:
   virtual ~PieceRelay() = default;
@@ -164,19 +162,13 @@ class PieceRelay {
   struct Range {
     uint64_t from = 0, to = 0, bytes = 0;
   };
-  // Hands the copy of `ranges` of `piece` into `frame`'s resident staged
-  // area (buffers the same allocator handed out for a resident layout) to
-  // the relay and returns at once. The relay may hold the copy back, to
-  // submit several pieces' copies together, until flush(frame) or until
-  // claim() needs the slot; the slot goes back to the ring once the GPU has
-  // copied it. Throws a sluice::Error (the implementer's own) on a device
-  // error (the piece is given back).
+  // Submits the copy of `ranges` of `piece` into `frame`'s resident staged
+  // area (buffers the same allocator handed out for a resident layout) and
+  // returns at once; the slot goes back to the ring once the GPU has
+  // copied it. A consumer of the frame waits for every copy sent into it
+  // (the allocator's own bookkeeping). Throws a sluice::Error (the implementer's own) on a
+  // device error (the piece is given back).
   virtual void send(std::span<std::byte> piece, const FrameBuffers& frame, std::span<const Range> ranges) = 0;
-  // Submits every copy into `frame` still held back and returns once no
-  // other thread is submitting one; a consumer of the frame then waits for
-  // every copy sent into it (the allocator's own bookkeeping). Throws as
-  // send() does.
-  virtual void flush(const FrameBuffers& frame) = 0;
   // Gives a claimed piece back unsent (after an error).
   virtual void give_back(std::span<std::byte> piece) = 0;
 };
