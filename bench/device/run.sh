@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Runs on the GPU machine (see bench/device/README.md): every benchmark the
 # issues ask GPU-machine figures for, in one call. Results go to $OUT.
-#   bash bench/device/run.sh [mpi] [io] [import] [layers] [band] [render] [stream] [split] [codec] [huge] [embed] [compare] [live] [stereo] [aniso] [xrsize] [firsthour] [streamcmp] [gpudecode] [gpuquick] [gpupair] [gpuab] [gpu100] [egl] [vtkpeer] [readpath] [importprobe] [relayprobe] [storeab] [gpusplit] [gpuplay] [gpuflight] [covered] [gpu100ab] [damf2] [gpusweep] [gpuvar] [relay] [relaytests] [relay100] [gpuplayall] [view] [viewall] [viewio] [tiersize] [tiergpu] [viewfull] [precision] [precision2] [precision3] [sendlite] [sendthreads] [sendcpu] [relaysub] [houseab]   (default: io render stream)
+#   bash bench/device/run.sh [mpi] [io] [import] [layers] [band] [render] [stream] [split] [codec] [huge] [embed] [compare] [live] [stereo] [aniso] [xrsize] [firsthour] [streamcmp] [gpudecode] [gpuquick] [gpupair] [gpuab] [gpu100] [egl] [vtkpeer] [readpath] [importprobe] [relayprobe] [storeab] [gpusplit] [gpuplay] [gpuflight] [covered] [gpu100ab] [damf2] [gpusweep] [gpuvar] [relay] [relaytests] [relay100] [gpuplayall] [view] [viewall] [viewio] [tiersize] [tiergpu] [viewfull] [precision] [precision2] [precision3] [sendlite] [sendthreads] [sendcpu] [relaysub] [batchring] [houseab]   (default: io render stream)
 set -uo pipefail
 # Folders on the GPU machine (it starts bare each session): SLUICE_SCRATCH holds
 # the unpacked libraries and the files stages write; OUT what comes back.
@@ -565,6 +565,12 @@ for stage in $stages; do
           run ./.gpu/time -f "%e s wall, %U s user, %S s system, %c involuntary and %w voluntary context switches" \
             $b bench view $T/v6.sluice --steps 6 --cache-steps 40 --memory 24G --no-storage --no-psnr
         done
+      done
+      ;;
+    batchring)  # issue 45, after houseab (its files): a frame's relay copies in one submission with a ring of 2 x read threads + 4 slots (.gpu/sluice_vbatch, a variant build of 8d4c214, carried) against this build
+      for b in ./.gpu/sluice_vbatch $S; do
+        run $b bench stream --gpu $T/h10m.sluice --no-storage --memory 16G --min-time 2
+        run $b bench view $T/h100m.sluice --steps 6 --cache-steps 40 --memory 24G --no-storage --no-psnr
       done
       ;;
     houseab)  # issue 46: render, stream and decode figures of this build against BASE (pack.sh BASE=...), alternated twice
