@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Runs on the GPU machine (see bench/device/README.md): every benchmark the
 # issues ask GPU-machine figures for, in one call. Results go to $OUT.
-#   bash bench/device/run.sh [mpi] [io] [import] [layers] [band] [render] [stream] [split] [codec] [huge] [embed] [compare] [live] [stereo] [aniso] [xrsize] [firsthour] [streamcmp] [gpudecode] [gpuquick] [gpupair] [gpuab] [gpu100] [egl] [vtkpeer] [readpath] [importprobe] [relayprobe] [storeab] [gpusplit] [gpuplay] [gpuflight] [covered] [gpu100ab] [damf2] [gpusweep] [gpuvar] [relay] [relaytests] [relay100] [gpuplayall] [view] [viewall] [viewio] [tiersize] [tiergpu] [viewfull] [precision] [precision2] [precision3] [sendlite] [sendthreads] [sendcpu] [relaysub] [batchring] [housestream] [housestream1] [rounds] [houseab]   (default: io render stream)
+#   bash bench/device/run.sh [mpi] [io] [import] [layers] [band] [render] [stream] [split] [codec] [huge] [embed] [compare] [live] [stereo] [aniso] [xrsize] [firsthour] [streamcmp] [gpudecode] [gpuquick] [gpupair] [gpuab] [gpu100] [egl] [vtkpeer] [readpath] [importprobe] [relayprobe] [storeab] [gpusplit] [gpuplay] [gpuflight] [covered] [gpu100ab] [damf2] [gpusweep] [gpuvar] [relay] [relaytests] [relay100] [gpuplayall] [view] [viewall] [viewio] [tiersize] [tiergpu] [viewfull] [precision] [precision2] [precision3] [sendlite] [sendthreads] [sendcpu] [relaysub] [batchring] [housestream] [housestream1] [houseab]   (default: io render stream)
 set -uo pipefail
 # Folders on the GPU machine (it starts bare each session): SLUICE_SCRATCH holds
 # the unpacked libraries and the files stages write; OUT what comes back.
@@ -579,13 +579,6 @@ for stage in $stages; do
       for i in 1 2; do
         for b in ./.gpu/sluice_base $S; do
           run $b bench stream --gpu $T/h10m.sluice --no-storage --memory 16G --min-time 2
-          run $b bench view $T/h100m.sluice --steps 6 --cache-steps 40 --memory 24G --no-storage --no-psnr
-        done
-      done
-      ;;
-    rounds)  # issue 45, after housestream (its files): four crew rounds in flight (.gpu/sluice_vrounds, a variant build with ReadCrew::kRounds = 4, carried) against this build's two, alternated twice, page cache
-      for i in 1 2; do
-        for b in ./.gpu/sluice_vrounds $S; do
           run $b bench view $T/h100m.sluice --steps 6 --cache-steps 40 --memory 24G --no-storage --no-psnr
         done
       done
