@@ -15,7 +15,7 @@ namespace sluice::app {
 std::string human_bytes(double bytes);      // "12.3 MB" (decimal units, as drives and networks count)
 std::string human_count(double n);          // "9,360" below a million, else "1.09 M"
 std::string human_duration(double seconds); // "0.84 s", "3:05", "1:02:09"
-using bench::fixed;  // the tables' own: one way to print a number
+using bench::fixed;                         // the tables' own: one way to print a number
 // A fraction as a percentage with one decimal: 0.234 -> "23.4%".
 std::string percent(double fraction);
 
