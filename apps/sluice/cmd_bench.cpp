@@ -140,6 +140,8 @@ void add_bench_view(CLI::App* bench) {
   vw->add_option("--device", view->device, "Vulkan device (index or name; default: the first GPU)");
   vw->add_option("--read-threads", view->read_threads, "Threads reading a frame's pieces at once (default: the pipeline's)")
       ->check(CLI::Range(1, 64));
+  vw->add_option("--read-rounds", view->read_rounds, "Frames read at once, each a round of the read threads' pieces (default: 2)")
+      ->check(CLI::Range(1, 4));
   vw->add_flag("!--pread", view->mapped_reads, "Read with pread instead of copying out of the file's mapping");
   vw->add_flag("--direct", view->direct_io, "Read with O_DIRECT (the page cache bypassed; reads by the view are always\n"
                                             "pread or O_DIRECT, never the mapping)");

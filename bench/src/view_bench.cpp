@@ -330,6 +330,7 @@ class Bench {
     stream::FrameFeed::configure(po, staging, -1, reader_.header(), decode_site(o_.decode));
     po.pipeline.demand = demand;
     if (o_.read_threads > 0) po.pipeline.read.threads = o_.read_threads;
+    if (o_.read_rounds > 0) po.pipeline.read.rounds = o_.read_rounds;
     po.pipeline.read.mapped = o_.mapped_reads;
     po.pipeline.read.direct_io = o_.direct_io;
     return po;

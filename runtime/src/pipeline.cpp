@@ -108,6 +108,7 @@ PipelineCore::PipelineCore(const io::ContainerReader& reader, FrameAllocator& al
   reads.threads = options_.read.threads > 0    ? options_.read.threads
                   : options_.decode.threads > 0 ? std::clamp(decode_threads_ / 4, 1, 4)
                                                 : default_thread_split(tbb::info::default_concurrency(), options_.decode.mode).read;
+  reads.rounds = options_.read.rounds;
   reads_.emplace(std::move(reads));
 
   initial_plan_ = SlotWindow::plan(window_parts(), allocator_.kept_bytes());  // blocks a previous pipeline left for reuse count as ours

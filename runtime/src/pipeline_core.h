@@ -12,6 +12,7 @@
 
 #include "read_crew.h"
 
+#include <algorithm>
 #include <array>
 #include <atomic>
 #include <chrono>
@@ -53,25 +54,27 @@ struct PendingRead {
 // has rounds. In place, because the crew holds their rounds by address.
 class PendingReads {
  public:
+  // `capacity`: the crew's rounds (1 .. ReadCrew::kMostRounds).
+  explicit PendingReads(int capacity) : capacity_(uint32_t(std::clamp(capacity, 1, ReadCrew::kMostRounds))) {}
   uint32_t size() const { return size_; }
-  bool full() const { return size_ == kCapacity; }
+  bool full() const { return size_ == capacity_; }
   PendingRead& oldest() { return reads_[first_]; }
-  const PendingRead& at(uint32_t i) const { return reads_[(first_ + i) % kCapacity]; }
-  PendingRead& push() { return reads_[(first_ + size_++) % kCapacity]; }  // not full()
+  const PendingRead& at(uint32_t i) const { return reads_[(first_ + i) % capacity_]; }
+  PendingRead& push() { return reads_[(first_ + size_++) % capacity_]; }  // not full()
   void pop() {  // size() > 0
-    first_ = (first_ + 1) % kCapacity;
+    first_ = (first_ + 1) % capacity_;
     --size_;
   }
 
  private:
-  static constexpr uint32_t kCapacity = ReadCrew::kRounds;
-  std::array<PendingRead, kCapacity> reads_;
+  std::array<PendingRead, ReadCrew::kMostRounds> reads_;
+  uint32_t capacity_;
   uint32_t first_ = 0, size_ = 0;
 };
 
 // What only the reader thread touches.
 struct ReaderState {
-  explicit ReaderState(const SlotWindow::Parts& parts, const WindowPlan& initial) : window(parts, initial) {}
+  ReaderState(const SlotWindow::Parts& parts, const WindowPlan& initial, int rounds) : window(parts, initial), pending(rounds) {}
   uint64_t generation = ~uint64_t(0);
   PlaybackSchedule schedule;
   uint64_t next_k = 0;                  // next entry of the schedule to fetch

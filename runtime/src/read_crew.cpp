@@ -1,6 +1,7 @@
 #include "read_crew.h"
 #include "sluice/error.h"
 
+#include <algorithm>
 #include <chrono>
 #include <stdexcept>
 #include <utility>
@@ -12,7 +13,8 @@ constexpr uint64_t kLow = 0xffffffffu;
 
 }  // namespace
 
-void ReadCrew::start(int helpers) {
+void ReadCrew::start(int helpers, int rounds) {
+  most_in_flight_ = std::clamp(rounds, 1, kMostRounds);
   for (int i = 0; i < helpers; ++i) threads_.emplace_back([this] { helper_main(); });
 }
 
@@ -60,10 +62,21 @@ bool ReadCrew::take(Round& round) {
 }
 
 bool ReadCrew::take_oldest() {
-  Round* first = &rounds_[0];
-  Round* second = &rounds_[1];
-  if (second->order.load(std::memory_order_relaxed) < first->order.load(std::memory_order_relaxed)) std::swap(first, second);
-  return take(*first) || take(*second);
+  // The rounds by when they began, from one reading of their `order` (a
+  // round begun meanwhile sorts by the value read: at worst a piece of a
+  // younger round goes first once).
+  std::array<std::pair<uint64_t, Round*>, kMostRounds> by_age{};
+  const size_t n = size_t(most_in_flight_);
+  for (size_t r = 0; r < n; ++r) {  // insertion: four at most
+    std::pair<uint64_t, Round*> next{rounds_[r].order.load(std::memory_order_relaxed), &rounds_[r]};
+    size_t at = r;
+    for (; at > 0 && by_age[at - 1].first > next.first; --at) by_age[at] = by_age[at - 1];
+    by_age[at] = next;
+  }
+  for (size_t r = 0; r < n; ++r) {
+    if (take(*by_age[r].second)) return true;
+  }
+  return false;
 }
 
 void ReadCrew::helper_main() {
@@ -77,9 +90,9 @@ void ReadCrew::helper_main() {
 }
 
 void ReadCrew::begin(uint64_t count, PieceBody body) {
-  if (in_flight() >= kRounds) throw Error("ReadCrew::begin: every round is in flight");
+  if (in_flight() >= most_in_flight_) throw Error("ReadCrew::begin: every round is in flight");
   if (count > kLow) throw Error("ReadCrew::begin: 2^32 pieces or more");
-  Round& round = rounds_[begun_ % kRounds];
+  Round& round = rounds_[begun_ % uint64_t(most_in_flight_)];
   round.count = static_cast<uint32_t>(count);
   round.body = body;
   round.error = nullptr;
@@ -94,7 +107,7 @@ void ReadCrew::begin(uint64_t count, PieceBody body) {
 
 void ReadCrew::join() {
   if (in_flight() == 0) throw Error("ReadCrew::join: no round in flight");
-  Round& round = rounds_[joined_ % kRounds];
+  Round& round = rounds_[joined_ % uint64_t(most_in_flight_)];
   while (take(round)) {
   }
   for (uint32_t done; (done = round.done.load(std::memory_order_acquire)) != round.count;) {

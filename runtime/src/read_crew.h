@@ -38,12 +38,14 @@ class PieceBody {
 
 class ReadCrew {
  public:
-  static constexpr int kRounds = 2;  // rounds begun and not yet joined, at most
+  static constexpr int kMostRounds = 4;  // rounds() at most
 
   ReadCrew() = default;
   ~ReadCrew();  // joins the rounds in flight, stops and joins the helpers
-  // Starts the helper threads; once, before the first begin().
-  void start(int helpers);
+  // Starts the helper threads and sets how many rounds may be begun and not
+  // yet joined (clamped to 1 .. kMostRounds); once, before the first begin().
+  void start(int helpers, int rounds = 2);
+  int rounds() const { return most_in_flight_; }
   ReadCrew(const ReadCrew&) = delete;
   ReadCrew& operator=(const ReadCrew&) = delete;
 
@@ -56,7 +58,7 @@ class ReadCrew {
   // Rounds are joined in the order they began; the callable behind `body`
   // must live until its round is joined. One caller (the reader thread)
   // makes every call. Waiting is on futex words (std::atomic::wait): no
-  // mutex. begin() throws std::logic_error with kRounds in flight and
+  // mutex. begin() throws std::logic_error with rounds() in flight and
   // std::length_error for 2^32 pieces or more; join() throws
   // std::logic_error with none in flight.
   void begin(uint64_t count, PieceBody body);
@@ -89,7 +91,8 @@ class ReadCrew {
   void run_piece(Round& round, uint32_t piece, uint32_t count);
 
   std::vector<std::thread> threads_;
-  std::array<Round, kRounds> rounds_;
+  std::array<Round, kMostRounds> rounds_;  // the first rounds() in use, cyclically
+  int most_in_flight_ = 2;                  // rounds(): set by start(), before the helpers run
   std::atomic<uint64_t> posted_{0};  // bumped for every begin(); idle helpers wait on it
   std::atomic<bool> stopping_{false};
   alignas(64) std::atomic<uint64_t> busy_ns_{0};

@@ -32,7 +32,7 @@ SlotWindow::Parts PipelineCore::window_parts() {
 }
 
 void PipelineCore::reader_main() {
-  ReaderState rs(window_parts(), initial_plan_);  // the plan the constructor reported
+  ReaderState rs(window_parts(), initial_plan_, reads_->rounds());  // the plan the constructor reported
   try {
     while (true) {
       // The wake count is read before anything it guards, stopping_ too: a

@@ -53,7 +53,7 @@ class RelayLaps {
   std::array<uint64_t, kParts> ns_{};
 };
 
-RecordReads::RecordReads(Parts parts) : parts_(std::move(parts)) { crew_.start(parts_.threads - 1); }
+RecordReads::RecordReads(Parts parts) : parts_(std::move(parts)) { crew_.start(parts_.threads - 1, parts_.rounds); }
 
 void RecordReads::drain() noexcept {
   while (crew_.in_flight() > 0) {

@@ -6,7 +6,7 @@
 // relay as read).
 //
 // Threads: begin_*(), join() and drain() are the reader thread's, which
-// has at most ReadCrew::kRounds rounds in flight, each living until joined;
+// has at most rounds() rounds in flight, each living until joined;
 // read_piece() is also called there directly. The crew's threads run the
 // rounds' pieces: they read through the source (RecordSource is called
 // from several threads at once by contract), relay through PieceRelay (a
@@ -71,12 +71,14 @@ class RecordReads {
     std::shared_ptr<RecordSource> source;
     PieceRelay* relay = nullptr;  // the allocator's, for frames kept encoded; null: none
     int threads = 1;              // threads reading: the reader thread and threads - 1 helpers
+    int rounds = 2;               // records read at once (ReadSettings::rounds)
   };
   explicit RecordReads(Parts parts);
 
   RecordSource& source() const { return *parts_.source; }
   PieceRelay* relay() const { return parts_.relay; }
   int threads() const { return parts_.threads; }
+  int rounds() const { return crew_.rounds(); }
 
   // --- the reader thread ---
   // Reads [0, need) of `dst` from `offset` in pieces of equal size, as many

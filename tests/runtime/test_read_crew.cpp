@@ -4,6 +4,7 @@
 // waits for a straggler, and each round keeps its own error.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <set>
@@ -107,6 +108,48 @@ TEST(ReadCrew, EachRoundKeepsItsOwnErrorAndRoundsAreBounded) {
   EXPECT_EQ(sum.load(), 4950u);
   EXPECT_THROW(crew.join(), sluice::runtime::Error) << "nothing left to join";
   EXPECT_THROW(crew.begin(uint64_t(1) << 32, adding), sluice::runtime::Error);
+  EXPECT_EQ(crew.in_flight(), 0);
+}
+
+// With four rounds in flight, helpers finish the three younger rounds while
+// a straggler holds the oldest; a fifth is refused; joins go in order.
+TEST(ReadCrew, FourRoundsInFlightEachRunWholeByTheHelpers) {
+  ReadCrew crew;
+  crew.start(3, 4);
+  EXPECT_EQ(crew.rounds(), 4);
+  std::atomic<bool> release{false};
+  std::atomic<int> oldest_done{0};
+  std::array<std::atomic<uint64_t>, 3> sums{};
+  const auto oldest = [&](uint64_t p) {
+    if (p == 0) {
+      const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(30);  // never forever
+      while (!release.load() && std::chrono::steady_clock::now() < until) std::this_thread::yield();
+    }
+    oldest_done.fetch_add(1);
+  };
+  const auto r1 = [&](uint64_t p) { sums[0].fetch_add(p); };
+  const auto r2 = [&](uint64_t p) { sums[1].fetch_add(p); };
+  const auto r3 = [&](uint64_t p) { sums[2].fetch_add(p); };
+  crew.begin(4, oldest);
+  crew.begin(100, r1);
+  crew.begin(200, r2);
+  crew.begin(300, r3);
+  EXPECT_EQ(crew.in_flight(), 4);
+  EXPECT_THROW(crew.begin(1, r1), sluice::runtime::Error) << "a fifth round in flight";
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  while (sums[2].load() < 44850u && std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  EXPECT_EQ(sums[0].load(), 4950u) << "the helpers reach the second round";
+  EXPECT_EQ(sums[1].load(), 19900u) << "and the third";
+  EXPECT_EQ(sums[2].load(), 44850u) << "and the fourth, while the oldest waits";
+  release = true;
+  for (int r = 0; r < 4; ++r) crew.join();
+  EXPECT_EQ(oldest_done.load(), 4);
+  // The rounds' storage is reused cyclically: another four go through.
+  for (int r = 0; r < 4; ++r) crew.begin(10, r1);
+  for (int r = 0; r < 4; ++r) crew.join();
+  EXPECT_EQ(sums[0].load(), 4950u + 4 * 45u);
   EXPECT_EQ(crew.in_flight(), 0);
 }
 

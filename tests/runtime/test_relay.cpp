@@ -103,12 +103,13 @@ class HostRelay final : public FrameAllocator, public PieceRelay {
 // decoder's frames, bit for bit (particles and the colour attribute), both
 // read under `demand`.
 PipelineStats expect_relayed_frames_decode_the_same(const std::filesystem::path& path, HostRelay& relay, int read_threads,
-                                                    const ViewDemand& demand = {}) {
+                                                    const ViewDemand& demand = {}, int rounds = 2) {
   const io::ContainerReader reader(path);
   HostFrameAllocator decoded_memory;
   PipelineOptions o;
   o.decode.threads = 2;
   o.read.threads = read_threads;
+  o.read.rounds = rounds;
   o.demand = demand;
   const bool coloured = !reader.header().attributes.empty();
   if (coloured) o.decode.attributes = std::vector<uint32_t>{0};
@@ -179,6 +180,19 @@ TEST_F(RelayTest, RelayedFramesDecodeToTheSameParticles) {
   EXPECT_GT(stats.relay.plan_seconds, 0.0);
   EXPECT_GT(stats.relay.send_seconds, 0.0);
   EXPECT_EQ(stats.relay.check_seconds, 0.0) << "whole frames are checked as they are copied, not apart";
+}
+
+// Four frames read at once (ReadSettings::rounds), whole and by a view's
+// demand: the same particles as the CPU decoder's.
+TEST_F(RelayTest, FourFramesReadAtOnceDecodeToTheSameParticles) {
+  HostRelay whole(8, 64 << 10);
+  EXPECT_EQ(expect_relayed_frames_decode_the_same(*path_, whole, 3, {}, 4).frames_relayed, 12u);
+  const auto path = test::write_scattered(*dir_ / "scattered4.sluice", 6, 200000, io::kFormatMajor, io::PlaneCoding::GpuDecodable);
+  HostRelay by_view(8, 4 << 20);
+  const ViewDemand close = test::demand_of({0.3f, 0.2f, 0.15f}, {-1.0f, -0.5f, 0.15f}, 1.0f);
+  const PipelineStats stats = expect_relayed_frames_decode_the_same(path, by_view, 2, close, 4);
+  EXPECT_EQ(stats.frames_by_demand, 6u);
+  EXPECT_EQ(stats.frames_failed, 0u);
 }
 
 // Fewer slots than read threads, and slots smaller than a chunk: threads

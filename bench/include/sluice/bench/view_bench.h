@@ -43,6 +43,7 @@ struct ViewBenchOptions {
   std::string decode = "auto";           // auto | cpu | gpu
   std::string device;                    // Vulkan device ("": the first GPU)
   int read_threads = 0;                  // the pipeline's (ReadSettings::threads); 0: its default
+  int read_rounds = 0;                   // records read at once (ReadSettings::rounds); 0: the pipeline's default
   bool mapped_reads = true;              // false: pread (ReadSettings::mapped)
   bool direct_io = false;                // O_DIRECT reads (ReadSettings::direct_io)
   // Only the close-up's read share (no timed segments, no pictures): what a

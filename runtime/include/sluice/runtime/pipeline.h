@@ -76,6 +76,12 @@ struct ReadSettings {
   // (FileRecordSource); false: pread. Stats say which is in use.
   bool mapped = true;
   uint64_t piece_bytes = 8 << 20;  // reads are split (a seek cancels a big read early; pieces go in parallel)
+  // Records read at once, each a round of the read threads' pieces (1 to 4):
+  // a thread done with one record's pieces goes on with the next record's
+  // instead of waiting for the slowest piece. 2: measured on whole frames
+  // (docs/runtime.md, "Two records in flight"); small frames read by the
+  // view may want more.
+  int rounds = 2;
   // Where records come from; null: the file, through FileRecordSource.
   std::shared_ptr<RecordSource> source;
 };
