@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Runs on the GPU machine (see bench/device/README.md): every benchmark the
 # issues ask GPU-machine figures for, in one call. Results go to $OUT.
-#   bash bench/device/run.sh [mpi] [io] [import] [layers] [band] [render] [stream] [split] [codec] [huge] [embed] [compare] [live] [stereo] [aniso] [xrsize] [firsthour] [streamcmp] [gpudecode] [gpuquick] [gpupair] [gpuab] [gpu100] [egl] [vtkpeer] [readpath] [importprobe] [relayprobe] [storeab] [gpusplit] [gpuplay] [gpuflight] [covered] [gpu100ab] [damf2] [gpusweep] [gpuvar] [relay] [relaytests] [relay100] [gpuplayall] [view] [viewall] [viewio] [tiersize] [tiergpu] [viewfull] [precision] [precision2] [precision3] [sendlite] [sendthreads] [sendcpu] [relaysub] [batchring] [housestream] [housestream1] [houseab]   (default: io render stream)
+#   bash bench/device/run.sh [mpi] [io] [import] [layers] [band] [render] [stream] [split] [codec] [huge] [embed] [compare] [live] [stereo] [aniso] [xrsize] [firsthour] [streamcmp] [gpudecode] [gpuquick] [gpupair] [gpuab] [gpu100] [egl] [vtkpeer] [readpath] [importprobe] [relayprobe] [storeab] [gpusplit] [gpuplay] [gpuflight] [covered] [gpu100ab] [damf2] [gpusweep] [gpuvar] [relay] [relaytests] [relay100] [gpuplayall] [view] [viewall] [viewio] [tiersize] [tiergpu] [viewfull] [precision] [precision2] [precision3] [sendlite] [sendthreads] [sendcpu] [relaysub] [batchring] [housestream] [housestream1] [readrounds] [houseab]   (default: io render stream)
 set -uo pipefail
 # Folders on the GPU machine (it starts bare each session): SLUICE_SCRATCH holds
 # the unpacked libraries and the files stages write; OUT what comes back.
@@ -587,6 +587,14 @@ for stage in $stages; do
       run $S synth -n 10M --frames 24 -o $T/h10m24.sluice --force -q --gpu-decodable
       for b in ./.gpu/sluice_base $S; do
         run $b bench stream --gpu $T/h10m24.sluice --no-storage --memory 16G --min-time 1
+      done
+      ;;
+    readrounds)  # issue 45: frames read at once (bench view --read-rounds 2, the default, against 4), page cache, alternated twice, 100M x 6
+      [[ -f $T/h100m.sluice ]] || run $S synth -n 100M --frames 6 -o $T/h100m.sluice --force -q --gpu-decodable
+      for i in 1 2; do
+        for r in 2 4; do
+          run $S bench view $T/h100m.sluice --steps 6 --cache-steps 40 --memory 24G --no-storage --no-psnr --read-rounds $r
+        done
       done
       ;;
     houseab)  # issue 46: render, stream and decode figures of this build against BASE (pack.sh BASE=...), alternated twice
