@@ -12,7 +12,6 @@
 
 #include "read_crew.h"
 
-#include <algorithm>
 #include <array>
 #include <atomic>
 #include <chrono>
@@ -54,8 +53,8 @@ struct PendingRead {
 // has rounds. In place, because the crew holds their rounds by address.
 class PendingReads {
  public:
-  // `capacity`: the crew's rounds (1 .. ReadCrew::kMostRounds).
-  explicit PendingReads(int capacity) : capacity_(uint32_t(std::clamp(capacity, 1, ReadCrew::kMostRounds))) {}
+  // `capacity`: the crew's rounds() (already 1 .. ReadCrew::kMostRounds).
+  explicit PendingReads(int capacity) : capacity_(uint32_t(capacity)) {}
   uint32_t size() const { return size_; }
   bool full() const { return size_ == capacity_; }
   PendingRead& oldest() { return reads_[first_]; }

@@ -298,9 +298,6 @@ TEST_F(StreamedUpload, RelayedCorruptChunkFailsItsFrameOnly) {
   fs::remove(copy);
 }
 
-// Seeking while frames are relayed: reads cut short leave copies in flight
-// into areas the next frames reuse. Every frame that arrives, whatever the
-// seeks, renders as load_frame renders it.
 // A host's own frame as plain data (FrameUpload from host memory: a decoded
 // frame, and the same frame kept encoded with its plan) draws what
 // load_frame draws; uploads that do not add up are refused by name, before
@@ -374,6 +371,9 @@ TEST_F(StreamedUpload, AHostsPlainFrameMatchesLoadFrameAndBadOnesAreRefused) {
   EXPECT_EQ(draw(r, scene).depth, expected[1].depth) << "after the refusals";
 }
 
+// Seeking while frames are relayed: reads cut short leave copies in flight
+// into areas the next frames reuse. Every frame that arrives, whatever the
+// seeks, renders as load_frame renders it.
 TEST_F(StreamedUpload, RelayedFramesSurviveSeeks) {
   ValidationGuard guard;
   const io::ContainerReader reader(gpu_path_);

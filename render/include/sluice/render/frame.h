@@ -91,8 +91,8 @@ struct UploadBytes {
 // render::frame_upload() in staging_allocator.h makes one of it).
 struct FrameUpload {
   const io::FrameHeader* header = nullptr;  // the chunk table: counts, boxes, layers, attribute ranges
-  std::span<const uint64_t>
-      chunk_first;  // first particle of each chunk (the running sum of the counts), checked; empty: from the counts
+  // First particle of each chunk (the running sum of the counts), checked; empty: from the counts.
+  std::span<const uint64_t> chunk_first;
   // Decoded (plan == nullptr): particle_count * io::decoded_particle_bytes()
   // of the scene's coding. Encoded: the staged area plan->staged_bytes()
   // long (io/gpu_decode_plan.h), decoded on the GPU; empty when `resident`.
